@@ -1,0 +1,30 @@
+"""Cable force bounds ``f_min <= f <= f_max`` (the sidecar's, unless given here)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..exceptions import ProblemError
+from .base import Constraint
+
+
+class CableForceBounds(Constraint):
+    def __init__(self, f_min=None, f_max=None):
+        self.f_min = None if f_min is None else np.asarray(f_min, dtype=float)
+        self.f_max = None if f_max is None else np.asarray(f_max, dtype=float)
+
+    def validate(self, robot) -> None:
+        lo = robot.f_min if self.f_min is None else self.f_min
+        hi = robot.f_max if self.f_max is None else self.f_max
+        if lo.shape != (robot.m,) or hi.shape != (robot.m,):
+            raise ProblemError(f"CableForceBounds: expected {robot.m} lower and upper bounds")
+        if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))) or np.any(lo < 0) or np.any(hi <= lo):
+            raise ProblemError("CableForceBounds: expected finite bounds with 0 <= f_min < f_max")
+
+    def bounds(self, terms, context):
+        r = context.robot
+        return (r.f_min if self.f_min is None else self.f_min,
+                r.f_max if self.f_max is None else self.f_max)
+
+    def __repr__(self) -> str:
+        return "CableForceBounds()"

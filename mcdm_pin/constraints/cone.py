@@ -1,0 +1,63 @@
+r"""The stability cone of a unilateral spherical joint (case 3):
+
+.. math:: \sqrt{F_x^2 + F_y^2} \le \tan(\rho^*)\, F_z,
+
+with :math:`F` the interaction force in the socket (parent-side) frame by default (``frame='child'``:
+in the child link's frame) and :math:`z` the joint's socket axis. It is a second-order cone in
+:math:`F`, and :math:`F` is affine in the cable forces, so the constraint is convex.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..exceptions import ProblemError
+from .base import ConeData, Constraint, perpendicular_basis
+
+FRAMES = ("socket", "child")
+
+
+class InteractionCone(Constraint):
+    """Keep joint ``joint``'s interaction force within ``angle_deg`` of its socket axis.
+
+    Args:
+        joint: a spherical joint's name.
+        angle_deg: the half-angle rho*, degrees, in (0, 90); default: the sidecar's ``cone_deg``.
+        frame: ``socket`` (default, the source paper's convention) or ``child``.
+    """
+
+    def __init__(self, joint: str, angle_deg: float | None = None, frame: str = "socket"):
+        if frame not in FRAMES:
+            raise ProblemError(f"InteractionCone: frame must be one of {FRAMES}, got {frame!r}")
+        self.joint, self.angle_deg, self.frame = joint, angle_deg, frame
+        self._index = None
+
+    def validate(self, robot) -> None:
+        joint = robot.joint(self.joint)
+        if joint.type != "spherical":
+            raise ProblemError(f"InteractionCone: joint {self.joint!r} is {joint.type}; cones apply to "
+                               f"spherical joints")
+        if self.angle_deg is None:
+            if joint.cone_deg is None:
+                raise ProblemError(f"InteractionCone: joint {self.joint!r} has no cone_deg in the sidecar; "
+                                   f"give an angle")
+            self.angle_deg = joint.cone_deg
+        if not (0.0 < float(self.angle_deg) < 90.0):
+            raise ProblemError(f"InteractionCone: angle for {self.joint!r} must be in (0, 90) deg, "
+                               f"got {self.angle_deg!r}")
+        self._index = robot.joint_names.index(self.joint)
+        self._basis = perpendicular_basis(joint.socket_axis)
+
+    def cones(self, terms, context) -> list[ConeData]:
+        if self._index is None:
+            self.validate(context.robot)
+        a = self._index
+        G, g = terms.RT[a, :3], terms.u[a, :3]
+        if self.frame == "socket":
+            Rs = terms.R_socket[a]
+            G, g = Rs @ G, Rs @ g
+        return [ConeData(joint=self.joint, G=G, g=g, axis=terms.socket_axes[a],
+                         angle_deg=float(self.angle_deg), basis=self._basis)]
+
+    def __repr__(self) -> str:
+        return f"InteractionCone({self.joint!r}, {self.angle_deg}, frame={self.frame!r})"

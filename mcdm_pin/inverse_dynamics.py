@@ -1,0 +1,181 @@
+"""State -> terms -> problem -> solver -> result, for one instant or a whole trajectory.
+
+Every answer is checked before it is returned: the equation-of-motion residual, the cable bounds and
+the cones must hold to the stated tolerances, otherwise the instant is reported ``inaccurate`` (no
+point that silently breaks a constraint is returned as optimal). An infeasible instant is diagnosed:
+the message says whether the cable bounds alone, a single cone, or the cones together cannot be met.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import numpy as np
+
+from .problem import Context, Problem, QPData, case_problem
+from .results import InstantResult, TrajectoryResult
+from .solvers import INACCURATE, INFEASIBLE, OPTIMAL, SOFTENED, Solution, get_solver
+from .solvers.base import cone_violation_deg
+from .terms import TermsEvaluator, interaction_angles
+
+EOM_TOL = 1e-8  # relative equation-of-motion residual
+BOUND_TOL = 1e-9  # N
+CONE_TOL_DEG = 1e-6  # degrees
+
+
+class InverseDynamics:
+    """Solve an inverse-dynamics problem on a robot, instant by instant.
+
+    Args:
+        robot: the :class:`~mcdm_pin.robot.Robot`.
+        problem: a :class:`~mcdm_pin.problem.Problem` (or use :meth:`for_case`).
+        solver: a back-end name (``proxqp``, ``clarabel``) or a :class:`~mcdm_pin.solvers.Solver`.
+        soften: for instants where the cones cannot be met, return the forces that make the largest
+            cone violation smallest (status ``softened``) instead of ``infeasible``.
+    """
+
+    def __init__(self, robot, problem: Problem, solver="proxqp", soften: bool = False):
+        self.robot = robot
+        self.problem = problem
+        self.solver = get_solver(solver)
+        self.soften = soften
+        self.evaluate = TermsEvaluator(robot)
+
+    @classmethod
+    def for_case(cls, robot, case: int, solver="proxqp", soften: bool = False, **options):
+        """The paper's case 1, 2 or 3 (options as :func:`~mcdm_pin.problem.case_problem`)."""
+        return cls(robot, case_problem(robot, case, **options), solver=solver, soften=soften)
+
+    @property
+    def cone_deg(self) -> np.ndarray:
+        out = np.full(len(self.robot.joints), np.nan)
+        for c in self.problem.cone_constraints:
+            out[self.robot.joint_names.index(c.joint)] = c.angle_deg
+        return out
+
+    def solve(self, q, qd=None, qdd=None, f_prev=None) -> InstantResult:
+        """Cable forces at one state."""
+        t0 = time.perf_counter()
+        terms = self.evaluate(q, qd, qdd)
+        context = Context(self.robot, f_prev)
+        qp = self.problem.assemble(terms, context)
+        t1 = time.perf_counter()
+        sol = self.solver.solve(qp)
+        message = sol.message
+        softened = 0.0
+        if sol.status == INFEASIBLE:
+            message = diagnose_infeasible(qp, self.solver)
+            if self.soften and qp.cones and not message.startswith("bounds"):
+                sol, softened = soften_cones(qp, self.solver)
+                if sol.status == SOFTENED:
+                    message = f"cones widened by {softened:.6g} deg: {message}"
+        t2 = time.perf_counter()
+        if sol.found:
+            sol = _check(qp, terms, sol)
+            message = sol.message or message
+        f = sol.f
+        wrench = terms.wrenches(f) if sol.found else np.full((len(self.robot.joints), 6), np.nan)
+        F_socket = np.einsum("jab,jb->ja", terms.R_socket, wrench[:, :3])
+        angles = interaction_angles(F_socket, terms.socket_axes)
+        objective = self.problem.value(terms, f, context) if sol.found else float("nan")
+        return InstantResult(
+            f=f, status=sol.status, objective=objective,
+            eom_residual=terms.eom_residual(f) if sol.found else float("nan"),
+            interaction_wrench=wrench, interaction_force_socket=F_socket,
+            interaction_angle_deg=angles, iterations=sol.iterations, rounds=sol.rounds,
+            time_model_s=t1 - t0, time_solve_s=t2 - t1, message=message, softened_deg=softened)
+
+    def solve_trajectory(self, traj, progress: bool | None = None) -> TrajectoryResult:
+        """Solve every instant of ``traj`` in order, warm-starting each from the previous one.
+
+        Args:
+            progress: show a progress bar (after 1.5 s) on a terminal; ``None``: when stderr is a tty.
+        """
+        self.solver.reset()
+        if progress is None:
+            progress = sys.stderr.isatty()
+        instants: list[InstantResult] = []
+        f_prev = None
+        indices = range(len(traj))
+        bar = None
+        if progress:
+            from tqdm import tqdm
+            bar = tqdm(total=len(traj), delay=1.5, unit="inst", leave=False, file=sys.stderr)
+        try:
+            for k in indices:
+                res = self.solve(traj.q[k], traj.qd[k], traj.qdd[k], f_prev=f_prev)
+                instants.append(res)
+                if res.found:
+                    f_prev = res.f
+                if bar is not None:
+                    bar.update(1)
+        finally:
+            if bar is not None:
+                bar.close()
+        return TrajectoryResult.from_instants(
+            self.robot, traj, instants, self.cone_deg, robot=self.robot.name,
+            problem=self.problem.describe(), solver=self.solver.name, trajectory=traj.name)
+
+
+def _check(qp: QPData, terms, sol: Solution) -> Solution:
+    """Downgrade a solution that breaks a constraint beyond tolerance to ``inaccurate``."""
+    f = sol.f
+    problems = []
+    eom = terms.eom_residual(f)
+    if not eom <= EOM_TOL:
+        problems.append(f"equation-of-motion residual {eom:.2e} > {EOM_TOL:g}")
+    below = float(np.max(qp.lb - f, initial=0.0))
+    above = float(np.max(f - qp.ub, initial=0.0))
+    if max(below, above) > BOUND_TOL:
+        problems.append(f"cable bounds broken by {max(below, above):.2e} N")
+    if qp.cones and sol.status == OPTIMAL:
+        viol = cone_violation_deg(qp, f)
+        if viol.max() > CONE_TOL_DEG:
+            k = int(np.argmax(viol))
+            problems.append(f"cone of {qp.cones[k].joint!r} broken by {viol[k]:.2e} deg")
+    if not problems:
+        return sol
+    return Solution(sol.f, INACCURATE, sol.objective, sol.iterations, sol.rounds, "; ".join(problems))
+
+
+def diagnose_infeasible(qp: QPData, solver) -> str:
+    """Say what cannot be met at an infeasible instant: the bounds, one cone, or the cones together."""
+    side = solver.fresh()
+    if side.solve(qp.without_cones()).status == INFEASIBLE:
+        return ("bounds: the equation of motion cannot be met with cable forces within "
+                "[f_min, f_max]")
+    alone = []
+    for cone in qp.cones:
+        if solver.fresh().solve(qp.with_cones([cone])).status == INFEASIBLE:
+            alone.append(f"{cone.joint} ({cone.angle_deg:g} deg)")
+    if alone:
+        return f"cone: the stability cone of {', '.join(alone)} cannot be met within the cable bounds"
+    names = ", ".join(f"{c.joint} ({c.angle_deg:g} deg)" for c in qp.cones)
+    return f"cones: the stability cones of {names} cannot be met together within the cable bounds"
+
+
+def soften_cones(qp: QPData, solver, tol_deg: float = 1e-4) -> tuple[Solution, float]:
+    """Widen every cone by the smallest common angle that makes the instant feasible (bisection to
+    ``tol_deg``) and solve there. Returns the solution (status ``softened``) and the widening."""
+    from .constraints import ConeData
+
+    def widened(delta):
+        return qp.with_cones([ConeData(c.joint, c.G, c.g, c.axis, min(c.angle_deg + delta, 89.999999),
+                                       c.basis) for c in qp.cones])
+
+    lo, hi = 0.0, 90.0 - min(c.angle_deg for c in qp.cones)
+    if solver.fresh().solve(widened(hi)).status != OPTIMAL:
+        sol = solver.fresh().solve(qp)
+        return Solution(sol.f, INFEASIBLE, sol.objective, sol.iterations, sol.rounds,
+                        "no force presses the balls into their sockets at all"), 0.0
+    while hi - lo > tol_deg:
+        mid = 0.5 * (lo + hi)
+        if solver.fresh().solve(widened(mid)).status == OPTIMAL:
+            hi = mid
+        else:
+            lo = mid
+    sol = solver.fresh().solve(widened(hi))
+    if sol.status != OPTIMAL:
+        return sol, hi
+    return Solution(sol.f, SOFTENED, sol.objective, sol.iterations, sol.rounds), hi

@@ -1,0 +1,29 @@
+r"""The 1-norm :math:`J(f) = \sum_i w_i f_i` (forces are non-negative, so this is :math:`\|f\|_1`):
+a linear program, CASPR's other classic."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..exceptions import ProblemError
+from .base import Objective, Quadratic
+
+
+class MinCableForceSum(Objective):
+    """Minimise the weighted sum of the cable forces."""
+
+    def __init__(self, weights=None):
+        self.weights = None if weights is None else np.asarray(weights, dtype=float)
+
+    def validate(self, robot) -> None:
+        if self.weights is not None and (self.weights.shape != (robot.m,)
+                                         or not np.all(np.isfinite(self.weights))):
+            raise ProblemError(f"MinCableForceSum: expected {robot.m} finite weights")
+
+    def quadratic(self, terms, context) -> Quadratic:
+        m = terms.L.shape[0]
+        w = np.ones(m) if self.weights is None else self.weights
+        return Quadratic(np.zeros((m, m)), w.copy(), 0.0)
+
+    def __repr__(self) -> str:
+        return "MinCableForceSum()"

@@ -1,0 +1,209 @@
+"""Per-instant and trajectory results, and their files (``.npz`` and ``.csv``).
+
+``.npz`` keys (N instants, J physical joints, m cables, nv coordinates):
+
+==========================  ============  =====================================================
+key                         shape         meaning
+==========================  ============  =====================================================
+t                           (N,)          time, s
+q                           (N, nv)       coordinates (rad or m), Pinocchio joint order
+qd, qdd                     (N, nv)       their first and second time derivatives
+f                           (N, m)        cable forces, N (rows of NaN where no valid answer)
+status                      (N,)          optimal, infeasible, max_iter, softened, inaccurate
+message                     (N,)          what cannot be met (empty when optimal)
+objective                   (N,)          objective value without the smoothing term
+eom_residual                (N,)          relative equation-of-motion residual
+joint_names                 (J,)          physical joints
+cable_names                 (m,)          cables
+coordinate_names            (nv,)         URDF joint of each coordinate
+interaction_wrench          (N, J, 6)     [F; M] of parent on child, joint point, child frame
+interaction_force_socket    (N, J, 3)     F in the socket (parent-side) frame
+interaction_angle_deg       (N, J)        angle of F from the socket axis, degrees
+cone_deg                    (J,)          cone half-angle used (NaN: no cone)
+time_model_s, time_solve_s  (N,)          wall time of model evaluation and of solving, s
+iterations                  (N,)          solver iterations (summed over cone rounds)
+rounds                      (N,)          QP solves (cone cut rounds + 1)
+softened_deg                (N,)          cone widening applied in soften mode (0 otherwise)
+robot, problem, solver,     ()            strings describing the run
+trajectory
+==========================  ============  =====================================================
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .exceptions import ResultsError
+
+
+@dataclass
+class InstantResult:
+    """One instant's answer (see the module docstring for the meaning of each field)."""
+
+    f: np.ndarray
+    status: str
+    objective: float
+    eom_residual: float
+    interaction_wrench: np.ndarray
+    interaction_force_socket: np.ndarray
+    interaction_angle_deg: np.ndarray
+    iterations: int
+    rounds: int
+    time_model_s: float
+    time_solve_s: float
+    message: str = ""
+    softened_deg: float = 0.0
+
+    @property
+    def found(self) -> bool:
+        return self.status in ("optimal", "softened")
+
+
+ARRAY_KEYS = ("t", "q", "qd", "qdd", "f", "status", "message", "objective", "eom_residual",
+              "interaction_wrench", "interaction_force_socket", "interaction_angle_deg", "time_model_s",
+              "time_solve_s", "iterations", "rounds", "softened_deg")
+NAME_KEYS = ("joint_names", "cable_names", "coordinate_names")
+META_KEYS = ("robot", "problem", "solver", "trajectory")
+
+
+@dataclass
+class TrajectoryResult:
+    """Results over a trajectory (arrays as in the module docstring)."""
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    f: np.ndarray
+    status: np.ndarray
+    message: np.ndarray
+    objective: np.ndarray
+    eom_residual: np.ndarray
+    interaction_wrench: np.ndarray
+    interaction_force_socket: np.ndarray
+    interaction_angle_deg: np.ndarray
+    time_model_s: np.ndarray
+    time_solve_s: np.ndarray
+    iterations: np.ndarray
+    rounds: np.ndarray
+    softened_deg: np.ndarray
+    joint_names: np.ndarray
+    cable_names: np.ndarray
+    coordinate_names: np.ndarray
+    cone_deg: np.ndarray
+    robot: str = ""
+    problem: str = ""
+    solver: str = ""
+    trajectory: str = ""
+
+    @classmethod
+    def from_instants(cls, rob, traj, instants: list[InstantResult], cone_deg, **meta):
+        def stack(name, dtype=float):
+            return np.array([getattr(r, name) for r in instants], dtype=dtype)
+        return cls(t=traj.t.copy(), q=traj.q.copy(), qd=traj.qd.copy(), qdd=traj.qdd.copy(),
+                   f=stack("f"), status=stack("status", str), message=stack("message", str),
+                   objective=stack("objective"), eom_residual=stack("eom_residual"),
+                   interaction_wrench=stack("interaction_wrench"),
+                   interaction_force_socket=stack("interaction_force_socket"),
+                   interaction_angle_deg=stack("interaction_angle_deg"),
+                   time_model_s=stack("time_model_s"), time_solve_s=stack("time_solve_s"),
+                   iterations=stack("iterations", int), rounds=stack("rounds", int),
+                   softened_deg=stack("softened_deg"),
+                   joint_names=np.array(rob.joint_names, dtype=str),
+                   cable_names=np.array(rob.cable_names, dtype=str),
+                   coordinate_names=np.array(rob.coordinate_names, dtype=str),
+                   cone_deg=np.asarray(cone_deg, dtype=float), **meta)
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    @property
+    def found(self) -> np.ndarray:
+        return np.isin(self.status, ("optimal", "softened"))
+
+    @property
+    def infeasible(self) -> np.ndarray:
+        """Indices of the instants without a valid answer."""
+        return np.flatnonzero(~self.found)
+
+    @property
+    def force_magnitude(self) -> np.ndarray:
+        """(N, J) |F| of every joint's interaction force, N."""
+        return np.linalg.norm(self.interaction_wrench[:, :, :3], axis=2)
+
+    # ------------------------------------------------------------------------------------- files
+    def save(self, path) -> Path:
+        """Write ``.npz`` or ``.csv`` by the file's extension."""
+        path = Path(path)
+        if path.suffix == ".npz":
+            return self.save_npz(path)
+        if path.suffix == ".csv":
+            return self.save_csv(path)
+        raise ResultsError(f"{path}: expected a .npz or .csv file name")
+
+    def save_npz(self, path) -> Path:
+        path = Path(path)
+        data = {k: getattr(self, k) for k in ARRAY_KEYS + NAME_KEYS + ("cone_deg",)}
+        data.update({k: np.array(getattr(self, k)) for k in META_KEYS})
+        np.savez_compressed(path, **data)
+        return path
+
+    @classmethod
+    def load(cls, path) -> "TrajectoryResult":
+        path = Path(path)
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                missing = [k for k in ARRAY_KEYS + NAME_KEYS if k not in z.files]
+                if missing:
+                    raise ResultsError(f"{path}: not an mcdm-pin results file (missing {', '.join(missing)})")
+                kw = {k: z[k] for k in ARRAY_KEYS + NAME_KEYS}
+                kw["cone_deg"] = z["cone_deg"] if "cone_deg" in z.files else \
+                    np.full(len(kw["joint_names"]), np.nan)
+                for k in META_KEYS:
+                    kw[k] = str(z[k]) if k in z.files else ""
+        except FileNotFoundError:
+            raise ResultsError(f"{path}: file not found") from None
+        except (OSError, ValueError) as exc:
+            raise ResultsError(f"{path}: cannot read the results ({exc})") from None
+        return cls(**kw)
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The per-instant columns written to CSV, in order."""
+        cols: dict[str, np.ndarray] = {"t": self.t}
+        for prefix, arr in (("q", self.q), ("qd", self.qd), ("qdd", self.qdd)):
+            for i, name in enumerate(self.coordinate_names):
+                cols[f"{prefix}[{name}]"] = arr[:, i]
+        for i, name in enumerate(self.cable_names):
+            cols[f"f[{name}]"] = self.f[:, i]
+        cols.update(status=self.status, objective=self.objective, eom_residual=self.eom_residual)
+        comps = ("Fx", "Fy", "Fz", "Mx", "My", "Mz")
+        for j, name in enumerate(self.joint_names):
+            for k, c in enumerate(comps):
+                cols[f"{c}[{name}]"] = self.interaction_wrench[:, j, k]
+            for k, c in enumerate(("Fx_socket", "Fy_socket", "Fz_socket")):
+                cols[f"{c}[{name}]"] = self.interaction_force_socket[:, j, k]
+            cols[f"angle_deg[{name}]"] = self.interaction_angle_deg[:, j]
+        cols.update(time_model_s=self.time_model_s, time_solve_s=self.time_solve_s,
+                    iterations=self.iterations, rounds=self.rounds, softened_deg=self.softened_deg,
+                    message=self.message)
+        return cols
+
+    def save_csv(self, path) -> Path:
+        path = Path(path)
+        cols = self.columns()
+        with path.open("w", newline="", encoding="utf-8") as fh:
+            w = csv.writer(fh)
+            w.writerow(cols.keys())
+            for i in range(len(self.t)):
+                w.writerow([_fmt(v[i]) for v in cols.values()])
+        return path
+
+
+def _fmt(x) -> str:
+    if isinstance(x, (float, np.floating)):
+        return repr(float(x))
+    return str(x)

@@ -1,0 +1,376 @@
+"""Cable sidecar (YAML) -> validated plain data.
+
+This module knows nothing of Pinocchio: it checks types, ranges and key names, and returns frozen
+dataclasses. Whether link and joint names exist in the URDF is checked by :mod:`mcdm_pin.robot`, which
+raises the same :class:`~mcdm_pin.exceptions.SidecarError` with the same key paths.
+
+The format is documented in ``docs/sidecar.md``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from .exceptions import SidecarError
+
+SUPPORTED_VERSIONS = (1,)
+JOINT_TYPES = ("spherical", "revolute", "prismatic")
+SPHERICAL_MODES = ("axis-angle", "per-coordinate")
+TRAJECTORY_TYPES = ("quintic", "csv")
+
+_FLOAT_RE = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
+
+
+@dataclass(frozen=True)
+class JointSpec:
+    """One physical joint as the sidecar declares it (names not yet checked against the URDF)."""
+
+    name: str
+    type: str
+    urdf_joints: tuple[str, ...]
+    socket_axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    alpha: float = 1.0
+    beta: float = 0.0
+    cone_deg: float | None = None
+    key: str = ""
+
+
+@dataclass(frozen=True)
+class RoutePoint:
+    link: str
+    point: tuple[float, float, float]
+    key: str = ""
+
+
+@dataclass(frozen=True)
+class CableSpec:
+    name: str
+    f_min: float
+    f_max: float
+    route: tuple[RoutePoint, ...]
+    key: str = ""
+
+
+@dataclass(frozen=True)
+class TrajectorySpec:
+    """A named trajectory. ``type`` is ``quintic`` (q_start, q_end, duration, dt, spherical) or
+    ``csv`` (file, resolved to an absolute path)."""
+
+    name: str
+    type: str
+    q_start: Any = None
+    q_end: Any = None
+    duration: float | None = None
+    dt: float | None = None
+    spherical: str = "axis-angle"
+    file: Path | None = None
+    key: str = ""
+
+
+@dataclass(frozen=True)
+class Sidecar:
+    """A validated sidecar. ``path`` is the YAML file (``None`` for data given in code)."""
+
+    path: Path | None
+    version: int
+    name: str
+    urdf: str
+    urdf_path: Path | None
+    gravity: tuple[float, float, float]
+    joints: tuple[JointSpec, ...]
+    cables: tuple[CableSpec, ...]
+    locked_joints: dict[str, float] = field(default_factory=dict)
+    trajectories: dict[str, TrajectorySpec] = field(default_factory=dict)
+    description: str = ""
+
+    def error(self, key: str, expected: str) -> SidecarError:
+        return SidecarError(self.path, key, expected)
+
+
+# --------------------------------------------------------------------------------------------------
+# small typed readers: each one names the key path and what was expected
+
+
+class _Reader:
+    def __init__(self, path: Path | None):
+        self.path = path
+
+    def fail(self, key: str, expected: str) -> SidecarError:
+        return SidecarError(self.path, key, expected)
+
+    def mapping(self, value, key: str, allowed: tuple[str, ...], required: tuple[str, ...] = ()):
+        if not isinstance(value, dict):
+            raise self.fail(key, f"expected a mapping with keys {_names(allowed)}, got {_kind(value)}")
+        for k in value:
+            if not isinstance(k, str):
+                raise self.fail(key, f"keys must be strings, got {k!r}")
+            if k not in allowed:
+                raise self.fail(_join(key, k), f"unknown key {k!r}; expected one of {_names(allowed)}")
+        for k in required:
+            if k not in value:
+                raise self.fail(_join(key, k), f"missing required key {k!r}")
+        return value
+
+    def number(self, value, key: str, *, lo=None, hi=None, lo_open=False, hi_open=False) -> float:
+        if isinstance(value, bool) or value is None:
+            raise self.fail(key, f"expected a number, got {_kind(value)}")
+        if isinstance(value, str):
+            # PyYAML reads "1e3" (no dot) as a string; accept plain decimal notation only.
+            if not _FLOAT_RE.match(value.strip()):
+                raise self.fail(key, f"expected a number, got the string {value!r}")
+            value = float(value)
+        if not isinstance(value, (int, float)):
+            raise self.fail(key, f"expected a number, got {_kind(value)}")
+        x = float(value)
+        if not math.isfinite(x):
+            raise self.fail(key, f"expected a finite number, got {value!r}")
+        if lo is not None and (x < lo or (lo_open and x == lo)):
+            raise self.fail(key, f"expected a number {'>' if lo_open else '>='} {lo}, got {x!r}")
+        if hi is not None and (x > hi or (hi_open and x == hi)):
+            raise self.fail(key, f"expected a number {'<' if hi_open else '<='} {hi}, got {x!r}")
+        return x
+
+    def vector(self, value, key: str, n: int | None = 3) -> tuple[float, ...]:
+        if not isinstance(value, (list, tuple)):
+            raise self.fail(key, f"expected a list of {n or 'some'} numbers, got {_kind(value)}")
+        if n is not None and len(value) != n:
+            raise self.fail(key, f"expected a list of {n} numbers, got {len(value)}")
+        return tuple(self.number(v, f"{key}[{i}]") for i, v in enumerate(value))
+
+    def string(self, value, key: str) -> str:
+        if not isinstance(value, str) or not value.strip():
+            raise self.fail(key, f"expected a non-empty string, got {_kind(value)}")
+        return value
+
+    def choice(self, value, key: str, choices: tuple[str, ...]) -> str:
+        if value not in choices:
+            raise self.fail(key, f"expected one of {_names(choices)}, got {value!r}")
+        return value
+
+
+def _kind(value) -> str:
+    if value is None:
+        return "nothing (null)"
+    if isinstance(value, bool):
+        return f"the boolean {value}"
+    if isinstance(value, (dict, list, str)):
+        text = repr(value)
+        return f"{type(value).__name__} {text[:60]}{'...' if len(text) > 60 else ''}"
+    return f"{type(value).__name__} {value!r}"
+
+
+def _names(names) -> str:
+    names = list(names)
+    shown = ", ".join(repr(n) for n in names[:25])
+    return shown + (f", ... ({len(names)} in all)" if len(names) > 25 else "")
+
+
+def _join(key: str, sub: str) -> str:
+    return f"{key}.{sub}" if key else sub
+
+
+# --------------------------------------------------------------------------------------------------
+
+TOP_KEYS = ("version", "name", "description", "urdf", "gravity", "joints", "cables", "locked_joints",
+            "trajectories")
+JOINT_KEYS = ("type", "urdf_joints", "socket_axis", "alpha", "beta", "cone_deg")
+CABLE_KEYS = ("name", "f_min", "f_max", "route")
+POINT_KEYS = ("link", "point")
+QUINTIC_KEYS = ("type", "q_start", "q_end", "duration", "dt", "spherical")
+CSV_KEYS = ("type", "file")
+
+
+def load_sidecar(path) -> Sidecar:
+    """Read and validate a sidecar file.
+
+    Raises:
+        SidecarError: the file is missing, is not valid YAML, or breaks the format; the message
+            names the file, the key path and what was expected.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SidecarError(path, "", "file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SidecarError(path, "", f"cannot read the file ({exc})") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise SidecarError(path, "", f"malformed YAML{where}: {problem}") from None
+    except RecursionError:
+        raise SidecarError(path, "", "malformed YAML: nesting too deep") from None
+    return parse_sidecar(data, path=path)
+
+
+def parse_sidecar(data, path: Path | None = None, base_dir: Path | None = None) -> Sidecar:
+    """Validate sidecar data already parsed from YAML (or built in code).
+
+    Args:
+        data: the YAML document as Python objects.
+        path: the file it came from, for messages and to resolve relative paths.
+        base_dir: folder relative paths are resolved against (default: the file's folder, or the
+            current directory).
+    """
+    r = _Reader(path)
+    if base_dir is None:
+        base_dir = path.parent if path is not None else Path.cwd()
+    data = r.mapping(data, "", TOP_KEYS, required=("version", "urdf", "joints", "cables"))
+
+    version = data["version"]
+    if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
+        raise r.fail("version", f"expected one of {list(SUPPORTED_VERSIONS)}, got {version!r}")
+
+    urdf = r.string(data["urdf"], "urdf")
+    urdf_path = None if urdf.startswith("package://") else (base_dir / urdf).resolve()
+    name = r.string(data.get("name", path.stem if path else "robot"), "name")
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        raise r.fail("description", f"expected a string, got {_kind(description)}")
+    gravity = r.vector(data.get("gravity", [0.0, 0.0, -9.81]), "gravity")
+
+    joints = _parse_joints(r, data["joints"])
+    cables = _parse_cables(r, data["cables"])
+
+    locked_raw = data.get("locked_joints", {}) or {}
+    if not isinstance(locked_raw, dict):
+        raise r.fail("locked_joints", f"expected a mapping urdf_joint: value, got {_kind(locked_raw)}")
+    locked = {}
+    for k, v in locked_raw.items():
+        key = f"locked_joints.{k}"
+        r.string(k, key)
+        locked[k] = r.number(v, key)
+
+    trajs_raw = data.get("trajectories", {}) or {}
+    if not isinstance(trajs_raw, dict):
+        raise r.fail("trajectories", f"expected a mapping name: trajectory, got {_kind(trajs_raw)}")
+    trajectories = {}
+    for tname, spec in trajs_raw.items():
+        trajectories[tname] = _parse_trajectory(r, tname, spec, base_dir)
+
+    return Sidecar(path=path, version=int(version), name=name, urdf=urdf, urdf_path=urdf_path,
+                   gravity=gravity, joints=joints, cables=cables, locked_joints=locked,
+                   trajectories=trajectories, description=description)
+
+
+def _parse_joints(r: _Reader, raw) -> tuple[JointSpec, ...]:
+    if not isinstance(raw, dict) or not raw:
+        raise r.fail("joints", f"expected a non-empty mapping joint_name: {{type, urdf_joints, ...}}, "
+                               f"got {_kind(raw)}")
+    joints = []
+    seen_urdf: dict[str, str] = {}
+    for jname, spec in raw.items():
+        key = f"joints.{jname}"
+        r.string(jname, key)
+        spec = r.mapping(spec, key, JOINT_KEYS, required=("type", "urdf_joints"))
+        jtype = r.choice(spec["type"], f"{key}.type", JOINT_TYPES)
+        uj = spec["urdf_joints"]
+        n_expected = 3 if jtype == "spherical" else 1
+        if isinstance(uj, str) and n_expected == 1:
+            uj = [uj]
+        if not isinstance(uj, list) or len(uj) != n_expected:
+            raise r.fail(f"{key}.urdf_joints",
+                         f"a {jtype} joint needs a list of {n_expected} URDF joint name"
+                         f"{'s' if n_expected > 1 else ''}, got {_kind(uj)}")
+        names = tuple(r.string(u, f"{key}.urdf_joints[{i}]") for i, u in enumerate(uj))
+        for i, u in enumerate(names):
+            if u in seen_urdf:
+                raise r.fail(f"{key}.urdf_joints[{i}]",
+                             f"URDF joint {u!r} is already used by joint {seen_urdf[u]!r}")
+            seen_urdf[u] = jname
+        axis = r.vector(spec.get("socket_axis", [0.0, 0.0, 1.0]), f"{key}.socket_axis")
+        norm = math.sqrt(sum(a * a for a in axis))
+        if abs(norm - 1.0) > 1e-6:
+            raise r.fail(f"{key}.socket_axis", f"expected a unit vector, got norm {norm:.6g}")
+        axis = tuple(a / norm for a in axis)
+        alpha = r.number(spec.get("alpha", 1.0), f"{key}.alpha", lo=0.0)
+        beta = r.number(spec.get("beta", 0.0), f"{key}.beta", lo=0.0)
+        cone = spec.get("cone_deg")
+        if cone is not None:
+            if jtype != "spherical":
+                raise r.fail(f"{key}.cone_deg", "a stability cone is defined for spherical joints only")
+            cone = r.number(cone, f"{key}.cone_deg", lo=0.0, hi=90.0, lo_open=True, hi_open=True)
+        joints.append(JointSpec(name=jname, type=jtype, urdf_joints=names, socket_axis=axis,
+                                alpha=alpha, beta=beta, cone_deg=cone, key=key))
+    return tuple(joints)
+
+
+def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:
+    if not isinstance(raw, list) or not raw:
+        raise r.fail("cables", f"expected a non-empty list of cables, got {_kind(raw)}")
+    cables = []
+    names: dict[str, int] = {}
+    for i, spec in enumerate(raw):
+        key = f"cables[{i}]"
+        spec = r.mapping(spec, key, CABLE_KEYS, required=CABLE_KEYS)
+        name = r.string(spec["name"], f"{key}.name")
+        if name in names:
+            raise r.fail(f"{key}.name", f"cable name {name!r} is already used by cables[{names[name]}]")
+        names[name] = i
+        f_min = r.number(spec["f_min"], f"{key}.f_min", lo=0.0)
+        f_max = r.number(spec["f_max"], f"{key}.f_max")
+        if not f_max > f_min:
+            raise r.fail(f"{key}.f_max", f"expected f_max > f_min = {f_min!r}, got {f_max!r}")
+        route = spec["route"]
+        if not isinstance(route, list) or len(route) < 2:
+            got = f"{len(route)} point(s)" if isinstance(route, list) else _kind(route)
+            raise r.fail(f"{key}.route", f"expected a list of at least two {{link, point}}, got {got}")
+        points = []
+        for k, p in enumerate(route):
+            pkey = f"{key}.route[{k}]"
+            p = r.mapping(p, pkey, POINT_KEYS, required=POINT_KEYS)
+            points.append(RoutePoint(link=r.string(p["link"], f"{pkey}.link"),
+                                     point=r.vector(p["point"], f"{pkey}.point"), key=pkey))
+        cables.append(CableSpec(name=name, f_min=f_min, f_max=f_max, route=tuple(points), key=key))
+    return tuple(cables)
+
+
+def _parse_trajectory(r: _Reader, name, spec, base_dir: Path) -> TrajectorySpec:
+    key = f"trajectories.{name}"
+    r.string(name, key)
+    if not isinstance(spec, dict) or "type" not in spec:
+        raise r.fail(key, f"expected a mapping with a 'type' of {_names(TRAJECTORY_TYPES)}, "
+                          f"got {_kind(spec)}")
+    ttype = r.choice(spec["type"], f"{key}.type", TRAJECTORY_TYPES)
+    if ttype == "csv":
+        spec = r.mapping(spec, key, CSV_KEYS, required=CSV_KEYS)
+        file = (base_dir / r.string(spec["file"], f"{key}.file")).resolve()
+        return TrajectorySpec(name=name, type="csv", file=file, key=key)
+    spec = r.mapping(spec, key, QUINTIC_KEYS, required=("type", "q_start", "q_end", "duration", "dt"))
+    q0 = _parse_q(r, spec["q_start"], f"{key}.q_start")
+    q1 = _parse_q(r, spec["q_end"], f"{key}.q_end")
+    duration = r.number(spec["duration"], f"{key}.duration", lo=0.0, lo_open=True)
+    dt = r.number(spec["dt"], f"{key}.dt", lo=0.0, lo_open=True)
+    if dt > duration:
+        raise r.fail(f"{key}.dt", f"expected dt <= duration = {duration!r}, got {dt!r}")
+    if duration / dt > 10_000_000:
+        raise r.fail(f"{key}.dt", f"expected at most 1e7 samples, got duration/dt = {duration / dt:.3g}")
+    mode = r.choice(spec.get("spherical", "axis-angle"), f"{key}.spherical", SPHERICAL_MODES)
+    return TrajectorySpec(name=name, type="quintic", q_start=q0, q_end=q1, duration=duration, dt=dt,
+                          spherical=mode, key=key)
+
+
+def _parse_q(r: _Reader, value, key: str):
+    """A configuration: a list of numbers (one per coordinate, in the model's order) or a mapping
+    physical joint name -> number or list of numbers (joints left out stay at 0)."""
+    if isinstance(value, list):
+        return tuple(r.number(v, f"{key}[{i}]") for i, v in enumerate(value))
+    if isinstance(value, dict):
+        out = {}
+        for j, v in value.items():
+            r.string(j, f"{key}.{j}")
+            if isinstance(v, list):
+                out[j] = tuple(r.number(x, f"{key}.{j}[{i}]") for i, x in enumerate(v))
+            else:
+                out[j] = (r.number(v, f"{key}.{j}"),)
+        return out
+    raise r.fail(key, f"expected a list of numbers or a mapping joint: value(s), got {_kind(value)}")

@@ -1,0 +1,154 @@
+r"""The terms of the inverse-dynamics problem at one state: the only module that calls RNEA.
+
+At a state :math:`(q, \dot q, \ddot q)`:
+
+.. math::
+
+    M(q)\ddot q + h(q,\dot q) = -L(q)^T f, \qquad L = \partial \ell / \partial q,
+
+and for every physical joint :math:`a` the interaction wrench (force and moment the parent exerts on
+the child through the joint, at the joint point, in the child link's frame, Pinocchio's ``data.f``
+convention) is affine in the cable forces:
+
+.. math::
+
+    p_a = u_a + R_a^T f, \qquad u_a = \text{RNEA}(q,\dot q,\ddot q)\text{'s } f_a, \qquad
+    R_a^T = {}^{a}X^{*}_{0} \sum_{b \in \text{subtree}(a)} W_b,
+
+where :math:`W_b` are the cables' signed Plücker vectors on body :math:`b` (:mod:`mcdm_pin.cables`).
+Because the joints are passive, the joint-space part :math:`S_a^T p_a` equals
+:math:`(M\ddot q + h + L^T f)_a`, zero whenever the equation of motion holds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .cables import CableGeometry, cable_geometry
+
+
+@dataclass
+class Terms:
+    """Everything the problem needs at one state (arrays are owned copies).
+
+    Attributes:
+        q, qd, qdd: the state (nv each).
+        M: (nv, nv) joint-space inertia matrix.
+        h: (nv,) Coriolis, centrifugal and gravity terms.
+        tau: (nv,) ``M qdd + h``; the equation of motion is ``L^T f = -tau``.
+        lengths: (m,) cable lengths, m.
+        L: (m, nv) ``d lengths / dq``.
+        u: (J, 6) interaction wrenches ``[F; M]`` with zero cable force (child frame).
+        RT: (J, 6, m) their derivative with respect to the cable forces.
+        R_socket: (J, 3, 3) rotation from the child frame to the socket frame of each joint.
+        socket_axes: (J, 3) unit socket axes (socket frame).
+        geometry: the cable geometry (world points, segments).
+        oMi: (nj, 4, 4) world placement of every Pinocchio joint frame.
+    """
+
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    M: np.ndarray
+    h: np.ndarray
+    tau: np.ndarray
+    lengths: np.ndarray
+    L: np.ndarray
+    u: np.ndarray
+    RT: np.ndarray
+    R_socket: np.ndarray
+    socket_axes: np.ndarray
+    geometry: CableGeometry
+    oMi: np.ndarray
+
+    # --- derived quantities for a force vector f (m,) ---------------------------------------------
+    def wrenches(self, f) -> np.ndarray:
+        """(J, 6) interaction wrenches ``[F; M]`` of parent on child, child frame, joint point."""
+        return self.u + self.RT @ np.asarray(f, dtype=float)
+
+    def socket_forces(self, f) -> np.ndarray:
+        """(J, 3) interaction forces expressed in each joint's socket (parent-side) frame."""
+        F = self.wrenches(f)[:, :3]
+        return np.einsum("jab,jb->ja", self.R_socket, F)
+
+    def angles_deg(self, f, frame: str = "socket") -> np.ndarray:
+        """(J,) interaction angle ``atan2(|F_perp|, F . axis)`` about each socket axis, degrees.
+
+        ``frame='child'`` measures the child-frame force against the same axis taken in the child
+        frame (the convention a cone "in the child frame" uses)."""
+        F = self.socket_forces(f) if frame == "socket" else self.wrenches(f)[:, :3]
+        return interaction_angles(F, self.socket_axes)
+
+    def eom_residual(self, f) -> float:
+        """Relative equation-of-motion residual ``|tau + L^T f|_inf / scale`` with
+        ``scale = max(|tau|_inf, max_i sum_c |L_ci f_c|)``."""
+        f = np.asarray(f, dtype=float)
+        r = self.tau + self.L.T @ f
+        scale = max(np.abs(self.tau).max(initial=0.0), (np.abs(self.L.T) @ np.abs(f)).max(initial=0.0),
+                    1e-300)
+        return float(np.abs(r).max(initial=0.0) / scale)
+
+
+def interaction_angles(F: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """Angle between each force ``F[j]`` and axis ``axes[j]``, degrees, in [0, 180]."""
+    along = np.einsum("ja,ja->j", F, axes)
+    perp = np.linalg.norm(F - along[:, None] * axes, axis=1)
+    return np.degrees(np.arctan2(perp, along))
+
+
+class TermsEvaluator:
+    """Computes :class:`Terms` for one robot, reusing Pinocchio's data between calls."""
+
+    def __init__(self, robot):
+        self.robot = robot
+        self.model = robot.model
+        self.data = robot.model.createData()
+        js = robot.joints
+        self._child = [j.child_id for j in js]
+        self._parent = [j.parent_id for j in js]
+        self._socket = [j.socket_placement for j in js]
+        self._sub = robot.subtree[self._child]  # (J, nj)
+        self._axes = np.array([j.socket_axis for j in js]).reshape(len(js), 3)
+        self._zeros = np.zeros(robot.nv)
+
+    def __call__(self, q, qd=None, qdd=None) -> Terms:
+        r = self.robot
+        q = r.check_vector(q, "q")
+        qd = self._zeros if qd is None else r.check_vector(qd, "qd")
+        qdd = self._zeros if qdd is None else r.check_vector(qdd, "qdd")
+        model, data = self.model, self.data
+        nj = model.njoints
+        qp = r.pin_q(q)
+
+        pin.computeJointJacobians(model, data, qp)
+        oMi = np.array([data.oMi[j].homogeneous for j in range(nj)])
+        oR, op = oMi[:, :3, :3], oMi[:, :3, 3]
+        J = np.array([pin.getJointJacobian(model, data, j, pin.ReferenceFrame.WORLD)
+                      for j in range(nj)])  # (nj, 6, nv), [v; w] at the world origin
+        M = pin.crba(model, data, qp).copy()
+        M = np.triu(M) + np.triu(M, 1).T
+        tau = pin.rnea(model, data, qp, qd, qdd).copy()
+        u = np.array([data.f[c].vector for c in self._child]).reshape(len(self._child), 6)
+
+        geo = cable_geometry(r, oR, op)
+        L = np.einsum("jkm,jkn->mn", geo.W, J)
+        Wsub = np.einsum("aj,jkm->akm", self._sub, geo.W)  # (J, 6, m) world, about the origin
+        Rc, tc = oR[self._child], op[self._child]
+        RcT = Rc.transpose(0, 2, 1)
+        F_w, M_w = Wsub[:, :3], Wsub[:, 3:]
+        RT = np.empty_like(Wsub)
+        RT[:, :3] = RcT @ F_w
+        RT[:, 3:] = RcT @ (M_w - np.cross(tc[:, None, :], F_w.transpose(0, 2, 1)).transpose(0, 2, 1))
+        R_socket = np.array([(data.oMi[p] * s).rotation.T @ R
+                             for p, s, R in zip(self._parent, self._socket, Rc)]).reshape(-1, 3, 3)
+        return Terms(q=q.copy(), qd=np.array(qd, float), qdd=np.array(qdd, float), M=M,
+                     h=tau - M @ qdd, tau=tau, lengths=geo.lengths, L=L, u=u, RT=RT,
+                     R_socket=R_socket, socket_axes=self._axes, geometry=geo, oMi=oMi)
+
+
+def compute_terms(robot, q, qd=None, qdd=None) -> Terms:
+    """Terms at one state (convenience wrapper; reuse a :class:`TermsEvaluator` in loops)."""
+    return TermsEvaluator(robot)(q, qd, qdd)

@@ -1,0 +1,52 @@
+"""A robot's validation report (``mcdm-pin info``): checks that need the model, at the zero pose."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .exceptions import McdmError
+
+
+def validation_report(robot) -> list[tuple[str, str]]:
+    """``[(level, text)]`` with level ``ok``, ``warn`` or ``fail``."""
+    from .inverse_dynamics import InverseDynamics
+    from .terms import compute_terms
+
+    out = [("ok", f"sidecar valid; URDF loaded; every movable URDF joint ({robot.nv}) belongs to one "
+                  f"of {len(robot.joints)} physical joints")]
+    q0 = np.zeros(robot.nv)
+    try:
+        terms = compute_terms(robot, q0)
+    except McdmError as exc:
+        return out + [("fail", f"cannot evaluate the model at q = 0: {exc}")]
+    eig = np.linalg.eigvalsh(terms.M)
+    if eig.min() > 0:
+        out.append(("ok", f"mass matrix positive definite at q = 0 (eigenvalues {eig.min():.3g} .. "
+                          f"{eig.max():.3g})"))
+    else:
+        out.append(("fail", f"mass matrix not positive definite at q = 0 (smallest eigenvalue "
+                            f"{eig.min():.3g}): a subtree has no mass or inertia"))
+    rank = np.linalg.matrix_rank(terms.L, tol=1e-9 * max(1.0, np.abs(terms.L).max()))
+    if rank == robot.nv:
+        sv = np.linalg.svd(terms.L, compute_uv=False)
+        out.append(("ok", f"cables span all {robot.nv} DoF at q = 0 (rank L = {rank}, condition "
+                          f"{sv[0] / sv[-1]:.3g})"))
+    else:
+        out.append(("warn", f"cables span only {rank} of {robot.nv} DoF at q = 0 (rank L = {rank}): "
+                            f"a singular pose, where some accelerations cannot be produced; check the "
+                            f"poses your trajectories visit"))
+    if robot.m <= robot.nv:
+        out.append(("warn", f"{robot.m} cables for {robot.nv} DoF: a cable robot needs more cables "
+                            f"than DoF to keep every cable in tension"))
+    res = InverseDynamics.for_case(robot, 1).solve(q0)
+    if res.found:
+        out.append(("ok", f"holds the zero pose against gravity with forces in bounds "
+                          f"(min f^T f: peak {np.max(res.f):.4g} N)"))
+    else:
+        out.append(("warn", f"cannot hold the zero pose against gravity within the cable bounds "
+                            f"({res.status}: {res.message})"))
+    for j in robot.joints:
+        if j.cone_deg is not None:
+            out.append(("ok", f"joint {j.name}: stability cone {j.cone_deg:g} deg about socket axis "
+                              f"{np.round(j.socket_axis, 6).tolist()}"))
+    return out
