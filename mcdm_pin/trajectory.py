@@ -173,7 +173,8 @@ def quintic_trajectory(robot, q_start, q_end, duration: float, dt: float,
                 th = kin.angles(target, th)
                 q[k, iv] = th
                 qd[k, iv], qdd[k, iv] = kin.rates(th, ds[k] * phi, dds[k] * phi)
-            q[-1, iv] = kin.angles(kin.rotation(q1[iv]), q[-1, iv])
+            if abs(t[-1] - duration) <= 1e-9 * duration:  # the last sample is the end pose
+                q[-1, iv] = kin.angles(kin.rotation(q1[iv]), q[-1, iv])
     elif spherical != "per-coordinate":
         raise TrajectoryError(f"spherical: expected 'axis-angle' or 'per-coordinate', got {spherical!r}")
     return Trajectory(name, t, q, qd, qdd)

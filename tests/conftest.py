@@ -1,0 +1,19 @@
+"""Shared fixtures: the bundled 2-link robot and paths."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+TWO_LINK = REPO / "robots" / "two_link_sr.yaml"
+TWO_LINK_URDF = REPO / "urdf" / "two_link_sr.urdf"
+SHARED = REPO.parent / "shared"
+
+
+@pytest.fixture(scope="session")
+def two_link():
+    from mcdm_pin import Robot
+
+    return Robot.load(TWO_LINK)
