@@ -115,22 +115,31 @@ class ProxQPSolver(Solver):
         if not self.keep_cuts:
             self._cuts = {}
         cuts = [list(self._cuts.get(c.joint, [])) for c in cones]
-        eye = np.eye(n)
         iterations, rounds = 0, 0
+        polish = False  # False: cutting planes; True: SQP polish (see the module docstring)
+        sqp_dirs: list = [None] * len(cones)
+        sqp_mult = np.zeros(len(cones))
+        x_prev = None
         for rounds in range(1, self.max_rounds + 1):
-            rows, rhs = [eye], []
-            for cone, ck in zip(cones, cuts):
-                if ck:
-                    W = np.asarray(ck) - cone.tan * cone.axis  # d . F - t a . F <= 0
-                    rows.append(W @ cone.G)
-                    rhs.append(-(W @ cone.g))
-            C = np.vstack(rows)
-            n_cut = C.shape[0] - n
-            l = np.concatenate([qp.lb, np.full(n_cut, -np.inf)])
-            u = np.concatenate([qp.ub] + rhs) if rhs else qp.ub.copy()
-            x, z, status, it = self._solve_qp(H, g, qp.A, qp.b, C, l, u)
+            Hk, gk = H, g
+            if polish:
+                # SQP subproblem: the objective plus, per cone, its curvature weighted by its
+                # multiplier, centred at the current point: 1/2 (f - x)^T (z_k D_k) (f - x)
+                rows = [(k, [d]) if d is not None else (k, []) for k, d in enumerate(sqp_dirs)]
+                Hk, gk = H.copy(), g.copy()
+                for k, cone in enumerate(cones):
+                    if sqp_dirs[k] is not None and sqp_mult[k] > 0:
+                        D = sqp_mult[k] * _cone_curvature(cone, x_prev)
+                        Hk += D
+                        gk -= D @ x_prev
+            else:
+                rows = list(enumerate(cuts))
+            C, l, u, owner = _rows(qp, cones, rows)
+            x, z, status, it = self._solve_qp(Hk, gk, qp.A, qp.b, C, l, u)
             iterations += it
             if status is None:
+                if polish:  # an SQP subproblem is not a relaxation: no proof, fall back
+                    return failure(n, INACCURATE, "SQP polish subproblem infeasible", iterations, rounds)
                 what = "the cones' outer approximation" if cones else "the cable bounds"
                 return failure(n, INFEASIBLE, f"no cable forces satisfy the equation of motion and "
                                               f"{what} (decided by HiGHS)", iterations, rounds)
@@ -138,43 +147,91 @@ class ProxQPSolver(Solver):
                 return failure(n, MAX_ITER, "ProxQP reached its iteration limit", iterations, rounds)
             if status != _STATUS.PROXQP_SOLVED:
                 return failure(n, INACCURATE, f"ProxQP: {status.name}", iterations, rounds)
-            # multipliers of each cone's cuts
-            duals, start = [], n
-            for ck in cuts:
-                duals.append(z[start:start + len(ck)])
-                start += len(ck)
-            added = False
+            zc = z[n:]
+            violated = []
             for k, cone in enumerate(cones):
                 F = cone.force(x)
                 along = float(cone.axis @ F)
                 perp_vec = F - along * cone.axis
                 perp = float(np.linalg.norm(perp_vec))
-                if np.degrees(np.arctan2(perp, along)) <= cone.angle_deg + self.cone_tol_deg:
-                    continue
-                d = perp_vec / perp if perp > 1e-300 else cone.basis[0]
-                near = _parallel_cuts(cone, cuts[k], d)
-                if near:
-                    # two nearly parallel rows make the relaxation degenerate and ProxQP then
-                    # stalls or misreports infeasibility: the exact separating cut replaces its
-                    # neighbour (a valid cut still; only the neighbour's sliver is given up)
-                    cuts[k][near[0]] = d
-                    added = True
-                    continue
-                if len(cuts[k]) >= self.cuts_per_cone:
-                    # drop inactive cuts only: the relaxation never loosens where it binds, so the
-                    # optimal values of successive relaxations increase and cannot cycle
-                    keep = [d for d, zi in zip(cuts[k], duals[k]) if zi != 0.0]
-                    cuts[k] = keep
-                    duals[k] = np.ones(len(keep))
-                cuts[k].append(d)
-                added = True
-            if not added:
+                if np.degrees(np.arctan2(perp, along)) > cone.angle_deg + self.cone_tol_deg:
+                    violated.append((k, perp_vec / perp if perp > 1e-300 else cone.basis[0]))
+            if polish:
+                step = np.linalg.norm(x - x_prev) / (1.0 + np.linalg.norm(x))
+                if not violated and step <= 1e-9:
+                    return Solution(x, OPTIMAL, qp.objective(x), iterations, rounds)
+                for k, cone in enumerate(cones):
+                    mult = float(zc[owner == k].sum())
+                    F = cone.force(x)
+                    perp_vec = F - float(cone.axis @ F) * cone.axis
+                    perp = float(np.linalg.norm(perp_vec))
+                    if (sqp_dirs[k] is not None or any(v[0] == k for v in violated)) and perp > 1e-300:
+                        sqp_dirs[k] = perp_vec / perp
+                        sqp_mult[k] = mult
+                x_prev = x
+                continue
+            duals = [zc[owner == k] for k in range(len(cones))]
+            if not violated:
                 if self.keep_cuts:  # keep the binding cuts (non-zero multiplier) for the next instant
                     for cone, ck, zk in zip(cones, cuts, duals):
                         self._cuts[cone.joint] = [d for d, zi in zip(ck, zk) if zi != 0.0]
                 return Solution(x, OPTIMAL, qp.objective(x), iterations, rounds)
+            for k, d in violated:
+                if _parallel_cuts(cones[k], cuts[k], d):
+                    polish = True
+                if len(cuts[k]) >= self.cuts_per_cone:
+                    # drop inactive cuts only: the relaxation never loosens where it binds, so the
+                    # optimal values of successive relaxations increase and cannot cycle
+                    cuts[k] = [c for c, zi in zip(cuts[k], duals[k]) if zi != 0.0]
+                cuts[k].append(d)
+            if polish:
+                # the cuts now crowd around the optimum: nearly parallel rows are degenerate for
+                # ProxQP, so finish with SQP from this point (one tangent row per cone plus the
+                # cone's curvature, weighted by its multiplier: quadratic convergence)
+                x_prev = x
+                for k, cone in enumerate(cones):
+                    F = cone.force(x)
+                    perp_vec = F - float(cone.axis @ F) * cone.axis
+                    perp = float(np.linalg.norm(perp_vec))
+                    mult = float(duals[k].sum())
+                    if (mult > 0 or any(v[0] == k for v in violated)) and perp > 1e-300:
+                        sqp_dirs[k], sqp_mult[k] = perp_vec / perp, mult
+                self._warm = None
+                if self.keep_cuts:
+                    for cone, ck, zk in zip(cones, cuts, duals):
+                        self._cuts[cone.joint] = [d for d, zi in zip(ck, zk) if zi != 0.0]
         return failure(n, MAX_ITER, f"the cone cuts did not converge in {self.max_rounds} rounds",
                        iterations, rounds)
+
+
+def _rows(qp: QPData, cones, rows):
+    """Inequality rows: the cable bounds (identity) then, per cone, ``(d - t a)^T (g + G f) <= 0``
+    for each direction ``d``. Returns C, l, u and the cone index owning each cut row."""
+    n = qp.n
+    blocks, rhs, owner = [np.eye(n)], [qp.ub], []
+    for k, dirs in rows:
+        if dirs:
+            cone = cones[k]
+            W = np.asarray(dirs) - cone.tan * cone.axis
+            blocks.append(W @ cone.G)
+            rhs.append(-(W @ cone.g))
+            owner += [k] * len(dirs)
+    C = np.vstack(blocks)
+    l = np.concatenate([qp.lb, np.full(C.shape[0] - n, -np.inf)])
+    return C, l, np.concatenate(rhs), np.array(owner, dtype=int)
+
+
+def _cone_curvature(cone, x) -> np.ndarray:
+    r"""Hessian in f of :math:`c(f) = \|F_\perp\| - t\,a^T F` at ``x``:
+    :math:`G^T (P_\perp - \hat n\hat n^T) G / \|F_\perp\|` (positive semidefinite)."""
+    F = cone.force(x)
+    perp_vec = F - float(cone.axis @ F) * cone.axis
+    perp = float(np.linalg.norm(perp_vec))
+    if perp <= 1e-300:
+        return np.zeros((len(x), len(x)))
+    nhat = perp_vec / perp
+    Pp = np.eye(3) - np.outer(cone.axis, cone.axis) - np.outer(nhat, nhat)
+    return cone.G.T @ Pp @ cone.G / perp
 
 
 def _feasible_point(A, b, C, l, u):
