@@ -181,6 +181,8 @@ def add_solve(sub):
                    help="where the cones cannot be met, return the least-violating forces (flagged)")
     p.add_argument("--out", action="append", default=[], help="write results (.npz or .csv); repeatable")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    p.add_argument("--html", type=_html_file, metavar="FILE.html",
+                   help="also write the 3-D view of the result as one self-contained HTML file")
     p.set_defaults(func=cmd_solve)
     return p
 
@@ -278,7 +280,12 @@ def summary(result) -> str:
 
 # ------------------------------------------------------------------------------------------- main
 COMMANDS = [add_info, add_solve]
+from .caspr import add_import_caspr  # noqa: E402
+COMMANDS.append(add_import_caspr)
 POST_SOLVE_HOOKS: list = []
+from .cli_view import add_plot, add_view, html_file as _html_file, solve_html_hook  # noqa: E402
+COMMANDS += [add_view, add_plot]
+POST_SOLVE_HOOKS.append(solve_html_hook)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -52,3 +52,22 @@ class SolverError(McdmError):
 
 class ResultsError(McdmError, ValueError):
     """A results file cannot be read or does not match the robot."""
+
+
+class CasprError(McdmError, ValueError):
+    """A CASPR model file (``*_bodies.xml``, ``*_cables.xml``, ``*_trajectories.xml``) cannot be
+    converted: malformed, inconsistent, or using a CASPR feature mcdm-pin does not support.
+
+    Attributes:
+        path: the XML file.
+        element: where in it, e.g. ``link_rigid[num=3, name='C5 bone']/joint@type``.
+        expected: what would have been accepted.
+    """
+
+    def __init__(self, path, element: str, expected: str):
+        self.path = None if path is None else str(path)
+        self.element = element
+        self.expected = expected
+        where = f"{self.path}: " if self.path else ""
+        at = f"{element}: " if element else ""
+        super().__init__(f"{where}{at}{expected}")

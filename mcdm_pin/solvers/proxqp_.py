@@ -5,13 +5,27 @@ vector :math:`n \perp a` the half-space
 
 .. math:: n^T F \le t\, a^T F \qquad (\text{since } n^T F \le \|F_\perp\|)
 
-contains it: a valid *outer cut*, linear in :math:`f` because :math:`F = g + G f`. The back-end solves
-the QP with the cuts it has, and while some force :math:`F_k` lies outside its cone by more than
-``cone_tol_deg``, adds the cut with :math:`n = F_{k,\perp}/\|F_{k,\perp}\|` (it separates :math:`F_k`)
-and re-solves, warm-started. Every relaxation contains the true feasible set, so (i) its optimum
-never exceeds the true optimum and the limit point, being feasible, is the global optimum, and
-(ii) a relaxation that is infeasible proves the true problem infeasible. Cut directions are kept for
-the next instant (they remain valid cuts whatever the state).
+contains it: a valid *outer cut*, linear in :math:`f` because :math:`F = g + G f`.
+
+1. **Cutting planes.** Solve the QP with the cuts at hand; while some force :math:`F_k` lies outside
+   its cone by more than ``cone_tol_deg``, add the cut with :math:`n = F_{k,\perp}/\|F_{k,\perp}\|`
+   (it separates :math:`F_k`) and re-solve, warm-started. Every relaxation contains the true feasible
+   set, so its optimum is a lower bound, and a relaxation that is infeasible *proves* the instant
+   infeasible. Cuts are only dropped when inactive, so the bounds increase monotonically.
+2. **SQP polish.** Near the optimum the new cuts become nearly parallel to the old ones, which makes
+   the QP degenerate (ProxQP then stalls or misreports infeasibility) and Kelley's method converges
+   only linearly. When a new cut is nearly parallel to an existing one, the back-end switches to
+   sequential quadratic programming from the current point: one tangent row per active cone (the
+   linearisation of :math:`c(F) = \|F_\perp\| - t\,a^T F`, itself a valid cut through the apex) and
+   the cone's curvature :math:`z_k\,G^T (I - aa^T - \hat n\hat n^T) G/\|F_\perp\|` (positive
+   semidefinite) added to the Hessian, centred at the current point. Its fixed point satisfies the
+   KKT conditions of the convex problem, hence is the global optimum; convergence is quadratic (2-3
+   extra solves). It stops when every cone holds and the step is below 1e-9 relative.
+
+ProxQP's own infeasibility test is a heuristic; whenever ProxQP does not report SOLVED, HiGHS (scipy)
+decides the relaxation's linear feasibility exactly, and a feasible relaxation is re-solved from
+HiGHS's point with ProxQP's infeasibility test off. Cut directions that bind are kept for the next
+instant (they remain valid cuts whatever the state).
 
 Bounds are written as rows of ``C`` (not ProxQP's box), so that warm starts with ``(x, y, z)`` are
 safe (see ``shared/PITFALLS.md``).
