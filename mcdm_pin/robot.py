@@ -39,7 +39,9 @@ class PhysicalJoint:
         socket_placement: the socket frame (fixed in the parent link at the joint point, equal to the
             child frame when the joint's coordinates are zero) relative to ``parent_id``'s frame.
         idx_v: the joint's coordinates in ``q``.
-        socket_axis: unit vector in the socket frame along which the ball is pressed into the socket.
+        socket_axis: unit vector in the socket frame: the socket's outward normal, i.e. the
+            direction in which the socket pushes the ball when the ball is pressed into it (the
+            cone requires ``F . socket_axis > 0`` for the force F of the parent on the child).
         alpha, beta: weights of |F|^2 and |M|^2 in the interaction objective.
         cone_deg: the largest interaction angle the joint tolerates, or ``None``.
     """

@@ -245,3 +245,17 @@ def test_bad_state_is_state_error(two_link, arg, value, message):
     with pytest.raises(StateError, match=message) as info:
         compute_terms(two_link, **kwargs)
     assert arg in str(info.value)
+
+
+def test_documented_example_loads(tmp_path):
+    """The complete example in docs/sidecar.md is valid (keeps the docs in sync with the code)."""
+    from .conftest import REPO
+    text = (REPO / "docs" / "sidecar.md").read_text()
+    block = text.split("```yaml\n", 1)[1].split("```", 1)[0]
+    data = yaml.safe_load(block)
+    data["urdf"] = str(TWO_LINK_URDF)
+    robot = Robot.load(write(tmp_path, data))
+    assert robot.m == 2 and robot.joint_names == ("shoulder", "elbow")
+    from mcdm_pin import load_trajectory
+    tr = load_trajectory(robot, "traj1")
+    assert tr.q[-1] == pytest.approx([-math.pi / 6, 0, 0, math.pi / 10], abs=1e-14)
