@@ -32,8 +32,8 @@ class CableGeometry:
         seg_vec: (S, 3) segment vectors x_B - x_A.
         seg_len: (S,) segment lengths, m.
         lengths: (m,) cable lengths, m.
-        W: (nj, 6, m) per Pinocchio joint (body) the summed signed Plücker vectors
-            ``sum_e s_e w_e`` of the cable end points on that body, per cable.
+        W: (B, 6, m) per body the summed signed Plücker vectors ``sum_e s_e w_e`` of the cable
+            end points on that body, per cable.
     """
 
     points: np.ndarray
@@ -41,29 +41,79 @@ class CableGeometry:
     seg_len: np.ndarray
     lengths: np.ndarray
     W: np.ndarray
+    w: np.ndarray | None = None
 
 
-def cable_geometry(robot, oR: np.ndarray, op: np.ndarray) -> CableGeometry:
-    """Cable geometry from the joint placements (``oR``: (nj, 3, 3), ``op``: (nj, 3) world)."""
-    pj = robot.point_joint
-    X = np.einsum("pij,pj->pi", oR[pj], robot.point_local) + op[pj]
+def _cross(a, b):
+    """Row-wise cross product of (n, 3) arrays (faster than np.cross for small n)."""
+    out = np.empty_like(a)
+    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return out
+
+
+class CableMaps:
+    """Precomputed index maps of a robot's cable routes for :func:`cable_geometry`.
+
+    Args:
+        robot: the robot.
+        point_body: (P,) body index of each route point (into the placements given later).
+        n_bodies: number of bodies (placements).
+    """
+
+    def __init__(self, robot, point_body, n_bodies: int):
+        from scipy import sparse
+
+        self.point_body = np.asarray(point_body, dtype=int)
+        act = robot.seg_active
+        a, b, c = robot.seg_a[act], robot.seg_b[act], robot.seg_cable[act]
+        self.act_a, self.act_b = a, b
+        self.ends = np.concatenate([b, a])  # end points: B (sign +1) then A (sign -1)
+        self.end_body = self.point_body[self.ends]
+        self.end_cable = np.concatenate([c, c])
+        self.n_bodies, self.m = n_bodies, robot.m
+        self.act = act
+        self.point_index = np.arange(len(self.point_body))
+        self.seg_to_cable = np.zeros((robot.m, len(robot.seg_a)))
+        self.seg_to_cable[robot.seg_cable, np.arange(len(robot.seg_a))] = 1.0
+        n_end = len(self.ends)
+        # scatter: (body, cable) <- end point
+        self.scatter = sparse.csr_matrix(
+            (np.ones(n_end), (self.end_body * robot.m + self.end_cable, np.arange(n_end))),
+            shape=(n_bodies * robot.m, n_end))
+
+
+def cable_geometry(robot, oR: np.ndarray, op: np.ndarray, maps: CableMaps | None = None) -> CableGeometry:
+    """Cable geometry from body placements.
+
+    Args:
+        oR, op: (B, 3, 3) rotations and (B, 3) positions (world) of the bodies.
+        maps: index maps (default: bodies are Pinocchio joints, ``oR``/``op`` indexed by joint id).
+
+    ``W`` is (B, 6, m), indexed like ``oR``; ``w`` holds the signed Pluecker vector of every end
+    point of an active segment, in the order of ``maps.ends``.
+    """
+    if maps is None:
+        maps = CableMaps(robot, robot.point_joint, len(oR))
+    pj = maps.point_body
+    # every point in every body's frame in one product, then each point's own body picked out
+    nb = len(oR)
+    Y = robot.point_local @ oR.transpose(0, 2, 1).transpose(1, 0, 2).reshape(3, 3 * nb)
+    X = Y.reshape(-1, nb, 3)[maps.point_index, pj] + op[pj]
     d = X[robot.seg_b] - X[robot.seg_a]
-    seg_len = np.linalg.norm(d, axis=1)
-    lengths = np.bincount(robot.seg_cable, weights=seg_len, minlength=robot.m)
-    act = robot.seg_active
-    if np.any(seg_len[act] <= 1e-12):
-        s = int(np.flatnonzero(act & (seg_len <= 1e-12))[0])
+    seg_len = np.sqrt((d * d).sum(axis=1))
+    lengths = maps.seg_to_cable @ seg_len
+    la = seg_len[maps.act]
+    if la.size and la.min() <= 1e-12:
+        s = int(np.flatnonzero(maps.act)[np.argmin(la)])
         raise StateError(f"cable {robot.cables[robot.seg_cable[s]].name!r}: a segment has zero length "
                          f"at this configuration, so its direction is undefined")
-    a, b, c = robot.seg_a[act], robot.seg_b[act], robot.seg_cable[act]
-    u = d[act] / seg_len[act, None]
-    # end points: B with sign +1, A with sign -1
-    ends = np.concatenate([b, a])
-    sign = np.concatenate([np.ones(len(b)), -np.ones(len(a))])[:, None]
-    uu = np.concatenate([u, u])
-    w = sign * np.hstack([uu, np.cross(X[ends], uu)])  # (2S, 6)
-    nj, m = robot.model.njoints, robot.m
-    flat = np.zeros((nj * m, 6))
-    np.add.at(flat, pj[ends] * m + np.concatenate([c, c]), w)
-    W = flat.reshape(nj, m, 6).transpose(0, 2, 1)
-    return CableGeometry(points=X, seg_vec=d, seg_len=seg_len, lengths=lengths, W=W)
+    u = d[maps.act] / la[:, None]
+    n_act = len(u)
+    w = np.empty((2 * n_act, 6))
+    w[:n_act, :3] = u  # end points B: sign +1
+    w[n_act:, :3] = -u  # end points A: sign -1
+    w[:, 3:] = _cross(X[maps.ends], w[:, :3])
+    W = (maps.scatter @ w).reshape(maps.n_bodies, maps.m, 6).transpose(0, 2, 1)
+    return CableGeometry(points=X, seg_vec=d, seg_len=seg_len, lengths=lengths, W=W, w=w)

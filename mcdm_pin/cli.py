@@ -286,6 +286,8 @@ POST_SOLVE_HOOKS: list = []
 from .cli_view import add_plot, add_view, html_file as _html_file, solve_html_hook  # noqa: E402
 COMMANDS += [add_view, add_plot]
 POST_SOLVE_HOOKS.append(solve_html_hook)
+from .verify import add_verify  # noqa: E402
+COMMANDS.append(add_verify)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -139,11 +139,12 @@ class TrajectoryResult:
     def save(self, path) -> Path:
         """Write ``.npz`` or ``.csv`` by the file's extension."""
         path = Path(path)
-        if path.suffix == ".npz":
-            return self.save_npz(path)
-        if path.suffix == ".csv":
-            return self.save_csv(path)
-        raise ResultsError(f"{path}: expected a .npz or .csv file name")
+        if path.suffix not in (".npz", ".csv"):
+            raise ResultsError(f"{path}: expected a .npz or .csv file name")
+        try:
+            return self.save_npz(path) if path.suffix == ".npz" else self.save_csv(path)
+        except OSError as exc:
+            raise ResultsError(f"{path}: cannot write the results ({exc.strerror or exc})") from None
 
     def save_npz(self, path) -> Path:
         path = Path(path)

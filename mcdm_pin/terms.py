@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .cables import CableGeometry, cable_geometry
+from .cables import CableGeometry, CableMaps, cable_geometry
 
 
 @dataclass
@@ -46,7 +46,6 @@ class Terms:
         R_socket: (J, 3, 3) rotation from the child frame to the socket frame of each joint.
         socket_axes: (J, 3) unit socket axes (socket frame).
         geometry: the cable geometry (world points, segments).
-        oMi: (nj, 4, 4) world placement of every Pinocchio joint frame.
     """
 
     q: np.ndarray
@@ -62,7 +61,6 @@ class Terms:
     R_socket: np.ndarray
     socket_axes: np.ndarray
     geometry: CableGeometry
-    oMi: np.ndarray
 
     # --- derived quantities for a force vector f (m,) ---------------------------------------------
     def wrenches(self, f) -> np.ndarray:
@@ -100,19 +98,54 @@ def interaction_angles(F: np.ndarray, axes: np.ndarray) -> np.ndarray:
 
 
 class TermsEvaluator:
-    """Computes :class:`Terms` for one robot, reusing Pinocchio's data between calls."""
+    """Computes :class:`Terms` for one robot, reusing Pinocchio's data between calls.
+
+    Only the joints that matter are read back from Pinocchio (those carrying cable points, the
+    physical joints' child and parent joints); every cable quantity is one vectorised numpy pass.
+    """
 
     def __init__(self, robot):
         self.robot = robot
-        self.model = robot.model
-        self.data = robot.model.createData()
+        self.model = model = robot.model
+        self.data = model.createData()
         js = robot.joints
+        nj = model.njoints
+        keys = sorted({0} | set(robot.point_joint.tolist()) | {j.child_id for j in js}
+                      | {j.parent_id for j in js})
+        pos = np.full(nj, -1, dtype=int)
+        pos[keys] = np.arange(len(keys))
+        self._keys = keys
+        self._point_key = pos[robot.point_joint]
+        self._child_key = pos[[j.child_id for j in js]]
+        self._parent_key = pos[[j.parent_id for j in js]]
         self._child = [j.child_id for j in js]
-        self._parent = [j.parent_id for j in js]
-        self._socket = [j.socket_placement for j in js]
-        self._sub = robot.subtree[self._child]  # (J, nj)
+        self._R_sp = np.array([j.socket_placement.rotation for j in js]).reshape(len(js), 3, 3)
+        self._t_sp = np.array([j.socket_placement.translation for j in js]).reshape(len(js), 3)
+        sub = robot.subtree[:, keys]  # sub[i, b] = 1 when key joint b is in the subtree of joint i
+        owner = np.zeros(model.nv, dtype=int)  # the joint owning each velocity column
+        for j in range(1, nj):
+            owner[model.joints[j].idx_v:model.joints[j].idx_v + model.joints[j].nv] = j
+        self._sub_v = sub[owner]  # (nv, K)
+        self._sub_phys = sub[self._child]  # (J, K)
         self._axes = np.array([j.socket_axis for j in js]).reshape(len(js), 3)
         self._zeros = np.zeros(robot.nv)
+        self._maps = maps = CableMaps(robot, self._point_key, len(keys))
+        # end point e moves with column v when its body is in the subtree of v's joint
+        self._end_mask = self._sub_v[:, maps.end_body].T  # (E, nv)
+        from scipy import sparse
+        n_end = len(maps.ends)
+        self._cable_of_end = sparse.csr_matrix(
+            (np.ones(n_end), (maps.end_cable, np.arange(n_end))), shape=(robot.m, n_end))
+        # (physical joint, cable) <- end points in the joint's subtree
+        rows, cols = [], []
+        for a_, subrow in enumerate(self._sub_phys):
+            inside = np.flatnonzero(subrow[maps.end_body] > 0)
+            rows.append(a_ * robot.m + maps.end_cable[inside])
+            cols.append(inside)
+        rows = np.concatenate(rows) if rows else np.zeros(0, int)
+        cols = np.concatenate(cols) if cols else np.zeros(0, int)
+        self._subtree_of_end = sparse.csr_matrix((np.ones(len(rows)), (rows, cols)),
+                                                 shape=(len(js) * robot.m, n_end))
 
     def __call__(self, q, qd=None, qdd=None) -> Terms:
         r = self.robot
@@ -120,33 +153,32 @@ class TermsEvaluator:
         qd = self._zeros if qd is None else r.check_vector(qd, "qd")
         qdd = self._zeros if qdd is None else r.check_vector(qdd, "qdd")
         model, data = self.model, self.data
-        nj = model.njoints
         qp = r.pin_q(q)
 
         pin.computeJointJacobians(model, data, qp)
-        oMi = np.array([data.oMi[j].homogeneous for j in range(nj)])
+        oMi = np.array([data.oMi[j].homogeneous for j in self._keys])
         oR, op = oMi[:, :3, :3], oMi[:, :3, 3]
-        J = np.array([pin.getJointJacobian(model, data, j, pin.ReferenceFrame.WORLD)
-                      for j in range(nj)])  # (nj, 6, nv), [v; w] at the world origin
+        J = data.J.copy()  # (6, nv): each column's motion in the world frame, at the origin
         M = pin.crba(model, data, qp).copy()
         M = np.triu(M) + np.triu(M, 1).T
         tau = pin.rnea(model, data, qp, qd, qdd).copy()
         u = np.array([data.f[c].vector for c in self._child]).reshape(len(self._child), 6)
 
-        geo = cable_geometry(r, oR, op)
-        L = np.einsum("jkm,jkn->mn", geo.W, J)
-        Wsub = np.einsum("aj,jkm->akm", self._sub, geo.W)  # (J, 6, m) world, about the origin
-        Rc, tc = oR[self._child], op[self._child]
+        geo = cable_geometry(r, oR, op, self._maps)
+        # d l / d q_v = sum of the end points' Pluecker vectors, on bodies that v moves, . column v
+        L = self._cable_of_end @ ((geo.w @ J) * self._end_mask)
+        nJ = len(self._child)
+        Wsub = (self._subtree_of_end @ geo.w).reshape(nJ, r.m, 6).transpose(0, 2, 1)  # world
+        Rc, tc = oR[self._child_key], op[self._child_key]
         RcT = Rc.transpose(0, 2, 1)
         F_w, M_w = Wsub[:, :3], Wsub[:, 3:]
         RT = np.empty_like(Wsub)
         RT[:, :3] = RcT @ F_w
-        RT[:, 3:] = RcT @ (M_w - np.cross(tc[:, None, :], F_w.transpose(0, 2, 1)).transpose(0, 2, 1))
-        R_socket = np.array([(data.oMi[p] * s).rotation.T @ R
-                             for p, s, R in zip(self._parent, self._socket, Rc)]).reshape(-1, 3, 3)
+        RT[:, 3:] = RcT @ (M_w - np.cross(tc[:, None, :], F_w, axisb=1).transpose(0, 2, 1))
+        R_socket = (oR[self._parent_key] @ self._R_sp).transpose(0, 2, 1) @ Rc
         return Terms(q=q.copy(), qd=np.array(qd, float), qdd=np.array(qdd, float), M=M,
                      h=tau - M @ qdd, tau=tau, lengths=geo.lengths, L=L, u=u, RT=RT,
-                     R_socket=R_socket, socket_axes=self._axes, geometry=geo, oMi=oMi)
+                     R_socket=R_socket, socket_axes=self._axes, geometry=geo)
 
 
 def compute_terms(robot, q, qd=None, qdd=None) -> Terms:

@@ -128,6 +128,12 @@ class ProxQPSolver(Solver):
         cones = qp.cones
         if not self.keep_cuts:
             self._cuts = {}
+        if self._warm is not None:
+            # a new instant: keep the previous forces as the starting point but not the previous
+            # instant's multipliers. Next to a singular instant (2-link arm, q = 0 at t = 0.5 s) they
+            # are huge and sent ProxQP into ~1e6 inner iterations (4 s) or a false "infeasible".
+            x, y, z = self._warm
+            self._warm = (x, np.zeros_like(y), np.zeros_like(z))
         cuts = [list(self._cuts.get(c.joint, [])) for c in cones]
         iterations, rounds = 0, 0
         polish = False  # False: cutting planes; True: SQP polish (see the module docstring)

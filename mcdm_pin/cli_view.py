@@ -1,0 +1,144 @@
+"""Command line for the pictures: ``mcdm-pin view``, ``mcdm-pin plot`` and ``solve --html``.
+
+Argument parsing only; the work is done by :mod:`mcdm_pin.viewer` and :mod:`mcdm_pin.plots`.
+Registered in :mod:`mcdm_pin.cli` through ``COMMANDS`` and ``POST_SOLVE_HOOKS``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import time
+from pathlib import Path
+
+
+def html_file(text: str) -> str:
+    """argparse type: a file name ending in .html."""
+    if Path(text).suffix.lower() not in (".html", ".htm"):
+        raise argparse.ArgumentTypeError(f"expected a file name ending in .html, got {text!r}")
+    return text
+
+
+def _positive(text: str) -> float:
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not x > 0 or x == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return x
+
+
+def _scene_options(args) -> dict:
+    return dict(fmax=args.fmax, arrow_scale=args.arrow_scale, start_time=args.time,
+                legend=not args.no_legend)
+
+
+def _add_scene_options(p) -> None:
+    p.add_argument("--fmax", type=_positive, metavar="N",
+                   help="top of the cable colour scale, N (default: the peak force, rounded up)")
+    p.add_argument("--arrow-scale", type=_positive, metavar="M_PER_N",
+                   help="interaction force arrow length per newton (default: the largest force is "
+                        "half the robot's size)")
+    p.add_argument("--time", type=float, metavar="T",
+                   help="show the scene paused at trajectory time T, s (default: play)")
+    p.add_argument("--no-legend", action="store_true", help="no colour bar / time overlay")
+
+
+# ------------------------------------------------------------------------------------------- view
+def add_view(sub):
+    p = sub.add_parser("view", help="3-D view of a solved trajectory (Meshcat: live, or one HTML file)")
+    p.add_argument("robot", help="cable sidecar (YAML)")
+    p.add_argument("--results", required=True, help="results file written by solve --out (.npz)")
+    p.add_argument("--html", type=html_file, metavar="FILE.html",
+                   help="write one self-contained HTML file (opens offline) instead of serving")
+    p.add_argument("--no-wait", action="store_true",
+                   help="do not serve: write the HTML file (--html, default: RESULTS.html) and exit")
+    p.add_argument("--screenshot", metavar="FILE.png",
+                   help="also render the HTML file in headless Chromium into this PNG")
+    p.add_argument("--size", default="1000x800", help="screenshot size WIDTHxHEIGHT (default 1000x800)")
+    _add_scene_options(p)
+    p.set_defaults(func=cmd_view)
+    return p
+
+
+def cmd_view(args) -> int:
+    from .cli import UsageError
+    from .viewer import scene_from_files, screenshot
+
+    if args.screenshot and Path(args.screenshot).suffix.lower() != ".png":
+        raise UsageError(f"--screenshot: expected a .png file name, got {args.screenshot!r}")
+    try:
+        size = tuple(int(x) for x in args.size.lower().split("x"))
+        assert len(size) == 2 and min(size) > 0
+    except (ValueError, AssertionError):
+        raise UsageError(f"--size: expected WIDTHxHEIGHT in pixels, got {args.size!r}") from None
+    html = args.html
+    if html is None and (args.no_wait or args.screenshot):
+        html = str(Path(args.results).with_suffix(".html"))
+    robot, result, scene = scene_from_files(args.robot, args.results, **_scene_options(args))
+    if html is not None:
+        path = scene.write_html(html)
+        print(f"wrote {path}")
+        if args.screenshot:
+            print(f"wrote {screenshot(path, args.screenshot, size=size)}")
+        return 0
+    # SIGTERM exits normally too, so that Meshcat's exit handler stops its server process
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
+    vis = scene.serve()
+    print(f"serving {robot.name} / {args.results} at {vis.url()} (press Ctrl-C to stop)", flush=True)
+    try:
+        while True:
+            time.sleep(1.0)
+    except KeyboardInterrupt:
+        print("stopped")
+    return 0
+
+
+def solve_html_hook(args, robot, result) -> None:
+    """``solve --html FILE.html``: write the 3-D view of the solved trajectory."""
+    html = getattr(args, "html", None)
+    if not html:
+        return
+    from .viewer import build_scene
+    path = build_scene(robot, result, source="the solved trajectory").write_html(html)
+    print(f"wrote {path}")
+
+
+# ------------------------------------------------------------------------------------------- plot
+def add_plot(sub):
+    from .plots import FIGURES
+    p = sub.add_parser("plot", help="the paper's figures (PNG + SVG) from results files, side by side")
+    p.add_argument("results", nargs="+", help="results files (.npz), one column each (e.g. cases 1-3)")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--labels", help="column titles, comma-separated (default: 'case N' from each run)")
+    p.add_argument("--figures", help=f"comma-separated subset of {','.join(FIGURES)} (default: all)")
+    p.add_argument("--format", default="png,svg", help="comma-separated: png, svg, pdf (default png,svg)")
+    p.add_argument("--prefix", default="", help="prefix of the file names")
+    p.set_defaults(func=cmd_plot)
+    return p
+
+
+def cmd_plot(args) -> int:
+    from .cli import UsageError
+    from .plots import FIGURES, plot_files
+
+    def items(text):
+        return [x.strip() for x in text.split(",") if x.strip()]
+    labels = items(args.labels) if args.labels else None
+    if labels is not None and len(labels) != len(args.results):
+        raise UsageError(f"--labels: expected {len(args.results)} labels (one per results file), "
+                         f"got {len(labels)}")
+    figures = items(args.figures) if args.figures else list(FIGURES)
+    for f in figures:
+        if f not in FIGURES:
+            raise UsageError(f"--figures: unknown figure {f!r}; expected one of {', '.join(FIGURES)}")
+    formats = items(args.format)
+    for f in formats:
+        if f not in ("png", "svg", "pdf"):
+            raise UsageError(f"--format: unknown format {f!r}; expected png, svg or pdf")
+    for p in plot_files(args.results, args.out, labels=labels, figures=figures, formats=formats,
+                        prefix=args.prefix):
+        print(f"wrote {p}")
+    return 0

@@ -1,0 +1,67 @@
+"""The notebooks in notebooks/ run top to bottom, headless and offline (nbclient + ipykernel), so they
+stay in sync with the code. Each runs in a temporary folder (its outputs go to ./out there)."""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+
+import pytest
+
+from .conftest import REPO, SHARED
+
+nbformat = pytest.importorskip("nbformat", reason="pip install -e '.[test]' (nbformat)")
+nbclient = pytest.importorskip("nbclient", reason="pip install -e '.[test]' (nbclient)")
+pytest.importorskip("ipykernel", reason="pip install -e '.[test]' (ipykernel)")
+
+NECK = SHARED / "reference" / "caspr" / "8S_neck"
+
+
+def _run(name, tmp_path):
+    nb = nbformat.read(REPO / "notebooks" / f"{name}.ipynb", as_version=4)
+    env_backend = os.environ.get("MPLBACKEND")
+    os.environ["MPLBACKEND"] = "Agg"  # inherited by the kernel: never a display
+    try:
+        nbclient.NotebookClient(nb, timeout=300, kernel_name="python3",
+                                resources={"metadata": {"path": str(tmp_path)}}).execute()
+    finally:
+        if env_backend is None:
+            os.environ.pop("MPLBACKEND", None)
+        else:
+            os.environ["MPLBACKEND"] = env_backend
+    return nb
+
+
+def _text(nb) -> str:
+    out = []
+    for cell in nb.cells:
+        for o in cell.get("outputs", []):
+            out.append(o.get("text", ""))
+            out.append(str(o.get("data", {}).get("text/plain", "")))
+    return "\n".join(out)
+
+
+def test_quickstart(tmp_path):
+    nb = _run("quickstart", tmp_path)
+    text = _text(nb)
+    assert "case 3: solved 101/101 instants" in text
+    assert (tmp_path / "out" / "quickstart_summary.png").stat().st_size > 20_000
+    assert (tmp_path / "out" / "quickstart_case3.html").stat().st_size > 100_000
+
+
+def test_two_link_paper(tmp_path):
+    nb = _run("two_link_paper", tmp_path)
+    text = _text(nb)
+    assert "traj2" in text and "instants > rho*" in text
+    for name in ("traj1", "traj2"):
+        assert (tmp_path / "out" / f"two_link_{name}_summary.png").is_file()
+
+
+@pytest.mark.skipif(importlib.util.find_spec("mcdm_pin.caspr") is None,
+                    reason="mcdm_pin.caspr (the CASPR importer) is not available")
+@pytest.mark.skipif(not NECK.is_dir(), reason=f"CASPR's 8S neck model is not at {NECK}")
+def test_neck_paper(tmp_path):
+    nb = _run("neck_paper", tmp_path)
+    text = _text(nb)
+    assert "8S_neck" in text and "case 3: solved" in text
+    assert (tmp_path / "out" / "neck_case3.html").is_file()
