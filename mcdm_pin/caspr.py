@@ -61,10 +61,15 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import yaml
 
 from .exceptions import CasprError
+
+if TYPE_CHECKING:
+    from .trajectory import Trajectory
 
 GRAVITY = (0.0, 0.0, -9.81)
 _X, _Y, _Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)

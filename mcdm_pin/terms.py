@@ -158,7 +158,8 @@ class TermsEvaluator:
         pin.computeJointJacobians(model, data, qp)
         oMi = np.array([data.oMi[j].homogeneous for j in self._keys])
         oR, op = oMi[:, :3, :3], oMi[:, :3, 3]
-        J = data.J.copy()  # (6, nv): each column's motion in the world frame, at the origin
+        # (6, nv): each column's motion in the world frame at the origin (eigenpy gives (6,) if nv = 1)
+        J = data.J.reshape(6, -1).copy()
         M = pin.crba(model, data, qp).copy()
         M = np.triu(M) + np.triu(M, 1).T
         tau = pin.rnea(model, data, qp, qd, qdd).copy()

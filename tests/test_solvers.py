@@ -16,7 +16,7 @@ pytest.importorskip("clarabel")
 EOM_TOL = 1e-8  # relative residual (issue 3)
 BOUND_TOL = 1e-9  # N
 CONE_TOL_DEG = 1e-6
-# ProxQP stops at eps_abs = 1e-11 on residuals and the cone cuts at 1e-7 deg; Clarabel at 1e-10 gap.
+# ProxQP stops at eps_abs = 1e-11 on residuals and the cone cuts at 1e-7 deg; Clarabel at 1e-11 gap.
 # Both optima then agree to ~1e-8 relative where the objective is O(1) or larger; the 1e-6 bound of
 # the issue also covers instants where the objective is tiny (traj1, t = 0.5 s: all cables at
 # f_min, objective 8e-6 N^2, measured difference 5.5e-7 relative).

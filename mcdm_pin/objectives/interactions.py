@@ -43,11 +43,14 @@ class MinInteractions(Objective):
     def quadratic(self, terms, context) -> Quadratic:
         if self._w is None:
             self.validate(context.robot)
-        w = self._w  # (J, 6)
-        RT, u = terms.RT, terms.u
-        WR = w[:, :, None] * RT
-        P = np.einsum("jkm,jkn->mn", RT, WR)
-        c = 2.0 * np.einsum("jk,jkm->m", u, WR)
+        w = self._w.reshape(-1)  # (6J,)
+        R = terms.RT.reshape(len(w), -1)  # (6J, m)
+        u = terms.u.reshape(-1)
+        keep = w != 0.0
+        R, u, w = R[keep], u[keep], w[keep]
+        WR = w[:, None] * R
+        P = R.T @ WR
+        c = 2.0 * (u @ WR)
         r = float(np.sum(w * u * u))
         return Quadratic(P, c, r)
 

@@ -21,7 +21,7 @@ class ClarabelSolver(Solver):
 
     name = "clarabel"
 
-    def __init__(self, tol: float = 1e-10, max_iter: int = 200):
+    def __init__(self, tol: float = 1e-11, max_iter: int = 200):
         try:
             import clarabel  # noqa: F401
         except ImportError:

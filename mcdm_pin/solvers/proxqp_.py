@@ -37,6 +37,7 @@ import numpy as np
 from proxsuite import proxqp
 
 from ..problem import QPData
+from .active_set import ActiveSet, try_active_set
 from .base import INACCURATE, INFEASIBLE, MAX_ITER, OPTIMAL, Solution, Solver, failure
 
 _STATUS = proxqp.QPSolverOutput
@@ -55,6 +56,8 @@ class ProxQPSolver(Solver):
         cuts_per_cone: cuts kept per cone; beyond it, cuts with zero multiplier are dropped.
         warm_start: warm-start each QP from the previous solution (same dimensions).
         keep_cuts: keep cut directions from one instant to the next.
+        active_set: first try the previous instant's active set (see :mod:`.active_set`); its
+            answer is used only when it passes the full KKT check, ProxQP is run otherwise.
         eps_infeasible: ProxQP's primal/dual infeasibility tolerances (first attempt).
         max_iter_retry: iteration limit of the re-run from a feasible point (see ``_solve_qp``).
     """
@@ -63,7 +66,9 @@ class ProxQPSolver(Solver):
 
     def __init__(self, eps_abs: float = 1e-11, eps_rel: float = 1e-12, max_iter: int = 1000, cone_tol_deg: float = 1e-7,
                  max_rounds: int = 200, cuts_per_cone: int = 24, warm_start: bool = True,
-                 keep_cuts: bool = True, eps_infeasible: float = 1e-7, max_iter_retry: int = 50_000):
+                 keep_cuts: bool = True, eps_infeasible: float = 1e-7, max_iter_retry: int = 50_000,
+                 active_set: bool = True):
+        self.active_set = active_set
         self.eps_abs, self.eps_rel = eps_abs, eps_rel
         self.max_iter, self.max_iter_retry = max_iter, max_iter_retry
         self.eps_infeasible = eps_infeasible
@@ -74,10 +79,12 @@ class ProxQPSolver(Solver):
     def fresh(self) -> "ProxQPSolver":
         return ProxQPSolver(self.eps_abs, self.eps_rel, self.max_iter, self.cone_tol_deg, self.max_rounds,
                             self.cuts_per_cone, self.warm_start, self.keep_cuts, self.eps_infeasible,
-                            self.max_iter_retry)
+                            self.max_iter_retry, self.active_set)
 
     def reset(self) -> None:
         self._warm = None
+        self._guess: ActiveSet | None = None
+        self._last_z = None
         self._cuts: dict[str, list[np.ndarray]] = {}
 
     # ------------------------------------------------------------------------------------------
@@ -87,6 +94,10 @@ class ProxQPSolver(Solver):
         s.eps_abs, s.eps_rel, s.max_iter = self.eps_abs, self.eps_rel, max_iter
         s.verbose = False
         s.eps_primal_inf = s.eps_dual_inf = eps_infeasible
+        # residuals alone do not bound the objective's error on degenerate problems (an LP whose
+        # optimum is a vertex stopped 1.5e-5 above it): require a small duality gap too
+        s.check_duality_gap = True
+        s.eps_duality_gap_abs, s.eps_duality_gap_rel = self.eps_abs, self.eps_rel
         qp.init(H, g, A, b, C, l, u)
         return qp
 
@@ -103,8 +114,13 @@ class ProxQPSolver(Solver):
         qp = self._new_qp(H, g, A, b, C, l, u, self.eps_infeasible, self.max_iter)
         warm = self._warm
         if self.warm_start and warm is not None and warm[0].shape == (H.shape[0],) \
-                and warm[1].shape == (A.shape[0],) and warm[2].shape == (C.shape[0],):
-            qp.solve(*warm)
+                and warm[1].shape == (A.shape[0],):
+            z = warm[2]
+            if z.shape != (C.shape[0],):  # cut rows changed: keep the bounds' multipliers only
+                z0 = np.zeros(C.shape[0])
+                z0[:H.shape[0]] = z[:H.shape[0]]
+                z = z0
+            qp.solve(warm[0], warm[1], z)
         else:
             qp.solve()
         iterations = int(qp.results.info.iter)
@@ -120,9 +136,28 @@ class ProxQPSolver(Solver):
         x, y, z = res.x.copy(), res.y.copy(), res.z.copy()
         status = res.info.status
         self._warm = (x, y, z) if status == _STATUS.PROXQP_SOLVED else None
+        self._last_z = z
         return x, z, status, iterations
 
     def solve(self, qp: QPData) -> Solution:
+        if self.active_set and self._guess is not None:
+            hit = try_active_set(qp, self._guess)
+            if hit is not None:
+                f, mult, bound_mult = hit
+                self._guess = ActiveSet.from_solution(qp, f, mult, bound_mult)
+                # warm start for a later ProxQP solve: the point and the bounds' multipliers
+                self._warm = (f.copy(), np.zeros(len(qp.b)), -bound_mult)
+                return Solution(f, OPTIMAL, qp.objective(f), 0, 0, "")
+        self._guess = None
+        sol, mult = self._solve_proxqp(qp)
+        if self.active_set and self._guess is None:
+            if sol.status == OPTIMAL:
+                # ProxQP's multipliers of the bound rows: z > 0 at an upper, z < 0 at a lower bound
+                z = self._last_z[:qp.n] if self._last_z is not None else None
+                self._guess = ActiveSet.from_solution(qp, sol.f, mult, None if z is None else -z)
+        return sol
+
+    def _solve_proxqp(self, qp: QPData):
         n = qp.n
         H, g = 2.0 * qp.P, qp.c
         cones = qp.cones
@@ -159,14 +194,14 @@ class ProxQPSolver(Solver):
             iterations += it
             if status is None:
                 if polish:  # an SQP subproblem is not a relaxation: no proof, fall back
-                    return failure(n, INACCURATE, "SQP polish subproblem infeasible", iterations, rounds)
+                    return failure(n, INACCURATE, "SQP polish subproblem infeasible", iterations, rounds), {}
                 what = "the cones' outer approximation" if cones else "the cable bounds"
                 return failure(n, INFEASIBLE, f"no cable forces satisfy the equation of motion and "
-                                              f"{what} (decided by HiGHS)", iterations, rounds)
+                                              f"{what} (decided by HiGHS)", iterations, rounds), {}
             if status == _STATUS.PROXQP_MAX_ITER_REACHED:
-                return failure(n, MAX_ITER, "ProxQP reached its iteration limit", iterations, rounds)
+                return failure(n, MAX_ITER, "ProxQP reached its iteration limit", iterations, rounds), {}
             if status != _STATUS.PROXQP_SOLVED:
-                return failure(n, INACCURATE, f"ProxQP: {status.name}", iterations, rounds)
+                return failure(n, INACCURATE, f"ProxQP: {status.name}", iterations, rounds), {}
             zc = z[n:]
             violated = []
             for k, cone in enumerate(cones):
@@ -179,7 +214,8 @@ class ProxQPSolver(Solver):
             if polish:
                 step = np.linalg.norm(x - x_prev) / (1.0 + np.linalg.norm(x))
                 if not violated and step <= 1e-9:
-                    return Solution(x, OPTIMAL, qp.objective(x), iterations, rounds)
+                    mult = {c.joint: float(zc[owner == k].sum()) for k, c in enumerate(cones)}
+                    return Solution(x, OPTIMAL, qp.objective(x), iterations, rounds), mult
                 for k, cone in enumerate(cones):
                     mult = float(zc[owner == k].sum())
                     F = cone.force(x)
@@ -195,7 +231,20 @@ class ProxQPSolver(Solver):
                 if self.keep_cuts:  # keep the binding cuts (non-zero multiplier) for the next instant
                     for cone, ck, zk in zip(cones, cuts, duals):
                         self._cuts[cone.joint] = [d for d, zi in zip(ck, zk) if zi != 0.0]
-                return Solution(x, OPTIMAL, qp.objective(x), iterations, rounds)
+                mult = {c.joint: float(dk.sum()) for c, dk in zip(cones, duals)}
+                return Solution(x, OPTIMAL, qp.objective(x), iterations, rounds), mult
+            if self.active_set and rounds == 1:
+                # the relaxation's solution tells which cables and cones bind: Newton on that active
+                # set (verified by the full KKT check) usually finishes without more rounds
+                mult = {c.joint: max(float(dk.sum()), 1e-9) for c, dk in zip(cones, duals)}
+                for k, _ in violated:
+                    mult[cones[k].joint] = max(mult[cones[k].joint], 1e-9)
+                guess = ActiveSet.from_solution(qp, x, mult, -z[:n])
+                hit = try_active_set(qp, guess)
+                if hit is not None:
+                    f, mult, bound_mult = hit
+                    self._guess = ActiveSet.from_solution(qp, f, mult, bound_mult)
+                    return Solution(f, OPTIMAL, qp.objective(f), iterations, rounds), mult
             for k, d in violated:
                 if _parallel_cuts(cones[k], cuts[k], d):
                     polish = True
@@ -221,7 +270,7 @@ class ProxQPSolver(Solver):
                     for cone, ck, zk in zip(cones, cuts, duals):
                         self._cuts[cone.joint] = [d for d, zi in zip(ck, zk) if zi != 0.0]
         return failure(n, MAX_ITER, f"the cone cuts did not converge in {self.max_rounds} rounds",
-                       iterations, rounds)
+                       iterations, rounds), {}
 
 
 def _rows(qp: QPData, cones, rows):
