@@ -180,6 +180,9 @@ def add_solve(sub):
     p.add_argument("--soften", action="store_true",
                    help="where the cones cannot be met, return the least-violating forces (flagged)")
     p.add_argument("--out", action="append", default=[], help="write results (.npz or .csv); repeatable")
+    p.add_argument("--workers", type=int, default=1,
+                   help="processes for batch mode (default 1; results equal the sequential run's "
+                        "to solver tolerance; not with --smoothing)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
     p.add_argument("--html", type=_html_file, metavar="FILE.html",
                    help="also write the 3-D view of the result as one self-contained HTML file")
@@ -209,7 +212,9 @@ def run_solve(args):
     problem = case_problem(robot, args.case, alpha=alpha, beta=beta, cones=cones, frame=args.frame,
                            smoothing=args.smoothing)
     ident = InverseDynamics(robot, problem, solver=args.solver, soften=args.soften)
-    result = ident.solve_trajectory(traj, progress=False if args.quiet else None)
+    if args.workers < 1:
+        raise UsageError(f"--workers: expected a positive number, got {args.workers}")
+    result = ident.solve_trajectory(traj, progress=False if args.quiet else None, workers=args.workers)
     result.problem = f"case {args.case}: " + result.problem
     return robot, result
 

@@ -13,6 +13,8 @@ import time
 
 import numpy as np
 
+from .exceptions import ProblemError
+from .objectives import Smoothing, Sum
 from .problem import Context, Problem, QPData, case_problem
 from .results import InstantResult, TrajectoryResult
 from .solvers import INACCURATE, INFEASIBLE, OPTIMAL, SOFTENED, Solution, get_solver
@@ -78,7 +80,7 @@ class InverseDynamics:
         wrench = terms.wrenches(f) if sol.found else np.full((len(self.robot.joints), 6), np.nan)
         F_socket = np.einsum("jab,jb->ja", terms.R_socket, wrench[:, :3])
         angles = interaction_angles(F_socket, terms.socket_axes)
-        objective = self.problem.value(terms, f, context) if sol.found else float("nan")
+        objective = self.problem.value(terms, f, context, qp) if sol.found else float("nan")
         return InstantResult(
             f=f, status=sol.status, objective=objective,
             eom_residual=terms.eom_residual(f) if sol.found else float("nan"),
@@ -86,22 +88,41 @@ class InverseDynamics:
             interaction_angle_deg=angles, iterations=sol.iterations, rounds=sol.rounds,
             time_model_s=t1 - t0, time_solve_s=t2 - t1, message=message, softened_deg=softened)
 
-    def solve_trajectory(self, traj, progress: bool | None = None) -> TrajectoryResult:
+    def solve_trajectory(self, traj, progress: bool | None = None, workers: int = 1) -> TrajectoryResult:
         """Solve every instant of ``traj`` in order, warm-starting each from the previous one.
 
         Args:
             progress: show a progress bar (after 1.5 s) on a terminal; ``None``: when stderr is a tty.
+            workers: processes to use (batch mode). The trajectory is cut into ``workers``
+                contiguous pieces solved in parallel, each warm-started along itself; a piece's
+                first instant starts cold. Every instant's answer is the verified optimum of the
+                same problem, so the results equal the sequential run's to solver tolerance (for
+                problems whose optimum is unique: the forces too). Not with smoothing, whose
+                every instant depends on the previous one.
         """
-        self.solver.reset()
+        if workers is None or workers < 1:
+            raise ProblemError(f"workers must be a positive integer, got {workers!r}")
         if progress is None:
             progress = sys.stderr.isatty()
+        if workers > 1 and len(traj) > 1:
+            if any(isinstance(t, Smoothing) for t in _terms_of(self.problem.objective)):
+                raise ProblemError("batch mode (workers > 1) cannot be used with smoothing: each "
+                                   "instant depends on the previous one")
+            instants = self._solve_parallel(traj, min(workers, len(traj)), progress)
+        else:
+            instants = self._solve_range(traj, range(len(traj)), progress)
+        return TrajectoryResult.from_instants(
+            self.robot, traj, instants, self.cone_deg, robot=self.robot.name,
+            problem=self.problem.describe(), solver=self.solver.name, trajectory=traj.name)
+
+    def _solve_range(self, traj, indices, progress=False) -> list[InstantResult]:
+        self.solver.reset()
         instants: list[InstantResult] = []
         f_prev = None
-        indices = range(len(traj))
         bar = None
         if progress:
             from tqdm import tqdm
-            bar = tqdm(total=len(traj), delay=1.5, unit="inst", leave=False, file=sys.stderr)
+            bar = tqdm(total=len(indices), delay=1.5, unit="inst", leave=False, file=sys.stderr)
         try:
             for k in indices:
                 res = self.solve(traj.q[k], traj.qd[k], traj.qdd[k], f_prev=f_prev)
@@ -113,9 +134,34 @@ class InverseDynamics:
         finally:
             if bar is not None:
                 bar.close()
-        return TrajectoryResult.from_instants(
-            self.robot, traj, instants, self.cone_deg, robot=self.robot.name,
-            problem=self.problem.describe(), solver=self.solver.name, trajectory=traj.name)
+        return instants
+
+    def _solve_parallel(self, traj, workers: int, progress: bool) -> list[InstantResult]:
+        import multiprocessing as mp
+
+        global _BATCH
+        bounds = np.linspace(0, len(traj), workers + 1).round().astype(int)
+        pieces = [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
+        _BATCH = (self, traj)
+        try:
+            # fork: the workers inherit the robot, the problem and the trajectory without pickling
+            with mp.get_context("fork").Pool(len(pieces)) as pool:
+                chunks = pool.map(_solve_piece, pieces)
+        finally:
+            _BATCH = None
+        return [res for chunk in chunks for res in chunk]
+
+
+_BATCH = None
+
+
+def _solve_piece(piece):
+    ident, traj = _BATCH
+    return ident._solve_range(traj, range(*piece))
+
+
+def _terms_of(objective):
+    return objective.terms if isinstance(objective, Sum) else [objective]
 
 
 def _check(qp: QPData, terms, sol: Solution) -> Solution:

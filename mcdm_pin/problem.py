@@ -90,6 +90,7 @@ class Problem:
         weights = objective.weights if isinstance(objective, Sum) else [1.0]
         self._primary = Sum([t for t in terms if not isinstance(t, Smoothing)],
                             [w for t, w in zip(terms, weights) if not isinstance(t, Smoothing)])
+        self.has_smoothing = any(isinstance(t, Smoothing) for t in terms)
 
     @property
     def cone_constraints(self) -> list[InteractionCone]:
@@ -114,8 +115,11 @@ class Problem:
         P = 0.5 * (quad.P + quad.P.T)
         return QPData(P=P, c=quad.c, r=quad.r, A=A, b=b, lb=lb, ub=ub, cones=cones)
 
-    def value(self, terms, f, context: Context) -> float:
-        """The objective at ``f`` without smoothing terms."""
+    def value(self, terms, f, context: Context, qp: QPData | None = None) -> float:
+        """The objective at ``f`` without smoothing terms (``qp``: the assembled problem, reused
+        when there is no smoothing term)."""
+        if qp is not None and not self.has_smoothing:
+            return qp.objective(f)
         return self._primary.quadratic(terms, context).value(f)
 
     def describe(self) -> str:
