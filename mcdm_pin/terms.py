@@ -175,7 +175,12 @@ class TermsEvaluator:
         F_w, M_w = Wsub[:, :3], Wsub[:, 3:]
         RT = np.empty_like(Wsub)
         RT[:, :3] = RcT @ F_w
-        RT[:, 3:] = RcT @ (M_w - np.cross(tc[:, None, :], F_w, axisb=1).transpose(0, 2, 1))
+        # moment about the joint point: M_w - t x F_w, per joint, for every cable column
+        tx, ty, tz = tc[:, 0, None], tc[:, 1, None], tc[:, 2, None]
+        Fx, Fy, Fz = F_w[:, 0], F_w[:, 1], F_w[:, 2]
+        M_t = np.stack([M_w[:, 0] - (ty * Fz - tz * Fy), M_w[:, 1] - (tz * Fx - tx * Fz),
+                        M_w[:, 2] - (tx * Fy - ty * Fx)], axis=1)
+        RT[:, 3:] = RcT @ M_t
         R_socket = (oR[self._parent_key] @ self._R_sp).transpose(0, 2, 1) @ Rc
         return Terms(q=q.copy(), qd=np.array(qd, float), qdd=np.array(qdd, float), M=M,
                      h=tau - M @ qdd, tau=tau, lengths=geo.lengths, L=L, u=u, RT=RT,

@@ -255,14 +255,15 @@ def _verify(qp, f, y, active, mus, lower: set, upper: set):
     for (cone, _), mu in zip(active, mus):
         if mu < 0:
             cones_out.add(cone.joint)
-    grad = 2.0 * qp.P @ f + qp.c + qp.A.T @ y
+    obj_grad = 2.0 * (qp.P @ f) + qp.c
+    Aty = qp.A.T @ y
+    grad = obj_grad + Aty
     for (cone, _), mu in zip(active, mus):
         F = cone.force(f)
         perp = F - float(cone.axis @ F) * cone.axis
         nhat = perp / np.linalg.norm(perp)
         grad = grad + mu * ((nhat - cone.tan * cone.axis) @ cone.G)
-    gscale = max(np.abs(2.0 * qp.P @ f + qp.c).max(initial=0.0), np.abs(qp.A.T @ y).max(initial=0.0),
-                 1e-300)
+    gscale = max(np.abs(obj_grad).max(initial=0.0), np.abs(Aty).max(initial=0.0), 1e-300)
     fixed = np.zeros(qp.n, dtype=bool)
     fixed[list(lower | upper)] = True
     if np.abs(grad[~fixed]).max(initial=0.0) > 1e-8 * gscale:
