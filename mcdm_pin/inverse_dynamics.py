@@ -66,8 +66,10 @@ class InverseDynamics:
         sol = self.solver.solve(qp)
         message = sol.message
         softened = 0.0
+        needed_f_max = needed_cone = float("nan")
         if sol.status == INFEASIBLE:
-            message = diagnose_infeasible(qp, self.solver)
+            message, needed_f_max, needed_cone = diagnose_infeasible(qp, self.solver,
+                                                                     self.robot.cable_names)
             if self.soften and qp.cones and not message.startswith("bounds"):
                 sol, softened = soften_cones(qp, self.solver)
                 if sol.status == SOFTENED:
@@ -86,7 +88,8 @@ class InverseDynamics:
             eom_residual=terms.eom_residual(f) if sol.found else float("nan"),
             interaction_wrench=wrench, interaction_force_socket=F_socket,
             interaction_angle_deg=angles, iterations=sol.iterations, rounds=sol.rounds,
-            time_model_s=t1 - t0, time_solve_s=t2 - t1, message=message, softened_deg=softened)
+            time_model_s=t1 - t0, time_solve_s=t2 - t1, message=message, softened_deg=softened,
+            needed_f_max=needed_f_max, needed_cone_deg=needed_cone)
 
     def solve_trajectory(self, traj, progress: bool | None = None, workers: int = 1) -> TrajectoryResult:
         """Solve every instant of ``traj`` in order, warm-starting each from the previous one.
@@ -185,20 +188,117 @@ def _check(qp: QPData, terms, sol: Solution) -> Solution:
     return Solution(sol.f, INACCURATE, sol.objective, sol.iterations, sol.rounds, "; ".join(problems))
 
 
-def diagnose_infeasible(qp: QPData, solver) -> str:
-    """Say what cannot be met at an infeasible instant: the bounds, one cone, or the cones together."""
-    side = solver.fresh()
-    if side.solve(qp.without_cones()).status == INFEASIBLE:
+def diagnose_infeasible(qp: QPData, solver, cable_names=None):
+    """What cannot be met at an infeasible instant, and what would make it feasible.
+
+    Returns ``(message, needed_f_max, needed_cone_deg)``:
+
+    - bounds alone (equation of motion within ``[f_min, f_max]``, an LP decided by HiGHS): the
+      message names the cables whose bounds must give (an elastic LP: the least total violation) and
+      ``needed_f_max`` is the smallest common upper bound that would do (``inf``: none would, the
+      cables would have to push);
+    - one cone alone: named, with ``needed_cone_deg`` its smallest feasible half-angle (bisection
+      to 1e-4 deg);
+    - only the cones together: ``needed_cone_deg`` is the largest cone after the smallest common
+      widening that makes the instant feasible.
+    """
+    names = list(cable_names) if cable_names is not None else [f"cable {i}" for i in range(qp.n)]
+    nan = float("nan")
+    if _feasible_lp(qp) is None:
+        below, above = _elastic_bounds(qp)
+        parts = []
+        if above:
+            parts.append("above f_max: " + ", ".join(names[i] for i in above))
+        if below:
+            parts.append("below f_min: " + ", ".join(names[i] for i in below))
+        need = _smallest_common_fmax(qp)
+        tail = (f"; a common f_max of {need:.6g} N would suffice" if np.isfinite(need) else
+                "; no f_max suffices (some cable would have to push)")
+        where = f" (the least change needs forces {'; '.join(parts)})" if parts else ""
         return ("bounds: the equation of motion cannot be met with cable forces within "
-                "[f_min, f_max]")
+                f"[f_min, f_max]{where}{tail}", need, nan)
     alone = []
     for cone in qp.cones:
         if solver.fresh().solve(qp.with_cones([cone])).status == INFEASIBLE:
-            alone.append(f"{cone.joint} ({cone.angle_deg:g} deg)")
+            alone.append(cone)
     if alone:
-        return f"cone: the stability cone of {', '.join(alone)} cannot be met within the cable bounds"
-    names = ", ".join(f"{c.joint} ({c.angle_deg:g} deg)" for c in qp.cones)
-    return f"cones: the stability cones of {names} cannot be met together within the cable bounds"
+        worst = None
+        texts = []
+        for cone in alone:
+            need = _smallest_angle(qp.with_cones([cone]), solver)
+            texts.append(f"{cone.joint} ({cone.angle_deg:g} deg; feasible from {need:.4f} deg)")
+            worst = need if worst is None else max(worst, need)
+        return (f"cone: the stability cone of {', '.join(texts)} cannot be met within the cable "
+                f"bounds", nan, float(worst))
+    delta = _smallest_angle(qp, solver) - max(c.angle_deg for c in qp.cones)
+    names_c = ", ".join(f"{c.joint} ({c.angle_deg:g} deg)" for c in qp.cones)
+    return (f"cones: the stability cones of {names_c} cannot be met together within the cable "
+            f"bounds; widening all by {delta:.4f} deg would do", nan,
+            float(max(c.angle_deg for c in qp.cones) + delta))
+
+
+def _feasible_lp(qp: QPData):
+    from scipy.optimize import linprog
+
+    res = linprog(np.zeros(qp.n), A_eq=qp.A if len(qp.b) else None, b_eq=qp.b if len(qp.b) else None,
+                  bounds=list(zip(qp.lb, qp.ub)), method="highs")
+    return res.x if res.status == 0 else None
+
+
+def _elastic_bounds(qp: QPData, tol: float = 1e-9):
+    """Cables whose bounds must give, by the least total violation (relative to each bound)."""
+    from scipy.optimize import linprog
+
+    n = qp.n
+    w_lo = 1.0 / (1.0 + np.abs(qp.lb))
+    w_hi = 1.0 / (1.0 + np.abs(qp.ub))
+    c = np.concatenate([np.zeros(n), w_lo, w_hi])
+    eye = np.eye(n)
+    A_ub = np.block([[-eye, -eye, np.zeros((n, n))], [eye, np.zeros((n, n)), -eye]])
+    b_ub = np.concatenate([-qp.lb, qp.ub])
+    A_eq = np.hstack([qp.A, np.zeros((len(qp.b), 2 * n))])
+    res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=qp.b,
+                  bounds=[(None, None)] * n + [(0, None)] * (2 * n), method="highs")
+    if res.status != 0:
+        return [], []
+    s_lo, s_hi = res.x[n:2 * n], res.x[2 * n:]
+    return (np.flatnonzero(s_lo > tol * (1.0 + np.abs(qp.lb))).tolist(),
+            np.flatnonzero(s_hi > tol * (1.0 + np.abs(qp.ub))).tolist())
+
+
+def _smallest_common_fmax(qp: QPData) -> float:
+    """min t such that A f = b, f_min <= f <= t (inf when even an unbounded f_max fails)."""
+    from scipy.optimize import linprog
+
+    n = qp.n
+    c = np.zeros(n + 1)
+    c[-1] = 1.0
+    A_ub = np.hstack([np.eye(n), -np.ones((n, 1))])
+    res = linprog(c, A_ub=A_ub, b_ub=np.zeros(n), A_eq=np.hstack([qp.A, np.zeros((len(qp.b), 1))]),
+                  b_eq=qp.b, bounds=[(lo, None) for lo in qp.lb] + [(float(qp.lb.max()), None)],
+                  method="highs")
+    return float(res.x[-1]) if res.status == 0 else float("inf")
+
+
+def _smallest_angle(qp: QPData, solver, tol_deg: float = 1e-4) -> float:
+    """The smallest half-angle, common widening of every cone of ``qp``, that is feasible
+    (returned as the largest widened cone's angle); inf when none below 90 deg is."""
+    from .constraints import ConeData
+
+    top = max(c.angle_deg for c in qp.cones)
+
+    def ok(delta):
+        cones = [ConeData(c.joint, c.G, c.g, c.axis, min(c.angle_deg + delta, 89.999999), c.basis)
+                 for c in qp.cones]
+        return solver.fresh().solve(qp.with_cones(cones)).status == OPTIMAL
+
+    lo, hi = 0.0, 90.0 - min(c.angle_deg for c in qp.cones)
+    if not ok(hi):
+        return float("inf")
+    while hi - lo > tol_deg:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if ok(mid) else (mid, hi)
+    return top + hi
 
 
 def soften_cones(qp: QPData, solver, tol_deg: float = 1e-4) -> tuple[Solution, float]:

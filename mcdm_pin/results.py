@@ -24,6 +24,10 @@ time_model_s, time_solve_s  (N,)          wall time of model evaluation and of s
 iterations                  (N,)          solver iterations (summed over cone rounds)
 rounds                      (N,)          QP solves (cone cut rounds + 1)
 softened_deg                (N,)          cone widening applied in soften mode (0 otherwise)
+needed_f_max                (N,)          infeasible by the bounds: smallest common f_max that
+                                          would do, N (inf: none; NaN: not this case)
+needed_cone_deg             (N,)          infeasible by the cones: smallest half-angle that would
+                                          do, degrees (NaN: not this case)
 robot, problem, solver,     ()            strings describing the run
 trajectory
 ==========================  ============  =====================================================
@@ -57,6 +61,8 @@ class InstantResult:
     time_solve_s: float
     message: str = ""
     softened_deg: float = 0.0
+    needed_f_max: float = float("nan")
+    needed_cone_deg: float = float("nan")
 
     @property
     def found(self) -> bool:
@@ -65,7 +71,7 @@ class InstantResult:
 
 ARRAY_KEYS = ("t", "q", "qd", "qdd", "f", "status", "message", "objective", "eom_residual",
               "interaction_wrench", "interaction_force_socket", "interaction_angle_deg", "time_model_s",
-              "time_solve_s", "iterations", "rounds", "softened_deg")
+              "time_solve_s", "iterations", "rounds", "softened_deg", "needed_f_max", "needed_cone_deg")
 NAME_KEYS = ("joint_names", "cable_names", "coordinate_names")
 META_KEYS = ("robot", "problem", "solver", "trajectory")
 
@@ -91,6 +97,8 @@ class TrajectoryResult:
     iterations: np.ndarray
     rounds: np.ndarray
     softened_deg: np.ndarray
+    needed_f_max: np.ndarray
+    needed_cone_deg: np.ndarray
     joint_names: np.ndarray
     cable_names: np.ndarray
     coordinate_names: np.ndarray
@@ -112,7 +120,8 @@ class TrajectoryResult:
                    interaction_angle_deg=stack("interaction_angle_deg"),
                    time_model_s=stack("time_model_s"), time_solve_s=stack("time_solve_s"),
                    iterations=stack("iterations", int), rounds=stack("rounds", int),
-                   softened_deg=stack("softened_deg"),
+                   softened_deg=stack("softened_deg"), needed_f_max=stack("needed_f_max"),
+                   needed_cone_deg=stack("needed_cone_deg"),
                    joint_names=np.array(rob.joint_names, dtype=str),
                    cable_names=np.array(rob.cable_names, dtype=str),
                    coordinate_names=np.array(rob.coordinate_names, dtype=str),
@@ -158,10 +167,13 @@ class TrajectoryResult:
         path = Path(path)
         try:
             with np.load(path, allow_pickle=False) as z:
-                missing = [k for k in ARRAY_KEYS + NAME_KEYS if k not in z.files]
+                optional = ("needed_f_max", "needed_cone_deg")
+                missing = [k for k in ARRAY_KEYS + NAME_KEYS if k not in z.files and k not in optional]
                 if missing:
                     raise ResultsError(f"{path}: not an mcdm-pin results file (missing {', '.join(missing)})")
-                kw = {k: z[k] for k in ARRAY_KEYS + NAME_KEYS}
+                kw = {k: z[k] for k in ARRAY_KEYS + NAME_KEYS if k in z.files}
+                for k in optional:
+                    kw.setdefault(k, np.full(len(kw["t"]), np.nan))
                 kw["cone_deg"] = z["cone_deg"] if "cone_deg" in z.files else \
                     np.full(len(kw["joint_names"]), np.nan)
                 for k in META_KEYS:
@@ -190,6 +202,7 @@ class TrajectoryResult:
             cols[f"angle_deg[{name}]"] = self.interaction_angle_deg[:, j]
         cols.update(time_model_s=self.time_model_s, time_solve_s=self.time_solve_s,
                     iterations=self.iterations, rounds=self.rounds, softened_deg=self.softened_deg,
+                    needed_f_max=self.needed_f_max, needed_cone_deg=self.needed_cone_deg,
                     message=self.message)
         return cols
 

@@ -226,3 +226,39 @@ def test_batch_mode_refuses_smoothing(two_link):
     traj = load_trajectory(two_link, "traj1")
     with pytest.raises(ProblemError, match="smoothing"):
         InverseDynamics.for_case(two_link, 2, smoothing=1e-3).solve_trajectory(traj, workers=2)
+
+
+def test_infeasible_bounds_name_the_cables_and_the_f_max_that_would_do(two_link):
+    from mcdm_pin import CableForceBounds, MinCableForces, Problem
+    traj = load_trajectory(two_link, "traj2")
+    # t = 0: cable 3 would have to push (checked by hand: with the other cables >= f_min, the
+    # equation of motion needs f3 <= -0.118 N), so no f_max helps
+    res = InverseDynamics.for_case(two_link, 1).solve(traj.q[0], traj.qd[0], traj.qdd[0])
+    assert res.status == "infeasible" and "below f_min: cable3" in res.message
+    assert res.needed_f_max == np.inf and "no f_max suffices" in res.message
+    # t = 0.49 s with f_max = 100 N: the upper bounds conflict; the needed f_max is exact
+    k = 49
+
+    def status(f_max, solver="proxqp"):
+        p = Problem(two_link, MinCableForces(), [CableForceBounds(two_link.f_min, np.full(8, f_max))])
+        return InverseDynamics(two_link, p, solver=solver).solve(traj.q[k], traj.qd[k], traj.qdd[k])
+
+    res = status(100.0)
+    assert res.status == "infeasible" and "above f_max: " in res.message
+    need = res.needed_f_max
+    assert 100.0 < need < 1000.0
+    assert status(need * (1 + 1e-6), "clarabel").status == "optimal"
+    assert status(need * (1 - 1e-6), "clarabel").status == "infeasible"
+
+
+def test_infeasible_cone_reports_the_smallest_feasible_angle(two_link):
+    traj = load_trajectory(two_link, "traj1")
+    k = 10
+    res = InverseDynamics.for_case(two_link, 3, cones={"shoulder": 5.0}).solve(traj.q[k], traj.qd[k],
+                                                                               traj.qdd[k])
+    assert res.status == "infeasible" and "feasible from" in res.message
+    need = res.needed_cone_deg
+    assert 5.0 < need < 90.0
+    for delta, status in ((+1e-3, "optimal"), (-1e-3, "infeasible")):
+        ref = InverseDynamics.for_case(two_link, 3, cones={"shoulder": need + delta}, solver="clarabel")
+        assert ref.solve(traj.q[k], traj.qd[k], traj.qdd[k]).status == status
