@@ -31,6 +31,11 @@ from .exceptions import SidecarError, TrajectoryError
 from .sidecar import TrajectorySpec, _names
 
 
+# |det S| = |cos q2| below which a spherical joint's Euler-angle rates are refused (within 0.057 deg
+# of gimbal lock the rates, and their rounding errors, are amplified more than 1000 times)
+SINGULAR_DET = 1e-3
+
+
 @dataclass
 class Trajectory:
     """Sampled joint trajectory: ``t`` (N,), ``q``, ``qd``, ``qdd`` (N, nv)."""
@@ -96,10 +101,15 @@ class SphericalKinematics:
     def rates(self, th, omega, omega_dot):
         """Angle rates and accelerations for a child-frame angular velocity and acceleration."""
         S = self.S(th)
-        if abs(np.linalg.det(S)) < 1e-6:
-            raise TrajectoryError(f"joint {self.name!r}: the Euler angles {np.round(th, 6).tolist()} are "
-                                  f"at a singularity (det S = {np.linalg.det(S):.2e}); their rates are "
-                                  f"undefined there")
+        det = float(np.linalg.det(S))
+        if abs(det) < SINGULAR_DET:
+            raise TrajectoryError(
+                f"joint {self.name!r}: the Euler angles {np.round(th, 6).tolist()} rad are "
+                f"{np.degrees(np.arccos(min(abs(det), 1.0))):.4g} deg from 90 deg, at the singularity "
+                f"of xyz Euler angles (gimbal lock: |det S| = |cos q2| = {abs(det):.2e} < {SINGULAR_DET:g}); "
+                f"the angle rates of this motion are undefined or amplified by 1/|cos q2| there. Keep "
+                f"the middle angle away from +-90 deg, e.g. turn the joint's socket frame (the first URDF "
+                f"joint's origin rpy) so that the motion stays near q2 = 0")
         thd = np.linalg.solve(S, omega)
         # dS/dt thd = sum_k -(sum_{j>k} S_j thd_j) x S_k thd_k
         cols = S * thd

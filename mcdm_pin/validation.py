@@ -35,6 +35,10 @@ def validation_report(robot) -> list[tuple[str, str]]:
         out.append(("warn", f"cables span only {rank} of {robot.nv} DoF at q = 0 (rank L = {rank}): "
                             f"a singular pose, where some accelerations cannot be produced; check the "
                             f"poses your trajectories visit"))
+    from .conditioning import wrench_closure
+
+    closure = wrench_closure(robot, q0, terms.L)
+    out.append(("ok" if closure.closed else "warn", f"at q = 0: {closure.message}"))
     if robot.m <= robot.nv:
         out.append(("warn", f"{robot.m} cables for {robot.nv} DoF: a cable robot needs more cables "
                             f"than DoF to keep every cable in tension"))

@@ -129,7 +129,9 @@ class _Dynamics:
         pin.computeJointJacobians(model, data, r.pin_q(q))
         nj = model.njoints
         oMi = np.array([data.oMi[j].homogeneous for j in range(nj)])
-        J = np.array([pin.getJointJacobian(model, data, j, pin.ReferenceFrame.WORLD) for j in range(nj)])
+        # reshape: for a 1-DoF model Pinocchio returns the 6 x 1 Jacobian as a flat (6,) array
+        J = np.array([pin.getJointJacobian(model, data, j, pin.ReferenceFrame.WORLD).reshape(6, model.nv)
+                      for j in range(nj)])
         geo = cable_geometry(r, oMi[:, :3, :3], oMi[:, :3, 3])
         L = np.einsum("jkm,jkn->mn", geo.W, J)
         return -L.T @ f

@@ -174,9 +174,11 @@ def _unit(draw, rng_float):
 def robots(draw, min_links: int = 1, max_links: int = 6, tree: bool | None = None,
            cables_per_dof=(3, 6), mass=(0.05, 2.0), length=(0.1, 0.5), f_bounds=((0.0, 1.0), (200.0, 2000.0)),
            mass_log_spread: float = 0.0, length_log_spread: float = 0.0, with_cones: bool = True,
-           base_offset: bool = True) -> GenRobot:
+           base_offset: bool = True, grouped: bool = False) -> GenRobot:
     """A random :class:`GenRobot` (module docstring). ``mass_log_spread`` / ``length_log_spread``
-    multiply each link's mass / length by ``10**u``, ``u`` uniform in +-spread (badly scaled robots)."""
+    multiply each link's mass / length by ``10**u``, ``u`` uniform in +-spread (badly scaled robots).
+    ``grouped``: cables come in threes, each route turned by 0, 120 and 240 degrees about every
+    link's z axis (like the 2-link arm's), so that the cables span the degrees of freedom more often."""
     unit = st.floats(-1.0, 1.0)
     n = draw(st.integers(min_links, max_links), label="links")
     is_tree = draw(st.booleans()) if tree is None else tree
@@ -204,8 +206,10 @@ def robots(draw, min_links: int = 1, max_links: int = 6, tree: bool | None = Non
                              beta=_r(draw(st.floats(0.0, 0.1))), cone_deg=cone))
     nv = sum(3 if link.kind == "spherical" else 1 for link in links)
     m = draw(st.integers(cables_per_dof[0] * nv, cables_per_dof[1] * nv), label="cables")
+    if grouped:
+        m = 3 * ((m + 2) // 3)
     cables = []
-    for _ in range(m):
+    for _ in range(m // 3 if grouped else m):
         end = draw(st.integers(1, n))
         path = [end]
         while path[-1] != 0:
@@ -227,7 +231,10 @@ def robots(draw, min_links: int = 1, max_links: int = 6, tree: bool | None = Non
             points.append((_r(rad * np.cos(theta)), _r(rad * np.sin(theta)), _r(z)))
         f_min = _r(draw(st.floats(*f_bounds[0])))
         f_max = _r(max(draw(st.floats(*f_bounds[1])), 2 * f_min + 1e-3))
-        cables.append(GenCable(links=tuple(route), points=tuple(points), f_min=f_min, f_max=f_max))
+        for turn in ((0.0, 2 * np.pi / 3, 4 * np.pi / 3) if grouped else (0.0,)):
+            c, s = np.cos(turn), np.sin(turn)
+            turned = tuple((_r(c * x - s * y), _r(s * x + c * y), z) for x, y, z in points)
+            cables.append(GenCable(links=tuple(route), points=turned, f_min=f_min, f_max=f_max))
     if base_offset:
         base_xyz = tuple(_r(draw(unit)) for _ in range(3))
         base_rpy = tuple(_r(np.pi * draw(unit)) for _ in range(3))
