@@ -180,6 +180,9 @@ def add_solve(sub):
     p.add_argument("--soften", action="store_true",
                    help="where the cones cannot be met, return the least-violating forces (flagged)")
     p.add_argument("--out", action="append", default=[], help="write results (.npz or .csv); repeatable")
+    p.add_argument("--no-diagnosis", action="store_true",
+                   help="do not analyse infeasible instants (what conflicts, the f_max or cone angle "
+                        "that would do); faster when many instants are infeasible")
     p.add_argument("--workers", type=int, default=1,
                    help="processes for batch mode (default 1; results equal the sequential run's "
                         "to solver tolerance; not with --smoothing)")
@@ -211,7 +214,8 @@ def run_solve(args):
     from .problem import case_problem
     problem = case_problem(robot, args.case, alpha=alpha, beta=beta, cones=cones, frame=args.frame,
                            smoothing=args.smoothing)
-    ident = InverseDynamics(robot, problem, solver=args.solver, soften=args.soften)
+    ident = InverseDynamics(robot, problem, solver=args.solver, soften=args.soften,
+                            diagnose=not args.no_diagnosis)
     if args.workers < 1:
         raise UsageError(f"--workers: expected a positive number, got {args.workers}")
     result = ident.solve_trajectory(traj, progress=False if args.quiet else None, workers=args.workers)

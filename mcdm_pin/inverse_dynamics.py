@@ -35,19 +35,26 @@ class InverseDynamics:
         solver: a back-end name (``proxqp``, ``clarabel``) or a :class:`~mcdm_pin.solvers.Solver`.
         soften: for instants where the cones cannot be met, return the forces that make the largest
             cone violation smallest (status ``softened``) instead of ``infeasible``.
+        diagnose: for infeasible instants, find what conflicts and the f_max or cone angle that
+            would make them feasible (:func:`diagnose_infeasible`; a few LPs and, for cones, a
+            bisection of ~20 solves). Off: the message only says that the instant is infeasible.
     """
 
-    def __init__(self, robot, problem: Problem, solver="proxqp", soften: bool = False):
+    def __init__(self, robot, problem: Problem, solver="proxqp", soften: bool = False,
+                 diagnose: bool = True):
         self.robot = robot
+        self.diagnose = diagnose
         self.problem = problem
         self.solver = get_solver(solver)
         self.soften = soften
         self.evaluate = TermsEvaluator(robot)
 
     @classmethod
-    def for_case(cls, robot, case: int, solver="proxqp", soften: bool = False, **options):
+    def for_case(cls, robot, case: int, solver="proxqp", soften: bool = False, diagnose: bool = True,
+                 **options):
         """The paper's case 1, 2 or 3 (options as :func:`~mcdm_pin.problem.case_problem`)."""
-        return cls(robot, case_problem(robot, case, **options), solver=solver, soften=soften)
+        return cls(robot, case_problem(robot, case, **options), solver=solver, soften=soften,
+                   diagnose=diagnose)
 
     @property
     def cone_deg(self) -> np.ndarray:
@@ -67,7 +74,7 @@ class InverseDynamics:
         message = sol.message
         softened = 0.0
         needed_f_max = needed_cone = float("nan")
-        if sol.status == INFEASIBLE:
+        if sol.status == INFEASIBLE and self.diagnose:
             message, needed_f_max, needed_cone = diagnose_infeasible(qp, self.solver,
                                                                      self.robot.cable_names)
             if self.soften and qp.cones and not message.startswith("bounds"):
