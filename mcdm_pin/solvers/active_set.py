@@ -156,8 +156,9 @@ def _solve_equality(qp: QPData, lower, upper, guess_cones: dict, max_newton: int
     by_name = {c.joint: c for c in qp.cones}
     active = [(by_name[j], d) for j, (d, _) in guess_cones.items() if j in by_name]
     nf, neq, nc = int(free.sum()), len(qp.b), len(active)
-    if nf < neq + nc:
-        return "fewer free cables than equations"
+    # fewer free cables than equations is fine when the equations are dependent (e.g. the 2-link
+    # arm at q = 0): the KKT system is then solved in the least-squares sense and verified
+    square = nf >= neq + nc
     A_F = qp.A[:, free]
     rhs_eq = qp.b - qp.A[:, fixed] @ f[fixed]
     H_FF, H_FB = H[np.ix_(free, free)], H[np.ix_(free, fixed)]
@@ -195,9 +196,13 @@ def _solve_equality(qp: QPData, lower, upper, guess_cones: dict, max_newton: int
         rhs[:nf] = -(gk[free] + H_FB @ f[fixed])
         rhs[nf:nf + neq] = rhs_eq
         try:
+            if not square:
+                raise np.linalg.LinAlgError
             sol = np.linalg.solve(K, rhs)
         except np.linalg.LinAlgError:
-            return "singular KKT system"
+            sol = np.linalg.lstsq(K, rhs, rcond=None)[0]
+            if np.abs(K @ sol - rhs).max(initial=0.0) > 1e-10 * max(np.abs(rhs).max(initial=0.0), 1.0):
+                return "singular KKT system"
         if not np.all(np.isfinite(sol)):
             return "singular KKT system"
         x = sol[:nf]

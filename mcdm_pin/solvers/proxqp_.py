@@ -150,11 +150,17 @@ class ProxQPSolver(Solver):
                 return Solution(f, OPTIMAL, qp.objective(f), 0, 0, "")
         self._guess = None
         sol, mult = self._solve_proxqp(qp)
-        if self.active_set and self._guess is None:
-            if sol.status == OPTIMAL:
-                # ProxQP's multipliers of the bound rows: z > 0 at an upper, z < 0 at a lower bound
-                z = self._last_z[:qp.n] if self._last_z is not None else None
-                self._guess = ActiveSet.from_solution(qp, sol.f, mult, None if z is None else -z)
+        if self.active_set and self._guess is None and sol.status == OPTIMAL:
+            # ProxQP's multipliers of the bound rows: z > 0 at an upper, z < 0 at a lower bound
+            z = self._last_z[:qp.n] if self._last_z is not None else None
+            self._guess = ActiveSet.from_solution(qp, sol.f, mult, None if z is None else -z)
+            # polish: the exact KKT point of ProxQP's active set (bounds and the equation of motion
+            # then hold to rounding instead of to ProxQP's tolerance), if it verifies
+            hit = try_active_set(qp, self._guess, max_pivots=2)
+            if hit is not None:
+                f, mult, bound_mult = hit
+                self._guess = ActiveSet.from_solution(qp, f, mult, bound_mult)
+                sol = Solution(f, OPTIMAL, qp.objective(f), sol.iterations, sol.rounds, sol.message)
         return sol
 
     def _solve_proxqp(self, qp: QPData):
