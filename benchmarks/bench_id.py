@@ -1,0 +1,688 @@
+"""Per-instant inverse-dynamics timing of mcdm-pin against peer solvers, on the same problems.
+
+For each case, one table row for mcdm-pin (``InverseDynamics.solve_trajectory``, default ProxQP
+back-end) and one per peer, each solving the *same* per-instant problem (the ``QPData`` that
+mcdm-pin assembles from the model terms):
+
+- ``clarabel``: Clarabel called directly as an exact cone program; the sparse matrices are built from
+  the QPData inside the timed region, as a user would (Clarabel's default settings).
+- ``cvxpy``: cvxpy with Clarabel; a Parameter-ised (DPP) problem is built and compiled **once** per
+  case, outside the timing; per instant the parameters are set (inside the timing, including the
+  factor ``K`` of ``P = K^T K`` by pivoted Cholesky, since ``quad_form`` of a parameter is not DPP)
+  and the problem is re-solved.
+- ``slsqp``: scipy's SLSQP, cones as nonlinear inequalities ``tan(rho) a.F - |F_perp| >= 0`` with
+  exact Jacobians, started from the previous instant's solution (``ftol = 1e-8``: absolute on the objective;
+  tighter values make SLSQP stop with 'Positive directional derivative' on the neck's case 3).
+- ``ipopt``: IPOPT through cyipopt (exact Hessian, default tolerance 1e-8, MUMPS), same cone form,
+  started from the previous instant's solution. Needs ``apt-get install -y coinor-libipopt-dev
+  libblas-dev liblapack-dev pkg-config`` and ``pip install cyipopt``; skipped with a note otherwise.
+
+Every peer needs the same model terms (M, h, L, u, R^T) and QP assembly as mcdm-pin: each peer runs
+its own loop over the trajectory, per instant the model (the library's own code) then the peer's
+solve, and a peer's total per instant is model + solve. Only instants a back-end answers are timed
+(the count of the others is shown). Before timing, every back-end (mcdm-pin included) is checked on a few
+instants against Clarabel at tight tolerances (1e-11): objective within ``--obj-rtol`` (relative),
+equation of motion, bounds and cones satisfied (tolerances in ``CHECK``); failures are flagged in the
+table and printed.
+
+    python benchmarks/bench_id.py [--robot neck|two_link|PATH.yaml] [--trajectory NAME] [--case 1 2 3]
+        [--samples N] [--repeat R] [--peers clarabel,cvxpy,slsqp,ipopt] [--json FILE] [--markdown FILE]
+
+The machine may be shared with other jobs: times are medians over instants and repeats, and the
+spread is shown as the 10th-90th percentile range.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+DEFAULT_CASPR = REPO.parent / "shared" / "reference" / "caspr"
+PEERS = ("clarabel", "cvxpy", "slsqp", "ipopt")
+# correctness check: objective relative to the reference, relative EOM residual, bounds (N), cones (deg)
+CHECK = dict(obj_rtol=1e-6, obj_atol=1e-8, eom_rtol=1e-7, bound_tol=1e-6, cone_tol_deg=1e-3)
+
+
+# ------------------------------------------------------------------------------------- the robots
+def machine() -> dict:
+    model = platform.processor() or "unknown CPU"
+    try:
+        out = subprocess.run(["lscpu"], capture_output=True, text=True, timeout=10).stdout
+        for line in out.splitlines():
+            if line.startswith("Model name:"):
+                model = line.split(":", 1)[1].strip()
+    except (OSError, subprocess.SubprocessError):
+        pass
+    versions = {}
+    for mod in ("pinocchio", "proxsuite", "clarabel", "cvxpy", "scipy", "numpy", "cyipopt"):
+        try:
+            versions[mod] = __import__(mod).__version__
+        except Exception:  # noqa: BLE001 - not installed or no version
+            pass
+    try:
+        load = os.getloadavg()[0]
+    except OSError:
+        load = float("nan")
+    return dict(cpu=model, nproc=os.cpu_count(), python=platform.python_version(), versions=versions,
+                load_avg_1min=round(load, 2))
+
+
+def load_case_setup(robot_spec: str, tmp: Path, caspr: Path, trajectory: str | None):
+    """(robot, trajectory, {case: for_case keyword arguments}, label)."""
+    from mcdm_pin import Robot, load_trajectory
+
+    if robot_spec == "neck":
+        from mcdm_pin.caspr import import_caspr
+
+        d = caspr / "8S_neck"
+        if not (d / "8S_neck_bodies.xml").is_file():
+            raise SystemExit(f"bench_id: CASPR neck model not found in {d} (use --caspr DIR)")
+        imp = import_caspr(d / "8S_neck_bodies.xml", d / "8S_neck_cables.xml", tmp / "neck",
+                           trajectories_xml=d / "8S_neck_trajectories.xml",
+                           trajectory_ids=[trajectory or "roll"])
+        robot = Robot.load(imp.sidecar)
+        J = robot.joint_names
+        base = dict(alpha={j: 0.125 for j in J}, beta={j: 0.0 for j in J})  # the paper's settings
+        kw = {1: {}, 2: dict(base), 3: dict(base, cones={j: 15.0 for j in J})}
+        return robot, load_trajectory(robot, trajectory or "roll"), kw, "neck (8S, 76 cables)"
+    path = REPO / "robots" / "two_link_sr.yaml" if robot_spec == "two_link" else Path(robot_spec)
+    robot = Robot.load(path)
+    names = list(robot.sidecar.trajectories)
+    if trajectory is None:
+        if not names:
+            raise SystemExit(f"bench_id: {path} has no trajectories; give --trajectory")
+        trajectory = names[0]
+    # sidecar defaults (weights, cones) for cases 2 and 3
+    return robot, load_trajectory(robot, trajectory), {1: {}, 2: {}, 3: {}}, robot.name
+
+
+# ---------------------------------------------------------------------------------- the problems
+def cone_rows(qp):
+    """Per cone, ``T (3, m)`` and ``t (3,)`` with ``s = T f + t = [tan a.F, e1.F, e2.F]``: the cone
+    is ``|s[1:]| <= s[0]``. Stacked: (K, 3, m), (K, 3)."""
+    if not qp.cones:
+        return np.zeros((0, 3, qp.n)), np.zeros((0, 3))
+    W = np.array([np.vstack([c.tan * c.axis, c.basis]) for c in qp.cones])  # (K, 3, 3)
+    G = np.array([c.G for c in qp.cones])
+    g = np.array([c.g for c in qp.cones])
+    return W @ G, np.einsum("kab,kb->ka", W, g)
+
+
+def check_solution(qp, f, ref_obj: float) -> tuple[bool, dict]:
+    """Does ``f`` solve ``qp`` to the stated tolerances, at the reference objective?"""
+    out = dict(obj_rel=float("nan"), eom_rel=float("nan"), bound=float("nan"), cone_deg=float("nan"))
+    if f is None or not np.all(np.isfinite(f)):
+        return False, out
+    obj = qp.objective(f)
+    out["obj_rel"] = abs(obj - ref_obj) / max(abs(ref_obj), 1e-300)
+    obj_ok = abs(obj - ref_obj) <= CHECK["obj_rtol"] * abs(ref_obj) + CHECK["obj_atol"]
+    r = qp.A @ f - qp.b
+    scale = max(np.abs(qp.b).max(initial=0.0), (np.abs(qp.A) @ np.abs(f)).max(initial=0.0), 1e-300)
+    out["eom_rel"] = float(np.abs(r).max(initial=0.0) / scale)
+    out["bound"] = float(max(np.max(qp.lb - f, initial=0.0), np.max(f - qp.ub, initial=0.0)))
+    out["cone_deg"] = float(max((max(0.0, c.angle_of(f) - c.angle_deg) for c in qp.cones), default=0.0))
+    ok = (obj_ok and out["eom_rel"] <= CHECK["eom_rtol"]
+          and out["bound"] <= CHECK["bound_tol"] and out["cone_deg"] <= CHECK["cone_tol_deg"])
+    return ok, out
+
+
+def reference_solve(qp):
+    """Clarabel at tight tolerances: the reference optimum of the check."""
+    return ClarabelPeer(tight=True).solve(qp)
+
+
+# ------------------------------------------------------------------------------------------ peers
+class Peer:
+    name = "peer"
+    label = "peer"
+    message = ""  # why the last failed solve failed, when the peer says
+
+    def reset(self):
+        pass
+
+    def prepare(self, qp):
+        """Called once per case with a representative problem, outside the timing."""
+
+    def solve(self, qp):
+        """Cable forces (m,) or None (no answer)."""
+        raise NotImplementedError
+
+
+class ClarabelPeer(Peer):
+    name = "clarabel"
+    label = "Clarabel (direct SOCP)"
+
+    def __init__(self, tight: bool = False):
+        import clarabel  # noqa: F401
+        self.tight = tight
+
+    def solve(self, qp):
+        import clarabel
+        from scipy import sparse
+
+        n = qp.n
+        blocks, rhs, cones = [], [], []
+        if len(qp.b):
+            blocks.append(qp.A)
+            rhs.append(qp.b)
+            cones.append(clarabel.ZeroConeT(len(qp.b)))
+        hi, lo = np.isfinite(qp.ub), np.isfinite(qp.lb)
+        if hi.any() or lo.any():
+            eye = np.eye(n)
+            blocks += [eye[hi], -eye[lo]]
+            rhs += [qp.ub[hi], -qp.lb[lo]]
+            cones.append(clarabel.NonnegativeConeT(int(hi.sum() + lo.sum())))
+        if qp.cones:
+            T, t = cone_rows(qp)
+            blocks.append(-T.reshape(-1, n))
+            rhs.append(t.reshape(-1))
+            cones += [clarabel.SecondOrderConeT(3)] * len(qp.cones)
+        A = sparse.csc_matrix(np.vstack(blocks))
+        b = np.concatenate(rhs)
+        P = sparse.csc_matrix(np.triu(2.0 * qp.P))
+        settings = clarabel.DefaultSettings()
+        settings.verbose = False
+        if self.tight:
+            settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = 1e-11
+            settings.tol_ktratio = 1e-8
+        sol = clarabel.DefaultSolver(P, qp.c, A, b, cones, settings).solve()
+        if str(sol.status) in ("Solved", "AlmostSolved"):
+            return np.array(sol.x)
+        return None
+
+
+class CvxpyPeer(Peer):
+    name = "cvxpy"
+    label = "cvxpy + Clarabel (DPP, built once)"
+
+    def __init__(self):
+        import cvxpy  # noqa: F401
+        self.prob = None
+
+    def prepare(self, qp):
+        import cvxpy as cp
+
+        n, me, k = qp.n, len(qp.b), len(qp.cones)
+        self.hi, self.lo = np.isfinite(qp.ub), np.isfinite(qp.lb)
+        f = self.f = cp.Variable(n)
+        self.K, self.c = cp.Parameter((n, n)), cp.Parameter(n)
+        cons = []
+        if me:
+            self.A, self.b = cp.Parameter((me, n)), cp.Parameter(me)
+            cons.append(self.A @ f == self.b)
+        if self.hi.any():
+            self.ub = cp.Parameter(int(self.hi.sum()))
+            cons.append(f[np.flatnonzero(self.hi)] <= self.ub)
+        if self.lo.any():
+            self.lb = cp.Parameter(int(self.lo.sum()))
+            cons.append(f[np.flatnonzero(self.lo)] >= self.lb)
+        self.T = [cp.Parameter((3, n)) for _ in range(k)]
+        self.t = [cp.Parameter(3) for _ in range(k)]
+        for T, t in zip(self.T, self.t):
+            s = T @ f + t
+            cons.append(cp.SOC(s[0], s[1:]))
+        self.prob = cp.Problem(cp.Minimize(cp.sum_squares(self.K @ f) + self.c @ f), cons)
+        assert self.prob.is_dcp(dpp=True)
+        self._set(qp)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            self.prob.solve(solver=cp.CLARABEL)  # compile once (cached for the re-solves)
+
+    def _set(self, qp):
+        from scipy.linalg import lapack
+
+        # P = K^T K by pivoted Cholesky (P is PSD, possibly singular)
+        U, piv, rank, info = lapack.dpstrf(qp.P, lower=0)
+        U = np.triu(U)
+        U[rank:] = 0.0
+        K = np.empty_like(U)
+        K[:, piv - 1] = U
+        self.K.value, self.c.value = K, qp.c
+        if len(qp.b):
+            self.A.value, self.b.value = qp.A, qp.b
+        if self.hi.any():
+            self.ub.value = qp.ub[self.hi]
+        if self.lo.any():
+            self.lb.value = qp.lb[self.lo]
+        if qp.cones:
+            T, t = cone_rows(qp)
+            for k in range(len(qp.cones)):
+                self.T[k].value, self.t[k].value = T[k], t[k]
+
+    def solve(self, qp):
+        import cvxpy as cp
+
+        self._set(qp)
+        try:
+            self.prob.solve(solver=cp.CLARABEL)
+        except cp.error.SolverError:
+            return None
+        if self.prob.status in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
+            return np.array(self.f.value)
+        return None
+
+
+def _cone_values(T, t, f):
+    """Cone constraint values ``s0 - |s12|`` (K,) and Jacobian (K, m); also s12 and |s12|."""
+    s = T @ f + t  # (K, 3)
+    nrm = np.linalg.norm(s[:, 1:], axis=1)
+    u = s[:, 1:] / np.maximum(nrm, 1e-300)[:, None]
+    jac = T[:, 0, :] - np.einsum("ka,kam->km", u, T[:, 1:, :])
+    return s[:, 0] - nrm, jac, s[:, 1:], nrm
+
+
+def _start(qp, f_prev):
+    if f_prev is not None:
+        return np.clip(f_prev, qp.lb, qp.ub)
+    f0 = np.linalg.lstsq(qp.A, qp.b, rcond=None)[0] if len(qp.b) else np.zeros(qp.n)
+    return np.clip(f0, qp.lb, qp.ub)
+
+
+class SlsqpPeer(Peer):
+    name = "slsqp"
+    label = "scipy SLSQP (warm start)"
+
+    def __init__(self):
+        self.f_prev = None
+
+    def reset(self):
+        self.f_prev = None
+
+    def solve(self, qp):
+        from scipy.optimize import Bounds, minimize
+
+        P2, c = 2.0 * qp.P, qp.c
+        cons = []
+        if len(qp.b):
+            A, b = qp.A, qp.b
+            cons.append(dict(type="eq", fun=lambda f: A @ f - b, jac=lambda f: A))
+        if qp.cones:
+            T, t = cone_rows(qp)
+            cons.append(dict(type="ineq", fun=lambda f: _cone_values(T, t, f)[0],
+                             jac=lambda f: _cone_values(T, t, f)[1]))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = minimize(lambda f: (f @ qp.P @ f + c @ f, P2 @ f + c), _start(qp, self.f_prev),
+                           jac=True, method="SLSQP", bounds=Bounds(qp.lb, qp.ub), constraints=cons,
+                           options=dict(ftol=1e-8, maxiter=1000))
+        if not res.success:
+            self.message = res.message
+            return None
+        self.f_prev = res.x
+        return np.array(res.x)
+
+
+class _IpoptNLP:
+    def __init__(self, qp, T, t):
+        self.qp, self.T, self.t = qp, T, t
+        n, me, k = qp.n, len(qp.b), len(qp.cones)
+        self.me, self.k = me, k
+        self.jrows, self.jcols = np.indices((me + k, n)).reshape(2, -1)
+        self.hrows, self.hcols = np.tril_indices(n)
+
+    def objective(self, f):
+        return float(f @ self.qp.P @ f + self.qp.c @ f)
+
+    def gradient(self, f):
+        return 2.0 * self.qp.P @ f + self.qp.c
+
+    def constraints(self, f):
+        parts = [self.qp.A @ f]
+        if self.k:
+            parts.append(_cone_values(self.T, self.t, f)[0])
+        return np.concatenate(parts)
+
+    def jacobianstructure(self):
+        return self.jrows, self.jcols
+
+    def jacobian(self, f):
+        parts = [self.qp.A]
+        if self.k:
+            parts.append(_cone_values(self.T, self.t, f)[1])
+        return np.vstack(parts).ravel()
+
+    def hessianstructure(self):
+        return self.hrows, self.hcols
+
+    def hessian(self, f, lam, obj_factor):
+        H = obj_factor * 2.0 * self.qp.P
+        if self.k:
+            # d^2 (-|s12|) = -T12^T (I - u u^T) T12 / |s12|
+            _, _, s12, nrm = _cone_values(self.T, self.t, f)
+            for j in range(self.k):
+                if nrm[j] > 1e-12:
+                    u = s12[j] / nrm[j]
+                    T12 = self.T[j, 1:, :]
+                    Tu = u @ T12
+                    H = H - lam[self.me + j] * (T12.T @ T12 - np.outer(Tu, Tu)) / nrm[j]
+        return H[self.hrows, self.hcols]
+
+
+class IpoptPeer(Peer):
+    name = "ipopt"
+    label = "IPOPT via cyipopt (warm start)"
+
+    def __init__(self):
+        import cyipopt  # noqa: F401
+        self.f_prev = None
+
+    def reset(self):
+        self.f_prev = None
+
+    def solve(self, qp):
+        import cyipopt
+
+        T, t = cone_rows(qp)
+        me, k = len(qp.b), len(qp.cones)
+        cl = np.concatenate([qp.b, np.zeros(k)])
+        cu = np.concatenate([qp.b, np.full(k, 2e19)])
+        lb = np.where(np.isfinite(qp.lb), qp.lb, -2e19)
+        ub = np.where(np.isfinite(qp.ub), qp.ub, 2e19)
+        nlp = cyipopt.Problem(n=qp.n, m=me + k, problem_obj=_IpoptNLP(qp, T, t), lb=lb, ub=ub, cl=cl, cu=cu)
+        nlp.add_option("print_level", 0)
+        nlp.add_option("sb", "yes")
+        nlp.add_option("tol", 1e-10)
+        nlp.add_option("max_iter", 500)
+        x, info = nlp.solve(_start(qp, self.f_prev))
+        if info["status"] not in (0, 1):  # solved, solved to acceptable level
+            self.message = info["status_msg"]
+            return None
+        self.f_prev = x
+        return np.array(x)
+
+
+PEER_CLASSES = {"clarabel": ClarabelPeer, "cvxpy": CvxpyPeer, "slsqp": SlsqpPeer, "ipopt": IpoptPeer}
+INSTALL = {"clarabel": "pip install clarabel", "cvxpy": "pip install cvxpy",
+           "slsqp": "pip install scipy",
+           "ipopt": "apt-get install -y coinor-libipopt-dev libblas-dev liblapack-dev pkg-config && "
+                    "pip install cyipopt"}
+
+
+def make_peers(names):
+    peers, notes = [], []
+    for name in names:
+        try:
+            peers.append(PEER_CLASSES[name]())
+        except ImportError as e:
+            notes.append(f"{name}: skipped, not installed ({e.name or e}); install with: {INSTALL[name]}")
+    return peers, notes
+
+
+# ------------------------------------------------------------------------------------ the running
+def stats_ms(x) -> dict:
+    x = np.asarray(x, dtype=float) * 1e3
+    if x.size == 0:
+        return dict(median=float("nan"), p10=float("nan"), p90=float("nan"), q25=float("nan"),
+                    q75=float("nan"), n=0)
+    p10, q25, med, q75, p90 = np.percentile(x, [10, 25, 50, 75, 90])
+    return dict(median=float(med), p10=float(p10), p90=float(p90), q25=float(q25), q75=float(q75),
+                n=int(x.size))
+
+
+def state(traj, k):
+    return traj.q[k], traj.qd[k], traj.qdd[k]
+
+
+def correctness(robot, traj, case, kw, peers, n_check: int) -> dict:
+    """Solve ``n_check`` instants spread over the trajectory with every back-end (in order, so warm
+    starts behave as when timed) and compare with the tight Clarabel reference."""
+    from mcdm_pin import InverseDynamics
+    from mcdm_pin.problem import Context
+
+    ours = InverseDynamics.for_case(robot, case, **kw)
+    idx = np.unique(np.round(np.linspace(0, len(traj) - 1, min(n_check, len(traj)))).astype(int))
+    for p in peers:
+        p.reset()
+    out = {"ours": [], **{p.name: [] for p in peers}}
+    f_prev = None
+    for k in idx:
+        terms = ours.evaluate(*state(traj, k))
+        qp = ours.problem.assemble(terms, Context(robot))
+        ref = reference_solve(qp)
+        if ref is None:
+            for key in out:
+                out[key].append(dict(instant=int(k), ok=None, note="reference found no answer"))
+            continue
+        ref_obj = qp.objective(ref)
+        res = ours.solve(*state(traj, k), f_prev=f_prev)
+        f_prev = res.f if res.found else f_prev
+        ok, det = check_solution(qp, res.f if res.found else None, ref_obj)
+        out["ours"].append(dict(instant=int(k), ok=ok, status=str(res.status), **det))
+        for p in peers:
+            try:
+                f = p.solve(qp)
+            except Exception as e:  # noqa: BLE001 - a peer failing is a result
+                f = None
+                p.message = f"error: {e}"
+            ok, det = check_solution(qp, f, ref_obj)
+            out[p.name].append(dict(instant=int(k), ok=ok, **det,
+                                    note="" if f is not None else (p.message or "no answer")))
+    return out
+
+
+def time_ours(robot, traj, case, kw, repeat: int):
+    from mcdm_pin import InverseDynamics
+
+    ident = InverseDynamics.for_case(robot, case, **kw)
+    model, solve, total, bad = [], [], [], 0
+    ident.solve_trajectory(traj.subsample(min(len(traj), 5)), progress=False)  # warm-up (imports, caches)
+    for _ in range(repeat):
+        res = ident.solve_trajectory(traj, progress=False)
+        ok = res.found
+        bad += int((~ok).sum())
+        model.append(res.time_model_s[ok])
+        solve.append(res.time_solve_s[ok])
+        total.append((res.time_model_s + res.time_solve_s)[ok])
+    cat = np.concatenate
+    return dict(model=cat(model), solve=cat(solve), total=cat(total), no_answer=bad)
+
+
+def time_batch(robot, traj, case, kw, repeat: int, workers: int):
+    """Wall time of a whole-trajectory batch run (``workers`` processes) divided by the instants."""
+    from mcdm_pin import InverseDynamics
+
+    ident = InverseDynamics.for_case(robot, case, **kw)
+    walls, bad = [], 0
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        res = ident.solve_trajectory(traj, progress=False, workers=workers)
+        walls.append((time.perf_counter() - t0) / len(traj))
+        bad += int((~res.found).sum())
+    return dict(total=np.array(walls), no_answer=bad)
+
+
+def time_peers(robot, traj, case, kw, peers, repeat: int):
+    """Each peer in its own loop over the trajectory, as its user would run it: per instant the
+    model (the library's terms + QP assembly) then the peer's solve, both timed."""
+    from mcdm_pin import InverseDynamics
+    from mcdm_pin.problem import Context
+
+    ident = InverseDynamics.for_case(robot, case, **kw)
+    prob = ident.problem
+    rec = {p.name: dict(model=[], solve=[], total=[], no_answer=0) for p in peers}
+    for _ in range(repeat):
+        for p in peers:
+            p.reset()
+            r = rec[p.name]
+            for k in range(len(traj)):
+                t0 = time.perf_counter()
+                terms = ident.evaluate(*state(traj, k))
+                qp = prob.assemble(terms, Context(robot))
+                t1 = time.perf_counter()
+                try:
+                    f = p.solve(qp)
+                except Exception:  # noqa: BLE001 - a peer failing is a result
+                    f = None
+                t2 = time.perf_counter()
+                if f is None:
+                    r["no_answer"] += 1
+                    continue
+                r["model"].append(t1 - t0)
+                r["solve"].append(t2 - t1)
+                r["total"].append(t2 - t0)
+    return rec
+
+
+def run(args) -> dict:
+    from mcdm_pin.problem import Context
+
+    names = [s.strip() for s in args.peers.split(",") if s.strip()] if args.peers else []
+    unknown = [n for n in names if n not in PEER_CLASSES]
+    if unknown:
+        raise SystemExit(f"bench_id: unknown peer(s) {unknown}; expected some of {','.join(PEERS)}")
+    peers, notes = make_peers(names)
+    rows, checks, failures = [], {}, []
+    with tempfile.TemporaryDirectory() as tmp:
+        robot, traj, kws, label = load_case_setup(args.robot, Path(tmp), Path(args.caspr), args.trajectory)
+        if args.samples:
+            traj = traj.subsample(args.samples)
+        for case in args.case:
+            kw = kws[case]
+            from mcdm_pin import InverseDynamics
+            ident = InverseDynamics.for_case(robot, case, **kw)
+            qp0 = ident.problem.assemble(ident.evaluate(*state(traj, 0)), Context(robot))
+            for p in peers:
+                p.prepare(qp0)
+            chk = correctness(robot, traj, case, kw, peers, args.check)
+            checks[case] = chk
+            verdict = {}
+            for name, items in chk.items():
+                judged = [it for it in items if it["ok"] is not None]
+                bad = [it for it in judged if not it["ok"]]
+                verdict[name] = "ok" if judged and not bad else ("n/a" if not judged else
+                                                                   f"FAIL {len(bad)}/{len(judged)}")
+                for it in bad:
+                    failures.append(f"case {case}, {name}, instant {it['instant']}: objective rel "
+                                    f"{it['obj_rel']:.1e}, EOM rel {it['eom_rel']:.1e}, bounds "
+                                    f"{it['bound']:.1e} N, cone {it['cone_deg']:.1e} deg"
+                                    + (f" ({it['note']})" if it.get("note") else ""))
+            if args.check_only:
+                rows.append(dict(case=case, check=verdict))
+                continue
+            ours = time_ours(robot, traj, case, kw, args.repeat)
+            peer_rec = time_peers(robot, traj, case, kw, peers, args.peer_repeat or args.repeat)
+            ours_total = stats_ms(ours["total"])["median"]
+            case_rows = [dict(case=case, backend="mcdm-pin", label="mcdm-pin (ProxQP)",
+                              model_ms=stats_ms(ours["model"]), solve_ms=stats_ms(ours["solve"]),
+                              total_ms=stats_ms(ours["total"]), no_answer=ours["no_answer"],
+                              check=verdict["ours"], ratio=1.0)]
+            if args.workers > 1:
+                b = time_batch(robot, traj, case, kw, args.repeat, args.workers)
+                tot = stats_ms(b["total"])
+                case_rows.append(dict(case=case, backend="mcdm-pin-batch",
+                                      label=f"mcdm-pin batch, {args.workers} processes (wall / instants)",
+                                      model_ms=stats_ms([]), solve_ms=stats_ms([]), total_ms=tot,
+                                      no_answer=b["no_answer"], check="-", ratio=tot["median"] / ours_total))
+            for p in peers:
+                r = peer_rec[p.name]
+                tot = stats_ms(r["total"])
+                case_rows.append(dict(case=case, backend=p.name, label=p.label, model_ms=stats_ms(r["model"]),
+                                      solve_ms=stats_ms(r["solve"]), total_ms=tot,
+                                      no_answer=r["no_answer"], check=verdict[p.name],
+                                      ratio=tot["median"] / ours_total))
+            ok_peers = [r for r in case_rows[1:] if r["check"] == "ok" and np.isfinite(r["ratio"])
+                        and not r["backend"].startswith("mcdm-pin")]
+            if ok_peers:
+                min(ok_peers, key=lambda r: r["ratio"])["best_peer"] = True
+            rows += case_rows
+    return dict(robot=label, trajectory=traj.name, instants=len(traj), repeat=args.repeat,
+                peer_repeat=args.peer_repeat or args.repeat, machine=machine(), check_tolerances=CHECK,
+                notes=notes, check_failures=failures, rows=rows, checks={str(k): v for k, v in checks.items()})
+
+
+def _cell(s: dict) -> str:
+    if not s["n"]:
+        return "-"
+    return f"{s['median']:.3f} ({s['p10']:.3f}-{s['p90']:.3f})"
+
+
+def markdown(result: dict) -> str:
+    lines = ["| case | back-end | model, ms | solve, ms | total, ms | total / ours | no answer | check |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in result["rows"]:
+        if "backend" not in r:
+            continue
+        ratio = "1 (ours)" if r["backend"] == "mcdm-pin" else (f"{r['ratio']:.1f}x" if np.isfinite(r["ratio"])
+                                                                else "-")
+        if r.get("best_peer"):
+            ratio += " **best peer**"
+        lines.append(f"| {r['case']} | {r['label']} | {_cell(r['model_ms'])} | {_cell(r['solve_ms'])} | "
+                     f"{_cell(r['total_ms'])} | {ratio} | {r['no_answer']} | {r['check']} |")
+    return "\n".join(lines)
+
+
+def header(result: dict) -> str:
+    m = result["machine"]
+    v = ", ".join(f"{k} {x}" for k, x in m["versions"].items())
+    return (f"{result['robot']}, trajectory {result['trajectory']} ({result['instants']} instants); "
+            f"mcdm-pin {result['repeat']} run(s), peers {result['peer_repeat']} run(s) per case.\n"
+            f"Machine: {m['cpu']}, {m['nproc']} cores (nproc), Python {m['python']}; {v}; "
+            f"1-min load average at the end {m['load_avg_1min']} (shared machine: medians).\n"
+            f"Cells: median (10th-90th percentile) per instant over instants and runs. Check: every "
+            f"back-end vs Clarabel at 1e-11 on a few instants: objective within {CHECK['obj_rtol']:g} relative + "
+            f"{CHECK['obj_atol']:g} absolute, "
+            f"EOM rel <= {CHECK['eom_rtol']:g}, bounds <= {CHECK['bound_tol']:g} N, cones <= "
+            f"{CHECK['cone_tol_deg']:g} deg.")
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--robot", default="neck", help="neck (CASPR 8S neck, paper settings), two_link, or a "
+                                                   "sidecar PATH.yaml (its weights and cones); default neck")
+    p.add_argument("--trajectory", help="trajectory name (default: roll for the neck, else the first)")
+    p.add_argument("--case", type=int, nargs="+", default=[1, 2, 3], choices=[1, 2, 3])
+    p.add_argument("--samples", type=int, help="N instants spread over the trajectory (default: all)")
+    p.add_argument("--repeat", type=int, default=5, help="runs of the trajectory for mcdm-pin (default 5)")
+    p.add_argument("--peer-repeat", type=int, default=1,
+                   help="runs of the trajectory for the peers (default 1; they are 10-1000x slower)")
+    p.add_argument("--peers", default=",".join(PEERS),
+                   help=f"comma-separated peers (default {','.join(PEERS)}; '' for none)")
+    p.add_argument("--workers", type=int, default=0,
+                   help="also time mcdm-pin's batch mode with this many processes (whole trajectory, "
+                        "wall time / instants; default off)")
+    p.add_argument("--check", type=int, default=5, help="instants in the correctness check (default 5)")
+    p.add_argument("--check-only", action="store_true", help="run the correctness check only, no timing")
+    p.add_argument("--caspr", default=str(DEFAULT_CASPR), help="CASPR reference folder (for the neck)")
+    p.add_argument("--json", help="write the table (and the check details) as JSON")
+    p.add_argument("--markdown", help="write the table as Markdown")
+    args = p.parse_args(argv)
+    result = run(args)
+    for note in result["notes"]:
+        print(f"note: {note}")
+    if result["check_failures"]:
+        print("CHECK FAILURES (these back-ends did not reach the reference optimum):")
+        for line in result["check_failures"]:
+            print(f"  {line}")
+    else:
+        print("check: every back-end reached the reference optimum on every checked instant")
+    if args.check_only:
+        for r in result["rows"]:
+            print(f"case {r['case']}: " + ", ".join(f"{k} {v}" for k, v in r["check"].items()))
+    else:
+        print()
+        print(header(result))
+        print()
+        print(markdown(result))
+    if args.json:
+        Path(args.json).write_text(json.dumps(result, indent=2, default=float))
+        print(f"\nwrote {args.json}")
+    if args.markdown:
+        Path(args.markdown).write_text(header(result) + "\n\n" + markdown(result) + "\n")
+        print(f"wrote {args.markdown}")
+    return 1 if result["check_failures"] else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
