@@ -74,6 +74,7 @@ class CableMaps:
         self.end_cable = np.concatenate([c, c])
         self.n_bodies, self.m = n_bodies, robot.m
         self.act = act
+        self.all_active = bool(np.all(act))
         self.point_index = np.arange(len(self.point_body))
         self.seg_to_cable = np.zeros((robot.m, len(robot.seg_a)))
         self.seg_to_cable[robot.seg_cable, np.arange(len(robot.seg_a))] = 1.0
@@ -104,12 +105,15 @@ def cable_geometry(robot, oR: np.ndarray, op: np.ndarray, maps: CableMaps | None
     d = X[robot.seg_b] - X[robot.seg_a]
     seg_len = np.sqrt((d * d).sum(axis=1))
     lengths = maps.seg_to_cable @ seg_len
-    la = seg_len[maps.act]
+    if maps.all_active:
+        la, da = seg_len, d
+    else:
+        la, da = seg_len[maps.act], d[maps.act]
     if la.size and la.min() <= 1e-12:
         s = int(np.flatnonzero(maps.act)[np.argmin(la)])
         raise StateError(f"cable {robot.cables[robot.seg_cable[s]].name!r}: a segment has zero length "
                          f"at this configuration, so its direction is undefined")
-    u = d[maps.act] / la[:, None]
+    u = da / la[:, None]
     n_act = len(u)
     w = np.empty((2 * n_act, 6))
     w[:n_act, :3] = u  # end points B: sign +1

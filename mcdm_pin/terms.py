@@ -129,6 +129,7 @@ class TermsEvaluator:
         self._sub_phys = sub[self._child]  # (J, K)
         self._axes = np.array([j.socket_axis for j in js]).reshape(len(js), 3)
         self._zeros = np.zeros(robot.nv)
+        self._tril = np.tril_indices(robot.nv, -1)
         self._maps = maps = CableMaps(robot, self._point_key, len(keys))
         # end point e moves with column v when its body is in the subtree of v's joint
         self._end_mask = self._sub_v[:, maps.end_body].T  # (E, nv)
@@ -160,8 +161,8 @@ class TermsEvaluator:
         oR, op = oMi[:, :3, :3], oMi[:, :3, 3]
         # (6, nv): each column's motion in the world frame at the origin (eigenpy gives (6,) if nv = 1)
         J = data.J.reshape(6, -1).copy()
-        M = pin.crba(model, data, qp).copy()
-        M = np.triu(M) + np.triu(M, 1).T
+        M = pin.crba(model, data, qp).copy()  # upper triangle filled
+        M[self._tril] = M.T[self._tril]
         tau = pin.rnea(model, data, qp, qd, qdd).copy()
         u = np.array([data.f[c].vector for c in self._child]).reshape(len(self._child), 6)
 
