@@ -58,24 +58,25 @@ def main(argv=None):
                     ("+ no ProxQP warm start", dict(active_set=False, keep_cuts=False, warm_start=False))]
         print(f"{robot.name}, trajectory {args.trajectory} ({len(traj)} instants), median of "
               f"{args.repeat} runs per instant, ms")
-        print("| case | variant | model | solve | total | instants solved |")
-        print("|---|---|---|---|---|---|")
+        print("| case | variant | model | solve | total | instants solved | by the active set |")
+        print("|---|---|---|---|---|---|---|")
         for case in (1, 2, 3):
             kw = {} if case == 1 else {"alpha": alpha}
             if case == 3:
                 kw["cones"] = cones
             for name, opts in variants:
                 ident = InverseDynamics.for_case(robot, case, solver=ProxQPSolver(**opts), **kw)
-                model, solve, ok = [], [], 0
+                model, solve, ok, fast = [], [], 0, 0
                 for _ in range(args.repeat):
                     run = ident.solve_trajectory(traj, progress=False)
                     model.append(run.time_model_s)
                     solve.append(run.time_solve_s)
                     ok = int(run.found.sum())
+                    fast = int((run.found & (run.rounds == 0)).sum())
                 m = np.median(np.array(model), axis=0)
                 s = np.median(np.array(solve), axis=0)
                 print(f"| {case} | {name} | {np.median(m) * 1e3:.3f} | {np.median(s) * 1e3:.3f} | "
-                      f"{np.median(m + s) * 1e3:.3f} | {ok} of {len(traj)} |")
+                      f"{np.median(m + s) * 1e3:.3f} | {ok} of {len(traj)} | {fast} |")
 
 
 if __name__ == "__main__":
