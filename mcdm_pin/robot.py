@@ -157,6 +157,7 @@ class Robot:
         except Exception as exc:  # pinocchio raises ValueError/RuntimeError with urdfdom's text
             first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
             raise ModelError(f"{urdf_path}: cannot load the URDF ({first})") from None
+        _check_model_numbers(model, urdf_path)
         model.gravity.linear = np.array(sidecar.gravity, dtype=float)
         model = _lock_joints(model, sidecar)
         return cls(sidecar, model, urdf_path)
@@ -346,6 +347,27 @@ class Robot:
     def __repr__(self) -> str:
         return (f"Robot({self.name!r}: {len(self.joints)} joints, {self.nv} DoF, {self.m} cables, "
                 f"urdf={str(self.urdf_path)!r})")
+
+
+def _check_model_numbers(model: pin.Model, urdf_path) -> None:
+    """Reject masses, inertias and placements that are not finite or so large that the dynamics
+    overflow (a CASPR mass of 1e308 kg gave inf terms and crashed the solver: tests/test_fuzz.py)."""
+    from .sidecar import MAX_MAGNITUDE
+
+    for j in range(model.njoints):
+        inertia = model.inertias[j]
+        checks = (("mass", np.array([inertia.mass]), "kg"), ("centre of mass", inertia.lever, "m"),
+                  ("inertia", inertia.inertia, "kg m^2"),
+                  ("joint origin", model.jointPlacements[j].translation, "m"))
+        for what, values, unit in checks:
+            values = np.asarray(values, dtype=float)
+            if not np.all(np.isfinite(values)) or np.abs(values).max(initial=0.0) > MAX_MAGNITUDE:
+                owner = "the fixed base" if j == 0 else f"the body moved by URDF joint {model.names[j]!r}"
+                raise ModelError(f"{urdf_path}: {what} of {owner} is {values.tolist()} {unit}; expected "
+                                 f"finite numbers of magnitude at most {MAX_MAGNITUDE:g}")
+        if inertia.mass < 0:
+            raise ModelError(f"{urdf_path}: mass of the body moved by URDF joint {model.names[j]!r} is "
+                             f"{inertia.mass!r} kg; expected >= 0")
 
 
 def _lock_joints(model: pin.Model, sc: Sidecar) -> pin.Model:

@@ -24,6 +24,10 @@ JOINT_TYPES = ("spherical", "revolute", "prismatic")
 SPHERICAL_MODES = ("axis-angle", "per-coordinate")
 TRAJECTORY_TYPES = ("quintic", "csv")
 
+# the largest magnitude accepted for any number: larger finite values (1e308 kg, a point at 1e300 m)
+# overflow to inf in the dynamics (found by tests/test_fuzz.py)
+MAX_MAGNITUDE = 1e100
+
 _FLOAT_RE = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 
 
@@ -130,6 +134,9 @@ class _Reader:
         x = float(value)
         if not math.isfinite(x):
             raise self.fail(key, f"expected a finite number, got {value!r}")
+        if abs(x) > MAX_MAGNITUDE:
+            raise self.fail(key, f"expected a number of magnitude at most {MAX_MAGNITUDE:g} (larger values "
+                                 f"overflow in the dynamics), got {x!r}")
         if lo is not None and (x < lo or (lo_open and x == lo)):
             raise self.fail(key, f"expected a number {'>' if lo_open else '>='} {lo}, got {x!r}")
         if hi is not None and (x > hi or (hi_open and x == hi)):

@@ -362,11 +362,12 @@ def problem_from_run(robot, result):
     from .problem import case_problem
 
     text = str(result.problem)
-    m = re.match(r"^case ([123]): minimise (.*) subject to (.*)$", text)
-    if not m or "Smoothing" in text:
+    m = re.match(r"^(?:case [123]: )?minimise (.*) subject to (.*)$", text)
+    if not m or "Smoothing" in text or "MinCableForceSum" in text:
         raise ResultsError(f"cannot rebuild the problem of this run from {text!r}: only the paper's "
-                           f"cases without smoothing, as written by mcdm-pin solve, can be re-solved")
-    case, objective = int(m.group(1)), m.group(2)
+                           f"cases without smoothing can be re-solved")
+    objective = m.group(1)
+    case = 1 if objective.startswith("MinCableForces") else 3 if "InteractionCone" in m.group(2) else 2
     alpha = beta = None
     if case == 1:
         if objective != "MinCableForces()":
