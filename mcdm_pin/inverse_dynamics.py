@@ -13,10 +13,11 @@ import time
 
 import numpy as np
 
-from .exceptions import ProblemError
+from .exceptions import ProblemError, StateError
 from .objectives import Smoothing, Sum
 from .problem import Context, Problem, QPData, case_problem
 from .results import InstantResult, TrajectoryResult
+from .scaling import ScaledSolver
 from .solvers import INACCURATE, INFEASIBLE, OPTIMAL, SOFTENED, Solution, get_solver
 from .solvers.base import cone_violation_deg
 from .terms import TermsEvaluator, interaction_angles
@@ -45,7 +46,9 @@ class InverseDynamics:
         self.robot = robot
         self.diagnose = diagnose
         self.problem = problem
-        self.solver = get_solver(solver)
+        # badly scaled robots (grams next to tonnes, mm next to m) are solved on an equilibrated
+        # copy; well-scaled ones pass straight through (mcdm_pin/scaling.py)
+        self.solver = ScaledSolver(get_solver(solver))
         self.soften = soften
         self.evaluate = TermsEvaluator(robot)
 
@@ -67,6 +70,9 @@ class InverseDynamics:
         """Cable forces at one state."""
         t0 = time.perf_counter()
         terms = self.evaluate(q, qd, qdd)
+        if not (np.all(np.isfinite(terms.tau)) and np.all(np.isfinite(terms.L))):
+            raise StateError("the dynamics overflow at this state (non-finite M qdd + h or L): check "
+                             "the model's masses, lengths and the state's magnitude")
         context = Context(self.robot, f_prev)
         qp = self.problem.assemble(terms, context)
         t1 = time.perf_counter()
@@ -77,6 +83,11 @@ class InverseDynamics:
         if sol.status == INFEASIBLE and self.diagnose:
             message, needed_f_max, needed_cone = diagnose_infeasible(qp, self.solver,
                                                                      self.robot.cable_names)
+            if message.startswith("bounds"):
+                from .conditioning import wrench_closure
+                closure = wrench_closure(self.robot, terms.q, terms.L)
+                if not closure.closed:
+                    message = f"{message}; {closure.message}"
             if self.soften and qp.cones and not message.startswith("bounds"):
                 sol, softened = soften_cones(qp, self.solver)
                 if sol.status == SOFTENED:

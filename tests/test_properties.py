@@ -1,0 +1,186 @@
+"""Property-based tests on generated robots (issue 7, item 2).
+
+Robots come from :mod:`tests.robotgen` (chains and trees of 1-6 links, spherical and revolute joints,
+random inertias, 3-6 cables per degree of freedom routed over several links, a random base
+placement). On failure hypothesis prints the ``GenRobot(...)`` (Python that rebuilds it) and the
+``note()``d URDF and sidecar text.
+
+Tolerances: ``L`` against central differences 1e-7 relative (step 1e-6: truncation ~1e-12, rounding
+~1e-10); identities between exact quantities 1e-9 relative; solver results as the runner checks them
+(equation of motion 1e-8 relative, bounds 1e-9 N, cones 1e-6 deg) and ProxQP's objective equal to
+Clarabel's to 1e-6 relative.
+
+**Infeasibility agreement.** Near the boundary of the feasible set the two solvers can legitimately
+disagree by a hair: one returns a point that breaks a bound by ~1e-9 (the runner then says
+``inaccurate``) where the other proves infeasibility. So agreement is asserted as: ProxQP
+``infeasible`` implies Clarabel not ``optimal``, and Clarabel ``infeasible`` implies ProxQP not
+``optimal``.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from hypothesis import HealthCheck, given, note, seed, settings
+from hypothesis import strategies as st
+
+from mcdm_pin import InverseDynamics, compute_terms
+
+from .robotgen import GenRobot, robots
+
+pytest.importorskip("clarabel")
+
+# a fixed seed (not derandomize, whose examples change whenever a test's source changes);
+# MCDM_HYPOTHESIS_SEED=<n> explores other examples
+SEED = int(os.environ.get("MCDM_HYPOTHESIS_SEED", "20141121"))
+SETTINGS = dict(deadline=None, database=None, print_blob=True,
+                suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
+                                      HealthCheck.large_base_example, HealthCheck.filter_too_much])
+EOM_TOL, BOUND_TOL, CONE_TOL_DEG, OBJ_RTOL = 1e-8, 1e-9, 1e-6, 1e-6
+
+
+seeds = st.integers(0, 2**32 - 1)
+
+
+def load(g: GenRobot, folder):
+    urdf, sidecar = g.texts()
+    note(f"URDF:\n{urdf}\nsidecar:\n{sidecar}")
+    return g.load(folder)
+
+
+def state(robot, seed, scale=0.6):
+    rng = np.random.default_rng(seed)
+    return (rng.uniform(-scale, scale, robot.nv), rng.normal(size=robot.nv) * 0.5,
+            rng.normal(size=robot.nv) * 0.5, rng)
+
+
+@seed(SEED)
+@settings(max_examples=40, **SETTINGS)
+@given(robots(), seeds)
+def test_L_matches_central_differences(g, seed):
+    with tempfile.TemporaryDirectory() as d:
+        robot = load(g, d)
+        q, _, _, _ = state(robot, seed)
+        terms = compute_terms(robot, q)
+        h = 1e-6
+        fd = np.zeros_like(terms.L)
+        for i in range(robot.nv):
+            e = np.zeros(robot.nv)
+            e[i] = h
+            fd[:, i] = (compute_terms(robot, q + e).lengths - compute_terms(robot, q - e).lengths) / (2 * h)
+        assert np.abs(fd - terms.L).max() <= 1e-7 * max(1.0, np.abs(terms.L).max())
+
+
+@seed(SEED)
+@settings(max_examples=40, **SETTINGS)
+@given(robots(), seeds)
+def test_joint_space_part_of_wrench_is_generalised_force(g, seed):
+    """S_a^T p_a = (M qdd + h + L^T f)_a for every joint, any f (the joints are passive)."""
+    with tempfile.TemporaryDirectory() as d:
+        robot = load(g, d)
+        q, qd, qdd, rng = state(robot, seed)
+        terms = compute_terms(robot, q, qd, qdd)
+        f = rng.uniform(robot.f_min, robot.f_max)
+        p = terms.wrenches(f)
+        expected = terms.M @ qdd + terms.h + terms.L.T @ f
+        model = robot.model
+        data = model.createData()
+        pin.computeJointJacobians(model, data, robot.pin_q(q))
+        scale = max(1.0, np.abs(expected).max(), np.abs(terms.L.T @ f).max())
+        for a, joint in enumerate(robot.joints):
+            J = pin.getJointJacobian(model, data, joint.child_id, pin.ReferenceFrame.LOCAL)
+            S = J.reshape(6, model.nv)[:, joint.idx_v]
+            assert np.abs(S.T @ p[a] - expected[joint.idx_v]).max() <= 1e-9 * scale
+
+
+@seed(SEED)
+@settings(max_examples=30, **SETTINGS)
+@given(robots(), seeds, st.tuples(*[st.floats(-2.0, 2.0)] * 3), st.tuples(*[st.floats(-np.pi, np.pi)] * 3))
+def test_wrenches_invariant_to_base_placement(g, seed, xyz, rpy):
+    """Moving and turning the whole robot (gravity turned along) changes no term and no wrench."""
+    with tempfile.TemporaryDirectory() as d:
+        a = load(g, d + "/a")
+        moved = g.moved(xyz, rpy)
+        note(f"moved base: xyz={moved.base_xyz}, rpy={moved.base_rpy}")
+        b = moved.load(d + "/b")
+        q, qd, qdd, rng = state(a, seed)
+        ta, tb = compute_terms(a, q, qd, qdd), compute_terms(b, q, qd, qdd)
+        f = rng.uniform(a.f_min, a.f_max)
+        wa, wb = ta.wrenches(f), tb.wrenches(f)
+        scale = max(1.0, np.abs(wa).max())
+        assert np.abs(wa - wb).max() <= 1e-9 * scale
+        assert np.abs(ta.M - tb.M).max() <= 1e-9 * max(1.0, np.abs(ta.M).max())
+        assert np.abs(ta.h - tb.h).max() <= 1e-9 * max(1.0, np.abs(ta.h).max())
+        assert np.abs(ta.L - tb.L).max() <= 1e-9 * max(1.0, np.abs(ta.L).max())
+        assert np.abs(ta.lengths - tb.lengths).max() <= 1e-12 * max(1.0, ta.lengths.max())
+
+
+SOLVER_STATS: dict[str, int] = {}
+
+
+@seed(SEED)
+@settings(max_examples=100, **SETTINGS)
+@given(robots(grouped=True, mass=(0.01, 0.5), f_bounds=((0.0, 1.0), (500.0, 5000.0)), base_offset=False), seeds, st.sampled_from([1, 2, 3]))
+def test_solver_meets_constraints_and_agrees_with_clarabel(g, seed, case):
+    with tempfile.TemporaryDirectory() as d:
+        robot = load(g, d)
+        if case == 3 and not any(j.cone_deg for j in robot.joints):
+            case = 2
+        q, qd, qdd, _ = state(robot, seed)
+        prox = InverseDynamics.for_case(robot, case).solve(q, qd, qdd)
+        ref = InverseDynamics.for_case(robot, case, solver="clarabel").solve(q, qd, qdd)
+        note(f"case {case}: proxqp {prox.status} ({prox.message}), clarabel {ref.status} ({ref.message})")
+        key = f"case {case}: {prox.status}/{ref.status}"
+        SOLVER_STATS[key] = SOLVER_STATS.get(key, 0) + 1
+        if prox.status == "infeasible":
+            assert ref.status != "optimal"
+        if ref.status == "infeasible":
+            assert prox.status != "optimal"
+        # ProxQP can stall on a generated robot (seen: 1 of ~100 examples in the full suite, 51k
+        # iterations); it then says "max_iter" and returns no forces: counted, the rate is asserted
+        # below, and the property is checked on every answer it does give
+        if prox.status == "max_iter":
+            return
+        assert prox.status in ("optimal", "infeasible", "inaccurate")
+        if prox.status == "optimal":
+            f = prox.f
+            assert prox.eom_residual <= EOM_TOL
+            assert np.all(f >= robot.f_min - BOUND_TOL) and np.all(f <= robot.f_max + BOUND_TOL)
+            if case == 3:
+                cones = np.array([j.cone_deg if j.cone_deg else np.inf for j in robot.joints])
+                assert np.all(prox.interaction_angle_deg <= cones + CONE_TOL_DEG)
+            if ref.status == "optimal":
+                assert abs(prox.objective - ref.objective) <= OBJ_RTOL * max(abs(ref.objective), 1e-12)
+
+
+def test_generator_covers_feasible_and_infeasible_instants():
+    """The solver property above is only meaningful if both outcomes occur (counts from the run)."""
+    if not SOLVER_STATS:
+        pytest.skip("run together with test_solver_meets_constraints_and_agrees_with_clarabel")
+    optimal = sum(n for k, n in SOLVER_STATS.items() if "optimal/optimal" in k)
+    infeasible = sum(n for k, n in SOLVER_STATS.items() if "infeasible/" in k)
+    print(SOLVER_STATS)
+    assert optimal >= 20 and infeasible >= 5, SOLVER_STATS
+    stalled = sum(n for k, n in SOLVER_STATS.items() if "max_iter/" in k)
+    assert stalled <= 0.05 * sum(SOLVER_STATS.values()), SOLVER_STATS
+
+
+def test_one_dof_robot(tmp_path):
+    """Regression: pin.getJointJacobian returns a 1-DoF model's 6 x 1 Jacobian as a flat (6,) array,
+    which gave L the wrong shape (found by the generator; fixed in terms.py)."""
+    from .robotgen import GenCable, GenLink
+
+    g = GenRobot(links=(GenLink(parent=0, kind="revolute", xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0),
+                                axis=(1.0, 0.0, 0.0), length=0.5, mass=1.0, com=(0.0, 0.0, 0.25),
+                                inertia=(0.03, 0.0, 0.0, 0.03, 0.0, 0.01)),),
+                 cables=(GenCable((0, 1), ((0.0, 0.25, 0.0), (0.0, 0.1, 0.4)), 0.0, 200.0),
+                         GenCable((0, 1), ((0.0, -0.25, 0.0), (0.0, -0.1, 0.4)), 0.0, 200.0),
+                         GenCable((0, 1), ((0.0, 0.3, 0.0), (0.0, 0.0, 0.4)), 0.0, 200.0)))
+    robot = g.load(tmp_path)
+    terms = compute_terms(robot, [0.1])
+    assert terms.L.shape == (3, 1)
+    assert InverseDynamics.for_case(robot, 1).solve([0.1]).status == "optimal"
