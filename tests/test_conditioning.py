@@ -109,8 +109,8 @@ def test_badly_scaled_robots_meet_the_tolerances(g, sd, case):
     1e-8 relative, bounds 1e-9 N absolute, cones 1e-6 deg) and Clarabel's objective to 1e-6.
 
     Without scaling, ProxQP stopped at its iteration limit on 23 of 85 such instants (measured with
-    the solver of commit c4218ec, each costing seconds of retries); ScaledSolver is to be hooked into
-    InverseDynamics (docs/trust.md)."""
+    the solver of commit c4218ec, each costing seconds of retries); InverseDynamics wraps every
+    back-end in ScaledSolver (docs/trust.md)."""
     urdf, sidecar = g.texts()
     note(f"URDF:\n{urdf}\nsidecar:\n{sidecar}")
     with tempfile.TemporaryDirectory() as d:
@@ -120,8 +120,7 @@ def test_badly_scaled_robots_meet_the_tolerances(g, sd, case):
         rng = np.random.default_rng(sd)
         q, qd, qdd = rng.uniform(-0.6, 0.6, robot.nv), 0.5 * rng.normal(size=robot.nv), 0.5 * rng.normal(size=robot.nv)
         ident = InverseDynamics.for_case(robot, case)
-        if not isinstance(ident.solver, ScaledSolver):  # until the lead hooks it in
-            ident.solver = ScaledSolver(ident.solver)
+        assert isinstance(ident.solver, ScaledSolver)
         prox = ident.solve(q, qd, qdd)
         ref = InverseDynamics.for_case(robot, case, solver="clarabel").solve(q, qd, qdd)
         key = f"{prox.status}/{ref.status}"
