@@ -70,7 +70,9 @@ class InverseDynamics:
         """Cable forces at one state."""
         t0 = time.perf_counter()
         terms = self.evaluate(q, qd, qdd)
-        if not (np.all(np.isfinite(terms.tau)) and np.all(np.isfinite(terms.L))):
+        # one sum is finite only if every entry is (a sum that overflows is checked entry by entry)
+        if not np.isfinite(terms.tau.sum() + terms.L.sum()) and \
+                not (np.all(np.isfinite(terms.tau)) and np.all(np.isfinite(terms.L))):
             raise StateError("the dynamics overflow at this state (non-finite M qdd + h or L): check "
                              "the model's masses, lengths and the state's magnitude")
         context = Context(self.robot, f_prev)
@@ -93,17 +95,22 @@ class InverseDynamics:
                 if sol.status == SOFTENED:
                     message = f"cones widened by {softened:.6g} deg: {message}"
         t2 = time.perf_counter()
+        eom = float("nan")
         if sol.found:
-            sol = _check(qp, terms, sol)
+            sol, eom = _check(qp, terms, sol)
             message = sol.message or message
         f = sol.f
-        wrench = terms.wrenches(f) if sol.found else np.full((len(self.robot.joints), 6), np.nan)
+        if sol.found:
+            wrench = terms.wrenches(f)
+            objective = (sol.objective if not self.problem.has_smoothing and np.isfinite(sol.objective)
+                         else self.problem.value(terms, f, context, qp))
+        else:
+            wrench = np.full((len(self.robot.joints), 6), np.nan)
+            objective = float("nan")
         F_socket = np.einsum("jab,jb->ja", terms.R_socket, wrench[:, :3])
         angles = interaction_angles(F_socket, terms.socket_axes)
-        objective = self.problem.value(terms, f, context, qp) if sol.found else float("nan")
         return InstantResult(
-            f=f, status=sol.status, objective=objective,
-            eom_residual=terms.eom_residual(f) if sol.found else float("nan"),
+            f=f, status=sol.status, objective=objective, eom_residual=eom,
             interaction_wrench=wrench, interaction_force_socket=F_socket,
             interaction_angle_deg=angles, iterations=sol.iterations, rounds=sol.rounds,
             time_model_s=t1 - t0, time_solve_s=t2 - t1, message=message, softened_deg=softened,
@@ -185,25 +192,25 @@ def _terms_of(objective):
     return objective.terms if isinstance(objective, Sum) else [objective]
 
 
-def _check(qp: QPData, terms, sol: Solution) -> Solution:
-    """Downgrade a solution that breaks a constraint beyond tolerance to ``inaccurate``."""
+def _check(qp: QPData, terms, sol: Solution) -> tuple[Solution, float]:
+    """Downgrade a solution that breaks a constraint beyond tolerance to ``inaccurate``. Returns the
+    solution and its relative equation-of-motion residual."""
     f = sol.f
     problems = []
     eom = terms.eom_residual(f)
     if not eom <= EOM_TOL:
         problems.append(f"equation-of-motion residual {eom:.2e} > {EOM_TOL:g}")
-    below = float(np.max(qp.lb - f, initial=0.0))
-    above = float(np.max(f - qp.ub, initial=0.0))
-    if max(below, above) > BOUND_TOL:
-        problems.append(f"cable bounds broken by {max(below, above):.2e} N")
+    broken = max(float((qp.lb - f).max(initial=0.0)), float((f - qp.ub).max(initial=0.0)))
+    if not broken <= BOUND_TOL:
+        problems.append(f"cable bounds broken by {broken:.2e} N")
     if qp.cones and sol.status == OPTIMAL:
         viol = cone_violation_deg(qp, f)
-        if viol.max() > CONE_TOL_DEG:
+        if not viol.max() <= CONE_TOL_DEG:
             k = int(np.argmax(viol))
             problems.append(f"cone of {qp.cones[k].joint!r} broken by {viol[k]:.2e} deg")
     if not problems:
-        return sol
-    return Solution(sol.f, INACCURATE, sol.objective, sol.iterations, sol.rounds, "; ".join(problems))
+        return sol, eom
+    return Solution(sol.f, INACCURATE, sol.objective, sol.iterations, sol.rounds, "; ".join(problems)), eom
 
 
 def diagnose_infeasible(qp: QPData, solver, cable_names=None):

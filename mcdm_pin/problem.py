@@ -40,10 +40,32 @@ class QPData:
     lb: np.ndarray
     ub: np.ndarray
     cones: list[ConeData] = field(default_factory=list)
+    _cone_arrays: tuple | None = field(default=None, repr=False, compare=False)
+    _H: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def n(self) -> int:
         return len(self.c)
+
+    @property
+    def H(self) -> np.ndarray:
+        """The objective's Hessian ``2 P``."""
+        if self._H is None:
+            self._H = 2.0 * self.P
+        return self._H
+
+    def cone_arrays(self) -> tuple:
+        """The cones stacked for vectorised and compiled code: ``G`` (k, 3, n), ``g`` (k, 3),
+        ``axis`` (k, 3), ``tan`` (k,), ``basis0`` (k, 3) (a unit vector normal to each axis)."""
+        if self._cone_arrays is None:
+            n, cs = self.n, self.cones
+            self._cone_arrays = (
+                np.array([c.G for c in cs], dtype=float).reshape(len(cs), 3, n),
+                np.array([c.g for c in cs], dtype=float).reshape(len(cs), 3),
+                np.array([c.axis for c in cs], dtype=float).reshape(len(cs), 3),
+                np.array([c.tan for c in cs], dtype=float),
+                np.array([c.basis[0] for c in cs], dtype=float).reshape(len(cs), 3))
+        return self._cone_arrays
 
     def objective(self, f) -> float:
         f = np.asarray(f, dtype=float)
@@ -91,6 +113,7 @@ class Problem:
         self._primary = Sum([t for t in terms if not isinstance(t, Smoothing)],
                             [w for t, w in zip(terms, weights) if not isinstance(t, Smoothing)])
         self.has_smoothing = any(isinstance(t, Smoothing) for t in terms)
+        self._plan = None
 
     @property
     def cone_constraints(self) -> list[InteractionCone]:
@@ -99,9 +122,12 @@ class Problem:
     def assemble(self, terms, context: Context) -> QPData:
         quad = self.objective.quadratic(terms, context)
         m = terms.L.shape[0]
+        if self._plan is None:
+            self._plan = self._make_plan(context.robot)
+        plan = self._plan
         A_rows, b_rows, cones = [], [], []
-        lb, ub = np.full(m, -np.inf), np.full(m, np.inf)
-        for con in self.constraints:
+        lb, ub = plan["lb"], plan["ub"]
+        for con in plan["general"]:
             eq = con.equalities(terms, context)
             if eq is not None:
                 A_rows.append(eq[0])
@@ -110,10 +136,44 @@ class Problem:
             if bd is not None:
                 lb, ub = np.maximum(lb, bd[0]), np.minimum(ub, bd[1])
             cones.extend(con.cones(terms, context))
-        A = np.vstack(A_rows) if A_rows else np.zeros((0, m))
-        b = np.concatenate(b_rows) if b_rows else np.zeros(0)
-        P = 0.5 * (quad.P + quad.P.T)
-        return QPData(P=P, c=quad.c, r=quad.r, A=A, b=b, lb=lb, ub=ub, cones=cones)
+        if A_rows:
+            A = np.vstack([terms.L.T] + A_rows) if plan["eom"] else np.vstack(A_rows)
+            b = np.concatenate([-terms.tau] + b_rows) if plan["eom"] else np.concatenate(b_rows)
+        elif plan["eom"]:
+            A, b = terms.L.T, -terms.tau
+        else:
+            A, b = np.zeros((0, m)), np.zeros(0)
+        P = quad.P if getattr(self.objective, "symmetric", False) else 0.5 * (quad.P + quad.P.T)
+        qp = QPData(P=P, c=quad.c, r=quad.r, A=A, b=b, lb=lb, ub=ub, cones=cones)
+        batch = plan["cones"]
+        if batch is not None and not cones:
+            qp.cones, qp._cone_arrays = batch(terms)
+        elif batch is not None:
+            qp.cones = batch(terms)[0] + cones
+        return qp
+
+    def _make_plan(self, robot) -> dict:
+        """What :meth:`assemble` does at every instant, decided once: the equation of motion and the
+        cable bounds directly, the cones in one batch, other constraints through their methods."""
+        from .constraints.cone import ConeBatch
+
+        general, eom = [], False
+        lb, ub = np.full(robot.m, -np.inf), np.full(robot.m, np.inf)
+        cone_cons = []
+        for con in self.constraints:
+            if type(con) is EquationOfMotion and not eom:
+                eom = True
+            elif type(con) is CableForceBounds:
+                lo, hi = con.bounds(None, Context(robot))
+                lb, ub = np.maximum(lb, lo), np.minimum(ub, hi)
+            elif type(con) is InteractionCone:
+                cone_cons.append(con)
+            else:
+                general.append(con)
+        lb.setflags(write=False)  # shared by every instant's QPData
+        ub.setflags(write=False)
+        return dict(general=general, eom=eom, lb=lb, ub=ub,
+                    cones=ConeBatch(robot, cone_cons) if cone_cons else None)
 
     def value(self, terms, f, context: Context, qp: QPData | None = None) -> float:
         """The objective at ``f`` without smoothing terms (``qp``: the assembled problem, reused

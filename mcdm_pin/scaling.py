@@ -95,16 +95,9 @@ class ScaledSolver(Solver):
     def needs_scaling(self, qp: QPData) -> bool:
         if not qp.A.shape[0]:
             return False
-        B = np.abs(qp.A)
-        rows, cols = B.max(axis=1), B.max(axis=0)
-        rows, cols = rows[rows > 0], cols[cols > 0]
-        if not len(rows) or not len(cols):
-            return False
-        spread = max(rows.max() / rows.min(), cols.max() / cols.min())
-        rhs = np.abs(qp.b)[np.abs(qp.b) > 0]
-        if len(rhs):
-            spread = max(spread, rhs.max() / rhs.min())
-        return spread > self.only_if_worse_than
+        from .kernels import spread
+
+        return spread(qp.A, qp.b) > self.only_if_worse_than
 
     def solve(self, qp: QPData) -> Solution:
         if not self.needs_scaling(qp):

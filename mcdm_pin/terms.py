@@ -27,7 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .cables import CableGeometry, CableMaps, cable_geometry
+from .cables import CableMaps, cable_geometry
+from .exceptions import StateError
 
 
 @dataclass
@@ -45,7 +46,7 @@ class Terms:
         RT: (J, 6, m) their derivative with respect to the cable forces.
         R_socket: (J, 3, 3) rotation from the child frame to the socket frame of each joint.
         socket_axes: (J, 3) unit socket axes (socket frame).
-        geometry: the cable geometry (world points, segments).
+        points: (P, 3) world position of every route point.
     """
 
     q: np.ndarray
@@ -60,7 +61,7 @@ class Terms:
     RT: np.ndarray
     R_socket: np.ndarray
     socket_axes: np.ndarray
-    geometry: CableGeometry
+    points: np.ndarray
 
     # --- derived quantities for a force vector f (m,) ---------------------------------------------
     def wrenches(self, f) -> np.ndarray:
@@ -101,11 +102,14 @@ class TermsEvaluator:
     """Computes :class:`Terms` for one robot, reusing Pinocchio's data between calls.
 
     Only the joints that matter are read back from Pinocchio (those carrying cable points, the
-    physical joints' child and parent joints); every cable quantity is one vectorised numpy pass.
+    physical joints' child and parent joints). The cable quantities come from one compiled pass
+    (:func:`mcdm_pin.kernels.cable_terms`); ``compiled=False`` uses the numpy formulation instead
+    (the reference the kernel is tested against).
     """
 
-    def __init__(self, robot):
+    def __init__(self, robot, compiled: bool = True):
         self.robot = robot
+        self.compiled = compiled
         self.model = model = robot.model
         self.data = model.createData()
         js = robot.joints
@@ -130,6 +134,19 @@ class TermsEvaluator:
         self._axes = np.array([j.socket_axis for j in js]).reshape(len(js), 3)
         self._zeros = np.zeros(robot.nv)
         self._tril = np.tril_indices(robot.nv, -1)
+        if compiled:
+            from .kernels import csr
+
+            K = len(keys)
+            self._v_csr = csr([np.flatnonzero(self._sub_v[:, k]).tolist() for k in range(K)], K)
+            self._a_csr = csr([np.flatnonzero(self._sub_phys[:, k]).tolist() for k in range(K)], K)
+            self._kernel_args = (
+                np.ascontiguousarray(robot.point_local, dtype=float),
+                self._point_key.astype(np.int64), robot.seg_a.astype(np.int64),
+                robot.seg_b.astype(np.int64), robot.seg_cable.astype(np.int64),
+                robot.seg_active.astype(np.bool_), *self._v_csr, *self._a_csr,
+                self._child_key.astype(np.int64), int(robot.m), len(js))
+            return
         self._maps = maps = CableMaps(robot, self._point_key, len(keys))
         # end point e moves with column v when its body is in the subtree of v's joint
         self._end_mask = self._sub_v[:, maps.end_body].T  # (E, nv)
@@ -160,17 +177,36 @@ class TermsEvaluator:
         oMi = np.array([data.oMi[j].homogeneous for j in self._keys])
         oR, op = oMi[:, :3, :3], oMi[:, :3, 3]
         # (6, nv): each column's motion in the world frame at the origin (eigenpy gives (6,) if nv = 1)
-        J = data.J.reshape(6, -1).copy()
+        J = data.J.reshape(6, -1)
+        if self.compiled:
+            from .kernels import cable_terms
+
+            X, _, lengths, L, RT, bad = cable_terms(np.ascontiguousarray(oR), np.ascontiguousarray(op),
+                                                    J, *self._kernel_args)
+            if bad >= 0:
+                raise StateError(f"cable {r.cables[r.seg_cable[bad]].name!r}: a segment has zero "
+                                 f"length at this configuration, so its direction is undefined")
+        else:
+            geo = cable_geometry(r, oR, op, self._maps)
+            X, lengths = geo.points, geo.lengths
+            RT, L = self._numpy_cable_maps(geo.w, J.copy(), oR, op)
         M = pin.crba(model, data, qp).copy()  # upper triangle filled
         M[self._tril] = M.T[self._tril]
         tau = pin.rnea(model, data, qp, qd, qdd).copy()
         u = np.array([data.f[c].vector for c in self._child]).reshape(len(self._child), 6)
+        Rc = oR[self._child_key]
+        R_socket = (oR[self._parent_key] @ self._R_sp).transpose(0, 2, 1) @ Rc
+        return Terms(q=q.copy(), qd=np.array(qd, float), qdd=np.array(qdd, float), M=M,
+                     h=tau - M @ qdd, tau=tau, lengths=lengths, L=L, u=u, RT=RT,
+                     R_socket=R_socket, socket_axes=self._axes, points=X)
 
-        geo = cable_geometry(r, oR, op, self._maps)
+    def _numpy_cable_maps(self, w, J, oR, op):
+        """(RT, L) from the end points' Pluecker vectors, in numpy (the reference formulation)."""
+        r = self.robot
         # d l / d q_v = sum of the end points' Pluecker vectors, on bodies that v moves, . column v
-        L = self._cable_of_end @ ((geo.w @ J) * self._end_mask)
+        L = self._cable_of_end @ ((w @ J) * self._end_mask)
         nJ = len(self._child)
-        Wsub = (self._subtree_of_end @ geo.w).reshape(nJ, r.m, 6).transpose(0, 2, 1)  # world
+        Wsub = (self._subtree_of_end @ w).reshape(nJ, r.m, 6).transpose(0, 2, 1)  # world
         Rc, tc = oR[self._child_key], op[self._child_key]
         RcT = Rc.transpose(0, 2, 1)
         F_w, M_w = Wsub[:, :3], Wsub[:, 3:]
@@ -182,12 +218,9 @@ class TermsEvaluator:
         M_t = np.stack([M_w[:, 0] - (ty * Fz - tz * Fy), M_w[:, 1] - (tz * Fx - tx * Fz),
                         M_w[:, 2] - (tx * Fy - ty * Fx)], axis=1)
         RT[:, 3:] = RcT @ M_t
-        R_socket = (oR[self._parent_key] @ self._R_sp).transpose(0, 2, 1) @ Rc
-        return Terms(q=q.copy(), qd=np.array(qd, float), qdd=np.array(qdd, float), M=M,
-                     h=tau - M @ qdd, tau=tau, lengths=geo.lengths, L=L, u=u, RT=RT,
-                     R_socket=R_socket, socket_axes=self._axes, geometry=geo)
+        return RT, L
 
 
-def compute_terms(robot, q, qd=None, qdd=None) -> Terms:
+def compute_terms(robot, q, qd=None, qdd=None, compiled: bool = True) -> Terms:
     """Terms at one state (convenience wrapper; reuse a :class:`TermsEvaluator` in loops)."""
-    return TermsEvaluator(robot)(q, qd, qdd)
+    return TermsEvaluator(robot, compiled)(q, qd, qdd)

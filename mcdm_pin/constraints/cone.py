@@ -61,3 +61,35 @@ class InteractionCone(Constraint):
 
     def __repr__(self) -> str:
         return f"InteractionCone({self.joint!r}, {self.angle_deg}, frame={self.frame!r})"
+
+
+class ConeBatch:
+    """All :class:`InteractionCone` constraints of a problem evaluated at once: one batched product
+    for every cone's ``G, g`` instead of one small product per cone (the per-instant hot path)."""
+
+    def __init__(self, robot, cones: list[InteractionCone]):
+        for c in cones:
+            if c._index is None:
+                c.validate(robot)
+        self.cones = cones
+        self.index = np.array([c._index for c in cones], dtype=int)
+        self.socket = np.array([c.frame == "socket" for c in cones])
+        self.all_socket = bool(self.socket.all())
+        self.tan = np.array([np.tan(np.radians(float(c.angle_deg))) for c in cones])
+        self.basis0 = np.array([c._basis[0] for c in cones]).reshape(len(cones), 3)
+
+    def __call__(self, terms) -> tuple[list[ConeData], tuple]:
+        idx = self.index
+        G, g = terms.RT[idx, :3], terms.u[idx, :3]
+        if self.all_socket:
+            Rs = terms.R_socket[idx]
+            G, g = Rs @ G, np.einsum("kab,kb->ka", Rs, g)
+        elif self.socket.any():
+            s = self.socket
+            Rs = terms.R_socket[idx[s]]
+            G, g = G.copy(), g.copy()
+            G[s], g[s] = Rs @ G[s], np.einsum("kab,kb->ka", Rs, g[s])
+        axes = terms.socket_axes[idx]
+        data = [ConeData(joint=c.joint, G=G[k], g=g[k], axis=axes[k], angle_deg=float(c.angle_deg),
+                         basis=c._basis) for k, c in enumerate(self.cones)]
+        return data, (G, g, axes, self.tan, self.basis0)

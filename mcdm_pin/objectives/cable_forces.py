@@ -15,6 +15,8 @@ class MinCableForces(Objective):
         weights: per-cable weights (m,), non-negative; default all ones.
     """
 
+    symmetric = True
+
     def __init__(self, weights=None):
         self.weights = None if weights is None else np.asarray(weights, dtype=float)
 

@@ -17,6 +17,8 @@ class MinInteractions(Objective):
         beta: ``{joint: weight}`` of |M|^2 (N^-2 m^-2); likewise.
     """
 
+    symmetric = True  # P = R^T W R is formed symmetric (see quadratic)
+
     def __init__(self, alpha: dict | None = None, beta: dict | None = None):
         self.alpha = dict(alpha or {})
         self.beta = dict(beta or {})
@@ -34,6 +36,9 @@ class MinInteractions(Objective):
         a = np.array([self.alpha.get(j.name, j.alpha) for j in robot.joints], dtype=float)
         b = np.array([self.beta.get(j.name, j.beta) for j in robot.joints], dtype=float)
         self._w = np.concatenate([np.repeat(a[:, None], 3, 1), np.repeat(b[:, None], 3, 1)], axis=1)
+        w = self._w.reshape(-1)
+        self._keep = np.flatnonzero(w != 0.0)
+        self._sqrt_w = np.sqrt(w[self._keep])
 
     def weights(self, robot) -> np.ndarray:
         """(J, 6) weights of the squared wrench components."""
@@ -43,15 +48,12 @@ class MinInteractions(Objective):
     def quadratic(self, terms, context) -> Quadratic:
         if self._w is None:
             self.validate(context.robot)
-        w = self._w.reshape(-1)  # (6J,)
-        R = terms.RT.reshape(len(w), -1)  # (6J, m)
-        u = terms.u.reshape(-1)
-        keep = w != 0.0
-        R, u, w = R[keep], u[keep], w[keep]
-        WR = w[:, None] * R
-        P = R.T @ WR
-        c = 2.0 * (u @ WR)
-        r = float(np.sum(w * u * u))
+        keep, sw = self._keep, self._sqrt_w
+        SR = sw[:, None] * terms.RT.reshape(len(self._w.reshape(-1)), -1)[keep]  # sqrt(w) R, (k, m)
+        su = sw * terms.u.reshape(-1)[keep]
+        P = SR.T @ SR  # exactly symmetric (a Gram matrix: BLAS syrk-like product of SR with itself)
+        c = 2.0 * (su @ SR)
+        r = float(su @ su)
         return Quadratic(P, c, r)
 
     def __repr__(self) -> str:

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..problem import QPData
+from . import _kkt as K
 
 # tolerances of the verification, relative to the problem's scale
 _PRIMAL_TOL = 1e-12  # bounds: |violation| <= tol * (1 + |bound|)
@@ -55,77 +56,118 @@ class ActiveSet:
             near_l &= bound_mult > thr
             near_u &= bound_mult < -thr
         cones = {}
-        for cone in qp.cones:
-            mult = cone_mult.get(cone.joint, 0.0)
-            F = cone.force(f)
-            perp = F - float(cone.axis @ F) * cone.axis
-            norm = float(np.linalg.norm(perp))
-            if mult > 0 and norm > 0:
-                cones[cone.joint] = (perp / norm, mult)
+        if qp.cones:
+            G, gc, ax, _, _ = qp.cone_arrays()
+            F = gc + G @ f
+            perp = F - np.einsum("ka,ka->k", ax, F)[:, None] * ax
+            norm = np.sqrt(np.einsum("ka,ka->k", perp, perp))
+            for k, cone in enumerate(qp.cones):
+                mult = cone_mult.get(cone.joint, 0.0)
+                if mult > 0 and norm[k] > 0:
+                    cones[cone.joint] = (perp[k] / norm[k], mult)
         return cls(np.flatnonzero(near_l), np.flatnonzero(near_u), cones)
 
 
 def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 12, max_newton: int = 10):
-    """The verified optimum, as ``(f, cone_multipliers, bound_multipliers)``, or ``None``.
+    """The verified optimum, as ``(f, cone_multipliers, bound_multipliers, next_guess)``, or
+    ``None``; ``next_guess`` is the optimum's active set (for the next instant).
 
     Starting from ``guess``, the active set is corrected by block principal pivoting (free cables
     that leave their bounds are fixed there, fixed cables whose multiplier has the wrong sign are
     freed, broken cones join, cones with a negative multiplier leave) for at most ``max_pivots``
-    equality-constrained solves; a repeated active set stops it.
+    equality-constrained solves; a repeated active set stops it. The solves and checks are the
+    compiled kernels of :mod:`._kkt`; a non-square or singular system falls back to the numpy
+    formulation (:func:`_solve_equality`, least squares).
     """
-    lower, upper = set(guess.lower.tolist()), set(guess.upper.tolist())
-    cones = dict(guess.cones)
+    n, neq = qp.n, len(qp.b)
+    H, g = qp.H, qp.c
+    G, gc, ax, tn, basis0 = qp.cone_arrays()
+    names = [c.joint for c in qp.cones]
+    state = np.zeros(n, dtype=np.int8)
+    state[guess.lower] = 1
+    state[guess.upper] = 2
+    cact = np.zeros(len(names), dtype=np.bool_)
+    cdir = np.zeros((len(names), 3))
+    for k, name in enumerate(names):
+        if name in guess.cones:
+            cact[k] = True
+            cdir[k] = guess.cones[name][0]
     seen = set()
     for _ in range(max_pivots):
-        key = (frozenset(lower), frozenset(upper), frozenset(cones))
+        key = state.tobytes() + cact.tobytes()
         if key in seen:
             return _miss("the active set cycles")
         seen.add(key)
-        out = _solve_equality(qp, np.array(sorted(lower), dtype=int), np.array(sorted(upper), dtype=int),
-                              cones, max_newton)
-        if isinstance(out, str):
-            return _miss(out)
-        if isinstance(out[0], str):  # ("drop", joints)
-            for j in out[1]:
-                cones.pop(j, None)
+        code, f, y, mus, dirs = K.eq_solve(H, g, qp.A, qp.b, qp.lb, qp.ub, state, G, gc, ax, tn, cact,
+                                           cdir, max_newton, _STEP_TOL)
+        if code in (K.SINGULAR, K.NOT_SQUARE):
+            out = _solve_equality(qp, np.flatnonzero(state == 1), np.flatnonzero(state == 2),
+                                  {names[k]: (cdir[k], 0.0) for k in np.flatnonzero(cact)}, max_newton)
+            if isinstance(out, str):
+                return _miss(out)
+            if isinstance(out[0], str):  # ("drop", joints)
+                cact &= ~np.isin(names, list(out[1]))
+                continue
+            f, y, active, mu_list = out
+            mus = np.zeros(len(names))
+            dirs = cdir.copy()
+            for (cone, d), mu in zip(active, mu_list):
+                mus[names.index(cone.joint)] = mu
+                dirs[names.index(cone.joint)] = d
+        elif code == K.VANISHED:
+            return _miss("a cone's force vanished")
+        elif code == K.NO_CONVERGENCE:
+            return _miss("Newton steps on the cone surfaces did not converge")
+        elif code == K.DROP:  # a cone pulls the force inwards: it is not active
+            cact &= ~(mus < 0)
             continue
-        f, y, active, mus = out
-        verdict = _verify(qp, f, y, active, mus, lower, upper)
-        if isinstance(verdict, str):
-            return _miss(verdict)
-        if isinstance(verdict, tuple) and verdict[0] is True:
-            return f, {cone.joint: float(mu) for (cone, _), mu in zip(active, mus)}, verdict[1]
-        to_lower, to_upper, release, cone_in, cone_out, worst, grad = verdict
-        new_lower = (lower - release) | to_lower
-        new_upper = (upper - release) | to_upper
-        n_cones = len(cones) - len(cone_out) + len(cone_in)
-        need = len(qp.b) + n_cones  # equations on the free cables
-        if qp.n - len(new_lower) - len(new_upper) < need:
+        (vcode, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind,
+         worst_idx) = K.verify(H, g, qp.A, qp.b, qp.lb, qp.ub, state, f, y, G, gc, ax, tn, basis0,
+                               cact, mus, _PRIMAL_TOL, _DUAL_TOL, _EOM_TOL)
+        if vcode != K.KKT_PIVOT:
+            if vcode == K.KKT_OPTIMAL:
+                mult = {names[k]: float(mus[k]) for k in np.flatnonzero(cact)}
+                # the next instant's guess (as ActiveSet.from_solution would find it: bounds whose
+                # multiplier is not negligible, cones with a positive multiplier)
+                thr = 1e-12 * max(float(np.abs(grad).max(initial=0.0)), 1e-300)
+                nxt = ActiveSet(np.flatnonzero((state == 1) & (grad > thr)),
+                                np.flatnonzero((state == 2) & (grad < -thr)),
+                                {names[k]: (dirs[k], float(mus[k])) for k in np.flatnonzero(cact)
+                                 if mus[k] > 0})
+                return f, mult, grad, nxt
+            return _miss(_VERIFY_REASONS[vcode])
+        new_state = state.copy()
+        new_state[release] = 0
+        new_state[to_lower] = 1
+        new_state[to_upper] = 2
+        need = neq + int(cact.sum()) - int(cone_out.sum()) + int(cone_in.sum())
+        if n - int(np.count_nonzero(new_state)) < need:
             # the block pivot would fix too many cables: change only the worst violation and, if
             # still too few cables are free, free the least binding fixed ones (a simplex-like swap)
-            kind, idx = worst
-            if kind == "lower":
-                new_lower, new_upper = lower | {idx}, set(upper)
-            elif kind == "upper":
-                new_lower, new_upper = set(lower), upper | {idx}
-            else:
-                new_lower, new_upper = lower - {idx}, upper - {idx}
-            if kind in ("lower", "upper"):
-                cone_in, cone_out = {}, set()
-            need = len(qp.b) + len(cones) - len(cone_out) + len(cone_in)
-            lam = {i: grad[i] for i in new_lower if i != idx}
-            lam.update({i: -grad[i] for i in new_upper if i != idx})
-            for i in sorted(lam, key=lam.get):
-                if qp.n - len(new_lower) - len(new_upper) >= need:
+            new_state = state.copy()
+            if worst_kind in (1, 2):
+                new_state[worst_idx] = worst_kind
+                cone_in[:] = False
+                cone_out[:] = False
+            elif worst_kind == 0:
+                new_state[worst_idx] = 0
+            need = neq + int(cact.sum()) - int(cone_out.sum()) + int(cone_in.sum())
+            fixed = np.flatnonzero(new_state != 0)
+            fixed = fixed[fixed != worst_idx]
+            lam = np.where(new_state[fixed] == 1, grad[fixed], -grad[fixed])
+            for i in fixed[np.argsort(lam, kind="stable")]:
+                if n - int(np.count_nonzero(new_state)) >= need:
                     break
-                new_lower.discard(i)
-                new_upper.discard(i)
-        lower, upper = new_lower, new_upper
-        for j in cone_out:
-            cones.pop(j, None)
-        for j, d in cone_in.items():
-            cones[j] = (d, 0.0)
+                new_state[i] = 0
+        state = new_state
+        cact &= ~cone_out
+        cact |= cone_in
+        cdir = np.where(cone_in[:, None], cone_dir, dirs)
     return _miss("no verified point within the pivot limit")
+
+
+_VERIFY_REASONS = {K.KKT_EOM: "equation of motion not met", K.KKT_NAPPE: "a cone's force on the wrong nappe",
+                   K.KKT_STATIONARY: "not stationary"}
 
 
 def _curvature_of(cone, f):
@@ -229,59 +271,3 @@ MISSES: dict[str, int] = {}  # why guesses were rejected (counts, for profiling)
 def _miss(reason: str):
     MISSES[reason] = MISSES.get(reason, 0) + 1
     return None
-
-
-def _verify(qp, f, y, active, mus, lower: set, upper: set):
-    """KKT conditions of the full problem at ``f``.
-
-    Returns (True, bound multipliers) at a global optimum, a reason string (give up), or the
-    pivots that would repair
-    the active set: (to_lower, to_upper, release, cones_in {joint: dir}, cones_out)."""
-    tol_l = _PRIMAL_TOL * (1.0 + np.abs(qp.lb))
-    tol_u = _PRIMAL_TOL * (1.0 + np.abs(qp.ub))
-    to_lower = set(np.flatnonzero(f < qp.lb - tol_l).tolist()) - lower
-    to_upper = set(np.flatnonzero(f > qp.ub + tol_u).tolist()) - upper
-    res = qp.A @ f - qp.b
-    scale = max(np.abs(qp.b).max(initial=0.0), (np.abs(qp.A) @ np.abs(f)).max(initial=0.0), 1e-300)
-    if np.abs(res).max(initial=0.0) > _EOM_TOL * scale:
-        return "equation of motion not met"
-    active_names = {cone.joint for cone, _ in active}
-    cones_in, cones_out = {}, set()
-    for cone in qp.cones:
-        F = cone.force(f)
-        along = float(cone.axis @ F)
-        perp_vec = F - along * cone.axis
-        perp = float(np.linalg.norm(perp_vec))
-        if cone.joint in active_names:
-            if along <= 0:
-                return "a cone's force on the wrong nappe"
-        elif perp > cone.tan * along * (1 + 1e-12) or along < 0:
-            cones_in[cone.joint] = perp_vec / perp if perp > 0 else cone.basis[0]
-    for (cone, _), mu in zip(active, mus):
-        if mu < 0:
-            cones_out.add(cone.joint)
-    obj_grad = 2.0 * (qp.P @ f) + qp.c
-    Aty = qp.A.T @ y
-    grad = obj_grad + Aty
-    for (cone, _), mu in zip(active, mus):
-        F = cone.force(f)
-        perp = F - float(cone.axis @ F) * cone.axis
-        nhat = perp / np.linalg.norm(perp)
-        grad = grad + mu * ((nhat - cone.tan * cone.axis) @ cone.G)
-    gscale = max(np.abs(obj_grad).max(initial=0.0), np.abs(Aty).max(initial=0.0), 1e-300)
-    fixed = np.zeros(qp.n, dtype=bool)
-    fixed[list(lower | upper)] = True
-    if np.abs(grad[~fixed]).max(initial=0.0) > 1e-8 * gscale:
-        return "not stationary"
-    lo = np.array(sorted(lower), dtype=int)
-    up = np.array(sorted(upper), dtype=int)
-    release = set(lo[grad[lo] < -_DUAL_TOL * gscale].tolist()) | \
-        set(up[grad[up] > _DUAL_TOL * gscale].tolist())
-    if not (to_lower or to_upper or release or cones_in or cones_out):
-        return True, grad
-    # the single worst violation, relative: primal in force, dual in gradient units
-    cands = [(float((qp.lb[i] - f[i]) / (1.0 + abs(qp.lb[i]))), ("lower", i)) for i in to_lower]
-    cands += [(float((f[i] - qp.ub[i]) / (1.0 + abs(qp.ub[i]))), ("upper", i)) for i in to_upper]
-    cands += [(float(abs(grad[i]) / gscale), ("release", i)) for i in release]
-    worst = max(cands)[1] if cands else ("none", -1)
-    return to_lower, to_upper, release, cones_in, cones_out, worst, grad

@@ -63,7 +63,14 @@ class Solver:
 
 def cone_violation_deg(qp: QPData, f) -> np.ndarray:
     """Per cone, how far (degrees) the force lies outside the cone (0 inside)."""
-    return np.array([max(0.0, c.angle_of(f) - c.angle_deg) for c in qp.cones])
+    if not qp.cones:
+        return np.zeros(0)
+    G, g, axis, _, _ = qp.cone_arrays()
+    F = g + G @ np.asarray(f, dtype=float)
+    along = np.einsum("ka,ka->k", axis, F)
+    perp = F - along[:, None] * axis
+    angle = np.degrees(np.arctan2(np.sqrt(np.einsum("ka,ka->k", perp, perp)), along))
+    return np.maximum(angle - np.array([c.angle_deg for c in qp.cones]), 0.0)
 
 
 def failure(m: int, status: str, message: str, iterations: int = 0, rounds: int = 1) -> Solution:

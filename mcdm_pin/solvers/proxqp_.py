@@ -143,8 +143,7 @@ class ProxQPSolver(Solver):
         if self.active_set and self._guess is not None:
             hit = try_active_set(qp, self._guess)
             if hit is not None:
-                f, mult, bound_mult = hit
-                self._guess = ActiveSet.from_solution(qp, f, mult, bound_mult)
+                f, mult, bound_mult, self._guess = hit
                 # warm start for a later ProxQP solve: the point and the bounds' multipliers
                 self._warm = (f.copy(), np.zeros(len(qp.b)), -bound_mult)
                 return Solution(f, OPTIMAL, qp.objective(f), 0, 0, "")
@@ -158,8 +157,7 @@ class ProxQPSolver(Solver):
             # then hold to rounding instead of to ProxQP's tolerance), if it verifies
             hit = try_active_set(qp, self._guess, max_pivots=2)
             if hit is not None:
-                f, mult, bound_mult = hit
-                self._guess = ActiveSet.from_solution(qp, f, mult, bound_mult)
+                f, mult, bound_mult, self._guess = hit
                 sol = Solution(f, OPTIMAL, qp.objective(f), sol.iterations, sol.rounds, sol.message)
         if sol.status == OPTIMAL:
             # ProxQP meets the bounds to its tolerance, relative to the problem's scale (1e-9 N at
@@ -258,8 +256,7 @@ class ProxQPSolver(Solver):
                 guess = ActiveSet.from_solution(qp, x, mult, -z[:n])
                 hit = try_active_set(qp, guess)
                 if hit is not None:
-                    f, mult, bound_mult = hit
-                    self._guess = ActiveSet.from_solution(qp, f, mult, bound_mult)
+                    f, mult, bound_mult, self._guess = hit
                     return Solution(f, OPTIMAL, qp.objective(f), iterations, rounds), mult
             for k, d in violated:
                 if _parallel_cuts(cones[k], cuts[k], d):

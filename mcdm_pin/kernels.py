@@ -1,0 +1,146 @@
+r"""Compiled (numba) kernels of the per-instant hot path.
+
+The numpy formulation of the cable terms (:func:`mcdm_pin.cables.cable_geometry` and the products in
+:class:`mcdm_pin.terms.TermsEvaluator`) is a few dozen array operations on arrays of a few hundred
+elements: its cost is numpy's per-call overhead, not arithmetic (0.13 ms of the neck's 0.18 ms terms,
+``benchmarks/bench_id.py``). The kernel below does the same arithmetic in one compiled pass over the
+route points and segments. It is the only place with explicit loops over cables; the numpy path
+stays as the reference it is tested against (``tests/test_kernels.py``).
+
+Compiled on first use and cached on disk (numba ``cache=True``: ``__pycache__`` beside this file,
+or ``NUMBA_CACHE_DIR``), so only the first run on a machine pays the compilation (a few seconds).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True, nogil=True)
+def cable_terms(oR, op, J, point_local, point_key, seg_a, seg_b, seg_cable, seg_active,
+                v_ptr, v_idx, a_ptr, a_idx, child_key, n_cables, n_joints):
+    """Cable geometry, ``L`` and the cables' part of the interaction wrenches in one pass.
+
+    Args:
+        oR, op: (K, 3, 3), (K, 3) world placements of the key bodies.
+        J: (6, nv) world Jacobian columns (spatial velocity at the world origin).
+        point_local, point_key: (P, 3) route points in their body's frame, (P,) their body.
+        seg_a, seg_b, seg_cable, seg_active: segments (start point, end point, cable, spans bodies).
+        v_ptr, v_idx: CSR over key bodies: the velocity columns that move body k.
+        a_ptr, a_idx: CSR over key bodies: the physical joints whose subtree holds body k.
+        child_key: (Jn,) key body of each physical joint's child frame.
+
+    Returns ``(X, seg_len, lengths, L, RT, bad)``: world points (P, 3), segment lengths, cable lengths
+    (m,), ``L`` (m, nv), ``RT`` (Jn, 6, m) in each child frame at the joint point, and the index of a
+    zero-length spanning segment (-1 when none).
+    """
+    n_pts = point_local.shape[0]
+    nv = J.shape[1]
+    X = np.empty((n_pts, 3))
+    for p in range(n_pts):
+        k = point_key[p]
+        for i in range(3):
+            X[p, i] = (oR[k, i, 0] * point_local[p, 0] + oR[k, i, 1] * point_local[p, 1]
+                       + oR[k, i, 2] * point_local[p, 2] + op[k, i])
+    n_seg = seg_a.shape[0]
+    seg_len = np.empty(n_seg)
+    lengths = np.zeros(n_cables)
+    L = np.zeros((n_cables, nv))
+    Ww = np.zeros((n_joints, 6, n_cables))  # world, about the origin
+    bad = -1
+    w = np.empty(6)
+    for s in range(n_seg):
+        a, b, c = seg_a[s], seg_b[s], seg_cable[s]
+        d0 = X[b, 0] - X[a, 0]
+        d1 = X[b, 1] - X[a, 1]
+        d2 = X[b, 2] - X[a, 2]
+        ln = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        seg_len[s] = ln
+        lengths[c] += ln
+        if not seg_active[s]:
+            continue
+        if not ln > 1e-12:
+            if bad < 0:
+                bad = s
+            continue
+        u0, u1, u2 = d0 / ln, d1 / ln, d2 / ln
+        for end in range(2):
+            e = b if end == 0 else a
+            sg = 1.0 if end == 0 else -1.0
+            x0, x1, x2 = X[e, 0], X[e, 1], X[e, 2]
+            w[0], w[1], w[2] = sg * u0, sg * u1, sg * u2
+            w[3] = sg * (x1 * u2 - x2 * u1)
+            w[4] = sg * (x2 * u0 - x0 * u2)
+            w[5] = sg * (x0 * u1 - x1 * u0)
+            k = point_key[e]
+            for t in range(v_ptr[k], v_ptr[k + 1]):
+                v = v_idx[t]
+                acc = 0.0
+                for i in range(6):
+                    acc += w[i] * J[i, v]
+                L[c, v] += acc
+            for t in range(a_ptr[k], a_ptr[k + 1]):
+                j = a_idx[t]
+                for i in range(6):
+                    Ww[j, i, c] += w[i]
+    # to each joint's child frame at the joint point: F = R^T F_w, M = R^T (M_w - t x F_w)
+    RT = np.empty((n_joints, 6, n_cables))
+    for j in range(n_joints):
+        k = child_key[j]
+        t0, t1, t2 = op[k, 0], op[k, 1], op[k, 2]
+        for c in range(n_cables):
+            f0, f1, f2 = Ww[j, 0, c], Ww[j, 1, c], Ww[j, 2, c]
+            m0 = Ww[j, 3, c] - (t1 * f2 - t2 * f1)
+            m1 = Ww[j, 4, c] - (t2 * f0 - t0 * f2)
+            m2 = Ww[j, 5, c] - (t0 * f1 - t1 * f0)
+            for i in range(3):
+                RT[j, i, c] = oR[k, 0, i] * f0 + oR[k, 1, i] * f1 + oR[k, 2, i] * f2
+                RT[j, 3 + i, c] = oR[k, 0, i] * m0 + oR[k, 1, i] * m1 + oR[k, 2, i] * m2
+    return X, seg_len, lengths, L, RT, bad
+
+
+@njit(cache=True, nogil=True)
+def spread(A, b):
+    """The largest ratio between the largest and smallest non-zero row maxima, column maxima and
+    right-hand-side entries of ``|A|``, ``|b|`` (1 when all are zero): how badly scaled ``A x = b``
+    is."""
+    n_r, n_c = A.shape
+    cols = np.zeros(n_c)
+    rmin, rmax = np.inf, 0.0
+    for r in range(n_r):
+        m = 0.0
+        for c in range(n_c):
+            v = abs(A[r, c])
+            if v > m:
+                m = v
+            if v > cols[c]:
+                cols[c] = v
+        if m > 0.0:
+            rmin = min(rmin, m)
+            rmax = max(rmax, m)
+    cmin, cmax = np.inf, 0.0
+    for c in range(n_c):
+        if cols[c] > 0.0:
+            cmin = min(cmin, cols[c])
+            cmax = max(cmax, cols[c])
+    bmin, bmax = np.inf, 0.0
+    for r in range(b.shape[0]):
+        v = abs(b[r])
+        if v > 0.0:
+            bmin = min(bmin, v)
+            bmax = max(bmax, v)
+    if rmax == 0.0 or cmax == 0.0:
+        return 1.0
+    out = max(rmax / rmin, cmax / cmin)
+    if bmax > 0.0:
+        out = max(out, bmax / bmin)
+    return out
+
+
+def csr(lists, n):
+    """(ptr, idx) int64 arrays of a list of index lists."""
+    ptr = np.zeros(n + 1, dtype=np.int64)
+    ptr[1:] = np.cumsum([len(x) for x in lists])
+    idx = np.array([i for x in lists for i in x], dtype=np.int64)
+    return ptr, idx

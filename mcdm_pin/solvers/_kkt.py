@@ -1,0 +1,264 @@
+r"""Compiled kernels of the active-set solver (:mod:`.active_set`): the equality-constrained solve of
+one active set and the KKT check of the full problem.
+
+The arithmetic is small (a KKT system of ~50 unknowns on the neck); in numpy its cost was the
+per-call overhead of ~100 array operations per try. The logic is that of the numpy formulation in
+:mod:`.active_set` (kept as the fallback for non-square and singular systems); the state of a
+cable is an int8 code: 0 free, 1 at its lower bound, 2 at its upper bound.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+# eq_solve codes
+OK, SINGULAR, NO_CONVERGENCE, DROP, NOT_SQUARE, VANISHED = 0, 1, 2, 3, 4, 5
+# verify codes
+KKT_OPTIMAL, KKT_PIVOT, KKT_EOM, KKT_NAPPE, KKT_STATIONARY = 0, 1, -1, -2, -3
+
+
+@njit(cache=True, nogil=True)
+def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, step_tol):
+    """Minimise ``1/2 f^T H f + g^T f`` with ``A f = b``, the cables of ``state`` fixed at their
+    bounds and the cones of ``cact`` held on their surface (Newton steps with the cones' curvature
+    weighted by their multipliers).
+
+    Returns ``(code, f, y, mus, dirs)``: ``mus`` (nc,) the active cones' multipliers (0 elsewhere),
+    ``dirs`` (nc, 3) their surface directions at ``f``.
+    """
+    n = H.shape[0]
+    neq = A.shape[0]
+    nc = G.shape[0]
+    f = np.zeros(n)
+    nf = 0
+    for i in range(n):
+        if state[i] == 1:
+            f[i] = lb[i]
+        elif state[i] == 2:
+            f[i] = ub[i]
+        else:
+            nf += 1
+    free = np.empty(nf, dtype=np.int64)
+    t = 0
+    for i in range(n):
+        if state[i] == 0:
+            free[t] = i
+            t += 1
+    na = 0
+    for k in range(nc):
+        if cact[k]:
+            na += 1
+    act = np.empty(na, dtype=np.int64)
+    t = 0
+    for k in range(nc):
+        if cact[k]:
+            act[t] = k
+            t += 1
+    mus = np.zeros(nc)
+    dirs = cdir.copy()
+    if nf < neq + na:
+        return NOT_SQUARE, f, np.zeros(neq), mus, dirs
+    N = nf + neq + na
+    # fixed part of the gradient and of the equations (f is zero on the free cables here)
+    Hf = H @ f
+    Af = A @ f
+    f_cur = f.copy()
+    x_prev = np.zeros(nf)
+    have_cur = False
+    have_prev = False
+    y = np.zeros(neq)
+    iters = max_newton if na > 0 else 1
+    converged = False
+    for _ in range(iters):
+        K = np.zeros((N, N))
+        rhs = np.empty(N)
+        for p in range(nf):
+            i = free[p]
+            for q in range(nf):
+                K[p, q] = H[i, free[q]]
+            for r in range(neq):
+                K[p, nf + r] = A[r, i]
+                K[nf + r, p] = A[r, i]
+            rhs[p] = -(g[i] + Hf[i])
+        for r in range(neq):
+            rhs[nf + r] = b[r] - Af[r]
+        for s in range(na):
+            k = act[s]
+            d0, d1, d2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
+            if have_cur:
+                F = gc[k] + G[k] @ f_cur
+                al = ax[k, 0] * F[0] + ax[k, 1] * F[1] + ax[k, 2] * F[2]
+                p0, p1, p2 = F[0] - al * ax[k, 0], F[1] - al * ax[k, 1], F[2] - al * ax[k, 2]
+                nrm = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+                if nrm <= 1e-300:
+                    return VANISHED, f, y, mus, dirs
+                d0, d1, d2 = p0 / nrm, p1 / nrm, p2 / nrm
+                dirs[k, 0], dirs[k, 1], dirs[k, 2] = d0, d1, d2
+                mu = mus[k]
+                if mu > 0.0:
+                    # curvature mu G^T (I - a a^T - d d^T) G / |F_perp| = mu/|F_perp| v v^T with
+                    # v = G^T e, e = a x d (the projector is rank one: e e^T)
+                    e0 = ax[k, 1] * d2 - ax[k, 2] * d1
+                    e1 = ax[k, 2] * d0 - ax[k, 0] * d2
+                    e2 = ax[k, 0] * d1 - ax[k, 1] * d0
+                    v = e0 * G[k, 0] + e1 * G[k, 1] + e2 * G[k, 2]
+                    sc = mu / nrm
+                    # centred at f_cur: + 1/2 (f - f_cur)^T D (f - f_cur); on the free cables the
+                    # gradient gains D (f_fixed - f_cur) restricted to free rows
+                    vdf = 0.0
+                    for i in range(n):
+                        if state[i] != 0:
+                            vdf += v[i] * (f[i] - f_cur[i])
+                        else:
+                            vdf -= v[i] * f_cur[i]
+                    for p in range(nf):
+                        vp = sc * v[free[p]]
+                        for q in range(nf):
+                            K[p, q] += vp * v[free[q]]
+                        rhs[p] -= vp * vdf
+            w0 = d0 - tn[k] * ax[k, 0]
+            w1 = d1 - tn[k] * ax[k, 1]
+            w2 = d2 - tn[k] * ax[k, 2]
+            row = w0 * G[k, 0] + w1 * G[k, 1] + w2 * G[k, 2]
+            rr = -(w0 * gc[k, 0] + w1 * gc[k, 1] + w2 * gc[k, 2])
+            for i in range(n):
+                if state[i] != 0:
+                    rr -= row[i] * f[i]
+            for p in range(nf):
+                K[p, nf + neq + s] = row[free[p]]
+                K[nf + neq + s, p] = row[free[p]]
+            rhs[nf + neq + s] = rr
+        try:
+            sol = np.linalg.solve(K, rhs)
+        except Exception:  # noqa: BLE001 (numba: LinAlgError on an exactly singular system)
+            return SINGULAR, f, y, mus, dirs
+        for i in range(N):
+            if not np.isfinite(sol[i]):
+                return SINGULAR, f, y, mus, dirs
+        for p in range(nf):
+            f[free[p]] = sol[p]
+        y = sol[nf:nf + neq].copy()
+        for s in range(na):
+            mus[act[s]] = sol[nf + neq + s]
+        if na == 0:
+            converged = True
+            break
+        if have_cur:
+            for s in range(na):
+                if mus[act[s]] < 0.0:
+                    return DROP, f, y, mus, dirs
+        if have_prev:
+            dx = 0.0
+            xx = 0.0
+            for p in range(nf):
+                dx += (sol[p] - x_prev[p]) ** 2
+                xx += sol[p] ** 2
+            if np.sqrt(dx) <= step_tol * (1.0 + np.sqrt(xx)):
+                converged = True
+                break
+        for p in range(nf):
+            x_prev[p] = sol[p]
+        have_prev = True
+        f_cur[:] = f
+        have_cur = True
+    if not converged:
+        return NO_CONVERGENCE, f, y, mus, dirs
+    return OK, f, y, mus, dirs
+
+
+@njit(cache=True, nogil=True)
+def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, primal_tol, dual_tol,
+           eom_tol):
+    """KKT conditions of the full problem at ``f`` (multipliers ``y`` of ``A f = b``, ``mus`` of the
+    active cones).
+
+    Returns ``(code, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind,
+    worst_idx)``; ``code`` is :data:`KKT_OPTIMAL`, :data:`KKT_PIVOT` (the flags say what to change;
+    ``worst_kind`` 1 lower, 2 upper, 0 release, -1 none) or a negative reason.
+    """
+    n = f.shape[0]
+    nc = G.shape[0]
+    to_lower = np.zeros(n, dtype=np.bool_)
+    to_upper = np.zeros(n, dtype=np.bool_)
+    release = np.zeros(n, dtype=np.bool_)
+    cone_in = np.zeros(nc, dtype=np.bool_)
+    cone_out = np.zeros(nc, dtype=np.bool_)
+    cone_dir = np.zeros((nc, 3))
+    grad = np.zeros(n)
+    for i in range(n):
+        if f[i] < lb[i] - primal_tol * (1.0 + abs(lb[i])) and state[i] != 1:
+            to_lower[i] = True
+        if f[i] > ub[i] + primal_tol * (1.0 + abs(ub[i])) and state[i] != 2:
+            to_upper[i] = True
+    res = A @ f - b
+    absf = np.abs(f)
+    scale = 1e-300
+    for r in range(A.shape[0]):
+        scale = max(scale, abs(b[r]))
+        acc = 0.0
+        for i in range(n):
+            acc += abs(A[r, i]) * absf[i]
+        scale = max(scale, acc)
+    for r in range(A.shape[0]):
+        if abs(res[r]) > eom_tol * scale:
+            return KKT_EOM, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, -1, -1
+    obj_grad = H @ f + g
+    Aty = A.T @ y
+    gscale = 1e-300
+    for i in range(n):
+        gscale = max(gscale, abs(obj_grad[i]), abs(Aty[i]))
+        grad[i] = obj_grad[i] + Aty[i]
+    for k in range(nc):
+        F = gc[k] + G[k] @ f
+        al = ax[k, 0] * F[0] + ax[k, 1] * F[1] + ax[k, 2] * F[2]
+        p0, p1, p2 = F[0] - al * ax[k, 0], F[1] - al * ax[k, 1], F[2] - al * ax[k, 2]
+        perp = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+        if cact[k]:
+            if al <= 0.0:
+                return KKT_NAPPE, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, -1, -1
+            if mus[k] < 0.0:
+                cone_out[k] = True
+            # d/df |F_perp| = n^T G with n = F_perp / |F_perp| (the caller never holds a cone
+            # whose force vanished: eq_solve reports it)
+            w0 = p0 / perp - tn[k] * ax[k, 0]
+            w1 = p1 / perp - tn[k] * ax[k, 1]
+            w2 = p2 / perp - tn[k] * ax[k, 2]
+            mu = mus[k]
+            for i in range(n):
+                grad[i] += mu * (w0 * G[k, 0, i] + w1 * G[k, 1, i] + w2 * G[k, 2, i])
+        elif perp > tn[k] * al * (1 + 1e-12) or al < 0.0:
+            cone_in[k] = True
+            if perp > 0.0:
+                cone_dir[k, 0], cone_dir[k, 1], cone_dir[k, 2] = p0 / perp, p1 / perp, p2 / perp
+            else:
+                cone_dir[k] = basis0[k]
+    for i in range(n):
+        if state[i] == 0 and abs(grad[i]) > 1e-8 * gscale:
+            return KKT_STATIONARY, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, -1, -1
+    any_change = False
+    worst_kind, worst_idx, worst = -1, -1, -np.inf
+    for i in range(n):
+        if (state[i] == 1 and grad[i] < -dual_tol * gscale) or \
+                (state[i] == 2 and grad[i] > dual_tol * gscale):
+            release[i] = True
+            any_change = True
+            v = abs(grad[i]) / gscale
+            if v > worst:
+                worst, worst_kind, worst_idx = v, 0, i
+        if to_lower[i]:
+            any_change = True
+            v = (lb[i] - f[i]) / (1.0 + abs(lb[i]))
+            if v > worst:
+                worst, worst_kind, worst_idx = v, 1, i
+        if to_upper[i]:
+            any_change = True
+            v = (f[i] - ub[i]) / (1.0 + abs(ub[i]))
+            if v > worst:
+                worst, worst_kind, worst_idx = v, 2, i
+    for k in range(nc):
+        if cone_in[k] or cone_out[k]:
+            any_change = True
+    if not any_change:
+        return KKT_OPTIMAL, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, -1, -1
+    return KKT_PIVOT, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind, worst_idx
