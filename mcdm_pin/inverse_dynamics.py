@@ -66,10 +66,10 @@ class InverseDynamics:
             out[self.robot.joint_names.index(c.joint)] = c.angle_deg
         return out
 
-    def solve(self, q, qd=None, qdd=None, f_prev=None) -> InstantResult:
+    def solve(self, q, qd=None, qdd=None, f_prev=None, _checked: bool = False) -> InstantResult:
         """Cable forces at one state."""
         t0 = time.perf_counter()
-        terms = self.evaluate(q, qd, qdd)
+        terms = self.evaluate(q, qd, qdd, checked=_checked)
         # one sum is finite only if every entry is (a sum that overflows is checked entry by entry)
         if not np.isfinite(terms.tau.sum() + terms.L.sum()) and \
                 not (np.all(np.isfinite(terms.tau)) and np.all(np.isfinite(terms.L))):
@@ -151,9 +151,10 @@ class InverseDynamics:
         if progress:
             from tqdm import tqdm
             bar = tqdm(total=len(indices), delay=1.5, unit="inst", leave=False, file=sys.stderr)
+        _check_trajectory(self.robot, traj)
         try:
             for k in indices:
-                res = self.solve(traj.q[k], traj.qd[k], traj.qdd[k], f_prev=f_prev)
+                res = self.solve(traj.q[k], traj.qd[k], traj.qdd[k], f_prev=f_prev, _checked=True)
                 instants.append(res)
                 if res.found:
                     f_prev = res.f
@@ -181,6 +182,21 @@ class InverseDynamics:
 
 
 _BATCH = None
+
+
+def _check_trajectory(robot, traj) -> None:
+    """Every state of ``traj`` is a finite float vector of length nv (checked once, not per instant)."""
+    for name in ("q", "qd", "qdd"):
+        x = getattr(traj, name)
+        if not (isinstance(x, np.ndarray) and x.dtype == np.float64 and x.ndim == 2
+                and x.shape[1] == robot.nv and x.shape[0] == len(traj)):
+            for k in range(len(traj)):  # the per-state check names what is wrong
+                robot.check_vector(x[k], f"{name}[{k}]")
+            raise StateError(f"trajectory {traj.name!r}: {name} must be an array of shape "
+                             f"({len(traj)}, {robot.nv})")
+        if not np.all(np.isfinite(x)):
+            k = int(np.flatnonzero(~np.all(np.isfinite(x), axis=1))[0])
+            robot.check_vector(x[k], f"{name}[{k}]")
 
 
 def _solve_piece(piece):

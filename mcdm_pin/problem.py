@@ -57,7 +57,11 @@ class QPData:
     def cone_arrays(self) -> tuple:
         """The cones stacked for vectorised and compiled code: ``G`` (k, 3, n), ``g`` (k, 3),
         ``axis`` (k, 3), ``tan`` (k,), ``basis0`` (k, 3) (a unit vector normal to each axis)."""
-        if self._cone_arrays is None:
+        if self._cone_arrays is None and not self.cones:
+            n = self.n
+            self._cone_arrays = (np.zeros((0, 3, n)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0),
+                                 np.zeros((0, 3)))
+        elif self._cone_arrays is None:
             n, cs = self.n, self.cones
             self._cone_arrays = (
                 np.array([c.G for c in cs], dtype=float).reshape(len(cs), 3, n),

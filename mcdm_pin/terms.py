@@ -22,7 +22,7 @@ Because the joints are passive, the joint-space part :math:`S_a^T p_a` equals
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
@@ -37,9 +37,9 @@ class Terms:
 
     Attributes:
         q, qd, qdd: the state (nv each).
-        M: (nv, nv) joint-space inertia matrix.
-        h: (nv,) Coriolis, centrifugal and gravity terms.
-        tau: (nv,) ``M qdd + h``; the equation of motion is ``L^T f = -tau``.
+        tau: (nv,) ``M qdd + h`` (RNEA); the equation of motion is ``L^T f = -tau``.
+        M: (nv, nv) joint-space inertia matrix (property, computed on first use).
+        h: (nv,) Coriolis, centrifugal and gravity terms (property, computed on first use).
         lengths: (m,) cable lengths, m.
         L: (m, nv) ``d lengths / dq``.
         u: (J, 6) interaction wrenches ``[F; M]`` with zero cable force (child frame).
@@ -52,8 +52,6 @@ class Terms:
     q: np.ndarray
     qd: np.ndarray
     qdd: np.ndarray
-    M: np.ndarray
-    h: np.ndarray
     tau: np.ndarray
     lengths: np.ndarray
     L: np.ndarray
@@ -62,6 +60,21 @@ class Terms:
     R_socket: np.ndarray
     socket_axes: np.ndarray
     points: np.ndarray
+    _evaluator: "TermsEvaluator | None" = field(default=None, repr=False, compare=False)
+    _M: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    # --- M and h on demand: the problem needs only tau = M qdd + h, which RNEA gives directly ----
+    @property
+    def M(self) -> np.ndarray:
+        """(nv, nv) joint-space inertia matrix (computed on first use)."""
+        if self._M is None:
+            self._M = self._evaluator.mass_matrix(self.q)
+        return self._M
+
+    @property
+    def h(self) -> np.ndarray:
+        """(nv,) Coriolis, centrifugal and gravity terms ``tau - M qdd`` (computed on first use)."""
+        return self.tau - self.M @ self.qdd
 
     # --- derived quantities for a force vector f (m,) ---------------------------------------------
     def wrenches(self, f) -> np.ndarray:
@@ -132,6 +145,10 @@ class TermsEvaluator:
         self._sub_v = sub[owner]  # (nv, K)
         self._sub_phys = sub[self._child]  # (J, K)
         self._axes = np.array([j.socket_axis for j in js]).reshape(len(js), 3)
+        # Pinocchio's placements and joint wrenches are read through element references into this
+        # evaluator's own data (they follow every update; 3x cheaper than indexing data.oMi anew)
+        self._oMi_refs = [self.data.oMi[j] for j in keys]
+        self._f_refs = [self.data.f[c] for c in self._child]
         self._zeros = np.zeros(robot.nv)
         self._tril = np.tril_indices(robot.nv, -1)
         if compiled:
@@ -165,16 +182,19 @@ class TermsEvaluator:
         self._subtree_of_end = sparse.csr_matrix((np.ones(len(rows)), (rows, cols)),
                                                  shape=(len(js) * robot.m, n_end))
 
-    def __call__(self, q, qd=None, qdd=None) -> Terms:
+    def __call__(self, q, qd=None, qdd=None, checked: bool = False) -> Terms:
+        """Terms at ``(q, qd, qdd)`` (``None``: zeros). ``checked``: the caller has already verified
+        that the three are finite float vectors of length nv (a trajectory checked as a whole)."""
         r = self.robot
-        q = r.check_vector(q, "q")
-        qd = self._zeros if qd is None else r.check_vector(qd, "qd")
-        qdd = self._zeros if qdd is None else r.check_vector(qdd, "qdd")
+        if not checked:
+            q = r.check_vector(q, "q")
+            qd = self._zeros if qd is None else r.check_vector(qd, "qd")
+            qdd = self._zeros if qdd is None else r.check_vector(qdd, "qdd")
         model, data = self.model, self.data
         qp = r.pin_q(q)
 
         pin.computeJointJacobians(model, data, qp)
-        oMi = np.array([data.oMi[j].homogeneous for j in self._keys])
+        oMi = np.array([M.homogeneous for M in self._oMi_refs])
         oR, op = oMi[:, :3, :3], oMi[:, :3, 3]
         # (6, nv): each column's motion in the world frame at the origin (eigenpy gives (6,) if nv = 1)
         J = data.J.reshape(6, -1)
@@ -190,15 +210,19 @@ class TermsEvaluator:
             geo = cable_geometry(r, oR, op, self._maps)
             X, lengths = geo.points, geo.lengths
             RT, L = self._numpy_cable_maps(geo.w, J.copy(), oR, op)
-        M = pin.crba(model, data, qp).copy()  # upper triangle filled
-        M[self._tril] = M.T[self._tril]
         tau = pin.rnea(model, data, qp, qd, qdd).copy()
-        u = np.array([data.f[c].vector for c in self._child]).reshape(len(self._child), 6)
+        u = np.array([w.vector for w in self._f_refs]).reshape(len(self._child), 6)
         Rc = oR[self._child_key]
         R_socket = (oR[self._parent_key] @ self._R_sp).transpose(0, 2, 1) @ Rc
-        return Terms(q=q.copy(), qd=np.array(qd, float), qdd=np.array(qdd, float), M=M,
-                     h=tau - M @ qdd, tau=tau, lengths=lengths, L=L, u=u, RT=RT,
-                     R_socket=R_socket, socket_axes=self._axes, points=X)
+        return Terms(q=q.copy(), qd=qd.copy(), qdd=qdd.copy(), tau=tau, lengths=lengths, L=L, u=u,
+                     RT=RT, R_socket=R_socket, socket_axes=self._axes, points=X, _evaluator=self)
+
+    def mass_matrix(self, q) -> np.ndarray:
+        """(nv, nv) joint-space inertia matrix at ``q`` (CRBA, both triangles filled)."""
+        data = self.model.createData()
+        M = pin.crba(self.model, data, self.robot.pin_q(q)).copy()  # upper triangle filled
+        M[self._tril] = M.T[self._tril]
+        return M
 
     def _numpy_cable_maps(self, w, J, oR, op):
         """(RT, L) from the end points' Pluecker vectors, in numpy (the reference formulation)."""

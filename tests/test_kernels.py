@@ -50,6 +50,18 @@ def test_generated_robots_kernel_equals_numpy(g, seed):
         assert_same_terms(robot, q, qd, qdd)
 
 
+def test_one_evaluator_along_a_trajectory_equals_fresh_ones(two_link):
+    """The evaluator reads Pinocchio's data through cached element references: reused along a
+    trajectory it must give what a new evaluator gives at every state."""
+    rng = np.random.default_rng(7)
+    ev = TermsEvaluator(two_link)
+    for _ in range(10):
+        q, qd, qdd = rng.uniform(-1, 1, 4), rng.normal(size=4), rng.normal(size=4)
+        a, b = ev(q, qd, qdd), TermsEvaluator(two_link)(q, qd, qdd)
+        for name in FIELDS:
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+
+
 def test_zero_length_segment_is_reported_by_both(two_link):
     """A cable point moved onto the next one of its route: both paths raise the same StateError."""
     r = two_link

@@ -1,10 +1,9 @@
 r"""Compiled kernels of the active-set solver (:mod:`.active_set`): the equality-constrained solve of
 one active set and the KKT check of the full problem.
 
-The arithmetic is small (a KKT system of ~50 unknowns on the neck); in numpy its cost was the
-per-call overhead of ~100 array operations per try. The logic is that of the numpy formulation in
-:mod:`.active_set` (kept as the fallback for non-square and singular systems); the state of a
-cable is an int8 code: 0 free, 1 at its lower bound, 2 at its upper bound.
+The arithmetic is small (a KKT system of ~50 unknowns on the neck); written with numpy its cost was
+the per-call overhead of ~100 array operations per try, so the whole pivoting loop runs compiled.
+The state of a cable is an int8 code: 0 free, 1 at its lower bound, 2 at its upper bound.
 """
 
 from __future__ import annotations
@@ -13,9 +12,36 @@ import numpy as np
 from numba import njit
 
 # eq_solve codes
-OK, SINGULAR, NO_CONVERGENCE, DROP, NOT_SQUARE, VANISHED = 0, 1, 2, 3, 4, 5
+OK, SINGULAR, NO_CONVERGENCE, DROP, VANISHED = 0, 1, 2, 3, 5
 # verify codes
 KKT_OPTIMAL, KKT_PIVOT, KKT_EOM, KKT_NAPPE, KKT_STATIONARY = 0, 1, -1, -2, -3
+# active_set_solve codes (besides OPTIMAL = 0 and the eq_solve / verify failures, shifted)
+FOUND, CYCLE, PIVOT_LIMIT = 0, 10, 11
+REASONS = {SINGULAR: "singular KKT system", NO_CONVERGENCE: "Newton steps on the cone surfaces did not converge",
+           VANISHED: "a cone's force vanished", 20 + KKT_EOM: "equation of motion not met",
+           20 + KKT_NAPPE: "a cone's force on the wrong nappe", 20 + KKT_STATIONARY: "not stationary",
+           CYCLE: "the active set cycles", PIVOT_LIMIT: "no verified point within the pivot limit"}
+
+
+@njit(cache=True, nogil=True)
+def _kkt_solve(K, rhs, square):
+    """``K x = rhs`` by LU; least squares when ``K`` is not square-solvable (then the residual must be
+    at rounding level, else NaNs: a singular, inconsistent system)."""
+    if square:
+        try:
+            return np.linalg.solve(K, rhs)
+        except Exception:  # noqa: BLE001 (numba: LinAlgError on an exactly singular system)
+            pass
+    sol = np.linalg.lstsq(K, rhs)[0]
+    scale = 1.0
+    for i in range(rhs.shape[0]):
+        scale = max(scale, abs(rhs[i]))
+    r = K @ sol - rhs
+    for i in range(rhs.shape[0]):
+        if not abs(r[i]) <= 1e-10 * scale:
+            sol[:] = np.nan
+            break
+    return sol
 
 
 @njit(cache=True, nogil=True)
@@ -57,8 +83,9 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
             t += 1
     mus = np.zeros(nc)
     dirs = cdir.copy()
-    if nf < neq + na:
-        return NOT_SQUARE, f, np.zeros(neq), mus, dirs
+    # fewer free cables than equations is fine when the equations are dependent (e.g. the 2-link
+    # arm at q = 0): the KKT system is then solved in the least-squares sense (and verified)
+    square = nf >= neq + na
     N = nf + neq + na
     # fixed part of the gradient and of the equations (f is zero on the free cables here)
     Hf = H @ f
@@ -129,10 +156,7 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
                 K[p, nf + neq + s] = row[free[p]]
                 K[nf + neq + s, p] = row[free[p]]
             rhs[nf + neq + s] = rr
-        try:
-            sol = np.linalg.solve(K, rhs)
-        except Exception:  # noqa: BLE001 (numba: LinAlgError on an exactly singular system)
-            return SINGULAR, f, y, mus, dirs
+        sol = _kkt_solve(K, rhs, square)
         for i in range(N):
             if not np.isfinite(sol[i]):
                 return SINGULAR, f, y, mus, dirs
@@ -262,3 +286,114 @@ def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, pr
     if not any_change:
         return KKT_OPTIMAL, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, -1, -1
     return KKT_PIVOT, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind, worst_idx
+
+
+@njit(cache=True, nogil=True)
+def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
+                     max_newton, step_tol, primal_tol, dual_tol, eom_tol):
+    """Block principal pivoting from the guess ``(state0, cact0, cdir0)`` until a verified KKT point
+    (see :func:`mcdm_pin.solvers.active_set.try_active_set`).
+
+    Returns ``(code, f, mus, grad, state, cact, dirs)``: ``code`` :data:`FOUND` or a key of
+    :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers, ``grad`` the bounds'
+    multipliers and ``(state, cact, dirs)`` the optimum's active set.
+    """
+    n = H.shape[0]
+    neq = A.shape[0]
+    nc = G.shape[0]
+    state = state0.copy()
+    cact = cact0.copy()
+    cdir = cdir0.copy()
+    hist_s = np.zeros((max_pivots, n), dtype=np.int8)
+    hist_c = np.zeros((max_pivots, nc), dtype=np.bool_)
+    f = np.zeros(n)
+    mus = np.zeros(nc)
+    grad = np.zeros(n)
+    for it in range(max_pivots):
+        for h in range(it):
+            same = True
+            for i in range(n):
+                if hist_s[h, i] != state[i]:
+                    same = False
+                    break
+            if same:
+                for k in range(nc):
+                    if hist_c[h, k] != cact[k]:
+                        same = False
+                        break
+            if same:
+                return CYCLE, f, mus, grad, state, cact, cdir
+        hist_s[it] = state
+        hist_c[it] = cact
+        code, f, y, mus, dirs = eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir,
+                                         max_newton, step_tol)
+        if code == DROP:  # a cone pulls the force inwards: it is not active
+            for k in range(nc):
+                if cact[k] and mus[k] < 0.0:
+                    cact[k] = False
+            continue
+        if code != OK:
+            return code, f, mus, grad, state, cact, cdir
+        (vcode, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind,
+         worst_idx) = verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus,
+                             primal_tol, dual_tol, eom_tol)
+        if vcode == KKT_OPTIMAL:
+            return FOUND, f, mus, grad, state, cact, dirs
+        if vcode != KKT_PIVOT:
+            return 20 + vcode, f, mus, grad, state, cact, cdir
+        new_state = state.copy()
+        n_in = 0
+        n_out = 0
+        n_act = 0
+        for k in range(nc):
+            n_in += cone_in[k]
+            n_out += cone_out[k]
+            n_act += cact[k]
+        for i in range(n):
+            if release[i]:
+                new_state[i] = 0
+            if to_lower[i]:
+                new_state[i] = 1
+            if to_upper[i]:
+                new_state[i] = 2
+        need = neq + n_act - n_out + n_in
+        if n - np.count_nonzero(new_state) < need:
+            # the block pivot would fix too many cables: change only the worst violation and, if
+            # still too few cables are free, free the least binding fixed ones (a simplex-like swap)
+            new_state = state.copy()
+            if worst_kind == 1 or worst_kind == 2:
+                new_state[worst_idx] = worst_kind
+                cone_in[:] = False
+                cone_out[:] = False
+                n_in = 0
+                n_out = 0
+            elif worst_kind == 0:
+                new_state[worst_idx] = 0
+            need = neq + n_act - n_out + n_in
+            n_fixed = 0
+            for i in range(n):
+                if new_state[i] != 0 and i != worst_idx:
+                    n_fixed += 1
+            fixed = np.empty(n_fixed, dtype=np.int64)
+            lam = np.empty(n_fixed)
+            t = 0
+            for i in range(n):
+                if new_state[i] != 0 and i != worst_idx:
+                    fixed[t] = i
+                    lam[t] = grad[i] if new_state[i] == 1 else -grad[i]
+                    t += 1
+            order = np.argsort(lam, kind="mergesort")
+            for t in range(n_fixed):
+                if n - np.count_nonzero(new_state) >= need:
+                    break
+                new_state[fixed[order[t]]] = 0
+        state = new_state
+        for k in range(nc):
+            if cone_out[k]:
+                cact[k] = False
+            if cone_in[k]:
+                cact[k] = True
+                cdir[k] = cone_dir[k]
+            else:
+                cdir[k] = dirs[k]
+    return PIVOT_LIMIT, f, mus, grad, state, cact, cdir
