@@ -5,8 +5,9 @@ back-end's accelerations switched off one at a time.
                                   [--cone 15] [--repeat 3]
 
 Without --robot the 8S neck is imported from ../shared/reference/caspr (read in place). Rows:
-- all on: active-set warm start (previous instant's active set, KKT-verified), cuts kept from the
-  previous instant, ProxQP warm start;
+- all on: compiled cable terms, active-set warm start (previous instant's active set, KKT-verified,
+  pivoting compiled), cuts kept from the previous instant, ProxQP warm start;
+- numpy cable terms: the cable terms by the numpy formulation (``TermsEvaluator(compiled=False)``);
 - active set off: every instant solved by ProxQP (cutting planes + SQP polish for the cones);
 - + cuts not kept, + no ProxQP warm start: the remaining accelerations removed in turn.
 The model evaluation (kinematics, RNEA, M, cable maps, QP assembly) is timed separately.
@@ -22,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mcdm_pin import InverseDynamics, Robot, load_trajectory
+from mcdm_pin import InverseDynamics, Robot, TermsEvaluator, load_trajectory
 from mcdm_pin.solvers import ProxQPSolver
 
 CASPR = Path(__file__).resolve().parents[2] / "shared" / "reference" / "caspr"
@@ -53,9 +54,10 @@ def main(argv=None):
         traj = load_trajectory(robot, args.trajectory)
         alpha = {j: args.alpha for j in robot.joint_names}
         cones = {j.name: args.cone for j in robot.joints if j.type == "spherical"}
-        variants = [("all on", {}), ("active set off", dict(active_set=False)),
-                    ("+ cuts not kept", dict(active_set=False, keep_cuts=False)),
-                    ("+ no ProxQP warm start", dict(active_set=False, keep_cuts=False, warm_start=False))]
+        variants = [("all on", {}, True), ("numpy cable terms", {}, False),
+                    ("active set off", dict(active_set=False), True),
+                    ("+ cuts not kept", dict(active_set=False, keep_cuts=False), True),
+                    ("+ no ProxQP warm start", dict(active_set=False, keep_cuts=False, warm_start=False), True)]
         print(f"{robot.name}, trajectory {args.trajectory} ({len(traj)} instants), median of "
               f"{args.repeat} runs per instant, ms")
         print("| case | variant | model | solve | total | instants solved | by the active set |")
@@ -64,8 +66,9 @@ def main(argv=None):
             kw = {} if case == 1 else {"alpha": alpha}
             if case == 3:
                 kw["cones"] = cones
-            for name, opts in variants:
+            for name, opts, compiled in variants:
                 ident = InverseDynamics.for_case(robot, case, solver=ProxQPSolver(**opts), **kw)
+                ident.evaluate = TermsEvaluator(robot, compiled=compiled)
                 model, solve, ok, fast = [], [], 0, 0
                 for _ in range(args.repeat):
                     run = ident.solve_trajectory(traj, progress=False)

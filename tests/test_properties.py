@@ -140,11 +140,9 @@ def test_solver_meets_constraints_and_agrees_with_clarabel(g, seed, case):
             assert ref.status != "optimal"
         if ref.status == "infeasible":
             assert prox.status != "optimal"
-        # ProxQP can stall on a generated robot (seen: 1 of ~100 examples in the full suite, 51k
-        # iterations); it then says "max_iter" and returns no forces: counted, the rate is asserted
-        # below, and the property is checked on every answer it does give
-        if prox.status == "max_iter":
-            return
+        # ProxQP alone stalled on ~1 in 100 generated robots (51k iterations, "max_iter"); the
+        # back-end now answers those with Clarabel (ProxQPSolver._solve_fallback), so every
+        # instant gets an answer: optimal, infeasible or (checked and found wanting) inaccurate
         assert prox.status in ("optimal", "infeasible", "inaccurate")
         if prox.status == "optimal":
             f = prox.f
@@ -166,7 +164,7 @@ def test_generator_covers_feasible_and_infeasible_instants():
     print(SOLVER_STATS)
     assert optimal >= 20 and infeasible >= 5, SOLVER_STATS
     stalled = sum(n for k, n in SOLVER_STATS.items() if "max_iter/" in k)
-    assert stalled <= 0.05 * sum(SOLVER_STATS.values()), SOLVER_STATS
+    assert stalled == 0, SOLVER_STATS
 
 
 def test_one_dof_robot(tmp_path):

@@ -294,6 +294,11 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
     """Block principal pivoting from the guess ``(state0, cact0, cdir0)`` until a verified KKT point
     (see :func:`mcdm_pin.solvers.active_set.try_active_set`).
 
+    Every violated condition is exchanged at once (a block pivot) while the number of violations
+    falls, or for a few steps without progress; then, or when a block pivot leaves a singular
+    system (too many cables fixed for the equation of motion), only the worst violation changes
+    (Judice and Pires' safeguard).
+
     Returns ``(code, f, mus, grad, state, cact, dirs)``: ``code`` :data:`FOUND` or a key of
     :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers, ``grad`` the bounds'
     multipliers and ``(state, cact, dirs)`` the optimum's active set.
@@ -309,6 +314,21 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
     f = np.zeros(n)
     mus = np.zeros(nc)
     grad = np.zeros(n)
+    # the last verified-but-not-optimal point, to step back to when a block pivot fails
+    have_prev = False
+    prev_state = state.copy()
+    prev_cact = cact.copy()
+    prev_cdir = cdir.copy()
+    prev_grad = np.zeros(n)
+    prev_kind, prev_idx = -1, -1
+    prev_dirs = cdir.copy()
+    prev_cone_dir = cdir.copy()
+    prev_in = np.zeros(nc, dtype=np.bool_)
+    prev_out = np.zeros(nc, dtype=np.bool_)
+    last_was_block = False
+    best_ninf = n + nc + 1
+    patience = 3
+    blocks_ok = True
     for it in range(max_pivots):
         for h in range(it):
             same = True
@@ -332,6 +352,14 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
                 if cact[k] and mus[k] < 0.0:
                     cact[k] = False
             continue
+        if code == SINGULAR and have_prev and last_was_block:
+            # the block pivot fixed too much: step back and change only the worst violation
+            state, cact = _single_pivot(prev_state, prev_cact, prev_grad, prev_kind, prev_idx,
+                                        prev_in, prev_out, neq, nc, n)
+            cdir = _next_dirs(prev_in, prev_cone_dir, prev_dirs, nc)
+            last_was_block = False
+            blocks_ok = False  # from now on one change at a time (finite for strictly convex QPs)
+            continue
         if code != OK:
             return code, f, mus, grad, state, cact, cdir
         (vcode, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind,
@@ -341,6 +369,31 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
             return FOUND, f, mus, grad, state, cact, dirs
         if vcode != KKT_PIVOT:
             return 20 + vcode, f, mus, grad, state, cact, cdir
+        have_prev = True
+        prev_state[:] = state
+        prev_cact[:] = cact
+        prev_grad[:] = grad
+        prev_kind, prev_idx = worst_kind, worst_idx
+        prev_dirs[:] = dirs
+        prev_cone_dir[:] = cone_dir
+        prev_in[:] = cone_in
+        prev_out[:] = cone_out
+        ninf = 0
+        for i in range(n):
+            ninf += release[i] + to_lower[i] + to_upper[i]
+        for k in range(nc):
+            ninf += cone_in[k] + cone_out[k]
+        if not blocks_ok:
+            block = False
+        elif ninf < best_ninf:
+            best_ninf = ninf
+            patience = 3
+            block = True
+        elif patience > 0:
+            patience -= 1
+            block = True
+        else:
+            block = False
         new_state = state.copy()
         n_in = 0
         n_out = 0
@@ -356,44 +409,67 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
                 new_state[i] = 1
             if to_upper[i]:
                 new_state[i] = 2
-        need = neq + n_act - n_out + n_in
-        if n - np.count_nonzero(new_state) < need:
-            # the block pivot would fix too many cables: change only the worst violation and, if
-            # still too few cables are free, free the least binding fixed ones (a simplex-like swap)
-            new_state = state.copy()
-            if worst_kind == 1 or worst_kind == 2:
-                new_state[worst_idx] = worst_kind
-                cone_in[:] = False
-                cone_out[:] = False
-                n_in = 0
-                n_out = 0
-            elif worst_kind == 0:
-                new_state[worst_idx] = 0
-            need = neq + n_act - n_out + n_in
-            n_fixed = 0
-            for i in range(n):
-                if new_state[i] != 0 and i != worst_idx:
-                    n_fixed += 1
-            fixed = np.empty(n_fixed, dtype=np.int64)
-            lam = np.empty(n_fixed)
-            t = 0
-            for i in range(n):
-                if new_state[i] != 0 and i != worst_idx:
-                    fixed[t] = i
-                    lam[t] = grad[i] if new_state[i] == 1 else -grad[i]
-                    t += 1
-            order = np.argsort(lam, kind="mergesort")
-            for t in range(n_fixed):
-                if n - np.count_nonzero(new_state) >= need:
-                    break
-                new_state[fixed[order[t]]] = 0
-        state = new_state
-        for k in range(nc):
-            if cone_out[k]:
-                cact[k] = False
-            if cone_in[k]:
-                cact[k] = True
-                cdir[k] = cone_dir[k]
-            else:
-                cdir[k] = dirs[k]
+        if block and n - np.count_nonzero(new_state) >= neq + n_act - n_out + n_in:
+            state = new_state
+            for k in range(nc):
+                if cone_out[k]:
+                    cact[k] = False
+                if cone_in[k]:
+                    cact[k] = True
+            last_was_block = True
+        else:
+            state, cact = _single_pivot(state, cact, grad, worst_kind, worst_idx, cone_in, cone_out,
+                                        neq, nc, n)
+            last_was_block = False
+        cdir = _next_dirs(cone_in, cone_dir, dirs, nc)
     return PIVOT_LIMIT, f, mus, grad, state, cact, cdir
+
+
+@njit(cache=True, nogil=True)
+def _next_dirs(cone_in, cone_dir, dirs, nc):
+    out = dirs.copy()
+    for k in range(nc):
+        if cone_in[k]:
+            out[k] = cone_dir[k]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _single_pivot(state, cact, grad, worst_kind, worst_idx, cone_in, cone_out, neq, nc, n):
+    """Change only the worst violation (a bound: fix it, and no cone change; a multiplier of the
+    wrong sign: free it, with the cone changes); then, if too few cables are free for the equations,
+    free the least binding fixed ones (a simplex-like swap)."""
+    new_state = state.copy()
+    new_cact = cact.copy()
+    bounds_move = worst_kind == 1 or worst_kind == 2
+    if bounds_move:
+        new_state[worst_idx] = worst_kind
+    elif worst_kind == 0:
+        new_state[worst_idx] = 0
+    n_act = 0
+    for k in range(nc):
+        if not bounds_move:
+            if cone_out[k]:
+                new_cact[k] = False
+            if cone_in[k]:
+                new_cact[k] = True
+        n_act += new_cact[k]
+    need = neq + n_act
+    n_fixed = 0
+    for i in range(n):
+        if new_state[i] != 0 and i != worst_idx:
+            n_fixed += 1
+    fixed = np.empty(n_fixed, dtype=np.int64)
+    lam = np.empty(n_fixed)
+    t = 0
+    for i in range(n):
+        if new_state[i] != 0 and i != worst_idx:
+            fixed[t] = i
+            lam[t] = grad[i] if new_state[i] == 1 else -grad[i]
+            t += 1
+    order = np.argsort(lam, kind="mergesort")
+    for t in range(n_fixed):
+        if n - np.count_nonzero(new_state) >= need:
+            break
+        new_state[fixed[order[t]]] = 0
+    return new_state, new_cact

@@ -1,8 +1,9 @@
 r"""Exact reference back-end: Clarabel's interior-point method on the second-order-cone program.
 
 Each cone :math:`\|F_\perp\| \le \tan\rho^*\, a^T F` is the cone
-:math:`(\tan\rho^*\,a^T F,\; e_1^T F,\; e_2^T F) \in \mathcal{Q}^3`. Clarabel is an optional dependency
-(``pip install mcdm-pin[reference]``).
+:math:`(\tan\rho^*\,a^T F,\; e_1^T F,\; e_2^T F) \in \mathcal{Q}^3`.
+Clarabel is a dependency: besides serving as the exact reference, it answers the rare instants on
+which ProxQP stalls (:meth:`~mcdm_pin.solvers.proxqp_.ProxQPSolver._solve_fallback`).
 """
 
 from __future__ import annotations

@@ -60,15 +60,18 @@ class ProxQPSolver(Solver):
             answer is used only when it passes the full KKT check, ProxQP is run otherwise.
         eps_infeasible: ProxQP's primal/dual infeasibility tolerances (first attempt).
         max_iter_retry: iteration limit of the re-run from a feasible point (see ``_solve_qp``).
+        fallback: when ProxQP stalls or its answer is inaccurate, solve the exact cone program with
+            Clarabel (``_solve_fallback``).
     """
 
     name = "proxqp"
 
     def __init__(self, eps_abs: float = 1e-11, eps_rel: float = 1e-12, max_iter: int = 1000, cone_tol_deg: float = 1e-7,
                  max_rounds: int = 200, cuts_per_cone: int = 24, warm_start: bool = True,
-                 keep_cuts: bool = True, eps_infeasible: float = 1e-7, max_iter_retry: int = 50_000,
-                 active_set: bool = True):
+                 keep_cuts: bool = True, eps_infeasible: float = 1e-7, max_iter_retry: int = 5_000,
+                 active_set: bool = True, fallback: bool = True):
         self.active_set = active_set
+        self.fallback = fallback
         self.eps_abs, self.eps_rel = eps_abs, eps_rel
         self.max_iter, self.max_iter_retry = max_iter, max_iter_retry
         self.eps_infeasible = eps_infeasible
@@ -79,7 +82,7 @@ class ProxQPSolver(Solver):
     def fresh(self) -> "ProxQPSolver":
         return ProxQPSolver(self.eps_abs, self.eps_rel, self.max_iter, self.cone_tol_deg, self.max_rounds,
                             self.cuts_per_cone, self.warm_start, self.keep_cuts, self.eps_infeasible,
-                            self.max_iter_retry, self.active_set)
+                            self.max_iter_retry, self.active_set, self.fallback)
 
     def reset(self) -> None:
         self._warm = None
@@ -149,6 +152,8 @@ class ProxQPSolver(Solver):
                 return Solution(f, OPTIMAL, qp.objective(f), 0, 0, "")
         self._guess = None
         sol, mult = self._solve_proxqp(qp)
+        if sol.status in (MAX_ITER, INACCURATE) and self.fallback:
+            sol, mult = self._solve_fallback(qp, sol)
         if self.active_set and self._guess is None and sol.status == OPTIMAL:
             # ProxQP's multipliers of the bound rows: z > 0 at an upper, z < 0 at a lower bound
             z = self._last_z[:qp.n] if self._last_z is not None else None
@@ -170,6 +175,30 @@ class ProxQPSolver(Solver):
                     f = np.clip(f, qp.lb, qp.ub)
                     sol = Solution(f, OPTIMAL, qp.objective(f), sol.iterations, sol.rounds, sol.message)
         return sol
+
+    def _solve_fallback(self, qp: QPData, failed: Solution):
+        """ProxQP stalled (seen on ~1 in 100 generated robots: its iteration limit after 51k
+        iterations on a positive semidefinite objective with a large flat subspace): solve the exact
+        cone program with Clarabel's interior-point method instead. The answer is then polished and
+        checked like any other."""
+        from .clarabel_ import ClarabelSolver
+
+        sol = ClarabelSolver().solve(qp)
+        why = f"ProxQP failed ({failed.message}); answered by Clarabel"
+        if sol.status != OPTIMAL:
+            return Solution(sol.f, sol.status, sol.objective, failed.iterations + sol.iterations,
+                            failed.rounds, f"{why}: {sol.message}"), {}
+        mult = {}
+        if qp.cones:
+            G, g, axis, tan, _ = qp.cone_arrays()
+            F = g + G @ sol.f
+            along = np.einsum("ka,ka->k", axis, F)
+            perp = np.linalg.norm(F - along[:, None] * axis, axis=1)
+            # a cone on its surface (within 1e-7 relative) is taken as binding for the polish guess
+            mult = {c.joint: 1.0 for c, a_, p_, t in zip(qp.cones, along, perp, tan)
+                    if p_ >= t * a_ * (1 - 1e-7)}
+        return Solution(sol.f, OPTIMAL, sol.objective, failed.iterations + sol.iterations,
+                        failed.rounds, why), mult
 
     def _solve_proxqp(self, qp: QPData):
         n = qp.n
