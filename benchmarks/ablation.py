@@ -26,18 +26,8 @@ import numpy as np
 from mcdm_pin import InverseDynamics, Robot, TermsEvaluator, load_trajectory
 from mcdm_pin.solvers import ProxQPSolver
 
-CASPR = Path(__file__).resolve().parents[2] / "shared" / "reference" / "caspr"
-
-
-def neck(tmp: Path) -> Path:
-    from mcdm_pin.caspr import import_caspr
-
-    d = CASPR / "8S_neck"
-    if not d.is_dir():
-        sys.exit(f"no CASPR reference data at {d}: pass --robot")
-    import_caspr(d / "8S_neck_bodies.xml", d / "8S_neck_cables.xml", tmp,
-                 trajectories_xml=d / "8S_neck_trajectories.xml")
-    return tmp / "8S_neck.yaml"
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import DEFAULT_CASPR as CASPR, import_neck  # noqa: E402
 
 
 def main(argv=None):
@@ -49,7 +39,7 @@ def main(argv=None):
     p.add_argument("--repeat", type=int, default=3)
     args = p.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
-        path = Path(args.robot) if args.robot else neck(Path(tmp))
+        path = Path(args.robot) if args.robot else import_neck(CASPR, Path(tmp)).sidecar
         robot = Robot.load(path)
         traj = load_trajectory(robot, args.trajectory)
         alpha = {j: args.alpha for j in robot.joint_names}

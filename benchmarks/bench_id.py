@@ -36,9 +36,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
-import subprocess
 import sys
 import tempfile
 import time
@@ -47,54 +44,21 @@ from pathlib import Path
 
 import numpy as np
 
-REPO = Path(__file__).resolve().parents[1]
-DEFAULT_CASPR = REPO.parent / "shared" / "reference" / "caspr"
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import DEFAULT_CASPR, REPO, import_neck, machine, neck_case_options  # noqa: E402
 PEERS = ("clarabel", "cvxpy", "slsqp", "ipopt")
 # correctness check: objective relative to the reference, relative EOM residual, bounds (N), cones (deg)
 CHECK = dict(obj_rtol=1e-6, obj_atol=1e-8, eom_rtol=1e-7, bound_tol=1e-6, cone_tol_deg=1e-3)
 
 
 # ------------------------------------------------------------------------------------- the robots
-def machine() -> dict:
-    model = platform.processor() or "unknown CPU"
-    try:
-        out = subprocess.run(["lscpu"], capture_output=True, text=True, timeout=10).stdout
-        for line in out.splitlines():
-            if line.startswith("Model name:"):
-                model = line.split(":", 1)[1].strip()
-    except (OSError, subprocess.SubprocessError):
-        pass
-    versions = {}
-    for mod in ("pinocchio", "proxsuite", "clarabel", "cvxpy", "scipy", "numpy", "cyipopt"):
-        try:
-            versions[mod] = __import__(mod).__version__
-        except Exception:  # noqa: BLE001 - not installed or no version
-            pass
-    try:
-        load = os.getloadavg()[0]
-    except OSError:
-        load = float("nan")
-    return dict(cpu=model, nproc=os.cpu_count(), python=platform.python_version(), versions=versions,
-                load_avg_1min=round(load, 2))
-
-
 def load_case_setup(robot_spec: str, tmp: Path, caspr: Path, trajectory: str | None):
     """(robot, trajectory, {case: for_case keyword arguments}, label)."""
     from mcdm_pin import Robot, load_trajectory
 
     if robot_spec == "neck":
-        from mcdm_pin.caspr import import_caspr
-
-        d = caspr / "8S_neck"
-        if not (d / "8S_neck_bodies.xml").is_file():
-            raise SystemExit(f"bench_id: CASPR neck model not found in {d} (use --caspr DIR)")
-        imp = import_caspr(d / "8S_neck_bodies.xml", d / "8S_neck_cables.xml", tmp / "neck",
-                           trajectories_xml=d / "8S_neck_trajectories.xml",
-                           trajectory_ids=[trajectory or "roll"])
-        robot = Robot.load(imp.sidecar)
-        J = robot.joint_names
-        base = dict(alpha={j: 0.125 for j in J}, beta={j: 0.0 for j in J})  # the paper's settings
-        kw = {1: {}, 2: dict(base), 3: dict(base, cones={j: 15.0 for j in J})}
+        robot = Robot.load(import_neck(caspr, tmp / "neck", [trajectory or "roll"]).sidecar)
+        kw = neck_case_options(robot.joint_names)  # the paper's settings
         return robot, load_trajectory(robot, trajectory or "roll"), kw, "neck (8S, 76 cables)"
     path = REPO / "robots" / "two_link_sr.yaml" if robot_spec == "two_link" else Path(robot_spec)
     robot = Robot.load(path)

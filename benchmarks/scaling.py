@@ -307,7 +307,7 @@ def main(argv=None) -> int:
                  args.instants, args.repeat)
     result["wall_s"] = time.perf_counter() - t0
     sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from bench_id import machine
+    from _common import machine
     result["machine"] = machine()
     print()
     print(markdown(result))

@@ -17,42 +17,25 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
-DEFAULT_CASPR = Path(__file__).resolve().parents[2] / "shared/reference/caspr"
-
-
-def machine() -> str:
-    model = platform.processor() or "unknown CPU"
-    try:
-        out = subprocess.run(["lscpu"], capture_output=True, text=True, timeout=10).stdout
-        for line in out.splitlines():
-            if line.startswith("Model name:"):
-                model = line.split(":", 1)[1].strip()
-    except (OSError, subprocess.SubprocessError):
-        pass
-    return f"{model}, {os.cpu_count()} cores (nproc), Python {platform.python_version()}"
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import DEFAULT_CASPR, import_neck, machine_line, neck_case_options  # noqa: E402
 
 
 def examples(caspr: Path, out: Path):
     from mcdm_pin import Robot, load_trajectory
     from mcdm_pin.caspr import import_caspr
 
-    sr_dir, neck_dir = caspr / "SR_model", caspr / "8S_neck"
+    sr_dir = caspr / "SR_model"
     sr = Robot.load(import_caspr(sr_dir / "SR_model_bodies.xml", sr_dir / "SR_model_cables.xml", out / "sr",
                                  trajectories_xml=sr_dir / "SR_model_trajectories.xml", name="sr").sidecar)
-    neck = Robot.load(import_caspr(neck_dir / "8S_neck_bodies.xml", neck_dir / "8S_neck_cables.xml",
-                                   out / "neck", trajectories_xml=neck_dir / "8S_neck_trajectories.xml",
-                                   trajectory_ids=["roll"]).sidecar)
-    J = neck.joint_names
-    neck_kw = dict(alpha={j: 1 / 8 for j in J}, beta={j: 0.0 for j in J}, cones={j: 15.0 for j in J})
+    neck = Robot.load(import_neck(caspr, out / "neck", ["roll"]).sidecar)
+    neck_kw = neck_case_options(neck.joint_names)[3]
     return [("2-link, trajectory 1", sr, load_trajectory(sr, "SR_trajectory"), {"cones": {"Link_1": 30.0}}),
             ("2-link, trajectory 2", sr, load_trajectory(sr, "SR_trajectory2"), {"cones": {"Link_1": 30.0}}),
             ("neck (8S), roll", neck, load_trajectory(neck, "roll"), neck_kw)]
@@ -106,10 +89,10 @@ def main(argv=None) -> int:
         print(f"table_i: CASPR reference models not found in {caspr}", file=sys.stderr)
         return 2
     rows = run(caspr, args.repeat, tuple(args.solver or ("proxqp", "clarabel")))
-    print(f"Machine: {machine()}; {args.repeat} run(s) per cell.\n")
+    print(f"Machine: {machine_line()}; {args.repeat} run(s) per cell.\n")
     print(markdown(rows))
     if args.json:
-        Path(args.json).write_text(json.dumps({"machine": machine(), "repeat": args.repeat, "rows": rows},
+        Path(args.json).write_text(json.dumps({"machine": machine_line(), "repeat": args.repeat, "rows": rows},
                                               indent=2))
         print(f"\nwrote {args.json}")
     return 0

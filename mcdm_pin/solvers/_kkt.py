@@ -14,12 +14,13 @@ from numba import njit
 # eq_solve codes
 OK, SINGULAR, NO_CONVERGENCE, DROP, VANISHED = 0, 1, 2, 3, 5
 # verify codes
-KKT_OPTIMAL, KKT_PIVOT, KKT_EOM, KKT_NAPPE, KKT_STATIONARY = 0, 1, -1, -2, -3
+KKT_OPTIMAL, KKT_PIVOT, KKT_EOM, KKT_NAPPE, KKT_STATIONARY, KKT_SURFACE = 0, 1, -1, -2, -3, -4
 # active_set_solve codes (besides OPTIMAL = 0 and the eq_solve / verify failures, shifted)
 FOUND, CYCLE, PIVOT_LIMIT = 0, 10, 11
 REASONS = {SINGULAR: "singular KKT system", NO_CONVERGENCE: "Newton steps on the cone surfaces did not converge",
            VANISHED: "a cone's force vanished", 20 + KKT_EOM: "equation of motion not met",
            20 + KKT_NAPPE: "a cone's force on the wrong nappe", 20 + KKT_STATIONARY: "not stationary",
+           20 + KKT_SURFACE: "a held cone's force off its surface",
            CYCLE: "the active set cycles", PIVOT_LIMIT: "no verified point within the pivot limit"}
 
 
@@ -42,6 +43,20 @@ def _kkt_solve(K, rhs, square):
             sol[:] = np.nan
             break
     return sol
+
+
+@njit(cache=True, nogil=True)
+def _on_surfaces(f, G, gc, ax, tn, act, tol):
+    """Every cone of ``act`` has ``| |F_perp| - tan a.F | <= tol |F|`` at ``f``."""
+    for s in range(act.shape[0]):
+        k = act[s]
+        F = gc[k] + G[k] @ f
+        al = ax[k, 0] * F[0] + ax[k, 1] * F[1] + ax[k, 2] * F[2]
+        p0, p1, p2 = F[0] - al * ax[k, 0], F[1] - al * ax[k, 1], F[2] - al * ax[k, 2]
+        perp = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+        if not abs(perp - tn[k] * al) <= tol * np.sqrt(F[0] * F[0] + F[1] * F[1] + F[2] * F[2]):
+            return False
+    return True
 
 
 @njit(cache=True, nogil=True)
@@ -178,7 +193,11 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
             for p in range(nf):
                 dx += (sol[p] - x_prev[p]) ** 2
                 xx += sol[p] ** 2
-            if np.sqrt(dx) <= step_tol * (1.0 + np.sqrt(xx)):
+            step = np.sqrt(dx) / (1.0 + np.sqrt(xx))
+            # converged: a step below step_tol, or, on an ill-conditioned system whose rounding floor
+            # is above it, a step below 1e-8 with every held cone on its surface to 1e-11 of |F|
+            # (the KKT check that follows decides in both cases)
+            if step <= step_tol or (step <= 1e-8 and _on_surfaces(f, G, gc, ax, tn, act, 1e-11)):
                 converged = True
                 break
         for p in range(nf):
@@ -241,6 +260,8 @@ def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, pr
         if cact[k]:
             if al <= 0.0:
                 return KKT_NAPPE, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, -1, -1
+            if not abs(perp - tn[k] * al) <= 1e-10 * np.sqrt(F[0] * F[0] + F[1] * F[1] + F[2] * F[2]):
+                return KKT_SURFACE, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, -1, -1
             if mus[k] < 0.0:
                 cone_out[k] = True
             # d/df |F_perp| = n^T G with n = F_perp / |F_perp| (the caller never holds a cone
@@ -360,8 +381,10 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
             last_was_block = False
             blocks_ok = False  # from now on one change at a time (finite for strictly convex QPs)
             continue
-        if code != OK:
+        if code != OK and code != NO_CONVERGENCE:
             return code, f, mus, grad, state, cact, cdir
+        # Newton steps that did not settle still say which cables and cones to exchange; the point
+        # itself is accepted only if it passes the full KKT check like any other
         (vcode, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind,
          worst_idx) = verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus,
                              primal_tol, dual_tol, eom_tol)

@@ -61,9 +61,13 @@ class ActiveSet:
             F = gc + G @ f
             perp = F - np.einsum("ka,ka->k", ax, F)[:, None] * ax
             norm = np.sqrt(np.einsum("ka,ka->k", perp, perp))
+            along = np.einsum("ka,ka->k", ax, F)
+            tan = qp.cone_arrays()[3]
             for k, cone in enumerate(qp.cones):
                 mult = cone_mult.get(cone.joint, 0.0)
-                if mult > 0 and norm[k] > 0:
+                # binding: a positive multiplier and the force on the cone's surface (a cutting-plane
+                # solver reports tiny positive multipliers on cuts of cones that do not bind)
+                if mult > 0 and norm[k] > 0 and norm[k] >= tan[k] * along[k] * (1.0 - tol):
                     cones[cone.joint] = (perp[k] / norm[k], mult)
         return cls(np.flatnonzero(near_l), np.flatnonzero(near_u), cones)
 

@@ -1,0 +1,64 @@
+"""What the benchmark scripts share: the machine description and the CASPR neck with the paper's
+settings (imported in place from ../shared/reference/caspr into a temporary folder)."""
+
+from __future__ import annotations
+
+import os
+import platform
+import subprocess
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+DEFAULT_CASPR = REPO.parent / "shared" / "reference" / "caspr"
+
+
+def cpu_model() -> str:
+    """``lscpu``'s model name (``platform.processor()`` when lscpu is missing)."""
+    model = platform.processor() or "unknown CPU"
+    try:
+        out = subprocess.run(["lscpu"], capture_output=True, text=True, timeout=10).stdout
+        for line in out.splitlines():
+            if line.startswith("Model name:"):
+                model = line.split(":", 1)[1].strip()
+    except (OSError, subprocess.SubprocessError):
+        pass
+    return model
+
+
+def machine() -> dict:
+    """CPU, cores, Python, the relevant package versions and the 1-minute load average."""
+    versions = {}
+    for mod in ("pinocchio", "proxsuite", "numba", "clarabel", "cvxpy", "scipy", "numpy", "cyipopt"):
+        try:
+            versions[mod] = __import__(mod).__version__
+        except Exception:  # noqa: BLE001 - not installed or no version
+            pass
+    try:
+        load = os.getloadavg()[0]
+    except OSError:
+        load = float("nan")
+    return dict(cpu=cpu_model(), nproc=os.cpu_count(), python=platform.python_version(), versions=versions,
+                load_avg_1min=round(load, 2))
+
+
+def machine_line() -> str:
+    m = machine()
+    return f"{m['cpu']}, {m['nproc']} cores (nproc), Python {m['python']}"
+
+
+def import_neck(caspr: Path, out: Path, trajectory_ids=None):
+    """Import CASPR's 8S neck from ``caspr/8S_neck`` into ``out``; returns the import (``.sidecar``)."""
+    from mcdm_pin.caspr import import_caspr
+
+    d = Path(caspr) / "8S_neck"
+    if not (d / "8S_neck_bodies.xml").is_file():
+        raise SystemExit(f"CASPR neck model not found in {d} (give the CASPR folder, e.g. --caspr DIR)")
+    return import_caspr(d / "8S_neck_bodies.xml", d / "8S_neck_cables.xml", out,
+                        trajectories_xml=d / "8S_neck_trajectories.xml", trajectory_ids=trajectory_ids)
+
+
+def neck_case_options(joint_names) -> dict:
+    """The paper's neck settings per case: alpha = 1/8 and beta = 0 on every joint (cases 2 and 3),
+    15 deg cones on every joint (case 3)."""
+    base = dict(alpha={j: 0.125 for j in joint_names}, beta={j: 0.0 for j in joint_names})
+    return {1: {}, 2: dict(base), 3: dict(base, cones={j: 15.0 for j in joint_names})}
