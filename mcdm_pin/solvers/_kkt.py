@@ -14,12 +14,12 @@ from numba import njit
 # eq_solve codes
 OK, SINGULAR, NO_CONVERGENCE, DROP, VANISHED = 0, 1, 2, 3, 5
 # verify codes
-KKT_OPTIMAL, KKT_PIVOT, KKT_EOM, KKT_NAPPE, KKT_STATIONARY, KKT_SURFACE = 0, 1, -1, -2, -3, -4
+KKT_OPTIMAL, KKT_PIVOT, KKT_EOM, KKT_STATIONARY, KKT_SURFACE = 0, 1, -1, -3, -4
 # active_set_solve codes (besides OPTIMAL = 0 and the eq_solve / verify failures, shifted)
 FOUND, CYCLE, PIVOT_LIMIT = 0, 10, 11
 REASONS = {SINGULAR: "singular KKT system", NO_CONVERGENCE: "Newton steps on the cone surfaces did not converge",
            VANISHED: "a cone's force vanished", 20 + KKT_EOM: "equation of motion not met",
-           20 + KKT_NAPPE: "a cone's force on the wrong nappe", 20 + KKT_STATIONARY: "not stationary",
+           20 + KKT_STATIONARY: "not stationary",
            20 + KKT_SURFACE: "a held cone's force off its surface",
            CYCLE: "the active set cycles", PIVOT_LIMIT: "no verified point within the pivot limit"}
 
@@ -60,10 +60,16 @@ def _on_surfaces(f, G, gc, ax, tn, act, tol):
 
 
 @njit(cache=True, nogil=True)
-def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, step_tol):
+def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, step_tol, reg):
     """Minimise ``1/2 f^T H f + g^T f`` with ``A f = b``, the cables of ``state`` fixed at their
     bounds and the cones of ``cact`` held on their surface (Newton steps with the cones' curvature
     weighted by their multipliers).
+
+    ``reg`` > 0 is added to the free cables' diagonal (a Tikhonov term ``reg/2 |f_free|^2``): with a
+    positive semidefinite objective whose optimum is a flat ridge (case 2 with ``beta = 0``) the
+    system is otherwise singular and its solution arbitrary along the ridge; with it, the point of
+    the ridge nearest the origin. The KKT check of the original problem decides whether the point is
+    accepted (its stationarity residual ``reg |f|`` is ~1e-12 of the gradient's scale).
 
     Returns ``(code, f, y, mus, dirs)``: ``mus`` (nc,) the active cones' multipliers (0 elsewhere),
     ``dirs`` (nc, 3) their surface directions at ``f``.
@@ -119,6 +125,7 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
             i = free[p]
             for q in range(nf):
                 K[p, q] = H[i, free[q]]
+            K[p, p] += reg
             for r in range(neq):
                 K[p, nf + r] = A[r, i]
                 K[nf + r, p] = A[r, i]
@@ -252,16 +259,18 @@ def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, pr
     for i in range(n):
         gscale = max(gscale, abs(obj_grad[i]), abs(Aty[i]))
         grad[i] = obj_grad[i] + Aty[i]
+    off_surface = False
     for k in range(nc):
         F = gc[k] + G[k] @ f
         al = ax[k, 0] * F[0] + ax[k, 1] * F[1] + ax[k, 2] * F[2]
         p0, p1, p2 = F[0] - al * ax[k, 0], F[1] - al * ax[k, 1], F[2] - al * ax[k, 2]
         perp = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
         if cact[k]:
-            if al <= 0.0:
-                return KKT_NAPPE, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, -1, -1
+            if al <= 0.0:  # held on the wrong nappe (F pulls the ball out): let the cone go
+                cone_out[k] = True
+                continue
             if not abs(perp - tn[k] * al) <= 1e-10 * np.sqrt(F[0] * F[0] + F[1] * F[1] + F[2] * F[2]):
-                return KKT_SURFACE, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, -1, -1
+                off_surface = True  # Newton did not settle: exchanges still apply, no acceptance
             if mus[k] < 0.0:
                 cone_out[k] = True
             # d/df |F_perp| = n^T G with n = F_perp / |F_perp| (the caller never holds a cone
@@ -278,9 +287,10 @@ def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, pr
                 cone_dir[k, 0], cone_dir[k, 1], cone_dir[k, 2] = p0 / perp, p1 / perp, p2 / perp
             else:
                 cone_dir[k] = basis0[k]
+    stationary = True
     for i in range(n):
         if state[i] == 0 and abs(grad[i]) > 1e-8 * gscale:
-            return KKT_STATIONARY, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, -1, -1
+            stationary = False
     any_change = False
     worst_kind, worst_idx, worst = -1, -1, -np.inf
     for i in range(n):
@@ -305,13 +315,18 @@ def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, pr
         if cone_in[k] or cone_out[k]:
             any_change = True
     if not any_change:
-        return KKT_OPTIMAL, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, -1, -1
+        # nothing to exchange: a KKT point if stationary on the free cables (a pending exchange
+        # comes first: far from the optimum a regularised solve is not stationary)
+        code = KKT_OPTIMAL if stationary else KKT_STATIONARY
+        if off_surface:
+            code = KKT_SURFACE
+        return code, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, -1, -1
     return KKT_PIVOT, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind, worst_idx
 
 
 @njit(cache=True, nogil=True)
 def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
-                     max_newton, step_tol, primal_tol, dual_tol, eom_tol):
+                     max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg):
     """Block principal pivoting from the guess ``(state0, cact0, cdir0)`` until a verified KKT point
     (see :func:`mcdm_pin.solvers.active_set.try_active_set`).
 
@@ -367,7 +382,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
         hist_s[it] = state
         hist_c[it] = cact
         code, f, y, mus, dirs = eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir,
-                                         max_newton, step_tol)
+                                         max_newton, step_tol, reg)
         if code == DROP:  # a cone pulls the force inwards: it is not active
             for k in range(nc):
                 if cact[k] and mus[k] < 0.0:

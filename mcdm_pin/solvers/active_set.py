@@ -31,6 +31,7 @@ from . import _kkt as K
 _PRIMAL_TOL = 1e-12  # bounds: |violation| <= tol * (1 + |bound|)
 _DUAL_TOL = 1e-9  # multipliers: >= -tol * gradient scale
 _EOM_TOL = 1e-11  # equation of motion, relative
+_REG = 1e-12  # Tikhonov term on the free cables, relative to the objective's scale (see _kkt.eq_solve)
 _STEP_TOL = 1e-10  # Newton step for cones, relative (the KKT solve's rounding floor is ~1e-11)
 
 
@@ -94,9 +95,11 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 12, max_newto
         if name in guess.cones:
             cact[k] = True
             cdir[k] = guess.cones[name][0]
+    reg = _REG * max(float(np.abs(qp.H).max(initial=0.0)),
+                     float(np.abs(qp.c).max(initial=0.0)) / (1.0 + float(np.abs(qp.ub[np.isfinite(qp.ub)]).max(initial=0.0))))
     code, f, mus, grad, state, cact, dirs = K.active_set_solve(
         qp.H, qp.c, qp.A, qp.b, qp.lb, qp.ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots,
-        max_newton, _STEP_TOL, _PRIMAL_TOL, _DUAL_TOL, _EOM_TOL)
+        max_newton, _STEP_TOL, _PRIMAL_TOL, _DUAL_TOL, _EOM_TOL, reg)
     if code != K.FOUND:
         return _miss(K.REASONS[code])
     active = np.flatnonzero(cact)
