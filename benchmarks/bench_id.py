@@ -440,7 +440,8 @@ def time_ours(robot, traj, case, kw, repeat: int):
 
     ident = InverseDynamics.for_case(robot, case, **kw)
     model, solve, total, bad = [], [], [], 0
-    ident.solve_trajectory(traj.subsample(min(len(traj), 5)), progress=False)  # warm-up (imports, caches)
+    # warm-up: one untimed pass (imports, compiled kernels loaded from numba's cache, CPU caches)
+    ident.solve_trajectory(traj, progress=False)
     for _ in range(repeat):
         res = ident.solve_trajectory(traj, progress=False)
         ok = res.found

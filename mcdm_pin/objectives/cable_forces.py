@@ -29,8 +29,15 @@ class MinCableForces(Objective):
 
     def quadratic(self, terms, context) -> Quadratic:
         m = terms.L.shape[0]
-        w = np.ones(m) if self.weights is None else self.weights
-        return Quadratic(np.diag(w), np.zeros(m), 0.0)
+        cached = getattr(self, "_cached", None)
+        if cached is None or cached.c.shape != (m,):
+            # the same at every instant: built once, read-only
+            w = np.ones(m) if self.weights is None else self.weights
+            P, c = np.diag(w), np.zeros(m)
+            P.setflags(write=False)
+            c.setflags(write=False)
+            cached = self._cached = Quadratic(P, c, 0.0)
+        return cached
 
     def __repr__(self) -> str:
         return "MinCableForces()" if self.weights is None else f"MinCableForces({self.weights.tolist()})"

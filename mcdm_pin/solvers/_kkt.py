@@ -326,7 +326,7 @@ def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, pr
 
 @njit(cache=True, nogil=True)
 def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
-                     max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg):
+                     max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel):
     """Block principal pivoting from the guess ``(state0, cact0, cdir0)`` until a verified KKT point
     (see :func:`mcdm_pin.solvers.active_set.try_active_set`).
 
@@ -335,11 +335,25 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
     system (too many cables fixed for the equation of motion), only the worst violation changes
     (Judice and Pires' safeguard).
 
-    Returns ``(code, f, mus, grad, state, cact, dirs)``: ``code`` :data:`FOUND` or a key of
-    :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers, ``grad`` the bounds'
-    multipliers and ``(state, cact, dirs)`` the optimum's active set.
+    ``reg_rel``: the Tikhonov term of :func:`eq_solve` relative to the objective's scale.
+
+    Returns ``(code, f, mus, grad, state, cact, dirs, next_state)``: ``code`` :data:`FOUND` or a key
+    of :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers, ``grad`` the bounds'
+    multipliers, ``(state, cact, dirs)`` the optimum's active set and ``next_state`` the guess for
+    the next instant (the bounds whose multiplier is not negligible, 1e-12 of the largest).
     """
     n = H.shape[0]
+    hmax = 0.0
+    for i in range(n):
+        for j in range(n):
+            hmax = max(hmax, abs(H[i, j]))
+    gmax = 0.0
+    umax = 0.0
+    for i in range(n):
+        gmax = max(gmax, abs(g[i]))
+        if np.isfinite(ub[i]):
+            umax = max(umax, abs(ub[i]))
+    reg = reg_rel * max(hmax, gmax / (1.0 + umax))
     neq = A.shape[0]
     nc = G.shape[0]
     state = state0.copy()
@@ -378,7 +392,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
                         same = False
                         break
             if same:
-                return CYCLE, f, mus, grad, state, cact, cdir
+                return CYCLE, f, mus, grad, state, cact, cdir, state
         hist_s[it] = state
         hist_c[it] = cact
         code, f, y, mus, dirs = eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir,
@@ -397,16 +411,24 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
             blocks_ok = False  # from now on one change at a time (finite for strictly convex QPs)
             continue
         if code != OK and code != NO_CONVERGENCE:
-            return code, f, mus, grad, state, cact, cdir
+            return code, f, mus, grad, state, cact, cdir, state
         # Newton steps that did not settle still say which cables and cones to exchange; the point
         # itself is accepted only if it passes the full KKT check like any other
         (vcode, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind,
          worst_idx) = verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus,
                              primal_tol, dual_tol, eom_tol)
         if vcode == KKT_OPTIMAL:
-            return FOUND, f, mus, grad, state, cact, dirs
+            gmx = 0.0
+            for i in range(n):
+                gmx = max(gmx, abs(grad[i]))
+            thr = 1e-12 * max(gmx, 1e-300)
+            nxt = state.copy()
+            for i in range(n):
+                if (state[i] == 1 and not grad[i] > thr) or (state[i] == 2 and not grad[i] < -thr):
+                    nxt[i] = 0
+            return FOUND, f, mus, grad, state, cact, dirs, nxt
         if vcode != KKT_PIVOT:
-            return 20 + vcode, f, mus, grad, state, cact, cdir
+            return 20 + vcode, f, mus, grad, state, cact, cdir, state
         have_prev = True
         prev_state[:] = state
         prev_cact[:] = cact
@@ -460,7 +482,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
                                         neq, nc, n)
             last_was_block = False
         cdir = _next_dirs(cone_in, cone_dir, dirs, nc)
-    return PIVOT_LIMIT, f, mus, grad, state, cact, cdir
+    return PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state
 
 
 @njit(cache=True, nogil=True)

@@ -38,11 +38,21 @@ _STEP_TOL = 1e-10  # Newton step for cones, relative (the KKT solve's rounding f
 @dataclass
 class ActiveSet:
     """A guess: index arrays of cables at their lower/upper bound, and per cone joint its surface
-    direction (unit vector of F_perp) and multiplier when it binds."""
+    direction (unit vector of F_perp) and multiplier when it binds. ``state``, when given (the
+    compiled solver's own output), takes the place of ``lower`` and ``upper``."""
 
     lower: np.ndarray
     upper: np.ndarray
     cones: dict = field(default_factory=dict)  # joint -> (direction (3,), multiplier)
+    state: np.ndarray | None = None  # the same as int8 codes per cable (0 free, 1 lower, 2 upper)
+
+    def cable_state(self, n: int) -> np.ndarray:
+        if self.state is not None and self.state.shape == (n,):
+            return self.state
+        state = np.zeros(n, dtype=np.int8)
+        state[self.lower] = 1
+        state[self.upper] = 2
+        return state
 
     @classmethod
     def from_solution(cls, qp: QPData, f: np.ndarray, cone_mult: dict, bound_mult=None,
@@ -83,35 +93,35 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 12, max_newto
     equality-constrained solves; a repeated active set stops it. The loop runs compiled
     (:func:`._kkt.active_set_solve`).
     """
-    n = qp.n
     G, gc, ax, tn, basis0 = qp.cone_arrays()
-    names = [c.joint for c in qp.cones]
-    state = np.zeros(n, dtype=np.int8)
-    state[guess.lower] = 1
-    state[guess.upper] = 2
-    cact = np.zeros(len(names), dtype=np.bool_)
-    cdir = np.zeros((len(names), 3))
-    for k, name in enumerate(names):
-        if name in guess.cones:
-            cact[k] = True
-            cdir[k] = guess.cones[name][0]
-    reg = _REG * max(float(np.abs(qp.H).max(initial=0.0)),
-                     float(np.abs(qp.c).max(initial=0.0)) / (1.0 + float(np.abs(qp.ub[np.isfinite(qp.ub)]).max(initial=0.0))))
-    code, f, mus, grad, state, cact, dirs = K.active_set_solve(
+    state = guess.cable_state(qp.n)
+    if qp.cones:
+        names = [c.joint for c in qp.cones]
+        cact = np.array([nm in guess.cones for nm in names], dtype=np.bool_)
+        cdir = np.array([guess.cones[nm][0] if nm in guess.cones else (0.0, 0.0, 0.0) for nm in names],
+                        dtype=float)
+    else:
+        names, cact, cdir = [], _NO_CONES, _NO_DIRS
+    code, f, mus, grad, state, cact, dirs, nxt_state = K.active_set_solve(
         qp.H, qp.c, qp.A, qp.b, qp.lb, qp.ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots,
-        max_newton, _STEP_TOL, _PRIMAL_TOL, _DUAL_TOL, _EOM_TOL, reg)
+        max_newton, _STEP_TOL, _PRIMAL_TOL, _DUAL_TOL, _EOM_TOL, _REG)
     if code != K.FOUND:
         return _miss(K.REASONS[code])
-    active = np.flatnonzero(cact)
-    mult = {names[k]: float(mus[k]) for k in active}
+    if names:
+        active = np.flatnonzero(cact)
+        mult = {names[k]: float(mus[k]) for k in active}
+        nxt_cones = {names[k]: (dirs[k], float(mus[k])) for k in active if mus[k] > 0}
+    else:
+        mult, nxt_cones = {}, {}
     # the next instant's guess (as ActiveSet.from_solution would find it: bounds whose multiplier is
     # not negligible, cones with a positive multiplier)
-    thr = 1e-12 * max(float(np.abs(grad).max(initial=0.0)), 1e-300)
-    nxt = ActiveSet(np.flatnonzero((state == 1) & (grad > thr)), np.flatnonzero((state == 2) & (grad < -thr)),
-                    {names[k]: (dirs[k], float(mus[k])) for k in active if mus[k] > 0})
+    nxt = ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt_state)
     return f, mult, grad, nxt
 
 
+_NO_CONES = np.zeros(0, dtype=np.bool_)
+_NO_DIRS = np.zeros((0, 3))
+_EMPTY = np.zeros(0, dtype=int)
 MISSES: dict[str, int] = {}  # why guesses were rejected (counts, for profiling)
 
 
