@@ -69,6 +69,23 @@ class InstantResult:
         return self.status in ("optimal", "softened")
 
 
+_COLUMN_TYPES = dict(f=float, status=str, message=str, objective=float, eom_residual=float,
+                     interaction_wrench=float, interaction_force_socket=float, interaction_angle_deg=float,
+                     time_model_s=float, time_solve_s=float, iterations=int, rounds=int, softened_deg=float,
+                     needed_f_max=float, needed_cone_deg=float)
+
+
+def instant_columns(instants: list[InstantResult]) -> dict:
+    """The instants' fields stacked into arrays, one per field (the trajectory-result columns)."""
+    return {name: np.array([getattr(r, name) for r in instants], dtype=dtype)
+            for name, dtype in _COLUMN_TYPES.items()}
+
+
+def concat_columns(parts: list[dict]) -> dict:
+    """Columns of consecutive pieces of a trajectory, joined."""
+    return {name: np.concatenate([p[name] for p in parts]) for name in _COLUMN_TYPES}
+
+
 ARRAY_KEYS = ("t", "q", "qd", "qdd", "f", "status", "message", "objective", "eom_residual",
               "interaction_wrench", "interaction_force_socket", "interaction_angle_deg", "time_model_s",
               "time_solve_s", "iterations", "rounds", "softened_deg", "needed_f_max", "needed_cone_deg")
@@ -110,18 +127,12 @@ class TrajectoryResult:
 
     @classmethod
     def from_instants(cls, rob, traj, instants: list[InstantResult], cone_deg, **meta):
-        def stack(name, dtype=float):
-            return np.array([getattr(r, name) for r in instants], dtype=dtype)
-        return cls(t=traj.t.copy(), q=traj.q.copy(), qd=traj.qd.copy(), qdd=traj.qdd.copy(),
-                   f=stack("f"), status=stack("status", str), message=stack("message", str),
-                   objective=stack("objective"), eom_residual=stack("eom_residual"),
-                   interaction_wrench=stack("interaction_wrench"),
-                   interaction_force_socket=stack("interaction_force_socket"),
-                   interaction_angle_deg=stack("interaction_angle_deg"),
-                   time_model_s=stack("time_model_s"), time_solve_s=stack("time_solve_s"),
-                   iterations=stack("iterations", int), rounds=stack("rounds", int),
-                   softened_deg=stack("softened_deg"), needed_f_max=stack("needed_f_max"),
-                   needed_cone_deg=stack("needed_cone_deg"),
+        return cls.from_columns(rob, traj, instant_columns(instants), cone_deg, **meta)
+
+    @classmethod
+    def from_columns(cls, rob, traj, columns: dict, cone_deg, **meta):
+        """From the per-instant fields stacked into arrays (:func:`instant_columns`)."""
+        return cls(t=traj.t.copy(), q=traj.q.copy(), qd=traj.qd.copy(), qdd=traj.qdd.copy(), **columns,
                    joint_names=np.array(rob.joint_names, dtype=str),
                    cable_names=np.array(rob.cable_names, dtype=str),
                    coordinate_names=np.array(rob.coordinate_names, dtype=str),
