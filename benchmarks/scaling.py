@@ -271,7 +271,7 @@ def document(result: dict, plot_path: str | None) -> str:
             f"along the cables sweep; joint fit t = {c1['joint'][2]:.3g} ms nv^{c1['joint'][0]:.2f} m^{c1['joint'][1]:.2f}.",
             f"- **case 3** total: ~ nv^{c3['vs_dof'][0]:.2f} along the links sweep, ~ m^{c3['vs_cables'][0]:.2f} "
             f"along the cables sweep; joint fit t = {c3['joint'][2]:.3g} ms nv^{c3['joint'][0]:.2f} m^{c3['joint'][1]:.2f}.",
-            f"- The model evaluation (Pinocchio + vectorised cable maps + QP assembly) grows as "
+            f"- The model evaluation (Pinocchio + compiled cable maps + QP assembly) grows as "
             f"~ nv^{f['case1_model']['vs_dof'][0]:.2f} (case 1) and ~ nv^{f['case3_model']['vs_dof'][0]:.2f} "
             f"(case 3) along the links sweep; at the largest robot it is {share(1):.0f}% (case 1) and "
             f"{share(3):.0f}% (case 3) of the time per instant.",

@@ -70,9 +70,7 @@ class InverseDynamics:
         """Cable forces at one state."""
         t0 = time.perf_counter()
         terms = self.evaluate(q, qd, qdd, checked=_checked)
-        # one sum is finite only if every entry is (a sum that overflows is checked entry by entry)
-        if not np.isfinite(terms.tau.sum() + terms.L.sum()) and \
-                not (np.all(np.isfinite(terms.tau)) and np.all(np.isfinite(terms.L))):
+        if not terms.finite and not (np.all(np.isfinite(terms.tau)) and np.all(np.isfinite(terms.L))):
             raise StateError("the dynamics overflow at this state (non-finite M qdd + h or L): check "
                              "the model's masses, lengths and the state's magnitude")
         context = Context(self.robot, f_prev)

@@ -18,23 +18,27 @@ from numba import njit
 
 
 @njit(cache=True, nogil=True)
-def cable_terms(oR, op, J, point_local, point_key, seg_a, seg_b, seg_cable, seg_active,
-                v_ptr, v_idx, a_ptr, a_idx, child_key, n_cables, n_joints):
+def cable_terms(oM, J, point_local, point_key, seg_a, seg_b, seg_cable, seg_active,
+                v_ptr, v_idx, a_ptr, a_idx, child_key, parent_key, R_sp, n_cables, n_joints):
     """Cable geometry, ``L`` and the cables' part of the interaction wrenches in one pass.
 
     Args:
-        oR, op: (K, 3, 3), (K, 3) world placements of the key bodies.
+        oM: (K, 4, 4) world placements (homogeneous) of the key bodies.
         J: (6, nv) world Jacobian columns (spatial velocity at the world origin).
         point_local, point_key: (P, 3) route points in their body's frame, (P,) their body.
         seg_a, seg_b, seg_cable, seg_active: segments (start point, end point, cable, spans bodies).
         v_ptr, v_idx: CSR over key bodies: the velocity columns that move body k.
         a_ptr, a_idx: CSR over key bodies: the physical joints whose subtree holds body k.
-        child_key: (Jn,) key body of each physical joint's child frame.
+        child_key, parent_key: (Jn,) key bodies of each physical joint's child and parent frames.
+        R_sp: (Jn, 3, 3) each socket frame's rotation in its parent's frame.
 
-    Returns ``(X, seg_len, lengths, L, RT, bad)``: world points (P, 3), segment lengths, cable lengths
-    (m,), ``L`` (m, nv), ``RT`` (Jn, 6, m) in each child frame at the joint point, and the index of a
-    zero-length spanning segment (-1 when none).
+    Returns ``(X, seg_len, lengths, L, RT, R_socket, bad)``: world points (P, 3), segment lengths,
+    cable lengths (m,), ``L`` (m, nv), ``RT`` (Jn, 6, m) in each child frame at the joint point, the
+    rotations child frame -> socket frame (Jn, 3, 3), and the index of a zero-length spanning segment
+    (-1 when none; -2 when ``L`` is not finite).
     """
+    oR = oM[:, :3, :3]
+    op = oM[:, :3, 3]
     n_pts = point_local.shape[0]
     nv = J.shape[1]
     X = np.empty((n_pts, 3))
@@ -97,7 +101,24 @@ def cable_terms(oR, op, J, point_local, point_key, seg_a, seg_b, seg_cable, seg_
             for i in range(3):
                 RT[j, i, c] = oR[k, 0, i] * f0 + oR[k, 1, i] * f1 + oR[k, 2, i] * f2
                 RT[j, 3 + i, c] = oR[k, 0, i] * m0 + oR[k, 1, i] * m1 + oR[k, 2, i] * m2
-    return X, seg_len, lengths, L, RT, bad
+    # R_socket = (R_parent R_sp)^T R_child
+    R_socket = np.empty((n_joints, 3, 3))
+    for j in range(n_joints):
+        kp, kc = parent_key[j], child_key[j]
+        for a in range(3):
+            for b in range(3):
+                acc = 0.0
+                for t in range(3):
+                    # (R_parent R_sp)[t, a] = sum_s R_parent[t, s] R_sp[s, a]
+                    rps = oR[kp, t, 0] * R_sp[j, 0, a] + oR[kp, t, 1] * R_sp[j, 1, a] + oR[kp, t, 2] * R_sp[j, 2, a]
+                    acc += rps * oR[kc, t, b]
+                R_socket[j, a, b] = acc
+    if bad < 0:
+        for c in range(n_cables):
+            for v in range(nv):
+                if not np.isfinite(L[c, v]):
+                    bad = -2
+    return X, seg_len, lengths, L, RT, R_socket, bad
 
 
 @njit(cache=True, nogil=True)

@@ -61,6 +61,7 @@ class Terms:
     socket_axes: np.ndarray
     points: np.ndarray
     _evaluator: "TermsEvaluator | None" = field(default=None, repr=False, compare=False)
+    finite: bool = True  # tau and L are finite (the dynamics did not overflow)
     _M: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     # --- M and h on demand: the problem needs only tau = M qdd + h, which RNEA gives directly ----
@@ -162,7 +163,8 @@ class TermsEvaluator:
                 self._point_key.astype(np.int64), robot.seg_a.astype(np.int64),
                 robot.seg_b.astype(np.int64), robot.seg_cable.astype(np.int64),
                 robot.seg_active.astype(np.bool_), *self._v_csr, *self._a_csr,
-                self._child_key.astype(np.int64), int(robot.m), len(js))
+                self._child_key.astype(np.int64), self._parent_key.astype(np.int64),
+                np.ascontiguousarray(self._R_sp, dtype=float), int(robot.m), len(js))
             return
         self._maps = maps = CableMaps(robot, self._point_key, len(keys))
         # end point e moves with column v when its body is in the subtree of v's joint
@@ -195,27 +197,27 @@ class TermsEvaluator:
 
         pin.computeJointJacobians(model, data, qp)
         oMi = np.array([M.homogeneous for M in self._oMi_refs])
-        oR, op = oMi[:, :3, :3], oMi[:, :3, 3]
         # (6, nv): each column's motion in the world frame at the origin (eigenpy gives (6,) if nv = 1)
         J = data.J.reshape(6, -1)
         if self.compiled:
             from .kernels import cable_terms
 
-            X, _, lengths, L, RT, bad = cable_terms(np.ascontiguousarray(oR), np.ascontiguousarray(op),
-                                                    J, *self._kernel_args)
+            X, _, lengths, L, RT, R_socket, bad = cable_terms(oMi, J, *self._kernel_args)
             if bad >= 0:
                 raise StateError(f"cable {r.cables[r.seg_cable[bad]].name!r}: a segment has zero "
                                  f"length at this configuration, so its direction is undefined")
         else:
+            oR, op = oMi[:, :3, :3], oMi[:, :3, 3]
             geo = cable_geometry(r, oR, op, self._maps)
             X, lengths = geo.points, geo.lengths
             RT, L = self._numpy_cable_maps(geo.w, J.copy(), oR, op)
+            R_socket = (oR[self._parent_key] @ self._R_sp).transpose(0, 2, 1) @ oR[self._child_key]
+            bad = -1 if np.all(np.isfinite(L)) else -2
         tau = pin.rnea(model, data, qp, qd, qdd).copy()
         u = np.array([w.vector for w in self._f_refs]).reshape(len(self._child), 6)
-        Rc = oR[self._child_key]
-        R_socket = (oR[self._parent_key] @ self._R_sp).transpose(0, 2, 1) @ Rc
         return Terms(q=q.copy(), qd=qd.copy(), qdd=qdd.copy(), tau=tau, lengths=lengths, L=L, u=u,
-                     RT=RT, R_socket=R_socket, socket_axes=self._axes, points=X, _evaluator=self)
+                     RT=RT, R_socket=R_socket, socket_axes=self._axes, points=X, _evaluator=self,
+                     finite=bad != -2 and bool(np.isfinite(tau.sum())))
 
     def mass_matrix(self, q) -> np.ndarray:
         """(nv, nv) joint-space inertia matrix at ``q`` (CRBA, both triangles filled)."""
