@@ -49,16 +49,19 @@ def run(caspr: Path, repeat: int, solvers=("proxqp", "clarabel")):
         for label, robot, traj, kw in examples(caspr, Path(tmp)):
             for case in (1, 2, 3):
                 for solver in solvers:
-                    times, iters = [], []
+                    times, iters, solves = [], [], []
+                    # warm-up: one untimed run (imports, numba's compiled kernels loaded from its cache)
+                    InverseDynamics.for_case(robot, case, solver=solver, **kw).solve_trajectory(traj, progress=False)
                     for _ in range(repeat):
                         ident = InverseDynamics.for_case(robot, case, solver=solver, **kw)
                         res = ident.solve_trajectory(traj, progress=False)
                         ok = res.found
                         times.append((res.time_model_s + res.time_solve_s)[ok])
+                        solves.append(res.time_solve_s[ok])
                         iters.append(res.iterations[ok])
                     t = np.concatenate(times) * 1e3
                     it = np.concatenate(iters)
-                    solve = np.concatenate([res.time_solve_s[res.found]]) * 1e3
+                    solve = np.concatenate(solves) * 1e3
                     rows.append(dict(example=label, case=case, solver=solver, instants=len(traj),
                                      no_answer=int((~res.found).sum()), mean_ms=float(t.mean()),
                                      std_ms=float(t.std()), solve_mean_ms=float(solve.mean()),

@@ -174,8 +174,8 @@ class Problem:
                 cone_cons.append(con)
             else:
                 general.append(con)
-        lb.setflags(write=False)  # shared by every instant's QPData
-        ub.setflags(write=False)
+        # lb, ub are shared by every instant's QPData (nothing writes into a QP's arrays; not flagged
+        # read-only because numba compiles read-only arrays as a separate specialisation)
         return dict(general=general, eom=eom, lb=lb, ub=ub,
                     cones=ConeBatch(robot, cone_cons) if cone_cons else None)
 

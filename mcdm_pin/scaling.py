@@ -97,7 +97,9 @@ class ScaledSolver(Solver):
             return False
         from .kernels import spread
 
-        return spread(qp.A, qp.b) > self.only_if_worse_than
+        # C order: one compiled specialisation (qp.A is often the transposed view L.T)
+        return spread(np.ascontiguousarray(qp.A, dtype=float), np.ascontiguousarray(qp.b, dtype=float)) \
+            > self.only_if_worse_than
 
     def solve(self, qp: QPData) -> Solution:
         if not self.needs_scaling(qp):

@@ -202,7 +202,7 @@ class TermsEvaluator:
         if self.compiled:
             from .kernels import cable_terms
 
-            X, _, lengths, L, RT, R_socket, bad = cable_terms(oMi, J, *self._kernel_args)
+            X, _, lengths, L, RT, R_socket, bad = cable_terms(oMi, np.asfortranarray(J), *self._kernel_args)
             if bad >= 0:
                 raise StateError(f"cable {r.cables[r.seg_cable[bad]].name!r}: a segment has zero "
                                  f"length at this configuration, so its direction is undefined")

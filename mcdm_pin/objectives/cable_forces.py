@@ -31,11 +31,10 @@ class MinCableForces(Objective):
         m = terms.L.shape[0]
         cached = getattr(self, "_cached", None)
         if cached is None or cached.c.shape != (m,):
-            # the same at every instant: built once, read-only
+            # the same at every instant: built once and shared (nothing writes into a QP's arrays;
+            # they are not flagged read-only because numba compiles read-only arrays separately)
             w = np.ones(m) if self.weights is None else self.weights
             P, c = np.diag(w), np.zeros(m)
-            P.setflags(write=False)
-            c.setflags(write=False)
             cached = self._cached = Quadratic(P, c, 0.0)
         return cached
 

@@ -102,9 +102,14 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 12, max_newto
                         dtype=float)
     else:
         names, cact, cdir = [], _NO_CONES, _NO_DIRS
+    # C-ordered float arrays and Python scalars: one compiled specialisation serves every call
+    # (each array layout would cost numba another ~20 s of compilation)
+    c_ = np.ascontiguousarray
     code, f, mus, grad, state, cact, dirs, nxt_state = K.active_set_solve(
-        qp.H, qp.c, qp.A, qp.b, qp.lb, qp.ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots,
-        max_newton, _STEP_TOL, _PRIMAL_TOL, _DUAL_TOL, _EOM_TOL, _REG)
+        c_(qp.H, dtype=float), c_(qp.c, dtype=float), c_(qp.A, dtype=float), c_(qp.b, dtype=float),
+        c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), state, c_(G, dtype=float), c_(gc, dtype=float),
+        c_(ax, dtype=float), c_(tn, dtype=float), c_(basis0, dtype=float), cact, c_(cdir, dtype=float),
+        int(max_pivots), int(max_newton), _STEP_TOL, _PRIMAL_TOL, _DUAL_TOL, _EOM_TOL, _REG)
     if code != K.FOUND:
         return _miss(K.REASONS[code])
     if names:

@@ -26,8 +26,8 @@ class ClarabelSolver(Solver):
         try:
             import clarabel  # noqa: F401
         except ImportError:
-            raise SolverError("the clarabel back-end needs the clarabel package: "
-                              "pip install 'mcdm-pin[reference]' (or pip install clarabel)") from None
+            raise SolverError("the clarabel back-end needs the clarabel package (a dependency of "
+                              "mcdm-pin): pip install clarabel") from None
         self.tol, self.max_iter = tol, max_iter
 
     def fresh(self) -> "ClarabelSolver":
