@@ -142,9 +142,11 @@ def test_badly_scaled_robots_meet_the_tolerances(g, sd, case):
                 # where Clarabel reached full accuracy the two agree; its reduced-accuracy
                 # ("AlmostSolved") answers are no reference (seen: 3 % worse, and 5.6e-6 better at
                 # a point 1e5 times larger on a flat optimal ridge)
-                # relative 1e-6, but where the optimum lies on a flat ridge (PSD objective) and the
-                # two answers differ by orders of magnitude (seen: 7 N against 1e5 N, objectives
-                # 2.5e-6 apart) the objective is only determined to ~1e-9 |f|^2: known gap, issue 7
+                # relative 1e-6, but where the optimum lies at the end of a nearly flat ridge (PSD
+                # objective) the two answers differ by orders of magnitude (seen: 7 N against 1e5 N,
+                # objectives 2.5e-6 apart; with MCDM_HYPOTHESIS_SEED=3, hundreds of N against up to
+                # 1e6 N = f_max, 4.8e-6 apart) and the KKT check's gradient tolerance bounds the objective only to
+                # ~1e-9 |f|^2: known gap, docs/trust.md
                 big = max(1.0, np.abs(f).max(), np.abs(ref.f).max())
                 scale = max(abs(ref.objective), 1e-9 * big ** 2)
                 assert abs(prox.objective - ref.objective) <= 1e-6 * scale

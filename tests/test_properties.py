@@ -155,6 +155,26 @@ def test_solver_meets_constraints_and_agrees_with_clarabel(g, seed, case):
                 assert abs(prox.objective - ref.objective) <= OBJ_RTOL * max(abs(ref.objective), 1e-12)
 
 
+def test_proxqp_stall_is_answered_by_clarabel():
+    """The generated robot on which ProxQP stalled (tests/regressions.py): ProxQP alone still
+    reports its iteration limit; the default back-end answers with Clarabel's optimum, checked."""
+    from mcdm_pin.solvers import ProxQPSolver
+
+    from .regressions import PROXQP_STALL, PROXQP_STALL_SEED
+
+    with tempfile.TemporaryDirectory() as d:
+        robot = PROXQP_STALL.load(d)
+        q, qd, qdd, _ = state(robot, PROXQP_STALL_SEED)
+        alone = InverseDynamics.for_case(robot, 2, solver=ProxQPSolver(fallback=False)).solve(q, qd, qdd)
+        ours = InverseDynamics.for_case(robot, 2).solve(q, qd, qdd)
+        ref = InverseDynamics.for_case(robot, 2, solver="clarabel").solve(q, qd, qdd)
+    assert alone.status == "max_iter"
+    assert ours.status == "optimal" and "answered by Clarabel" in ours.message
+    assert ours.eom_residual <= EOM_TOL
+    assert np.all(ours.f >= robot.f_min - BOUND_TOL) and np.all(ours.f <= robot.f_max + BOUND_TOL)
+    assert ours.objective == pytest.approx(ref.objective, rel=OBJ_RTOL)
+
+
 def test_generator_covers_feasible_and_infeasible_instants():
     """The solver property above is only meaningful if both outcomes occur (counts from the run)."""
     if not SOLVER_STATS:
