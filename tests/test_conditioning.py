@@ -158,6 +158,38 @@ def test_badly_scaled_robots_meet_the_tolerances(g, sd, case):
                 SCALED_STATS[name] = SCALED_STATS.get(name, 0) + int(wide)
 
 
+@seed(SEED)
+@settings(max_examples=60, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.filter_too_much,
+                                 HealthCheck.large_base_example])
+@given(robots(min_links=2, max_links=4, grouped=True, mass=(1.0, 1.0), mass_log_spread=3.0,
+              length=(0.03, 0.03), length_log_spread=1.5, f_bounds=((1e-3, 1e-3), (1e4, 1e4)),
+              base_offset=False), st.integers(0, 2**32 - 1), st.sampled_from([1, 2, 3]))
+def test_issue_range_objective_matches_clarabel_strictly(g, sd, case):
+    """The issue's range, forces of 1e-3 N next to 1e4 N (masses 1 g .. 1 t, lengths 1 mm .. 0.95 m):
+    besides the runner's tolerances, the objective equals Clarabel's to 1e-6 relative, without the
+    size-relative allowance the 1e6 N test needs on long flat ridges (docs/trust.md, "Known gap";
+    the same strict check also passed with MCDM_HYPOTHESIS_SEED=1, 2, 3 and 4)."""
+    urdf, sidecar = g.texts()
+    note(f"URDF:\n{urdf}\nsidecar:\n{sidecar}")
+    with tempfile.TemporaryDirectory() as d:
+        robot = g.load(d)
+        if case == 3 and not any(j.cone_deg for j in robot.joints):
+            case = 2
+        rng = np.random.default_rng(sd)
+        q, qd, qdd = rng.uniform(-0.6, 0.6, robot.nv), 0.5 * rng.normal(size=robot.nv), 0.5 * rng.normal(size=robot.nv)
+        prox = InverseDynamics.for_case(robot, case).solve(q, qd, qdd)
+        ref = InverseDynamics.for_case(robot, case, solver="clarabel").solve(q, qd, qdd)
+        note(f"case {case}: proxqp {prox.status} ({prox.message}); clarabel {ref.status} ({ref.message})")
+        if prox.status == "infeasible":
+            assert ref.status != "optimal"
+        if prox.status == "optimal":
+            assert prox.eom_residual <= 1e-8
+            assert np.all(prox.f >= robot.f_min - 1e-9) and np.all(prox.f <= robot.f_max + 1e-9)
+            if ref.status == "optimal" and "AlmostSolved" not in ref.message:
+                assert abs(prox.objective - ref.objective) <= 1e-6 * max(abs(ref.objective), 1e-12)
+
+
 def test_scaled_examples_are_really_badly_scaled():
     if not SCALED_STATS:
         pytest.skip("run together with test_badly_scaled_robots_meet_the_tolerances")
