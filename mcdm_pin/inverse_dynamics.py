@@ -51,6 +51,9 @@ class InverseDynamics:
         self.solver = ScaledSolver(get_solver(solver))
         self.soften = soften
         self.evaluate = TermsEvaluator(robot)
+        from .kernels import warm_up
+
+        warm_up()  # compiled kernels ready before the first (timed) instant
 
     @classmethod
     def for_case(cls, robot, case: int, solver="proxqp", soften: bool = False, diagnose: bool = True,

@@ -18,13 +18,14 @@ from numba import njit
 
 
 @njit(cache=True, nogil=True)
-def cable_terms(oM, J, point_local, point_key, seg_a, seg_b, seg_cable, seg_active,
+def cable_terms(oM, Jt, point_local, point_key, seg_a, seg_b, seg_cable, seg_active,
                 v_ptr, v_idx, a_ptr, a_idx, child_key, parent_key, R_sp, n_cables, n_joints):
     """Cable geometry, ``L`` and the cables' part of the interaction wrenches in one pass.
 
     Args:
         oM: (K, 4, 4) world placements (homogeneous) of the key bodies.
-        J: (6, nv) world Jacobian columns (spatial velocity at the world origin).
+        Jt: (nv, 6) the world Jacobian, transposed: row v is column v's spatial velocity at the
+            world origin (Pinocchio's column-major ``data.J`` transposed: a C-ordered view).
         point_local, point_key: (P, 3) route points in their body's frame, (P,) their body.
         seg_a, seg_b, seg_cable, seg_active: segments (start point, end point, cable, spans bodies).
         v_ptr, v_idx: CSR over key bodies: the velocity columns that move body k.
@@ -40,7 +41,7 @@ def cable_terms(oM, J, point_local, point_key, seg_a, seg_b, seg_cable, seg_acti
     oR = oM[:, :3, :3]
     op = oM[:, :3, 3]
     n_pts = point_local.shape[0]
-    nv = J.shape[1]
+    nv = Jt.shape[0]
     X = np.empty((n_pts, 3))
     for p in range(n_pts):
         k = point_key[p]
@@ -82,7 +83,7 @@ def cable_terms(oM, J, point_local, point_key, seg_a, seg_b, seg_cable, seg_acti
                 v = v_idx[t]
                 acc = 0.0
                 for i in range(6):
-                    acc += w[i] * J[i, v]
+                    acc += w[i] * Jt[v, i]
                 L[c, v] += acc
             for t in range(a_ptr[k], a_ptr[k + 1]):
                 j = a_idx[t]
@@ -165,3 +166,21 @@ def csr(lists, n):
     ptr[1:] = np.cumsum([len(x) for x in lists])
     idx = np.array([i for x in lists for i in x], dtype=np.int64)
     return ptr, idx
+
+
+def warm_up() -> None:
+    """Compile (first run on a machine, ~25 s) or load from numba's cache (~0.3 s) every kernel of the
+    hot path, on tiny inputs of the types the library passes, so that no timed instant pays for it."""
+    from .solvers import _kkt
+
+    z = np.zeros
+    i64 = np.int64
+    spread(z((1, 2)), z(1))
+    cable_terms(np.tile(np.eye(4), (1, 1, 1)), z((1, 6)), z((2, 3)), z(2, dtype=i64),
+                np.array([0], dtype=i64), np.array([1], dtype=i64), np.array([0], dtype=i64),
+                np.array([False]), z(2, dtype=i64), z(0, dtype=i64), z(2, dtype=i64), z(0, dtype=i64),
+                z(0, dtype=i64), z(0, dtype=i64), z((0, 3, 3)), 1, 0)
+    n = 2
+    _kkt.active_set_solve(np.eye(n), z(n), np.ones((1, n)), np.ones(1), z(n), np.ones(n), z(n, dtype=np.int8),
+                          z((0, 3, n)), z((0, 3)), z((0, 3)), z(0), z((0, 3)), z(0, dtype=np.bool_), z((0, 3)),
+                          2, 2, 1e-10, 1e-12, 1e-9, 1e-11, 1e-12)

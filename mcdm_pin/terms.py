@@ -202,7 +202,8 @@ class TermsEvaluator:
         if self.compiled:
             from .kernels import cable_terms
 
-            X, _, lengths, L, RT, R_socket, bad = cable_terms(oMi, np.asfortranarray(J), *self._kernel_args)
+            # J.T: C-ordered for any nv (one compiled specialisation; a (6, 1) array counts as C)
+            X, _, lengths, L, RT, R_socket, bad = cable_terms(oMi, np.ascontiguousarray(J.T), *self._kernel_args)
             if bad >= 0:
                 raise StateError(f"cable {r.cables[r.seg_cable[bad]].name!r}: a segment has zero "
                                  f"length at this configuration, so its direction is undefined")
