@@ -130,7 +130,13 @@ class Problem:
             self._plan = self._make_plan(context.robot)
         plan = self._plan
         A_rows, b_rows, cones = [], [], []
-        lb, ub = plan["lb"], plan["ub"]
+        lb = ub = None
+        for con in plan["bounds"]:
+            lo, hi = con.bounds(terms, context)
+            # one bounds constraint (the usual case): its arrays as they are, read afresh each instant
+            lb, ub = (lo, hi) if lb is None else (np.maximum(lb, lo), np.minimum(ub, hi))
+        if lb is None:
+            lb, ub = np.full(m, -np.inf), np.full(m, np.inf)
         for con in plan["general"]:
             eq = con.equalities(terms, context)
             if eq is not None:
@@ -161,22 +167,18 @@ class Problem:
         cable bounds directly, the cones in one batch, other constraints through their methods."""
         from .constraints.cone import ConeBatch
 
-        general, eom = [], False
-        lb, ub = np.full(robot.m, -np.inf), np.full(robot.m, np.inf)
+        general, eom, bounds = [], False, []
         cone_cons = []
         for con in self.constraints:
             if type(con) is EquationOfMotion and not eom:
                 eom = True
             elif type(con) is CableForceBounds:
-                lo, hi = con.bounds(None, Context(robot))
-                lb, ub = np.maximum(lb, lo), np.minimum(ub, hi)
+                bounds.append(con)
             elif type(con) is InteractionCone:
                 cone_cons.append(con)
             else:
                 general.append(con)
-        # lb, ub are shared by every instant's QPData (nothing writes into a QP's arrays; not flagged
-        # read-only because numba compiles read-only arrays as a separate specialisation)
-        return dict(general=general, eom=eom, lb=lb, ub=ub,
+        return dict(general=general, eom=eom, bounds=bounds,
                     cones=ConeBatch(robot, cone_cons) if cone_cons else None)
 
     def value(self, terms, f, context: Context, qp: QPData | None = None) -> float:
