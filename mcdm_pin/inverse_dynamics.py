@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import sys
 import time
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -39,11 +40,18 @@ class InverseDynamics:
         diagnose: for infeasible instants, find what conflicts and the f_max or cone angle that
             would make them feasible (:func:`diagnose_infeasible`; a few LPs and, for cones, a
             bisection of ~20 solves). Off: the message only says that the instant is infeasible.
+        blas_threads: threads the BLAS library may use while solving (default 1; ``None``: leave
+            it alone). The matrices of one instant are small, and waking BLAS worker threads cost
+            milliseconds on a loaded machine: with them the model of a 16-link chain took 4.5 ms per
+            instant instead of 0.38 ms (docs/speed.md). The limit applies only inside ``solve`` and
+            ``solve_trajectory`` (threadpoolctl) and is lifted afterwards.
     """
 
     def __init__(self, robot, problem: Problem, solver="proxqp", soften: bool = False,
-                 diagnose: bool = True):
+                 diagnose: bool = True, blas_threads: int | None = 1):
         self.robot = robot
+        self.blas_threads = blas_threads
+        self._limited = False
         self.diagnose = diagnose
         self.problem = problem
         # badly scaled robots (grams next to tonnes, mm next to m) are solved on an equilibrated
@@ -57,10 +65,23 @@ class InverseDynamics:
 
     @classmethod
     def for_case(cls, robot, case: int, solver="proxqp", soften: bool = False, diagnose: bool = True,
-                 **options):
+                 blas_threads: int | None = 1, **options):
         """The paper's case 1, 2 or 3 (options as :func:`~mcdm_pin.problem.case_problem`)."""
         return cls(robot, case_problem(robot, case, **options), solver=solver, soften=soften,
-                   diagnose=diagnose)
+                   diagnose=diagnose, blas_threads=blas_threads)
+
+    @contextmanager
+    def _blas_limit(self):
+        """BLAS limited to ``blas_threads`` threads inside (once, when calls nest)."""
+        if self.blas_threads is None or self._limited:
+            yield
+            return
+        self._limited = True
+        try:
+            with _blas_controller().limit(limits=self.blas_threads, user_api="blas"):
+                yield
+        finally:
+            self._limited = False
 
     @property
     def cone_deg(self) -> np.ndarray:
@@ -71,6 +92,10 @@ class InverseDynamics:
 
     def solve(self, q, qd=None, qdd=None, f_prev=None, _checked: bool = False) -> InstantResult:
         """Cable forces at one state."""
+        with self._blas_limit():
+            return self._solve(q, qd, qdd, f_prev, _checked)
+
+    def _solve(self, q, qd, qdd, f_prev, _checked: bool) -> InstantResult:
         t0 = time.perf_counter()
         terms = self.evaluate(q, qd, qdd, checked=_checked)
         if not terms.finite and not (np.all(np.isfinite(terms.tau)) and np.all(np.isfinite(terms.L))):
@@ -145,6 +170,10 @@ class InverseDynamics:
             problem=self.problem.describe(), solver=self.solver.name, trajectory=traj.name)
 
     def _solve_range(self, traj, indices, progress=False) -> list[InstantResult]:
+        with self._blas_limit():
+            return self._solve_range_limited(traj, indices, progress)
+
+    def _solve_range_limited(self, traj, indices, progress=False) -> list[InstantResult]:
         self.solver.reset()
         instants: list[InstantResult] = []
         f_prev = None
@@ -183,6 +212,18 @@ class InverseDynamics:
 
 
 _BATCH = None
+_CONTROLLER = None
+
+
+def _blas_controller():
+    """threadpoolctl's view of the loaded BLAS libraries (made once: it scans them, ~1.5 ms)."""
+    global _CONTROLLER
+    if _CONTROLLER is None:
+        import scipy.linalg  # noqa: F401  (load scipy's BLAS too, so that it is limited as well)
+        from threadpoolctl import ThreadpoolController
+
+        _CONTROLLER = ThreadpoolController()
+    return _CONTROLLER
 
 
 def _check_trajectory(robot, traj) -> None:
