@@ -478,11 +478,79 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
                     cact[k] = True
             last_was_block = True
         else:
-            state, cact = _single_pivot(state, cact, grad, worst_kind, worst_idx, cone_in, cone_out,
-                                        neq, nc, n)
+            enter = -1
+            if (worst_kind == 1 or worst_kind == 2) and n - np.count_nonzero(state) == neq + n_act:
+                # at a vertex (as many free cables as equations): a dual simplex step, the fixed
+                # cable to free chosen by the ratio test (keeps the other multipliers' signs)
+                enter = _ratio_test(A, G, gc, ax, tn, cact, dirs, state, grad, worst_kind, worst_idx, n)
+            if enter >= 0:
+                state = state.copy()
+                state[worst_idx] = worst_kind
+                state[enter] = 0
+            else:
+                state, cact = _single_pivot(state, cact, grad, worst_kind, worst_idx, cone_in, cone_out,
+                                            neq, nc, n)
             last_was_block = False
         cdir = _next_dirs(cone_in, cone_dir, dirs, nc)
     return PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state
+
+
+@njit(cache=True, nogil=True)
+def _ratio_test(A, G, gc, ax, tn, cact, dirs, state, grad, kind, r, n):
+    """The fixed cable whose release lets the leaving free cable ``r`` reach its bound (``kind`` 1:
+    it is below its lower bound, 2: above its upper bound) at the least dual cost: min over eligible
+    j of multiplier_j / |dx_r/df_j|, with ``x_F = B^-1 (rhs - col_j f_j)`` and ``B`` the square
+    matrix of the equations (and held cones' surface rows) on the free cables. -1 if none is
+    eligible or ``B`` is singular."""
+    neq = A.shape[0]
+    nc = G.shape[0]
+    rows = np.zeros((neq + nc, n))
+    m = 0
+    for i in range(neq):
+        rows[m] = A[i]
+        m += 1
+    for k in range(nc):
+        if cact[k]:
+            w0 = dirs[k, 0] - tn[k] * ax[k, 0]
+            w1 = dirs[k, 1] - tn[k] * ax[k, 1]
+            w2 = dirs[k, 2] - tn[k] * ax[k, 2]
+            rows[m] = w0 * G[k, 0] + w1 * G[k, 1] + w2 * G[k, 2]
+            m += 1
+    free = np.flatnonzero(state == 0)
+    if free.shape[0] != m:
+        return -1
+    B = np.empty((m, m))
+    pos = -1
+    for q in range(m):
+        j = free[q]
+        if j == r:
+            pos = q
+        for i in range(m):
+            B[i, q] = rows[i, j]
+    if pos < 0:
+        return -1
+    e = np.zeros(m)
+    e[pos] = 1.0
+    try:
+        u = np.linalg.solve(B.T, e)  # row pos of B^-1
+    except Exception:  # noqa: BLE001 (singular basis)
+        return -1
+    need_up = kind == 1  # x_r must rise to its lower bound
+    best, enter = np.inf, -1
+    for j in range(n):
+        if state[j] == 0:
+            continue
+        d = 0.0  # dx_r / df_j = -(B^-1 col_j)_pos
+        for i in range(m):
+            d -= u[i] * rows[i, j]
+        # f_j may only move away from its bound: up from a lower one, down from an upper one
+        rate = d if state[j] == 1 else -d
+        if (rate > 1e-12) if need_up else (rate < -1e-12):
+            lam = grad[j] if state[j] == 1 else -grad[j]
+            ratio = max(lam, 0.0) / abs(rate)
+            if ratio < best:
+                best, enter = ratio, j
+    return enter
 
 
 @njit(cache=True, nogil=True)
