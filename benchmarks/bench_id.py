@@ -435,13 +435,39 @@ def correctness(robot, traj, case, kw, peers, n_check: int) -> dict:
     return out
 
 
-def time_ours(robot, traj, case, kw, repeat: int):
+def time_interleaved(robot, traj, case, kw, peers, repeat: int, peer_repeat: int):
+    """mcdm-pin's runs and the peers' runs taken in turns (ours, then each peer, then ours again,
+    ...), so that a slow spell of the shared machine falls on both sides of a ratio alike."""
     from mcdm_pin import InverseDynamics
 
     ident = InverseDynamics.for_case(robot, case, **kw)
-    model, solve, total, bad = [], [], [], 0
     # warm-up: one untimed pass (imports, compiled kernels loaded from numba's cache, CPU caches)
     ident.solve_trajectory(traj, progress=False)
+    ours = dict(model=[], solve=[], total=[], no_answer=0)
+    rec = {p.name: dict(model=[], solve=[], total=[], no_answer=0) for p in peers}
+    for r in range(max(repeat, peer_repeat)):
+        if r < repeat:
+            one = time_ours(robot, traj, case, kw, 1, ident=ident)
+            for key in ("model", "solve", "total"):
+                ours[key].append(one[key])
+            ours["no_answer"] += one["no_answer"]
+        if r < peer_repeat and peers:
+            for name, one in time_peers(robot, traj, case, kw, peers, 1).items():
+                for key in ("model", "solve", "total"):
+                    rec[name][key] += one[key]
+                rec[name]["no_answer"] += one["no_answer"]
+    ours = {k: (np.concatenate(v) if k != "no_answer" else v) for k, v in ours.items()}
+    return ours, rec
+
+
+def time_ours(robot, traj, case, kw, repeat: int, ident=None):
+    from mcdm_pin import InverseDynamics
+
+    model, solve, total, bad = [], [], [], 0
+    if ident is None:
+        ident = InverseDynamics.for_case(robot, case, **kw)
+        # warm-up: one untimed pass (imports, compiled kernels loaded from numba's cache, CPU caches)
+        ident.solve_trajectory(traj, progress=False)
     for _ in range(repeat):
         res = ident.solve_trajectory(traj, progress=False)
         ok = res.found
@@ -535,8 +561,8 @@ def run(args) -> dict:
             if args.check_only:
                 rows.append(dict(case=case, check=verdict))
                 continue
-            ours = time_ours(robot, traj, case, kw, args.repeat)
-            peer_rec = time_peers(robot, traj, case, kw, peers, args.peer_repeat or args.repeat)
+            ours, peer_rec = time_interleaved(robot, traj, case, kw, peers, args.repeat,
+                                              args.peer_repeat or args.repeat)
             ours_total = stats_ms(ours["total"])["median"]
             case_rows = [dict(case=case, backend="mcdm-pin", label="mcdm-pin (ProxQP)",
                               model_ms=stats_ms(ours["model"]), solve_ms=stats_ms(ours["solve"]),
