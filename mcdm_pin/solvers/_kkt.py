@@ -331,7 +331,8 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
     (see :func:`mcdm_pin.solvers.active_set.try_active_set`).
 
     Every violated condition is exchanged at once (a block pivot) while the number of violations
-    falls, or for a few steps without progress; then, or when a block pivot leaves a singular
+    falls (Judice and Pires allow a few steps without progress; here none: on the neck that wandered
+    off and cycled); then, or when a block pivot leaves a singular
     system (too many cables fixed for the equation of motion), only the worst violation changes
     (Judice and Pires' safeguard).
 
@@ -377,7 +378,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
     prev_out = np.zeros(nc, dtype=np.bool_)
     last_was_block = False
     best_ninf = n + nc + 1
-    patience = 3
+    patience = 0  # block pivots allowed without a fall in the number of violations
     blocks_ok = True
     for it in range(max_pivots):
         for h in range(it):
@@ -447,7 +448,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
             block = False
         elif ninf < best_ninf:
             best_ninf = ninf
-            patience = 3
+            patience = 0
             block = True
         elif patience > 0:
             patience -= 1

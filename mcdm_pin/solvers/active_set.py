@@ -83,7 +83,7 @@ class ActiveSet:
         return cls(np.flatnonzero(near_l), np.flatnonzero(near_u), cones)
 
 
-def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 12, max_newton: int = 10):
+def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newton: int = 10):
     """The verified optimum, as ``(f, cone_multipliers, bound_multipliers, next_guess)``, or
     ``None``; ``next_guess`` is the optimum's active set (for the next instant).
 
