@@ -132,13 +132,11 @@ class TermsEvaluator:
                       | {j.parent_id for j in js})
         pos = np.full(nj, -1, dtype=int)
         pos[keys] = np.arange(len(keys))
-        self._keys = keys
         self._point_key = pos[robot.point_joint]
         self._child_key = pos[[j.child_id for j in js]]
         self._parent_key = pos[[j.parent_id for j in js]]
         self._child = [j.child_id for j in js]
         self._R_sp = np.array([j.socket_placement.rotation for j in js]).reshape(len(js), 3, 3)
-        self._t_sp = np.array([j.socket_placement.translation for j in js]).reshape(len(js), 3)
         sub = robot.subtree[:, keys]  # sub[i, b] = 1 when key joint b is in the subtree of joint i
         owner = np.zeros(model.nv, dtype=int)  # the joint owning each velocity column
         for j in range(1, nj):

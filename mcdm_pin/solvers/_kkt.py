@@ -378,7 +378,6 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
     prev_out = np.zeros(nc, dtype=np.bool_)
     last_was_block = False
     best_ninf = n + nc + 1
-    patience = 0  # block pivots allowed without a fall in the number of violations
     blocks_ok = True
     for it in range(max_pivots):
         for h in range(it):
@@ -444,17 +443,9 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
             ninf += release[i] + to_lower[i] + to_upper[i]
         for k in range(nc):
             ninf += cone_in[k] + cone_out[k]
-        if not blocks_ok:
-            block = False
-        elif ninf < best_ninf:
-            best_ninf = ninf
-            patience = 0
-            block = True
-        elif patience > 0:
-            patience -= 1
-            block = True
-        else:
-            block = False
+        # a block pivot only while the number of violations keeps falling
+        block = blocks_ok and ninf < best_ninf
+        best_ninf = min(best_ninf, ninf)
         new_state = state.copy()
         n_in = 0
         n_out = 0
