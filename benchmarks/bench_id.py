@@ -46,6 +46,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import DEFAULT_CASPR, REPO, import_neck, machine, neck_case_options  # noqa: E402
+
+from mcdm_pin.solvers.clarabel_ import cone_rows, conic_form  # noqa: E402
 PEERS = ("clarabel", "cvxpy", "slsqp", "ipopt")
 # correctness check: objective relative to the reference, relative EOM residual, bounds (N), cones (deg)
 CHECK = dict(obj_rtol=1e-6, obj_atol=1e-8, eom_rtol=1e-7, bound_tol=1e-6, cone_tol_deg=1e-3)
@@ -72,17 +74,6 @@ def load_case_setup(robot_spec: str, tmp: Path, caspr: Path, trajectory: str | N
 
 
 # ---------------------------------------------------------------------------------- the problems
-def cone_rows(qp):
-    """Per cone, ``T (3, m)`` and ``t (3,)`` with ``s = T f + t = [tan a.F, e1.F, e2.F]``: the cone
-    is ``|s[1:]| <= s[0]``. Stacked: (K, 3, m), (K, 3)."""
-    if not qp.cones:
-        return np.zeros((0, 3, qp.n)), np.zeros((0, 3))
-    W = np.array([np.vstack([c.tan * c.axis, c.basis]) for c in qp.cones])  # (K, 3, 3)
-    G = np.array([c.G for c in qp.cones])
-    g = np.array([c.g for c in qp.cones])
-    return W @ G, np.einsum("kab,kb->ka", W, g)
-
-
 def check_solution(qp, f, ref_obj: float) -> tuple[bool, dict]:
     """Does ``f`` solve ``qp`` to the stated tolerances, at the reference objective?"""
     out = dict(obj_rel=float("nan"), eom_rel=float("nan"), bound=float("nan"), cone_deg=float("nan"))
@@ -133,34 +124,15 @@ class ClarabelPeer(Peer):
 
     def solve(self, qp):
         import clarabel
-        from scipy import sparse
 
-        n = qp.n
-        blocks, rhs, cones = [], [], []
-        if len(qp.b):
-            blocks.append(qp.A)
-            rhs.append(qp.b)
-            cones.append(clarabel.ZeroConeT(len(qp.b)))
-        hi, lo = np.isfinite(qp.ub), np.isfinite(qp.lb)
-        if hi.any() or lo.any():
-            eye = np.eye(n)
-            blocks += [eye[hi], -eye[lo]]
-            rhs += [qp.ub[hi], -qp.lb[lo]]
-            cones.append(clarabel.NonnegativeConeT(int(hi.sum() + lo.sum())))
-        if qp.cones:
-            T, t = cone_rows(qp)
-            blocks.append(-T.reshape(-1, n))
-            rhs.append(t.reshape(-1))
-            cones += [clarabel.SecondOrderConeT(3)] * len(qp.cones)
-        A = sparse.csc_matrix(np.vstack(blocks))
-        b = np.concatenate(rhs)
-        P = sparse.csc_matrix(np.triu(2.0 * qp.P))
+        # the library's conic form, timed here: building it is part of calling Clarabel
+        P, c, A, b, cones = conic_form(qp)
         settings = clarabel.DefaultSettings()
         settings.verbose = False
         if self.tight:
             settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = 1e-11
             settings.tol_ktratio = 1e-8
-        sol = clarabel.DefaultSolver(P, qp.c, A, b, cones, settings).solve()
+        sol = clarabel.DefaultSolver(P, c, A, b, cones, settings).solve()
         if str(sol.status) in ("Solved", "AlmostSolved"):
             return np.array(sol.x)
         return None

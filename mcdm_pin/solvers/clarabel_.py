@@ -15,6 +15,45 @@ from ..problem import QPData
 from .base import INACCURATE, INFEASIBLE, MAX_ITER, OPTIMAL, Solution, Solver, failure
 
 
+def cone_rows(qp: QPData) -> tuple[np.ndarray, np.ndarray]:
+    """Per cone, ``T (3, m)`` and ``t (3,)`` with ``s = T f + t = [tan a.F, e1.F, e2.F]``: the cone
+    is ``|s[1:]| <= s[0]``. Stacked: (K, 3, m), (K, 3)."""
+    if not qp.cones:
+        return np.zeros((0, 3, qp.n)), np.zeros((0, 3))
+    W = np.array([np.vstack([c.tan * c.axis, c.basis]) for c in qp.cones])  # (K, 3, 3)
+    G, g = qp.cone_arrays()[:2]
+    return W @ G, np.einsum("kab,kb->ka", W, g)
+
+
+def conic_form(qp: QPData):
+    """``(P, c, A, b, cones)`` of Clarabel's ``min 1/2 x^T P x + c^T x, b - A x in cones``: the
+    equation of motion (zero cone), the finite bounds (non-negative cone), one second-order cone of
+    dimension 3 per stability cone (:func:`cone_rows`). ``P`` is the upper triangle, sparse."""
+    import clarabel
+    from scipy import sparse
+
+    n = qp.n
+    blocks, rhs, cones = [], [], []
+    if len(qp.b):
+        blocks.append(qp.A)
+        rhs.append(qp.b)
+        cones.append(clarabel.ZeroConeT(len(qp.b)))
+    hi, lo = np.isfinite(qp.ub), np.isfinite(qp.lb)
+    if hi.any() or lo.any():
+        eye = np.eye(n)
+        blocks += [eye[hi], -eye[lo]]
+        rhs += [qp.ub[hi], -qp.lb[lo]]
+        cones.append(clarabel.NonnegativeConeT(int(hi.sum() + lo.sum())))
+    if qp.cones:
+        T, t = cone_rows(qp)
+        blocks.append(-T.reshape(-1, n))
+        rhs.append(t.reshape(-1))
+        cones += [clarabel.SecondOrderConeT(3)] * len(qp.cones)
+    A = sparse.csc_matrix(np.vstack(blocks)) if blocks else sparse.csc_matrix((0, n))
+    b = np.concatenate(rhs) if rhs else np.zeros(0)
+    return sparse.csc_matrix(np.triu(2.0 * qp.P)), qp.c, A, b, cones
+
+
 class ClarabelSolver(Solver):
     """Args:
         tol: Clarabel's gap and feasibility tolerances.
@@ -35,36 +74,16 @@ class ClarabelSolver(Solver):
 
     def solve(self, qp: QPData) -> Solution:
         import clarabel
-        from scipy import sparse
 
         n = qp.n
-        blocks, rhs, cones = [], [], []
-        if len(qp.b):
-            blocks.append(qp.A)
-            rhs.append(qp.b)
-            cones.append(clarabel.ZeroConeT(len(qp.b)))
-        hi, lo = np.isfinite(qp.ub), np.isfinite(qp.lb)
-        eye = np.eye(n)
-        if hi.any() or lo.any():
-            blocks += [eye[hi], -eye[lo]]
-            rhs += [qp.ub[hi], -qp.lb[lo]]
-            cones.append(clarabel.NonnegativeConeT(int(hi.sum() + lo.sum())))
-        for c in qp.cones:
-            # s = b - A f = [t a.F; e1.F; e2.F] with F = g + G f
-            T = np.vstack([c.tan * c.axis, c.basis])
-            blocks.append(-(T @ c.G))
-            rhs.append(T @ c.g)
-            cones.append(clarabel.SecondOrderConeT(3))
-        A = sparse.csc_matrix(np.vstack(blocks))
-        b = np.concatenate(rhs)
-        P = sparse.csc_matrix(np.triu(2.0 * qp.P))
+        P, c, A, b, cones = conic_form(qp)
         settings = clarabel.DefaultSettings()
         settings.verbose = False
         settings.max_iter = self.max_iter
         settings.tol_gap_abs = settings.tol_gap_rel = self.tol
         settings.tol_feas = self.tol
         settings.tol_ktratio = 1e-8
-        solver = clarabel.DefaultSolver(P, qp.c, A, b, cones, settings)
+        solver = clarabel.DefaultSolver(P, c, A, b, cones, settings)
         sol = solver.solve()
         status = str(sol.status)
         if status == "Solved":
