@@ -10,6 +10,8 @@ import pytest
 from mcdm_pin.exceptions import SidecarError
 from mcdm_pin.robot import Robot, resolve_package_uri
 
+from .fd import lengths_jacobian
+
 SIDECAR = Path(__file__).resolve().parents[1] / "robots" / "human_arm.yaml"
 HUMAN_URDF = "package://example-robot-data/robots/human_description/robots/human.urdf"
 
@@ -69,12 +71,7 @@ def test_L_matches_finite_differences(robot):
     q = rng.uniform(-0.6, 0.6, robot.nv)
     q[robot.joint("elbow").idx_v] = rng.uniform(0.2, 1.8)
     L = evaluate(q).L.copy()
-    h = 1e-6
-    fd = np.empty_like(L)
-    for i in range(robot.nv):
-        dq = np.zeros(robot.nv)
-        dq[i] = h
-        fd[:, i] = (evaluate(q + dq).lengths - evaluate(q - dq).lengths) / (2 * h)
+    fd = lengths_jacobian(lambda x: evaluate(x).lengths, q)
     rel = np.abs(L - fd).max() / np.abs(L).max()
     assert rel <= 1e-7, rel
 
