@@ -90,14 +90,15 @@ class InverseDynamics:
             out[self.robot.joint_names.index(c.joint)] = c.angle_deg
         return out
 
-    def solve(self, q, qd=None, qdd=None, f_prev=None, _checked: bool = False) -> InstantResult:
+    def solve(self, q, qd=None, qdd=None, f_prev=None) -> InstantResult:
         """Cable forces at one state."""
         with self._blas_limit():
-            return self._solve(q, qd, qdd, f_prev, _checked)
+            return self._solve(q, qd, qdd, f_prev, checked=False)
 
-    def _solve(self, q, qd, qdd, f_prev, _checked: bool) -> InstantResult:
+    def _solve(self, q, qd, qdd, f_prev, checked: bool) -> InstantResult:
+        """:meth:`solve` inside the BLAS limit; ``checked``: the state was validated already."""
         t0 = time.perf_counter()
-        terms = self.evaluate(q, qd, qdd, checked=_checked)
+        terms = self.evaluate(q, qd, qdd, checked=checked)
         if not terms.finite and not (np.all(np.isfinite(terms.tau)) and np.all(np.isfinite(terms.L))):
             raise StateError("the dynamics overflow at this state (non-finite M qdd + h or L): check "
                              "the model's masses, lengths and the state's magnitude")
@@ -158,6 +159,7 @@ class InverseDynamics:
             raise ProblemError(f"workers must be a positive integer, got {workers!r}")
         if progress is None:
             progress = sys.stderr.isatty()
+        _check_trajectory(self.robot, traj)  # once, not per instant or per batch piece
         if workers > 1 and len(traj) > 1:
             if any(isinstance(t, Smoothing) for t in _terms_of(self.problem.objective)):
                 raise ProblemError("batch mode (workers > 1) cannot be used with smoothing: each "
@@ -181,10 +183,10 @@ class InverseDynamics:
         if progress:
             from tqdm import tqdm
             bar = tqdm(total=len(indices), delay=1.5, unit="inst", leave=False, file=sys.stderr)
-        _check_trajectory(self.robot, traj)
         try:
             for k in indices:
-                res = self.solve(traj.q[k], traj.qd[k], traj.qdd[k], f_prev=f_prev, _checked=True)
+                # the trajectory was checked as a whole (solve_trajectory) and BLAS is limited here
+                res = self._solve(traj.q[k], traj.qd[k], traj.qdd[k], f_prev, checked=True)
                 instants.append(res)
                 if res.found:
                     f_prev = res.f
