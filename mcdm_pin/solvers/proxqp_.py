@@ -188,15 +188,10 @@ class ProxQPSolver(Solver):
         if sol.status != OPTIMAL:
             return Solution(sol.f, sol.status, sol.objective, failed.iterations + sol.iterations,
                             failed.rounds, f"{why}: {sol.message}"), {}
-        mult = {}
-        if qp.cones:
-            G, g, axis, tan, _ = qp.cone_arrays()
-            F = g + G @ sol.f
-            along = np.einsum("ka,ka->k", axis, F)
-            perp = np.linalg.norm(F - along[:, None] * axis, axis=1)
-            # a cone on its surface (within 1e-7 relative) is taken as binding for the polish guess
-            mult = {c.joint: 1.0 for c, a_, p_, t in zip(qp.cones, along, perp, tan)
-                    if p_ >= t * a_ * (1 - 1e-7)}
+        # the polish guess: cables by position only (the stalled run's multipliers mean nothing),
+        # cones that ActiveSet.from_solution finds on their surface
+        self._last_z = None
+        mult = {c.joint: 1.0 for c in qp.cones}
         return Solution(sol.f, OPTIMAL, sol.objective, failed.iterations + sol.iterations,
                         failed.rounds, why), mult
 
