@@ -42,9 +42,10 @@ class InverseDynamics:
             bisection of ~20 solves). Off: the message only says that the instant is infeasible.
         blas_threads: threads the BLAS library may use while solving (default 1; ``None``: leave
             it alone). The matrices of one instant are small, and waking BLAS worker threads cost
-            milliseconds on a loaded machine: with them the model of a 16-link chain took 4.5 ms per
-            instant instead of 0.38 ms (docs/speed.md). The limit applies only inside ``solve`` and
-            ``solve_trajectory`` (threadpoolctl) and is lifted afterwards.
+            milliseconds on a loaded machine: with them the model of a 16-link chain's case 3 took
+            5.56 ms per instant instead of 0.38 ms (``benchmarks/scaling.py``, docs/speed.md). The
+            limit applies only inside ``solve`` and ``solve_trajectory`` (threadpoolctl) and is
+            lifted afterwards.
     """
 
     def __init__(self, robot, problem: Problem, solver="proxqp", soften: bool = False,
