@@ -1,8 +1,5 @@
-"""Command line for the pictures: ``mcdm-pin view``, ``mcdm-pin plot`` and ``solve --html``.
-
-Argument parsing only; the work is done by :mod:`mcdm_pin.viewer` and :mod:`mcdm_pin.plots`.
-Registered in :mod:`mcdm_pin.cli` through ``COMMANDS`` and ``POST_SOLVE_HOOKS``.
-"""
+"""``mcdm-pin view``: the 3-D view of a solved trajectory (Meshcat live, or one HTML file); the
+``solve --html`` hook."""
 
 from __future__ import annotations
 
@@ -11,6 +8,8 @@ import signal
 import sys
 import time
 from pathlib import Path
+
+from ._common import UsageError
 
 
 def html_file(text: str) -> str:
@@ -47,7 +46,7 @@ def _add_scene_options(p) -> None:
 
 
 # ------------------------------------------------------------------------------------------- view
-def add_view(sub):
+def add(sub):
     p = sub.add_parser("view", help="3-D view of a solved trajectory (Meshcat: live, or one HTML file)")
     p.add_argument("robot", help="cable sidecar (YAML)")
     p.add_argument("--results", required=True, help="results file written by solve --out (.npz)")
@@ -59,13 +58,12 @@ def add_view(sub):
                    help="also render the HTML file in headless Chromium into this PNG")
     p.add_argument("--size", default="1000x800", help="screenshot size WIDTHxHEIGHT (default 1000x800)")
     _add_scene_options(p)
-    p.set_defaults(func=cmd_view)
+    p.set_defaults(func=run)
     return p
 
 
-def cmd_view(args) -> int:
-    from .cli import UsageError
-    from .viewer import scene_from_files, screenshot
+def run(args) -> int:
+    from ..viewer import scene_from_files, screenshot
 
     if args.screenshot and Path(args.screenshot).suffix.lower() != ".png":
         raise UsageError(f"--screenshot: expected a .png file name, got {args.screenshot!r}")
@@ -101,44 +99,6 @@ def solve_html_hook(args, robot, result) -> None:
     html = getattr(args, "html", None)
     if not html:
         return
-    from .viewer import build_scene
+    from ..viewer import build_scene
     path = build_scene(robot, result, source="the solved trajectory").write_html(html)
     print(f"wrote {path}")
-
-
-# ------------------------------------------------------------------------------------------- plot
-def add_plot(sub):
-    from .plots import FIGURES
-    p = sub.add_parser("plot", help="the paper's figures (PNG + SVG) from results files, side by side")
-    p.add_argument("results", nargs="+", help="results files (.npz), one column each (e.g. cases 1-3)")
-    p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--labels", help="column titles, comma-separated (default: 'case N' from each run)")
-    p.add_argument("--figures", help=f"comma-separated subset of {','.join(FIGURES)} (default: all)")
-    p.add_argument("--format", default="png,svg", help="comma-separated: png, svg, pdf (default png,svg)")
-    p.add_argument("--prefix", default="", help="prefix of the file names")
-    p.set_defaults(func=cmd_plot)
-    return p
-
-
-def cmd_plot(args) -> int:
-    from .cli import UsageError
-    from .plots import FIGURES, plot_files
-
-    def items(text):
-        return [x.strip() for x in text.split(",") if x.strip()]
-    labels = items(args.labels) if args.labels else None
-    if labels is not None and len(labels) != len(args.results):
-        raise UsageError(f"--labels: expected {len(args.results)} labels (one per results file), "
-                         f"got {len(labels)}")
-    figures = items(args.figures) if args.figures else list(FIGURES)
-    for f in figures:
-        if f not in FIGURES:
-            raise UsageError(f"--figures: unknown figure {f!r}; expected one of {', '.join(FIGURES)}")
-    formats = items(args.format)
-    for f in formats:
-        if f not in ("png", "svg", "pdf"):
-            raise UsageError(f"--format: unknown format {f!r}; expected png, svg or pdf")
-    for p in plot_files(args.results, args.out, labels=labels, figures=figures, formats=formats,
-                        prefix=args.prefix):
-        print(f"wrote {p}")
-    return 0

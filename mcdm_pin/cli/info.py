@@ -1,0 +1,55 @@
+"""``mcdm-pin info ROBOT.yaml``: a robot's links, joints, cables and a validation report."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._common import table
+
+
+def add(sub):
+    p = sub.add_parser("info", help="show a robot's links, joints, cables and a validation report")
+    p.add_argument("robot", help="cable sidecar (YAML)")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from ..robot import Robot
+    from ..validation import validation_report
+
+    robot = Robot.load(args.robot)
+    sc = robot.sidecar
+    print(f"robot {robot.name}: {len(robot.joints)} joints, {robot.nv} DoF, {robot.m} cables")
+    print(f"  sidecar  {sc.path}")
+    print(f"  urdf     {robot.urdf_path}" + (f"  ({sc.urdf})" if sc.urdf.startswith("package://") else ""))
+    print(f"  gravity  {list(sc.gravity)} m/s^2")
+    if sc.locked_joints:
+        print(f"  locked   {len(sc.locked_joints)} URDF joints: "
+              + ", ".join(f"{k}={v:g}" for k, v in sc.locked_joints.items()))
+    print("\nlinks (URDF frames):")
+    print("  " + ", ".join(robot.link_names))
+    print("\njoints:")
+    rows = []
+    for j in robot.joints:
+        coords = ", ".join(robot.coordinate_names[i] for i in j.idx_v)
+        axis = np.round(j.socket_axis, 6).tolist() if j.type == "spherical" else "-"
+        rows.append([j.name, j.type, j.nv, coords, axis, f"{j.alpha:g}",
+                     f"{j.beta:g}", "-" if j.cone_deg is None else f"{j.cone_deg:g}"])
+    print(table(["joint", "type", "DoF", "coordinates (URDF joints)", "socket axis", "alpha", "beta",
+                  "cone deg"], rows))
+    print("\ncables:")
+    rows = []
+    for c in robot.cables:
+        route = " -> ".join(f"{link}{np.round(p, 4).tolist()}" for link, p in zip(c.links, c.points))
+        rows.append([c.name, f"{c.f_min:g}", f"{c.f_max:g}", route])
+    print(table(["cable", "f_min N", "f_max N", "route (link[point m])"], rows))
+    if sc.trajectories:
+        print("\ntrajectories: " + ", ".join(
+            f"{n} ({t.type}{'' if t.type == 'csv' else f', {t.duration:g} s, dt {t.dt:g}'})"
+            for n, t in sc.trajectories.items()))
+    print("\nvalidation:")
+    ok = True
+    for level, text in validation_report(robot):
+        print(f"  [{level}] {text}")
+        ok &= level != "fail"
+    return 0 if ok else 1

@@ -1,0 +1,132 @@
+"""``mcdm-pin solve ROBOT.yaml --trajectory NAME ...``: cable forces along a trajectory (cases 1-3)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ._common import UsageError, parse_cones, parse_weights, table
+from .view import html_file, solve_html_hook
+
+
+def add(sub):
+    p = sub.add_parser("solve", help="cable forces along a trajectory (cases 1-3)")
+    p.add_argument("robot", help="cable sidecar (YAML)")
+    p.add_argument("--trajectory", "-t", required=True, help="a trajectory named in the sidecar")
+    p.add_argument("--case", type=int, choices=(1, 2, 3), default=1,
+                   help="1: min f^T f; 2: min interactions; 3: case 2 + stability cones (default 1)")
+    p.add_argument("--weights", help="alpha (and beta) per joint: JOINT=ALPHA[:BETA],...")
+    p.add_argument("--cone", help="cone half-angle per joint: JOINT=DEG,... or all=DEG (case 3)")
+    p.add_argument("--frame", choices=("socket", "child"), default="socket",
+                   help="frame of the cone's force (default socket, the source paper's)")
+    p.add_argument("--solver", default="proxqp", help="proxqp (default) or clarabel (exact reference)")
+    p.add_argument("--samples", type=int, help="solve N instants spread over the trajectory")
+    p.add_argument("--smoothing", type=float, default=0.0, help="weight of |f - f_prev|^2 (default 0)")
+    p.add_argument("--soften", action="store_true",
+                   help="where the cones cannot be met, return the least-violating forces (flagged)")
+    p.add_argument("--out", action="append", default=[], help="write results (.npz or .csv); repeatable")
+    p.add_argument("--no-diagnosis", action="store_true",
+                   help="do not analyse infeasible instants (what conflicts, the f_max or cone angle "
+                        "that would do); faster when many instants are infeasible")
+    p.add_argument("--workers", type=int, default=1,
+                   help="processes for batch mode (default 1; results equal the sequential run's "
+                        "to solver tolerance; not with --smoothing)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    p.add_argument("--html", type=html_file, metavar="FILE.html",
+                   help="also write the 3-D view of the result as one self-contained HTML file")
+    p.set_defaults(func=run)
+    return p
+
+
+def run_solve(args):
+    """Build and run the problem from parsed ``solve`` arguments; return (robot, result)."""
+    from ..inverse_dynamics import InverseDynamics
+    from ..robot import Robot
+    from ..trajectory import load_trajectory
+
+    robot = Robot.load(args.robot)
+    if args.samples is not None and args.samples < 1:
+        raise UsageError(f"--samples: expected a positive number, got {args.samples}")
+    if not np.isfinite(args.smoothing) or args.smoothing < 0:
+        raise UsageError(f"--smoothing: expected a weight >= 0, got {args.smoothing}")
+    alpha, beta = parse_weights(robot, args.weights)
+    cones = parse_cones(robot, args.cone)
+    if cones and args.case != 3:
+        raise UsageError("--cone applies to --case 3 only")
+    traj = load_trajectory(robot, args.trajectory)
+    if args.samples:
+        traj = traj.subsample(args.samples)
+    from ..problem import case_problem
+    problem = case_problem(robot, args.case, alpha=alpha, beta=beta, cones=cones, frame=args.frame,
+                           smoothing=args.smoothing)
+    ident = InverseDynamics(robot, problem, solver=args.solver, soften=args.soften,
+                            diagnose=not args.no_diagnosis)
+    if args.workers < 1:
+        raise UsageError(f"--workers: expected a positive number, got {args.workers}")
+    result = ident.solve_trajectory(traj, progress=False if args.quiet else None, workers=args.workers)
+    result.problem = f"case {args.case}: " + result.problem
+    return robot, result
+
+
+def run(args) -> int:
+    for out in args.out:
+        if Path(out).suffix not in (".npz", ".csv"):
+            raise UsageError(f"--out: expected a .npz or .csv file name, got {out!r}")
+    robot, result = run_solve(args)
+    print(summary(result))
+    for out in args.out:
+        path = result.save(out)
+        print(f"wrote {path}")
+    solve_html_hook(args, robot, result)
+    return 0
+
+
+def summary(result) -> str:
+    """The solve summary: peaks per cable and joint, infeasible instants, timing."""
+    t = result.t
+    lines = [f"{result.robot}: {result.problem}",
+             f"trajectory {result.trajectory}: {len(t)} instants, t = {t[0]:g}..{t[-1]:g} s, "
+             f"solver {result.solver}"]
+    found = result.found
+    rows = []
+    for i, name in enumerate(result.cable_names):
+        col = result.f[:, i]
+        if np.any(np.isfinite(col)):
+            k = int(np.nanargmax(col))
+            rows.append([name, f"{col[k]:.4f}", f"{t[k]:.3f}", f"{np.nanmin(col):.4f}"])
+        else:
+            rows.append([name, "-", "-", "-"])
+    lines += ["", table(["cable", "peak f N", "at t s", "min f N"], rows)]
+    rows = []
+    Fmag = result.force_magnitude
+    for j, name in enumerate(result.joint_names):
+        if np.any(np.isfinite(Fmag[:, j])):
+            k = int(np.nanargmax(Fmag[:, j]))
+            a = int(np.nanargmax(result.interaction_angle_deg[:, j]))
+            cone = result.cone_deg[j]
+            rows.append([name, f"{Fmag[k, j]:.4f}", f"{t[k]:.3f}",
+                         f"{result.interaction_angle_deg[a, j]:.4f}", f"{t[a]:.3f}",
+                         "-" if not np.isfinite(cone) else f"{cone:g}"])
+        else:
+            rows.append([name, "-", "-", "-", "-", "-"])
+    lines += ["", table(["joint", "peak |F| N", "at t s", "max angle deg", "at t s", "cone deg"], rows)]
+    bad = np.flatnonzero(~found)
+    soft = np.flatnonzero(result.status == "softened")
+    lines.append("")
+    if len(bad):
+        lines.append(f"no valid answer at {len(bad)} of {len(t)} instants:")
+        for k in bad[:20]:
+            lines.append(f"  t = {t[k]:.3f} s  {result.status[k]}: {result.message[k]}")
+        if len(bad) > 20:
+            lines.append(f"  ... and {len(bad) - 20} more")
+    else:
+        lines.append(f"all {len(t)} instants solved")
+    if len(soft):
+        lines.append(f"softened at {len(soft)} instants (largest widening "
+                     f"{np.max(result.softened_deg):.4g} deg)")
+    tm, ts = result.time_model_s * 1e3, result.time_solve_s * 1e3
+    lines.append(f"time per instant: model {np.median(tm):.3f} ms, solve {np.median(ts):.3f} ms "
+                 f"(median; mean {np.mean(tm + ts):.3f} ms total), "
+                 f"{np.median(result.iterations):.0f} solver iterations (median)")
+    return "\n".join(lines)
