@@ -28,8 +28,15 @@ needed_f_max                (N,)          infeasible by the bounds: smallest com
                                           would do, N (inf: none; NaN: not this case)
 needed_cone_deg             (N,)          infeasible by the cones: smallest half-angle that would
                                           do, degrees (NaN: not this case)
+unique                      (N,)          the optimum is provably unique (False: the least-norm
+                                          optimum was picked among equally optimal forces, or
+                                          no answer)
+stage                       (N,)          the solver stage that answered (``ipm``,
+                                          ``warm_active_set``, ``proxqp>polish``, ...)
 robot, problem, solver,     ()            strings describing the run
 trajectory
+problem_json                ()            the problem as data (``Problem.spec()`` as JSON;
+                                          ``Problem.from_spec(robot, text)`` rebuilds it)
 ==========================  ============  =====================================================
 """
 
@@ -63,6 +70,8 @@ class InstantResult:
     softened_deg: float = 0.0
     needed_f_max: float = float("nan")
     needed_cone_deg: float = float("nan")
+    unique: bool = False
+    stage: str = ""
 
     @property
     def found(self) -> bool:
@@ -72,7 +81,7 @@ class InstantResult:
 _COLUMN_TYPES = dict(f=float, status=str, message=str, objective=float, eom_residual=float,
                      interaction_wrench=float, interaction_force_socket=float, interaction_angle_deg=float,
                      time_model_s=float, time_solve_s=float, iterations=int, rounds=int, softened_deg=float,
-                     needed_f_max=float, needed_cone_deg=float)
+                     needed_f_max=float, needed_cone_deg=float, unique=bool, stage=str)
 
 
 def instant_columns(instants: list[InstantResult]) -> dict:
@@ -88,9 +97,11 @@ def concat_columns(parts: list[dict]) -> dict:
 
 ARRAY_KEYS = ("t", "q", "qd", "qdd", "f", "status", "message", "objective", "eom_residual",
               "interaction_wrench", "interaction_force_socket", "interaction_angle_deg", "time_model_s",
-              "time_solve_s", "iterations", "rounds", "softened_deg", "needed_f_max", "needed_cone_deg")
+              "time_solve_s", "iterations", "rounds", "softened_deg", "needed_f_max", "needed_cone_deg",
+              "unique", "stage")
 NAME_KEYS = ("joint_names", "cable_names", "coordinate_names")
-META_KEYS = ("robot", "problem", "solver", "trajectory")
+META_KEYS = ("robot", "problem", "solver", "trajectory", "problem_json")
+_OPTIONAL = {"needed_f_max": float("nan"), "needed_cone_deg": float("nan"), "unique": False, "stage": ""}
 
 
 @dataclass
@@ -124,6 +135,15 @@ class TrajectoryResult:
     problem: str = ""
     solver: str = ""
     trajectory: str = ""
+    unique: np.ndarray | None = None
+    stage: np.ndarray | None = None
+    problem_json: str = ""
+
+    def __post_init__(self):
+        if self.unique is None:
+            self.unique = np.zeros(len(self.t), dtype=bool)
+        if self.stage is None:
+            self.stage = np.full(len(self.t), "", dtype=str)
 
     @classmethod
     def from_instants(cls, rob, traj, instants: list[InstantResult], cone_deg, **meta):
@@ -178,13 +198,12 @@ class TrajectoryResult:
         path = Path(path)
         try:
             with np.load(path, allow_pickle=False) as z:
-                optional = ("needed_f_max", "needed_cone_deg")
-                missing = [k for k in ARRAY_KEYS + NAME_KEYS if k not in z.files and k not in optional]
+                missing = [k for k in ARRAY_KEYS + NAME_KEYS if k not in z.files and k not in _OPTIONAL]
                 if missing:
                     raise ResultsError(f"{path}: not an mcdm-pin results file (missing {', '.join(missing)})")
                 kw = {k: z[k] for k in ARRAY_KEYS + NAME_KEYS if k in z.files}
-                for k in optional:
-                    kw.setdefault(k, np.full(len(kw["t"]), np.nan))
+                for k, fill in _OPTIONAL.items():
+                    kw.setdefault(k, np.full(len(kw["t"]), fill))
                 kw["cone_deg"] = z["cone_deg"] if "cone_deg" in z.files else \
                     np.full(len(kw["joint_names"]), np.nan)
                 for k in META_KEYS:
@@ -214,7 +233,7 @@ class TrajectoryResult:
         cols.update(time_model_s=self.time_model_s, time_solve_s=self.time_solve_s,
                     iterations=self.iterations, rounds=self.rounds, softened_deg=self.softened_deg,
                     needed_f_max=self.needed_f_max, needed_cone_deg=self.needed_cone_deg,
-                    message=self.message)
+                    unique=self.unique, stage=self.stage, message=self.message)
         return cols
 
     def save_csv(self, path) -> Path:

@@ -338,9 +338,9 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
 
     ``reg_rel``: the Tikhonov term of :func:`eq_solve` relative to the objective's scale.
 
-    Returns ``(code, f, mus, grad, state, cact, dirs, next_state)``: ``code`` :data:`FOUND` or a key
-    of :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers, ``grad`` the bounds'
-    multipliers, ``(state, cact, dirs)`` the optimum's active set and ``next_state`` the guess for
+    Returns ``(code, f, mus, grad, state, cact, dirs, next_state, y)``: ``code`` :data:`FOUND` or a
+    key of :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers, ``grad`` the bounds'
+    multipliers (> 0 at a lower bound), ``y`` the equations' multipliers, ``(state, cact, dirs)`` the optimum's active set and ``next_state`` the guess for
     the next instant (the bounds whose multiplier is not negligible, 1e-12 of the largest).
     """
     n = H.shape[0]
@@ -363,6 +363,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
     hist_s = np.zeros((max_pivots, n), dtype=np.int8)
     hist_c = np.zeros((max_pivots, nc), dtype=np.bool_)
     f = np.zeros(n)
+    y = np.zeros(neq)
     mus = np.zeros(nc)
     grad = np.zeros(n)
     # the last verified-but-not-optimal point, to step back to when a block pivot fails
@@ -392,7 +393,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
                         same = False
                         break
             if same:
-                return CYCLE, f, mus, grad, state, cact, cdir, state
+                return CYCLE, f, mus, grad, state, cact, cdir, state, y
         hist_s[it] = state
         hist_c[it] = cact
         code, f, y, mus, dirs = eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir,
@@ -411,7 +412,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
             blocks_ok = False  # from now on one change at a time (finite for strictly convex QPs)
             continue
         if code != OK and code != NO_CONVERGENCE:
-            return code, f, mus, grad, state, cact, cdir, state
+            return code, f, mus, grad, state, cact, cdir, state, y
         # Newton steps that did not settle still say which cables and cones to exchange; the point
         # itself is accepted only if it passes the full KKT check like any other
         (vcode, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind,
@@ -426,9 +427,9 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
             for i in range(n):
                 if (state[i] == 1 and not grad[i] > thr) or (state[i] == 2 and not grad[i] < -thr):
                     nxt[i] = 0
-            return FOUND, f, mus, grad, state, cact, dirs, nxt
+            return FOUND, f, mus, grad, state, cact, dirs, nxt, y
         if vcode != KKT_PIVOT:
-            return 20 + vcode, f, mus, grad, state, cact, cdir, state
+            return 20 + vcode, f, mus, grad, state, cact, cdir, state, y
         have_prev = True
         prev_state[:] = state
         prev_cact[:] = cact
@@ -484,7 +485,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
                                             neq, nc, n)
             last_was_block = False
         cdir = _next_dirs(cone_in, cone_dir, dirs, nc)
-    return PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state
+    return PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state, y
 
 
 @njit(cache=True, nogil=True)
