@@ -57,7 +57,7 @@ def wrench_closure(robot, q, L: np.ndarray | None = None) -> Closure:
     from scipy.optimize import linprog
 
     if L is None:
-        from .terms import compute_terms
+        from .model.terms import compute_terms
 
         L = compute_terms(robot, q).L
     m, nv = L.shape

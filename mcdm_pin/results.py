@@ -6,7 +6,10 @@
 key                         shape         meaning
 ==========================  ============  =====================================================
 t                           (N,)          time, s
-q                           (N, nv)       coordinates (rad or m), Pinocchio joint order
+q                           (N, nv)       coordinates (rad or m; a native ball joint's rotation
+                                          vector), Pinocchio joint order
+configuration               (N, nq)       Pinocchio's configuration vector (equal to q when every
+                                          joint has nq == nv; absent from older files)
 qd, qdd                     (N, nv)       their first and second time derivatives
 f                           (N, m)        cable forces, N (rows of NaN where no valid answer)
 status                      (N,)          optimal, infeasible, max_iter, softened, inaccurate
@@ -124,6 +127,11 @@ class TrajectoryResult:
     problem: str = ""
     solver: str = ""
     trajectory: str = ""
+    configuration: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.configuration is None:
+            self.configuration = self.q
 
     @classmethod
     def from_instants(cls, rob, traj, instants: list[InstantResult], cone_deg, **meta):
@@ -132,7 +140,10 @@ class TrajectoryResult:
     @classmethod
     def from_columns(cls, rob, traj, columns: dict, cone_deg, **meta):
         """From the per-instant fields stacked into arrays (:func:`instant_columns`)."""
-        return cls(t=traj.t.copy(), q=traj.q.copy(), qd=traj.qd.copy(), qdd=traj.qdd.copy(), **columns,
+        coords = (traj.q.copy() if rob.nq == rob.nv else
+                  np.array([rob.coordinates(q) for q in traj.q]).reshape(len(traj.t), rob.nv))
+        return cls(t=traj.t.copy(), q=coords, qd=traj.qd.copy(), qdd=traj.qdd.copy(), **columns,
+                   configuration=traj.q.copy(),
                    joint_names=np.array(rob.joint_names, dtype=str),
                    cable_names=np.array(rob.cable_names, dtype=str),
                    coordinate_names=np.array(rob.coordinate_names, dtype=str),
@@ -168,7 +179,7 @@ class TrajectoryResult:
 
     def save_npz(self, path) -> Path:
         path = Path(path)
-        data = {k: getattr(self, k) for k in ARRAY_KEYS + NAME_KEYS + ("cone_deg",)}
+        data = {k: getattr(self, k) for k in ARRAY_KEYS + NAME_KEYS + ("cone_deg", "configuration")}
         data.update({k: np.array(getattr(self, k)) for k in META_KEYS})
         np.savez_compressed(path, **data)
         return path
@@ -189,6 +200,8 @@ class TrajectoryResult:
                     np.full(len(kw["joint_names"]), np.nan)
                 for k in META_KEYS:
                     kw[k] = str(z[k]) if k in z.files else ""
+                if "configuration" in z.files:
+                    kw["configuration"] = z["configuration"]
         except FileNotFoundError:
             raise ResultsError(f"{path}: file not found") from None
         except (OSError, ValueError) as exc:

@@ -20,7 +20,11 @@ import yaml
 from .exceptions import SidecarError
 
 SUPPORTED_VERSIONS = (1,)
-JOINT_TYPES = ("spherical", "revolute", "prismatic")
+JOINT_TYPES = ("spherical", "revolute", "prismatic", "universal", "planar", "translation", "free")
+# how many URDF joints each type takes
+URDF_JOINT_COUNTS = {"spherical": (1, 3), "revolute": (1,), "prismatic": (1,), "universal": (2,),
+                     "planar": (1, 3), "translation": (2, 3), "free": (1,)}
+PARAMETRIZATIONS = {1: ("quaternion", "zyx"), 3: ("euler-xyz",)}  # spherical: by URDF joint count
 SPHERICAL_MODES = ("axis-angle", "per-coordinate")
 TRAJECTORY_TYPES = ("quintic", "csv")
 
@@ -42,6 +46,18 @@ class JointSpec:
     alpha: float = 1.0
     beta: float = 0.0
     cone_deg: float | None = None
+    key: str = ""
+    parametrization: str | None = None  # spherical joints: euler-xyz | quaternion | zyx
+    actuated: "ActuatorSpec | None" = None
+
+
+@dataclass(frozen=True)
+class ActuatorSpec:
+    """``actuated:`` of a joint (hybrid robots): bounds per degree of freedom and the weight of tau^2."""
+
+    min: tuple[float, ...]
+    max: tuple[float, ...]
+    weight: float = 1.0
     key: str = ""
 
 
@@ -186,7 +202,9 @@ def _join(key: str, sub: str) -> str:
 
 TOP_KEYS = ("version", "name", "description", "urdf", "gravity", "joints", "cables", "locked_joints",
             "trajectories")
-JOINT_KEYS = ("type", "urdf_joints", "socket_axis", "alpha", "beta", "cone_deg")
+JOINT_KEYS = ("type", "urdf_joints", "parametrization", "socket_axis", "alpha", "beta", "cone_deg",
+              "actuated")
+ACTUATED_KEYS = ("min", "max", "weight")
 CABLE_KEYS = ("name", "f_min", "f_max", "route")
 POINT_KEYS = ("link", "point")
 QUINTIC_KEYS = ("type", "q_start", "q_end", "duration", "dt", "spherical")
@@ -281,13 +299,13 @@ def _parse_joints(r: _Reader, raw) -> tuple[JointSpec, ...]:
         spec = r.mapping(spec, key, JOINT_KEYS, required=("type", "urdf_joints"))
         jtype = r.choice(spec["type"], f"{key}.type", JOINT_TYPES)
         uj = spec["urdf_joints"]
-        n_expected = 3 if jtype == "spherical" else 1
-        if isinstance(uj, str) and n_expected == 1:
+        counts = URDF_JOINT_COUNTS[jtype]
+        if isinstance(uj, str) and 1 in counts:
             uj = [uj]
-        if not isinstance(uj, list) or len(uj) != n_expected:
+        if not isinstance(uj, list) or len(uj) not in counts:
+            want = " or ".join(str(c) for c in counts)
             raise r.fail(f"{key}.urdf_joints",
-                         f"a {jtype} joint needs a list of {n_expected} URDF joint name"
-                         f"{'s' if n_expected > 1 else ''}, got {_kind(uj)}")
+                         f"a {jtype} joint needs a list of {want} URDF joint name(s), got {_kind(uj)}")
         names = tuple(r.string(u, f"{key}.urdf_joints[{i}]") for i, u in enumerate(uj))
         for i, u in enumerate(names):
             if u in seen_urdf:
@@ -301,14 +319,39 @@ def _parse_joints(r: _Reader, raw) -> tuple[JointSpec, ...]:
         axis = tuple(a / norm for a in axis)
         alpha = r.number(spec.get("alpha", 1.0), f"{key}.alpha", lo=0.0)
         beta = r.number(spec.get("beta", 0.0), f"{key}.beta", lo=0.0)
+        parametrization = None
+        if jtype == "spherical":
+            allowed = PARAMETRIZATIONS[len(uj)]
+            parametrization = r.choice(spec.get("parametrization", allowed[0]), f"{key}.parametrization", allowed)
+        elif "parametrization" in spec:
+            raise r.fail(f"{key}.parametrization", "a parametrization is chosen for spherical joints only")
+        actuated = None
+        if spec.get("actuated") is not None:
+            actuated = _parse_actuated(r, spec["actuated"], f"{key}.actuated")
         cone = spec.get("cone_deg")
         if cone is not None:
             if jtype != "spherical":
                 raise r.fail(f"{key}.cone_deg", "a stability cone is defined for spherical joints only")
             cone = r.number(cone, f"{key}.cone_deg", lo=0.0, hi=90.0, lo_open=True, hi_open=True)
         joints.append(JointSpec(name=jname, type=jtype, urdf_joints=names, socket_axis=axis,
-                                alpha=alpha, beta=beta, cone_deg=cone, key=key))
+                                alpha=alpha, beta=beta, cone_deg=cone, key=key,
+                                parametrization=parametrization, actuated=actuated))
     return tuple(joints)
+
+
+def _parse_actuated(r: _Reader, raw, key: str) -> ActuatorSpec:
+    """``{min: [...], max: [...], weight: w}``: one bound per degree of freedom (checked against the
+    joint by the loader), a single number meaning one degree of freedom."""
+    raw = r.mapping(raw, key, ACTUATED_KEYS, required=("min", "max"))
+    lo = raw["min"] if isinstance(raw["min"], list) else [raw["min"]]
+    hi = raw["max"] if isinstance(raw["max"], list) else [raw["max"]]
+    lo = r.vector(lo, f"{key}.min", None)
+    hi = r.vector(hi, f"{key}.max", len(lo))
+    for i, (a, b) in enumerate(zip(lo, hi)):
+        if not a < b:
+            raise r.fail(f"{key}.max[{i}]", f"expected max > min = {a!r}, got {b!r}")
+    weight = r.number(raw.get("weight", 1.0), f"{key}.weight", lo=0.0)
+    return ActuatorSpec(min=lo, max=hi, weight=weight, key=key)
 
 
 def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:

@@ -10,7 +10,7 @@ from .exceptions import McdmError
 def validation_report(robot) -> list[tuple[str, str]]:
     """``[(level, text)]`` with level ``ok``, ``warn`` or ``fail``."""
     from .inverse_dynamics import InverseDynamics
-    from .terms import compute_terms
+    from .model.terms import compute_terms
 
     out = [("ok", f"sidecar valid; URDF loaded; every movable URDF joint ({robot.nv}) belongs to one "
                   f"of {len(robot.joints)} physical joints")]

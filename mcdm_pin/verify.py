@@ -38,7 +38,7 @@ from typing import Callable
 import numpy as np
 import pinocchio as pin
 
-from .cables import cable_geometry
+from .model.geometry import cable_geometry
 from .exceptions import ResultsError, TrajectoryError
 
 INTEGRATORS = ("rk4", "euler", "semi-implicit")
