@@ -50,6 +50,7 @@ class Part:
 def _primitive_parts(jm, name: str, idx_q: int, idx_v: int, tag: str) -> list[Part]:
     short = jm.shortname()
     if short == "JointModelComposite":
+        jm = jm.extract() if hasattr(jm, "extract") else jm
         parts = []
         for k, sub in enumerate(jm.joints):
             parts += _primitive_parts(sub, name, idx_q + sub.idx_q - jm.idx_q, idx_v + sub.idx_v - jm.idx_v,
