@@ -20,12 +20,17 @@ def validation_report(robot) -> list[tuple[str, str]]:
     except McdmError as exc:
         return out + [("fail", f"cannot evaluate the model at q = 0: {exc}")]
     eig = np.linalg.eigvalsh(terms.M)
-    if eig.min() > 0:
+    tol = 1e-12 * max(1.0, float(np.abs(eig).max()))
+    if eig.min() > tol:
         out.append(("ok", f"mass matrix positive definite at q = 0 (eigenvalues {eig.min():.3g} .. "
                           f"{eig.max():.3g})"))
+    elif eig.min() >= -tol:
+        out.append(("warn", f"mass matrix singular at q = 0 (smallest eigenvalue {eig.min():.3g}): a subtree "
+                            f"has no mass or no inertia about some axis; inverse dynamics is still defined "
+                            f"(forward dynamics, e.g. mcdm-pin verify, is not)"))
     else:
-        out.append(("fail", f"mass matrix not positive definite at q = 0 (smallest eigenvalue "
-                            f"{eig.min():.3g}): a subtree has no mass or inertia"))
+        out.append(("fail", f"mass matrix indefinite at q = 0 (smallest eigenvalue {eig.min():.3g}): some "
+                            f"body's inertia is not physical"))
     rank = np.linalg.matrix_rank(terms.L, tol=1e-9 * max(1.0, np.abs(terms.L).max()))
     if rank == robot.nv:
         sv = np.linalg.svd(terms.L, compute_uv=False)
