@@ -35,10 +35,16 @@ def resolve_package_uri(uri: str, sidecar_path=None, key: str = "urdf") -> Path:
     package, _, inner = rest.partition("/")
     if not package or not inner:
         raise SidecarError(sidecar_path, key, f"expected package://PACKAGE/PATH, got {uri!r}")
+    if package in (".", "..") or "\\" in rest:
+        raise SidecarError(sidecar_path, key, f"expected package://PACKAGE/PATH, got {uri!r}")
     tried = []
     for share in package_share_dirs():
-        candidate = share / package / inner
+        root = (share / package).resolve()
+        candidate = (share / package / inner).resolve()
         tried.append(str(share))
+        if root != candidate and root not in candidate.parents:
+            raise SidecarError(sidecar_path, key, f"{uri!r} leaves the package {package!r}: a package:// path "
+                                                  f"must stay inside its package's folder")
         if candidate.is_file():
             return candidate
     raise SidecarError(sidecar_path, key,

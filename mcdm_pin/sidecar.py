@@ -15,9 +15,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
+from . import yaml12
 from .exceptions import SidecarError
+from .limits import MAX_CABLES, MAX_MAGNITUDE, MAX_ROUTE_POINTS, MAX_SAMPLES, MAX_SIDECAR_BYTES
 
 SUPPORTED_VERSIONS = (1,)
 JOINT_TYPES = ("spherical", "revolute", "prismatic", "universal", "planar", "translation", "free")
@@ -28,9 +28,6 @@ PARAMETRIZATIONS = {1: ("quaternion", "zyx"), 3: ("euler-xyz",)}  # spherical: b
 SPHERICAL_MODES = ("axis-angle", "per-coordinate")
 TRAJECTORY_TYPES = ("quintic", "csv")
 
-# the largest magnitude accepted for any number: larger finite values (1e308 kg, a point at 1e300 m)
-# overflow to inf in the dynamics (found by tests/test_fuzz.py)
-MAX_MAGNITUDE = 1e100
 
 _FLOAT_RE = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 
@@ -141,13 +138,17 @@ class _Reader:
         if isinstance(value, bool) or value is None:
             raise self.fail(key, f"expected a number, got {_kind(value)}")
         if isinstance(value, str):
-            # PyYAML reads "1e3" (no dot) as a string; accept plain decimal notation only.
+            # a quoted number in plain decimal notation is accepted (data built in code, old files)
             if not _FLOAT_RE.match(value.strip()):
-                raise self.fail(key, f"expected a number, got the string {value!r}")
+                raise self.fail(key, f"expected a number, got the string {_short(value)}")
             value = float(value)
         if not isinstance(value, (int, float)):
             raise self.fail(key, f"expected a number, got {_kind(value)}")
-        x = float(value)
+        try:
+            x = float(value)
+        except OverflowError:
+            raise self.fail(key, f"expected a number of magnitude at most {MAX_MAGNITUDE:g}, got an integer "
+                                 f"of {len(str(abs(value)))} digits") from None
         if not math.isfinite(x):
             raise self.fail(key, f"expected a finite number, got {value!r}")
         if abs(x) > MAX_MAGNITUDE:
@@ -175,6 +176,10 @@ class _Reader:
         if value not in choices:
             raise self.fail(key, f"expected one of {_names(choices)}, got {value!r}")
         return value
+
+
+def _short(text: str, n: int = 60) -> str:
+    return repr(text[:n]) + ("..." if len(text) > n else "")
 
 
 def _kind(value) -> str:
@@ -220,20 +225,30 @@ def load_sidecar(path) -> Sidecar:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        size = path.stat().st_size
+        if size > MAX_SIDECAR_BYTES:
+            raise SidecarError(path, "", f"the file has {size} bytes; a sidecar may have at most "
+                                         f"{MAX_SIDECAR_BYTES} (docs/limits.md)")
+        text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise SidecarError(path, "", "file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SidecarError(path, "", f"cannot read the file ({exc})") from None
+    except IsADirectoryError:
+        raise SidecarError(path, "", "is a folder; expected a sidecar YAML file") from None
+    except UnicodeDecodeError:
+        raise SidecarError(path, "", "not UTF-8 text; expected a sidecar YAML file (is it a URDF, a CSV "
+                                     "or a results file?)") from None
+    except OSError as exc:
+        raise SidecarError(path, "", f"cannot read the file ({exc.strerror or exc})") from None
+    head = text.lstrip()[:200]
+    if head.startswith("<"):
+        kind = "a URDF" if "<robot" in text[:4096] else "an XML file"
+        raise SidecarError(path, "", f"this is {kind}, not a sidecar: pass the sidecar YAML that names it "
+                                     f"(docs/sidecar.md)")
     try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise SidecarError(path, "", f"malformed YAML{where}: {problem}") from None
-    except RecursionError:
-        raise SidecarError(path, "", "malformed YAML: nesting too deep") from None
+        data = yaml12.load(text)
+    except yaml12.YamlError as exc:
+        where = f" at line {exc.line}" if exc.line else ""
+        raise SidecarError(path, "", f"malformed YAML{where}: {exc.problem}") from None
     return parse_sidecar(data, path=path)
 
 
@@ -357,6 +372,8 @@ def _parse_actuated(r: _Reader, raw, key: str) -> ActuatorSpec:
 def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:
     if not isinstance(raw, list) or not raw:
         raise r.fail("cables", f"expected a non-empty list of cables, got {_kind(raw)}")
+    if len(raw) > MAX_CABLES:
+        raise r.fail("cables", f"expected at most {MAX_CABLES} cables (docs/limits.md), got {len(raw)}")
     cables = []
     names: dict[str, int] = {}
     for i, spec in enumerate(raw):
@@ -371,6 +388,9 @@ def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:
         if not f_max > f_min:
             raise r.fail(f"{key}.f_max", f"expected f_max > f_min = {f_min!r}, got {f_max!r}")
         route = spec["route"]
+        if isinstance(route, list) and len(route) > MAX_ROUTE_POINTS:
+            raise r.fail(f"{key}.route", f"expected at most {MAX_ROUTE_POINTS} points (docs/limits.md), "
+                                         f"got {len(route)}")
         if not isinstance(route, list) or len(route) < 2:
             got = f"{len(route)} point(s)" if isinstance(route, list) else _kind(route)
             raise r.fail(f"{key}.route", f"expected a list of at least two {{link, point}}, got {got}")
@@ -402,8 +422,9 @@ def _parse_trajectory(r: _Reader, name, spec, base_dir: Path) -> TrajectorySpec:
     dt = r.number(spec["dt"], f"{key}.dt", lo=0.0, lo_open=True)
     if dt > duration:
         raise r.fail(f"{key}.dt", f"expected dt <= duration = {duration!r}, got {dt!r}")
-    if duration / dt > 10_000_000:
-        raise r.fail(f"{key}.dt", f"expected at most 1e7 samples, got duration/dt = {duration / dt:.3g}")
+    if duration / dt + 1 > MAX_SAMPLES:
+        raise r.fail(f"{key}.dt", f"expected at most {MAX_SAMPLES} samples (docs/limits.md), got "
+                                  f"duration/dt + 1 = {duration / dt + 1:.3g}")
     mode = r.choice(spec.get("spherical", "axis-angle"), f"{key}.spherical", SPHERICAL_MODES)
     return TrajectorySpec(name=name, type="quintic", q_start=q0, q_end=q1, duration=duration, dt=dt,
                           spherical=mode, key=key)

@@ -39,6 +39,7 @@ import numpy as np
 import pinocchio as pin
 
 from .exceptions import SidecarError, TrajectoryError
+from .limits import MAX_CSV_BYTES, MAX_SAMPLES
 from .model import charts
 from .sidecar import TrajectorySpec, _names
 
@@ -56,6 +57,19 @@ class Trajectory:
     q: np.ndarray
     qd: np.ndarray
     qdd: np.ndarray
+
+    def __post_init__(self):
+        try:
+            self.t = np.asarray(self.t, dtype=float).reshape(-1)
+            arrays = [np.asarray(getattr(self, k), dtype=float) for k in ("q", "qd", "qdd")]
+        except (TypeError, ValueError) as exc:
+            raise TrajectoryError(f"trajectory {self.name!r}: expected arrays of numbers ({exc})") from None
+        n = len(self.t)
+        for key, arr in zip(("q", "qd", "qdd"), arrays):
+            if arr.ndim != 2 or arr.shape[0] != n:
+                raise TrajectoryError(f"trajectory {self.name!r}: {key} has shape {arr.shape}; expected "
+                                      f"{n} rows, one per time in t")
+        self.q, self.qd, self.qdd = arrays
 
     def __len__(self) -> int:
         return len(self.t)
@@ -222,6 +236,9 @@ def quintic_trajectory(robot, q_start, q_end, duration: float, dt: float,
     (module docstring)."""
     if not (np.isfinite(duration) and np.isfinite(dt) and duration > 0 and dt > 0 and dt <= duration):
         raise TrajectoryError(f"expected finite 0 < dt <= duration, got dt={dt!r}, duration={duration!r}")
+    if duration / dt + 1 > MAX_SAMPLES:
+        raise TrajectoryError(f"expected at most {MAX_SAMPLES} samples (docs/limits.md), got duration/dt + 1 = "
+                              f"{duration / dt + 1:.3g}")
     n = int(np.floor(duration / dt + 1e-9)) + 1
     plan_ = QuinticPlan(robot, q_start, q_end, duration, spherical)
     t = np.arange(n) * dt
@@ -244,11 +261,26 @@ def quintic_trajectory(robot, q_start, q_end, duration: float, dt: float,
 # -------------------------------------------------------------------------------------------- CSV
 def _csv_rows(path: Path) -> list[list[str]]:
     try:
-        with path.open(newline="", encoding="utf-8") as fh:
-            return [row for row in csv.reader(fh) if row and any(c.strip() for c in row)]
+        size = path.stat().st_size
+        if size > MAX_CSV_BYTES:
+            raise TrajectoryError(f"{path}: the file has {size} bytes; a trajectory CSV may have at most "
+                                  f"{MAX_CSV_BYTES} (docs/limits.md)")
+        rows = []
+        # utf-8-sig: a byte-order mark written by spreadsheets is not part of the first cell
+        with path.open(newline="", encoding="utf-8-sig") as fh:
+            for row in csv.reader(fh):
+                if row and any(c.strip() for c in row):
+                    rows.append(row)
+                    if len(rows) > MAX_SAMPLES + 1:
+                        raise TrajectoryError(f"{path}: more than {MAX_SAMPLES} rows (docs/limits.md)")
+        return rows
     except FileNotFoundError:
         raise TrajectoryError(f"{path}: file not found") from None
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+    except IsADirectoryError:
+        raise TrajectoryError(f"{path}: is a folder; expected a CSV file") from None
+    except UnicodeDecodeError:
+        raise TrajectoryError(f"{path}: not UTF-8 text; expected a CSV file") from None
+    except (OSError, csv.Error) as exc:
         raise TrajectoryError(f"{path}: cannot read the CSV ({exc})") from None
 
 

@@ -12,16 +12,16 @@ from __future__ import annotations
 import os
 import site
 import sys
+import tempfile
 import xml.etree.ElementTree as ET
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
 from .exceptions import ModelError
-
-# the largest magnitude accepted for any number (larger finite values overflow in the dynamics)
-MAX_MAGNITUDE = 1e100
+from .limits import MAX_JOINTS, MAX_MAGNITUDE, MAX_URDF_BYTES
 
 
 def package_share_dirs() -> list[Path]:
@@ -43,15 +43,74 @@ def package_share_dirs() -> list[Path]:
     return dirs
 
 
+@contextmanager
+def _captured_stderr():
+    """What C/C++ code writes to file descriptor 2 meanwhile (urdfdom reports through it)."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile(mode="w+b") as tmp:
+        os.dup2(tmp.fileno(), 2)
+        box: list[str] = []
+        try:
+            yield box
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            box.append(tmp.read(65536).decode("utf-8", "replace"))
+
+
 def load_model(urdf_path) -> pin.Model:
-    """Pinocchio's model of a URDF file, its numbers checked (:func:`check_model_numbers`)."""
+    """Pinocchio's model of a URDF file. Everything the parser reports (urdfdom prints an ``Error:``
+    and still returns a model when, e.g., a mass is not a number: that link would silently lose its
+    inertia) is fatal; the model is then checked (:func:`check_urdf`, :func:`check_model_numbers`)."""
+    path = Path(urdf_path)
     try:
-        model = pin.buildModelFromUrdf(str(urdf_path))
+        size = path.stat().st_size
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read the URDF ({exc.strerror or exc})") from None
+    if size > MAX_URDF_BYTES:
+        raise ModelError(f"{path}: the URDF has {size} bytes; at most {MAX_URDF_BYTES} are read (docs/limits.md)")
+    joints = check_urdf(path)
+    try:
+        with _captured_stderr() as said:
+            model = pin.buildModelFromUrdf(str(path))
     except Exception as exc:  # pinocchio raises ValueError/RuntimeError with urdfdom's text
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise ModelError(f"{urdf_path}: cannot load the URDF ({first})") from None
-    check_model_numbers(model, urdf_path)
+        reason = " ".join((said[0] if said else "").split()) or (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+        raise ModelError(f"{path}: cannot load the URDF ({reason[:300]})") from None
+    report = " ".join(said[0].split()) if said else ""
+    if report:
+        raise ModelError(f"{path}: the URDF parser reported: {report[:300]}")
+    if model.njoints > MAX_JOINTS:
+        raise ModelError(f"{path}: {model.njoints} joints; at most {MAX_JOINTS} are supported (docs/limits.md)")
+    del joints
+    check_model_numbers(model, path)
     return model
+
+
+_AXIS_TYPES = ("revolute", "continuous", "prismatic", "planar")
+
+
+def check_urdf(path) -> dict:
+    """What Pinocchio's URDF parser accepts but a dynamics model cannot use, refused by name: ``<mimic>``
+    joints (a coordinate slaved to another), zero joint axes. Returns :func:`urdf_joint_axes`."""
+    try:
+        root = ET.parse(str(path)).getroot()
+    except ET.ParseError as exc:
+        raise ModelError(f"{path}: malformed XML ({exc})") from None
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read the URDF ({exc.strerror or exc})") from None
+    if root.tag != "robot":
+        raise ModelError(f"{path}: the root element is <{root.tag}>, not <robot>: not a URDF")
+    for el in root.iter("joint"):
+        if el.find("mimic") is not None:
+            raise ModelError(f"{path}: joint {el.get('name')!r}: <mimic> joints are not supported (a coordinate "
+                             f"slaved to another); lock the joint (locked_joints) or make it independent")
+    axes = urdf_joint_axes(path, root)
+    for name, (kind, axis) in axes.items():
+        if kind in _AXIS_TYPES and not np.linalg.norm(axis) > 1e-12:
+            raise ModelError(f"{path}: joint {name!r}: <axis xyz> is zero; expected a direction")
+    return axes
 
 
 def check_model_numbers(model: pin.Model, source) -> None:
@@ -68,14 +127,20 @@ def check_model_numbers(model: pin.Model, source) -> None:
                 owner = "the fixed base" if j == 0 else f"the body moved by joint {model.names[j]!r}"
                 raise ModelError(f"{source}: {what} of {owner} is {values.tolist()} {unit}; expected "
                                  f"finite numbers of magnitude at most {MAX_MAGNITUDE:g}")
+        owner = "the fixed base" if j == 0 else f"the body moved by joint {model.names[j]!r}"
         if inertia.mass < 0:
-            raise ModelError(f"{source}: mass of the body moved by joint {model.names[j]!r} is "
-                             f"{inertia.mass!r} kg; expected >= 0")
+            raise ModelError(f"{source}: mass of {owner} is {inertia.mass!r} kg; expected >= 0")
+        eig = np.linalg.eigvalsh(0.5 * (inertia.inertia + inertia.inertia.T))
+        tol = 1e-12 * max(1.0, float(np.abs(eig).max()))
+        if eig.min() < -tol:
+            # (the triangle inequality is not required: planar models often give Izz only)
+            raise ModelError(f"{source}: inertia of {owner} has principal moments {np.round(eig, 12).tolist()} "
+                             f"kg m^2; expected a positive semidefinite inertia (moments >= 0)")
 
 
-def urdf_joint_axes(urdf_path) -> dict[str, tuple[str, np.ndarray]]:
+def urdf_joint_axes(urdf_path, root=None) -> dict[str, tuple[str, np.ndarray]]:
     """``{joint name: (URDF type, axis)}`` as the file writes them (axis default +x, URDF's)."""
-    root = ET.parse(str(urdf_path)).getroot()
+    root = ET.parse(str(urdf_path)).getroot() if root is None else root
     out = {}
     for el in root.iter("joint"):
         axis_el = el.find("axis")
