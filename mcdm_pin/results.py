@@ -187,6 +187,7 @@ class TrajectoryResult:
     @classmethod
     def load(cls, path) -> "TrajectoryResult":
         path = Path(path)
+        _check_archive(path)
         try:
             with np.load(path, allow_pickle=False) as z:
                 optional = ("needed_f_max", "needed_cone_deg")
@@ -239,6 +240,27 @@ class TrajectoryResult:
             for i in range(len(self.t)):
                 w.writerow([_fmt(v[i]) for v in cols.values()])
         return path
+
+
+def _check_archive(path: Path) -> None:
+    """Refuse an ``.npz`` whose arrays would unpack beyond :data:`~mcdm_pin.limits.MAX_RESULTS_BYTES`
+    (sizes from the archive's directory, before anything is read) or that is not one."""
+    import zipfile
+
+    from .limits import MAX_RESULTS_BYTES
+
+    try:
+        with zipfile.ZipFile(path) as zf:
+            total = sum(info.file_size for info in zf.infolist())
+    except FileNotFoundError:
+        raise ResultsError(f"{path}: file not found") from None
+    except IsADirectoryError:
+        raise ResultsError(f"{path}: is a folder; expected a results file (.npz)") from None
+    except (zipfile.BadZipFile, OSError) as exc:
+        raise ResultsError(f"{path}: not a results file written by mcdm-pin solve --out (.npz): {exc}") from None
+    if total > MAX_RESULTS_BYTES:
+        raise ResultsError(f"{path}: its arrays unpack to {total} bytes; at most {MAX_RESULTS_BYTES} are read "
+                           f"(docs/limits.md)")
 
 
 def _fmt(x) -> str:

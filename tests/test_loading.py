@@ -115,3 +115,28 @@ def test_quintic_needs_a_finite_duration(two_link):
     for duration, dt in ((float("inf"), 0.01), (1.0, float("nan")), (1.0, 1e-9)):
         with pytest.raises(TrajectoryError):
             quintic_trajectory(two_link, np.zeros(4), np.ones(4), duration, dt)
+
+
+def test_results_archive_sizes_are_checked_before_reading(tmp_path, monkeypatch):
+    """A zip bomb: the archive's directory says how large its arrays unpack; beyond the limit nothing is
+    read (the limit is lowered here so that the bomb stays small; the check is the same)."""
+    import mcdm_pin.limits
+    from mcdm_pin.exceptions import ResultsError
+    from mcdm_pin.results import TrajectoryResult
+
+    path = tmp_path / "bomb.npz"
+    np.savez_compressed(path, t=np.zeros(200_000))  # 1.6 MB of zeros, a few kB on disk
+    assert path.stat().st_size < 20_000
+    monkeypatch.setattr(mcdm_pin.limits, "MAX_RESULTS_BYTES", 1_000_000)
+    with pytest.raises(ResultsError, match=r"unpack to \d+ bytes; at most 1000000 are read"):
+        TrajectoryResult.load(path)
+    (tmp_path / "text.npz").write_text("not a zip")
+    with pytest.raises(ResultsError, match="not a results file"):
+        TrajectoryResult.load(tmp_path / "text.npz")
+
+
+def test_names_with_control_characters_are_escaped_in_tables():
+    from mcdm_pin.cli._common import table
+
+    out = table(["cable"], [["c1\nall 101 instants solved\x1b[2J"]])
+    assert "\n" not in out.splitlines()[-1] and "\\nall 101 instants solved\\x1b[2J" in out

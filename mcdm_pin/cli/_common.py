@@ -89,8 +89,16 @@ def parse_cones(robot, text: str | None):
     return out
 
 
+def printable(text) -> str:
+    """``text`` with control characters escaped (a name must not move the cursor or print a fake line)."""
+    text = str(text)
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in text)
+
+
 def table(headers, rows) -> str:
-    cells = [list(map(str, headers))] + [[str(c) for c in r] for r in rows]
+    cells = [[printable(c) for c in headers]] + [[printable(c) for c in r] for r in rows]
     widths = [max(len(r[i]) for r in cells) for i in range(len(headers))]
     lines = []
     for k, r in enumerate(cells):
