@@ -134,7 +134,7 @@ class Robot:
         model.gravity.linear = np.array(sc.gravity, dtype=float)
         model = _lock_joints(model, sc)
         model = _native_joints(model, sc, urdf_path)
-        joints = _physical_joints(model, sc)
+        joints = _physical_joints(model, sc, urdf_path)
         cables = _cables(model, sc, joints)
         actuators = _actuators(sc, joints)
         try:
@@ -324,7 +324,7 @@ def _native_joints(model: pin.Model, sc: Sidecar, urdf_path) -> pin.Model:
     return replace_joints(model, replace) if replace else model
 
 
-def _physical_joints(model: pin.Model, sc: Sidecar) -> tuple[PhysicalJoint, ...]:
+def _physical_joints(model: pin.Model, sc: Sidecar, urdf_path) -> tuple[PhysicalJoint, ...]:
     joints = []
     used: set[int] = set()
     for spec in sc.joints:
@@ -337,7 +337,7 @@ def _physical_joints(model: pin.Model, sc: Sidecar) -> tuple[PhysicalJoint, ...]
                                   socket_axis=spec.socket_axis)
         except ModelError as exc:
             key = f"{spec.key}.urdf_joints" + ("[0]" if len(ids) == 1 else "")
-            raise sc.error(key, str(exc)) from None
+            raise sc.error(key, f"{exc} (in {urdf_path})") from None
         used.update(ids)
         joints.append(pj)
     missing = [model.names[j] for j in range(1, model.njoints) if j not in used]

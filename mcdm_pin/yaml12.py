@@ -99,8 +99,10 @@ def _expanded_size(node, memo: dict) -> int:
     """Nodes reachable from ``node`` counting every alias use (shared subtrees counted per use)."""
     key = id(node)
     if key in memo:
+        if memo[key] is None:
+            raise YamlError("a recursive alias (a value that contains itself)", node.start_mark.line + 1)
         return memo[key]
-    memo[key] = 1  # a cycle (recursive alias) counts once; construction then refuses it
+    memo[key] = None  # in progress: meeting it again below is a cycle
     if isinstance(node, ScalarNode):
         size = 1
     elif isinstance(node, SequenceNode):
