@@ -136,7 +136,15 @@ def describe(robot) -> RobotSpec:
     """
     model = robot.model
     names = _body_names(model)
-    joints = tuple(_joint_spec(model, j, names) for j in robot.joints)
+    joints = []
+    for j in robot.joints:
+        try:
+            joints.append(_joint_spec(model, j, names))
+        except ModelError as exc:
+            if getattr(robot, "sidecar", None) is None:
+                raise
+            raise robot.sidecar.error(f"joints.{j.name}", str(exc)) from None
+    joints = tuple(joints)
     used = {j.child for j in joints}
     bodies = []
     for jid in range(1, model.njoints):
@@ -247,7 +255,7 @@ def euler_xyz(R: np.ndarray) -> tuple[float, float, float]:
     else:  # gimbal lock: only a +- c is defined; take c = 0
         a = math.atan2(R[2, 1], R[1, 1])
         c = 0.0
-    return a, b, c
+    return a + 0.0, b + 0.0, c + 0.0  # no "-0" in the file
 
 
 def opensim_model(robot_or_spec, optimal_force: float | None = None):

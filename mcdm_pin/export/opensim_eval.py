@@ -26,6 +26,8 @@ class OpenSimModel:
     Args:
         robot: a :class:`~mcdm_pin.robot.Robot`.
         optimal_force: :math:`F_0` of every cable (default: the largest ``f_max``).
+        path: read the model from this ``.osim`` file (written by
+            :func:`~mcdm_pin.export.opensim.export_opensim` for ``robot``) instead of building it.
 
     Attributes:
         model, state: the ``opensim.Model`` and its working state (``initSystem``'s).
@@ -34,11 +36,15 @@ class OpenSimModel:
         actuators: the cables' ``PathActuator`` objects, in our cable order.
     """
 
-    def __init__(self, robot, optimal_force: float | None = None):
+    def __init__(self, robot, optimal_force: float | None = None, path=None):
         self.osim = osim = require_opensim()
         self.spec = describe(robot)
-        self.optimal_force = default_optimal_force(self.spec) if optimal_force is None else float(optimal_force)
-        self.model = opensim_model(self.spec, self.optimal_force)
+        if path is None:
+            self.optimal_force = (default_optimal_force(self.spec) if optimal_force is None
+                                  else float(optimal_force))
+            self.model = opensim_model(self.spec, self.optimal_force)
+        else:
+            self.model = osim.Model(str(path))
         self.state = self.model.initSystem()
         names = self.spec.coordinate_names
         cs = self.model.getCoordinateSet()
@@ -58,6 +64,8 @@ class OpenSimModel:
                              f"(q {q_tag.tolist()}, u {u_tag.tolist()})")
         fs = self.model.getForceSet()
         self.actuators = [osim.PathActuator.safeDownCast(fs.get(c.name)) for c in self.spec.cables]
+        if path is not None:
+            self.optimal_force = float(self.actuators[0].getOptimalForce())
         self.nv, self.m = nv, len(self.actuators)
 
     # ------------------------------------------------------------------------------------ state
@@ -118,3 +126,32 @@ class OpenSimModel:
         s = self.set_state(x)
         self.model.realizePosition(s)
         return np.array([[a.computeMomentArm(s, c) for c in self.coordinates] for a in self.actuators])
+
+
+def compare_with_pinocchio(robot, om: OpenSimModel, samples: int = 5, seed: int = 0) -> dict[str, float]:
+    """The export checked against our model (Pinocchio) at ``samples`` random states (coordinates,
+    rates and accelerations uniform in [-1, 1]): the largest relative difference, over the states, of
+    the mass matrix, the inverse dynamics ``M a + h``, the cable lengths and the moment arms
+    (OpenSim's ``r = -L``), each relative to the largest entry of ours."""
+    import pinocchio as pin
+
+    from ..model.terms import cable_jacobian, cable_lengths
+
+    rng = np.random.default_rng(seed)
+    model, data = robot.model, robot.model.createData()
+    worst = dict(mass_matrix=0.0, inverse_dynamics=0.0, cable_lengths=0.0, moment_arms=0.0)
+
+    def rel(ours, theirs):
+        return float(np.abs(ours - theirs).max() / max(np.abs(ours).max(), 1e-300))
+
+    for _ in range(samples):
+        x, v, a = (rng.uniform(-1.0, 1.0, robot.nv) for _ in range(3))
+        q = robot.configuration(x)
+        M = pin.crba(model, data, q)
+        M = np.triu(M) + np.triu(M, 1).T
+        found = dict(mass_matrix=rel(M, om.mass_matrix(x)),
+                     inverse_dynamics=rel(pin.rnea(model, data, q, v, a), om.inverse_dynamics(x, v, a)),
+                     cable_lengths=rel(cable_lengths(model, data, robot.cables, q), om.cable_lengths(x)),
+                     moment_arms=rel(cable_jacobian(model, data, robot.cables, q), -om.moment_arms(x)))
+        worst = {k: max(worst[k], found[k]) for k in worst}
+    return worst
