@@ -60,6 +60,7 @@ def require_opensim():
                                   f"(OpenSim 4.6), which is not installed; install it with: "
                                   f"{INSTALL_HINT}") from None
     opensim.Logger.setLevelString("error")  # OpenSim logs every model it builds at 'info'
+    opensim.Logger.removeFileSink()  # and would leave an opensim.log in the working directory
     return opensim
 
 
