@@ -309,13 +309,20 @@ def bench_rows(robot, traj, case: int, ours_row: dict, stats_ms) -> list[dict]:
     (1e-6 of the trajectory's largest force) and our wrenches (1e-6 of each frame's largest)."""
     if case != 1:
         return []
+    label = "OpenSim 4.6 Static Optimization + JRA (F0 1 N, tol 1e-10)"
+    try:
+        require_opensim()
+    except ImportError:
+        return [dict(case=case, backend="opensim", label=label, model_ms=stats_ms([]), solve_ms=stats_ms([]),
+                     total_ms=stats_ms([]), no_answer=0, check=f"skipped: not installed ({INSTALL_HINT})",
+                     ratio=float("nan"))]
     c = compare(robot, traj)
     ok = (c["forces"]["traj_max"] <= 1e-6 and c["jra_vs_ours_at_so_forces"] <= 1e-6)
     check = ("ok" if ok else "FAIL") + (f" (forces {c['forces']['traj_max']:.0e}, JRA "
                                         f"{c['jra_vs_ours_at_so_forces']:.0e})")
     so = np.array([c["so_ms"]["median"]])
     total = c["so_ms"]["median"] + c["jra_ms"]["median"]
-    return [dict(case=case, backend="opensim", label="OpenSim 4.6 Static Optimization + JRA (F0 1 N, tol 1e-10)",
+    return [dict(case=case, backend="opensim", label=label,
                  model_ms=stats_ms([]), solve_ms=stats_ms(so / 1e3), total_ms=stats_ms(np.array([total / 1e3])),
                  no_answer=c["so_eom_fail"] - (c["frames"] - c["answered"]), check=check,
                  ratio=total / ours_row["total_ms"]["median"])]
