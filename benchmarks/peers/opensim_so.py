@@ -11,12 +11,14 @@ has the cables only, so SO cannot buy acceleration anywhere else.
 **Exact states.** SO reads ``q`` and ``u`` from the state it is handed and takes its target
 accelerations from the derivative of a quintic interpolating spline (``GCVSplineSet(5, states)``, error
 variance 0) of the *speeds* in its states storage, evaluated at the storage's times. A spline of the
-sampled trajectory is not exact (the natural end conditions alone cost 1e-3 relative at the ends). So
+sampled trajectory is not exact (from a coordinates file: 5 % of the largest force at the first and last
+frames of the 2-link arm's trajectories, from the natural end conditions, and 0.1 % in between). So
 :func:`exact_states` gives each frame its own stretch of (fictitious) time, ``2 J + 1`` knots one
 second apart on which every speed is a straight line of slope :math:`\ddot q_k` (the lines joined into
 one continuous polyline): a quintic interpolant reproduces a straight line exactly, and the kinks between
 the stretches reach the middle knot damped by :math:`0.43^J` (the decay of the natural quintic
-spline's cardinal functions), 1e-15 for ``J = 40``. The frame's state is set at that middle knot's time.
+spline's cardinal functions): for ``J = 40`` the targets equal ``qdd`` to 7e-13 (rounding of the
+polyline's values). The frame's state is set at that middle knot's time.
 
 **Tolerance and optimal force.** SO's optimiser is IPOPT (Simbody's, limited-memory Hessian) with an
 absolute convergence criterion (default 1e-4, iterations 100) on the problem in controls, whose
