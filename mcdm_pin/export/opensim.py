@@ -41,14 +41,11 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import McdmError, ModelError
+from ..exceptions import MissingPackageError, McdmError, ModelError
 
 INSTALL_HINT = "pip install 'mcdm-pin[opensim]'  (or: pip install opensim)"
 GROUND = "ground"
 
-
-class MissingPackageError(McdmError, ImportError):
-    """An optional package that this feature needs is not installed (the message says how to install it)."""
 
 
 def require_opensim():
