@@ -41,11 +41,10 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import MissingPackageError, McdmError, ModelError
+from ..exceptions import MissingPackageError, ModelError
 
 INSTALL_HINT = "pip install 'mcdm-pin[opensim]'  (or: pip install opensim)"
 GROUND = "ground"
-
 
 
 def require_opensim():
