@@ -67,3 +67,39 @@ def test_version_and_python_dash_m():
     for args in (["-m", "mcdm_pin", "--version"], ["-m", "mcdm_pin.cli", "--version"]):
         proc = subprocess.run([sys.executable, *args], cwd=REPO, capture_output=True, text=True, timeout=120)
         assert proc.returncode == 0 and proc.stdout.strip() == f"mcdm-pin {__version__}"
+
+
+# import names whose distribution importlib.metadata cannot map (cmeel wheels install them under
+# cmeel.prefix)
+_DISTRIBUTION_OF = {"pinocchio": "pin", "proxsuite": "proxsuite"}
+# declared but never imported, on purpose
+_DATA_ONLY = {"example-robot-data": "robot models read through package:// paths"}
+
+
+def _canonical(name: str) -> str:
+    return re.sub(r"[-_.]+", "-", name).lower()
+
+
+def test_every_imported_package_is_declared_and_every_declared_one_is_used():
+    import ast
+    import tomllib
+    from importlib.metadata import packages_distributions
+
+    deps = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["dependencies"]
+    declared = {_canonical(re.split(r"[<>=!~ \[;]", d, maxsplit=1)[0]) for d in deps}
+    known = packages_distributions()
+    used = {}
+    for path in (REPO / "mcdm_pin").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                     [node.module] if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module else [])
+            for name in names:
+                top = name.split(".")[0]
+                if top in sys.stdlib_module_names or top == "mcdm_pin":
+                    continue
+                dist = _DISTRIBUTION_OF.get(top) or (known.get(top) or [top])[0]
+                used.setdefault(_canonical(dist), path.relative_to(REPO))
+    undeclared = {d: str(p) for d, p in used.items() if d not in declared}
+    assert not undeclared, f"imported but not in pyproject's dependencies: {undeclared}"
+    unused = declared - set(used) - {_canonical(d) for d in _DATA_ONLY}
+    assert not unused, f"declared but imported nowhere in mcdm_pin: {sorted(unused)}"
