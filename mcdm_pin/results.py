@@ -71,6 +71,7 @@ class InstantResult:
 
     @property
     def found(self) -> bool:
+        """A valid answer: ``optimal``, or ``softened`` (cones widened by :attr:`softened_deg`)."""
         return self.status in ("optimal", "softened")
 
     def __repr__(self) -> str:
@@ -189,6 +190,8 @@ class TrajectoryResult:
 
     @property
     def found(self) -> np.ndarray:
+        """(N,) True at the instants with a valid answer (``optimal`` or ``softened``); the rows of
+        the others are NaN in ``f``, the wrenches and the angles."""
         return np.isin(self.status, ("optimal", "softened"))
 
     @property
