@@ -103,3 +103,46 @@ def test_every_imported_package_is_declared_and_every_declared_one_is_used():
     assert not undeclared, f"imported but not in pyproject's dependencies: {undeclared}"
     unused = declared - set(used) - {_canonical(d) for d in _DATA_ONLY}
     assert not unused, f"declared but imported nowhere in mcdm_pin: {sorted(unused)}"
+
+
+def _table_rows(lines):
+    return {ln.split()[0]: ln.split()[1:] for ln in lines if re.match(r"^(cable\d|shoulder|elbow)\s", ln)}
+
+
+def test_readme_worked_example_output_is_a_fresh_runs(capsys):
+    """The README's sample output of `mcdm-pin solve ... traj1 --case 3`: the same lines, the same
+    peaks to 1e-3 (the time of a peak is compared only where the peak is not a tie at the lower bound,
+    and the timing line not at all: it is this machine's)."""
+    from mcdm_pin.cli import main
+
+    text = README.read_text()
+    shown = re.search(r"A worked example.*?```\n(.*?)```", text, flags=re.S).group(1).splitlines()
+    assert main(["solve", str(REPO / "robots" / "two_link_sr.yaml"), "--trajectory", "traj1", "--case", "3",
+                 "-q"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[:2] == shown[:2]  # the problem and the trajectory
+    assert [ln for ln in out if not re.match(r"^(cable\d|shoulder|elbow|time per)", ln)] == \
+           [ln for ln in shown if not re.match(r"^(cable\d|shoulder|elbow|time per)", ln)]
+    got, want = _table_rows(out), _table_rows(shown)
+    assert sorted(got) == sorted(want)
+    for name, row in want.items():
+        for k, (a, b) in enumerate(zip(got[name], row)):
+            if b == "-":
+                assert a == "-"
+            elif name.startswith("cable") and k == 1 and row[0] == row[2]:
+                continue  # at its lower bound all along: any instant is "the" peak
+            else:
+                assert float(a) == pytest.approx(float(b), abs=1e-3), (name, k, a, b)
+    assert re.match(r"time per instant: model [\d.]+ ms, solve [\d.]+ ms", shown[-1])
+
+
+def test_links_in_the_readme_and_the_docs_lead_somewhere():
+    pages = [README, *sorted((REPO / "docs").glob("*.md")), *sorted((REPO / "docs" / "api").glob("*.md"))]
+    broken = []
+    for page in pages:
+        for target in re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", page.read_text()):
+            if "://" in target or target.startswith("mailto:"):
+                continue
+            if not (page.parent / target).exists():
+                broken.append(f"{page.relative_to(REPO)} -> {target}")
+    assert not broken, broken
