@@ -120,3 +120,23 @@ def test_info_given_a_urdf_or_a_results_file_says_what_it_is(tmp_path):
     np.savez(npz, t=np.zeros(2))
     code, out, err = cli("info", npz)
     assert code == 2 and "is a results file (.npz" in err and "codec" not in err
+
+
+def test_no_library_module_imports_the_command_line():
+    """The command line is a package on top: nothing below imports it (or argparse), so that it can
+    change without touching the library (``python -m mcdm_pin`` is its entry point)."""
+    import ast
+
+    offenders = []
+    for path in (REPO / "mcdm_pin").rglob("*.py"):
+        rel = path.relative_to(REPO / "mcdm_pin")
+        if rel.parts[0] == "cli" or rel.name == "__main__.py":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                     [("." * node.level) + (node.module or "")] if isinstance(node, ast.ImportFrom) else [])
+            for name in names:
+                if name == "argparse" or name.lstrip(".").split(".")[0] == "cli" or "mcdm_pin.cli" in name \
+                        or (name.startswith(".") and name.lstrip(".").startswith("cli")):
+                    offenders.append(f"{rel}: {name}")
+    assert not offenders, offenders
