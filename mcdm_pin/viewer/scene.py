@@ -45,9 +45,12 @@ class Scene:
         t: (N,) the animation's key times (trajectory time, s); ``status``: (N,) each instant's status.
         fmax: top of the cable colour scale, N; ``arrow_scale``: arrow length per newton, m/N.
         info: title lines for the overlay.
-        center, extent: the middle of the robot's box (display frame) and the box's diagonal, m.
+        center: the display-frame point the camera looks at (the middle of the robot in the
+            picture); the robot's world is shifted so that it is at the origin.
+        extent: the diagonal of the box that holds the robot over the trajectory, m.
         up: (3, 3) the rotation from the robot's world to the display frame (gravity down).
-        camera: (3,) the camera's position in the display frame (the robot's centre at the origin).
+        camera: (3,) the camera's position, display frame, relative to ``center``.
+        floor: the height of the floor grid (the lowest thing drawn), relative to ``center``.
     """
 
     commands: list = field(default_factory=list)
