@@ -146,3 +146,10 @@ def test_no_library_module_imports_the_command_line():
                 if name == "argparse" or "mcdm_pin.cli" in name or (name.startswith(".") and "cli" in parts[:1]):
                     offenders.append(f"{rel}: {name}")
     assert not offenders, offenders
+
+
+@pytest.mark.parametrize("command", ["info", "solve", "import-caspr", "view", "plot", "verify"])
+def test_every_command_has_help(command, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main([command, "--help"])
+    assert exc.value.code == 0 and "usage: mcdm-pin" in capsys.readouterr().out

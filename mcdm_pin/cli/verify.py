@@ -17,9 +17,10 @@ def add(sub):
     """``mcdm-pin verify ROBOT.yaml RUN.npz [--integrator rk4|euler|semi-implicit] [--substeps N]``"""
     p = sub.add_parser("verify", help="replay a solved run through the forward dynamics (ABA), halve the "
                                       "step and judge whether the forces produce the planned motion")
-    p.add_argument("files", nargs=2, metavar=("ROBOT", "RUN"),
-                   help="the robot's cable sidecar (YAML) and the results file (.npz) written by "
-                        "mcdm-pin solve --out, in either order (told apart by their content)")
+    p.add_argument("robot", metavar="ROBOT", help="the robot's cable sidecar (YAML)")
+    p.add_argument("run", metavar="RUN",
+                   help="the results file (.npz) written by mcdm-pin solve --out (the two files may "
+                        "also be given the other way round: they are told apart by their content)")
     p.add_argument("--integrator", choices=INTEGRATORS, default="rk4", help="default rk4")
     p.add_argument("--substeps", type=int, default=1,
                    help="integration steps per sample interval at the coarsest level (default 1)")
@@ -58,7 +59,7 @@ def run(args) -> int:
         raise UsageError(f"--levels: expected 2..12, got {args.levels}")
     if args.window is not None and args.window < 1:
         raise UsageError(f"--window: expected a positive integer, got {args.window}")
-    robot_path, run_path = robot_and_results(*args.files)
+    robot_path, run_path = robot_and_results(args.robot, args.run)
     robot = Robot.load(robot_path)
     result = TrajectoryResult.load(run_path)
     forces = _resolved(robot, result, robot_path) if args.resolve else None
