@@ -17,6 +17,8 @@ message                     (N,)          what cannot be met (empty when optimal
 objective                   (N,)          objective value without the smoothing term
 eom_residual                (N,)          relative equation-of-motion residual
 joint_names                 (J,)          physical joints
+joint_types                 (J,)          their types (spherical, revolute, ...; absent from
+                                          older files)
 cable_names                 (m,)          cables
 coordinate_names            (nv,)         URDF joint of each coordinate
 interaction_wrench          (N, J, 6)     [F; M] of parent on child, joint point, child frame
@@ -69,7 +71,16 @@ class InstantResult:
 
     @property
     def found(self) -> bool:
+        """A valid answer: ``optimal``, or ``softened`` (cones widened by :attr:`softened_deg`)."""
         return self.status in ("optimal", "softened")
+
+    def __repr__(self) -> str:
+        f = np.asarray(self.f, float)
+        forces = (f"{len(f)} cable forces {np.min(f):.4g}..{np.max(f):.4g} N" if np.all(np.isfinite(f))
+                  else f"no forces ({len(f)} cables)")
+        why = f", {self.message!r}" if self.message else ""
+        return (f"InstantResult({self.status}: {forces}, objective {self.objective:.6g}, "
+                f"{len(self.interaction_wrench)} joints{why})")
 
 
 _COLUMN_TYPES = dict(f=float, status=str, message=str, objective=float, eom_residual=float,
@@ -128,10 +139,34 @@ class TrajectoryResult:
     solver: str = ""
     trajectory: str = ""
     configuration: np.ndarray | None = None
+    joint_types: np.ndarray | None = None
 
     def __post_init__(self):
         if self.configuration is None:
             self.configuration = self.q
+
+    def __repr__(self) -> str:
+        """A few lines: what was run, how many instants have an answer, the peak forces (the arrays
+        are attributes: ``run.f``, ``run.status``, ...)."""
+        t, found = np.asarray(self.t, float), self.found
+        span = f"t = {t[0]:g}..{t[-1]:g} s" if len(t) else "no instants"
+        lines = [f"TrajectoryResult({self.robot or 'robot'}, trajectory {self.trajectory or '?'}: "
+                 f"{len(t)} instants, {span}, solver {self.solver or '?'}",
+                 f"  problem: {self.problem or '?'}"]
+        bad = np.flatnonzero(~found)
+        if len(bad):
+            where = ", ".join(f"{t[k]:g}" for k in bad[:5]) + (", ..." if len(bad) > 5 else "")
+            statuses = ", ".join(f"{n} {s}" for s, n in zip(*np.unique(self.status[bad], return_counts=True)))
+            lines.append(f"  answered at {int(found.sum())} of {len(t)} instants; none at t = {where} s "
+                         f"({statuses})")
+        else:
+            lines.append(f"  answered at all {len(t)} instants")
+        if found.any():
+            f = np.asarray(self.f, float)[found]
+            F = self.force_magnitude[found]
+            lines.append(f"  {f.shape[1]} cables: peak force {f.max():.4g} N; {F.shape[1]} joints: peak "
+                         f"interaction force {F.max():.4g} N")
+        return "\n".join(lines) + ")"
 
     @classmethod
     def from_instants(cls, rob, traj, instants: list[InstantResult], cone_deg, **meta):
@@ -147,6 +182,7 @@ class TrajectoryResult:
                    joint_names=np.array(rob.joint_names, dtype=str),
                    cable_names=np.array(rob.cable_names, dtype=str),
                    coordinate_names=np.array(rob.coordinate_names, dtype=str),
+                   joint_types=np.array([j.type for j in rob.joints], dtype=str),
                    cone_deg=np.asarray(cone_deg, dtype=float), **meta)
 
     def __len__(self) -> int:
@@ -154,6 +190,8 @@ class TrajectoryResult:
 
     @property
     def found(self) -> np.ndarray:
+        """(N,) True at the instants with a valid answer (``optimal`` or ``softened``); the rows of
+        the others are NaN in ``f``, the wrenches and the angles."""
         return np.isin(self.status, ("optimal", "softened"))
 
     @property
@@ -180,6 +218,8 @@ class TrajectoryResult:
     def save_npz(self, path) -> Path:
         path = Path(path)
         data = {k: getattr(self, k) for k in ARRAY_KEYS + NAME_KEYS + ("cone_deg", "configuration")}
+        if self.joint_types is not None:
+            data["joint_types"] = np.asarray(self.joint_types, dtype=str)
         data.update({k: np.array(getattr(self, k)) for k in META_KEYS})
         np.savez_compressed(path, **data)
         return path
@@ -201,8 +241,9 @@ class TrajectoryResult:
                     np.full(len(kw["joint_names"]), np.nan)
                 for k in META_KEYS:
                     kw[k] = str(z[k]) if k in z.files else ""
-                if "configuration" in z.files:
-                    kw["configuration"] = z["configuration"]
+                for k in ("configuration", "joint_types"):
+                    if k in z.files:
+                        kw[k] = z[k]
         except FileNotFoundError:
             raise ResultsError(f"{path}: file not found") from None
         except (OSError, ValueError) as exc:
