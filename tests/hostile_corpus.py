@@ -237,8 +237,9 @@ def cli_cases() -> list[Case]:
 
     add("no such robot", ["info", "nope.yaml"], r"file not found", "nope.yaml")
     add("robot is a folder", ["info", "."], r"is a folder", ".")
-    add("robot is the urdf", ["info", "arm.urdf"], r"this is a URDF, not a sidecar", "arm.urdf")
-    add("robot is the csv", ["info", "wave.csv"], r"expected a mapping|not a sidecar", "wave.csv")
+    add("robot is the urdf", ["info", "arm.urdf"], r"arm\.urdf is a URDF; .* pass the sidecar instead", "arm.urdf")
+    add("solve on the urdf", ["solve", "arm.urdf", "-t", "traj1"], r"arm\.urdf is a URDF; .* pass the sidecar instead", "arm.urdf")
+    add("robot is the csv", ["info", "wave.csv"], r"wave\.csv is a CSV file, not a cable sidecar", "wave.csv")
     add("unknown command", ["fly"], r"invalid choice: 'fly'")
     add("solve without trajectory", ["solve", "robot.yaml"], r"the following arguments are required: --trajectory/-t")
     add("unknown trajectory", ["solve", "robot.yaml", "-t", "nope"], r"no trajectory 'nope'", "robot.yaml")

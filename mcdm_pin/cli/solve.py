@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ._common import UsageError, check_outputs, parse_cones, parse_weights, printable, table
+from ._files import robot_file
 from .view import html_file, solve_html_hook
 
 
@@ -45,7 +46,7 @@ def run_solve(args):
     from ..robot import Robot
     from ..trajectory import load_trajectory
 
-    robot = Robot.load(args.robot)
+    robot = Robot.load(robot_file(args.robot))
     _check_outputs(args, robot)
     if args.samples is not None and args.samples < 1:
         raise UsageError(f"--samples: expected a positive number, got {args.samples}")
@@ -111,13 +112,17 @@ def summary(result) -> str:
     lines += ["", table(["cable", "peak f N", "at t s", "min f N"], rows)]
     rows = []
     Fmag = result.force_magnitude
+    types = list(result.joint_types) if result.joint_types is not None else ["spherical"] * len(result.joint_names)
     for j, name in enumerate(result.joint_names):
         if np.any(np.isfinite(Fmag[:, j])):
             k = int(np.nanargmax(Fmag[:, j]))
-            a = int(np.nanargmax(result.interaction_angle_deg[:, j]))
             cone = result.cone_deg[j]
-            rows.append([name, f"{Fmag[k, j]:.4f}", f"{t[k]:.3f}",
-                         f"{result.interaction_angle_deg[a, j]:.4f}", f"{t[a]:.3f}",
+            if types[j] == "spherical":  # an interaction angle means something only about a socket axis
+                a = int(np.nanargmax(result.interaction_angle_deg[:, j]))
+                angle = [f"{result.interaction_angle_deg[a, j]:.4f}", f"{t[a]:.3f}"]
+            else:
+                angle = ["-", "-"]
+            rows.append([name, f"{Fmag[k, j]:.4f}", f"{t[k]:.3f}", *angle,
                          "-" if not np.isfinite(cone) else f"{cone:g}"])
         else:
             rows.append([name, "-", "-", "-", "-", "-"])
