@@ -10,6 +10,8 @@ from __future__ import annotations
 MAX_SIDECAR_BYTES = 16 * 2**20
 #: YAML nodes after expanding aliases (a few hundred bytes of nested aliases expand to billions)
 MAX_YAML_NODES = 2_000_000
+#: nesting levels of a YAML document (a sidecar needs 6)
+MAX_YAML_DEPTH = 64
 #: alias uses in one YAML document
 MAX_YAML_ALIASES = 10_000
 #: bytes of a URDF file (example-robot-data's largest is ~0.5 MB)

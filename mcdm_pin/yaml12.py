@@ -16,7 +16,7 @@ import re
 import yaml
 from yaml.nodes import MappingNode, ScalarNode, SequenceNode
 
-from .limits import MAX_YAML_ALIASES, MAX_YAML_NODES
+from .limits import MAX_YAML_ALIASES, MAX_YAML_DEPTH, MAX_YAML_NODES
 
 _INT = re.compile(r"^(?:[-+]?[0-9]+|0o[0-7]+|0x[0-9a-fA-F]+)$")
 _FLOAT = re.compile(r"^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?|[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$")
@@ -38,6 +38,7 @@ class _Loader(yaml.SafeLoader):
     def __init__(self, stream):
         super().__init__(stream)
         self._aliases = 0
+        self._depth = 0
 
     def compose_node(self, parent, index):
         if self.check_event(yaml.AliasEvent):
@@ -45,7 +46,14 @@ class _Loader(yaml.SafeLoader):
             if self._aliases > MAX_YAML_ALIASES:
                 mark = self.peek_event().start_mark
                 raise YamlError(f"more than {MAX_YAML_ALIASES} aliases", mark.line + 1)
-        return super().compose_node(parent, index)
+        self._depth += 1
+        try:
+            if self._depth > MAX_YAML_DEPTH:
+                mark = self.peek_event().start_mark
+                raise YamlError(f"nested more than {MAX_YAML_DEPTH} levels deep", mark.line + 1)
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
 
     def construct_mapping(self, node, deep=False):
         seen: dict = {}
@@ -117,8 +125,9 @@ def _expanded_size(node, memo: dict) -> int:
 
 def load(text: str):
     """The document in ``text`` (one), read as YAML 1.2 with the checks of the module docstring."""
-    loader = _Loader(text)
+    loader = None
     try:
+        loader = _Loader(text)  # the reader checks the characters here already
         node = loader.get_single_node()
         if node is None:
             return None
@@ -133,4 +142,5 @@ def load(text: str):
     except RecursionError:
         raise YamlError("nesting too deep") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()

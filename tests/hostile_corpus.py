@@ -70,7 +70,7 @@ def sidecar_cases() -> list[Case]:
     s = SIDECAR
     add("empty file", "", r"expected a mapping")
     add("not a mapping", "- 1\n- 2\n", r"expected a mapping")
-    add("binary", b"\x89PNG\r\n\x1a\n\x00\x00", r"not UTF-8 text")
+    add("binary", b"\x89PNG\r\n\x1a\n\x00\x00", r"robot\.yaml is a binary file, not a cable sidecar")
     add("tab indentation", s.replace("  shoulder:", "\tshoulder:", 1), r"malformed YAML at line")
     add("unclosed bracket", _sub(s, "[0.0, 0.0, -9.81]", "[0.0, 0.0, -9.81"), r"malformed YAML at line")
     add("duplicate key f_max", _sub(s, "    f_max: 1000.0\n", "    f_max: 1000.0\n    f_max: 0.5\n"),
