@@ -140,7 +140,7 @@ def open_for_resume(path, settings: dict) -> list[int]:
         raise WorkspaceError(f"{path}: not a workspace store ({type(exc).__name__}: {exc})") from None
     if old != settings:
         keys = sorted(k for k in set(old) | set(settings) if old.get(k) != settings.get(k))
-        raise WorkspaceError(f"{path}: made with other settings ({', '.join(keys)} differ); resume with "
+        raise WorkspaceError(f"{path}: made with other settings (differing: {', '.join(keys)}); resume with "
                              f"the command that created it, or write to another --out")
     for leftover in path.rglob("*.partial"):  # Zarr's temporary files of a write that was killed
         leftover.unlink(missing_ok=True)
