@@ -15,16 +15,22 @@ from mcdm_pin.workspace.store import RESULT_VARIABLES
 from .conftest import TWO_LINK
 
 
-def assert_same_store(a, b):
-    """Two stores hold the same values (NaN where the other has NaN), coordinates and settings."""
+def assert_same_store(a, b, exact=False):
+    """Two stores hold the same statuses, labels and settings, and the same numbers (NaN where the
+    other has NaN). Between processes the last bits may differ (vectorised sums round by memory
+    alignment; seen: 4e-12 relative on a case-3 force), so unless ``exact`` the numbers agree to
+    1e-9 (relative and N or deg), and the cone margin to its bisection tolerance."""
     assert a.attrs == b.attrs
     assert set(a.variables) == set(b.variables)
     for name in a.variables:
         x, y = a[name].values, b[name].values
-        if x.dtype.kind == "f":
+        if x.dtype.kind != "f":
+            assert (x == y).all(), name
+        elif exact:
             np.testing.assert_array_equal(x, y, err_msg=name)  # NaN == NaN here
         else:
-            assert (x == y).all(), name
+            atol = margins.CONE_TOL_DEG if name == "needed_cone_deg" else 1e-9
+            np.testing.assert_allclose(x, y, rtol=1e-9, atol=atol, err_msg=name)
 
 
 # ------------------------------------------------------------------------------------------ poses
@@ -191,7 +197,7 @@ def test_the_chunk_size_does_not_change_the_answers(small_store, two_link, tmp_p
     other = tmp_path / "other.zarr"
     compute_workspace(two_link, poses, other, Setup(case=1), chunk=7, scheduler="inline", progress=False)
     a, b = open_workspace(path), open_workspace(other)
-    for name in RESULT_VARIABLES:
+    for name in RESULT_VARIABLES:  # in one process: bit for bit
         x, y = a[name].values, b[name].values
         assert (x == y).all() if x.dtype.kind == "U" else np.array_equal(x, y, equal_nan=True), name
 
@@ -225,7 +231,7 @@ def test_resume_computes_only_the_missing_chunks(small_store, two_link, tmp_path
                                resume=True)
     assert (report.computed_chunks, report.computed_poses) == (2, 8)
     assert not list(copy.rglob("*.partial"))
-    assert_same_store(open_workspace(copy), open_workspace(path))
+    assert_same_store(open_workspace(copy), open_workspace(path), exact=True)  # one process
 
 
 # ---------------------------------------------------------------------------------- command line

@@ -106,7 +106,7 @@ def create_store(path, robot, poses, chunk: int, settings: dict) -> None:
             chunks = (chunk,) + shape[1:]
             _array(g, name, shape, dims, dtype, chunks, fill,
                    dict(units=UNITS.get(name, ""), description=DESCRIPTIONS[name]))
-        _array(g, "chunk_done", (nchunks,), ("chunk",), "u1", (1,), 0,
+        _array(g, "chunk_done", (nchunks,), ("chunk",), "u1", (1,), None,
                dict(description=DESCRIPTIONS["chunk_done"], chunk_size=chunk))
         labels = dict(coordinate=list(robot.coordinate_names), cable=list(robot.cable_names),
                       joint=list(robot.joint_names), component=list(COMPONENTS))
