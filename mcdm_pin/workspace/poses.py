@@ -32,6 +32,27 @@ def coordinate_index(robot, name: str, what: str) -> int:
     return names.index(name)
 
 
+def coordinate_units(robot) -> list[str]:
+    """``rad`` or ``m`` for every coordinate, from its Pinocchio joint's type."""
+    units = ["rad"] * robot.nv
+    model = robot.model
+    for j in range(1, model.njoints):
+        jm = model.joints[j]
+        short = jm.shortname()
+        if short.startswith("JointModelP") and not short.startswith("JointModelPlanar"):
+            kinds = ["m"] * jm.nv  # prismatic (any axis)
+        elif short in ("JointModelTranslation",):
+            kinds = ["m"] * jm.nv
+        elif short == "JointModelFreeFlyer":
+            kinds = ["m"] * 3 + ["rad"] * 3
+        elif short == "JointModelPlanar":
+            kinds = ["m", "m", "rad"]
+        else:
+            continue
+        units[jm.idx_v:jm.idx_v + jm.nv] = kinds
+    return units
+
+
 def coordinate_limits(robot) -> tuple[np.ndarray, np.ndarray]:
     """Lower and upper joint limits of every coordinate from the model (NaN where there is none: no
     finite limit, or a joint whose configuration is not its coordinates, e.g. a continuous joint)."""

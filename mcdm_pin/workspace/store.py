@@ -39,6 +39,7 @@ import numpy as np
 
 from .errors import WorkspaceError
 from .evaluate import COMPONENTS, STATUS_DTYPE
+from .poses import coordinate_units
 
 FORMAT = 1  # version of this layout, in the attributes
 
@@ -113,10 +114,13 @@ def create_store(path, robot, poses, chunk: int, settings: dict) -> None:
         for name, values in labels.items():
             values = np.array(values, dtype=str)
             _array(g, name, values, (name,), values.dtype.str, (max(len(values), 1),), None)
+        units = coordinate_units(robot)
+        g["q"].attrs["coordinate_units"] = units
         for coordinate, values in poses.axes:
             name = axis_name(coordinate)
+            unit = units[list(robot.coordinate_names).index(coordinate)]
             _array(g, name, np.asarray(values, float), (name,), "f8", (len(values),), None,
-                   dict(units="rad or m", description=f"grid axis: coordinate {coordinate}"))
+                   dict(units=unit, description=f"grid axis: coordinate {coordinate}"))
         g.attrs["workspace"] = settings
         zarr.consolidate_metadata(str(tmp))
         os.replace(tmp, path)
