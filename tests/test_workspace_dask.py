@@ -81,7 +81,7 @@ def cluster(tmp_path):
                                       start_new_session=True))
     try:
         start("distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
-              "--no-dashboard", "--scheduler-file", str(info))
+              "--no-dashboard", "--dashboard-address", "127.0.0.1:0", "--scheduler-file", str(info))
         deadline = time.monotonic() + 60
         while not info.is_file() and time.monotonic() < deadline:
             time.sleep(0.1)
@@ -89,7 +89,7 @@ def cluster(tmp_path):
         address = re.search(r'"address": "(tcp://127\.0\.0\.1:\d+)"', info.read_text()).group(1)
         for _ in range(2):
             start("distributed.cli.dask_worker", address, "--nthreads", "1", "--host", "127.0.0.1",
-                  "--no-dashboard", "--no-nanny")
+                  "--no-dashboard", "--dashboard-address", "127.0.0.1:0", "--no-nanny")
         yield address
     finally:
         for p in procs:
