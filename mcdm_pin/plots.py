@@ -389,5 +389,7 @@ def figure_workspace(grid, title: str = ""):
     for ax in axes[0]:
         ax.set_xlabel(f"{xdim}, {units.get(xdim, grid[xdim].attrs.get('units', ''))}")
     axes[0][0].set_ylabel(f"{ydim}, {units.get(ydim, grid[ydim].attrs.get('units', ''))}")
-    fig.suptitle(title or f"{attrs['robot']['name']}: {attrs['problem'].split(':')[0]}")
+    cones = ", ".join(f"{j} {d:g} deg" for j, d in attrs["cones_deg"].items())
+    fig.suptitle(title or f"{attrs['robot']['name']}: {attrs['problem'].split(':')[0]}"
+                          + (f", cones {cones}" if cones else "") + f"; {len(status.flat)} poses")
     return fig
