@@ -8,11 +8,14 @@ figure                   content
 =======================  ==========================================================================
 ``cable_forces``         every cable's force over time, N
 ``interaction_forces``   one row per joint: the interaction force magnitude :math:`|F|`, N
-``interaction_angles``   one row per joint: the angle of :math:`F` from the socket axis, degrees,
-                         with the cone half-angle :math:`\rho^*` as a dashed line
+``interaction_angles``   one row per spherical joint: the angle of :math:`F` from the socket axis,
+                         degrees, with the cone half-angle :math:`\rho^*` as a dashed line (other
+                         joints have no socket axis: the angle means nothing there and is not drawn;
+                         a robot without spherical joints gets no such figure)
 ``trajectory``           the coordinates :math:`q` and their rates :math:`\dot q` (one column when
                          every run has the same trajectory)
-``summary``              cable forces (top) and the angles of the joints that have a cone (bottom)
+``summary``              cable forces (top) and the angles of the joints that have a cone (bottom;
+                         without cones, of the spherical joints)
 =======================  ==========================================================================
 
 Instants without a valid answer (``f`` is NaN there) are gaps in the lines, shaded red and marked with
@@ -135,6 +138,18 @@ def _mark_infeasible(ax, run, labelled: list) -> None:
     labelled.append(True)
 
 
+def angle_joints(runs) -> list[int]:
+    """The joints whose interaction angle means something: those with a socket axis (spherical), from
+    the runs' ``joint_types``. Files written before results carried the types: the joints with a cone
+    in some run, or every joint when none has one (as before)."""
+    types = getattr(runs[0], "joint_types", None)
+    if types is not None and len(types) == len(runs[0].joint_names):
+        return [j for j, kind in enumerate(np.asarray(types).tolist()) if kind == "spherical"]
+    cones = _cone_lines(runs)
+    with_cone = [j for j in range(len(cones)) if np.isfinite(cones[j])]
+    return with_cone or list(range(len(cones)))
+
+
 def _cone_lines(runs) -> np.ndarray:
     """rho* per joint: the first run's finite cone on that joint (NaN where none has one)."""
     out = np.full(len(runs[0].joint_names), np.nan)
@@ -223,9 +238,9 @@ def figure_interaction_forces(runs, labels):
 
 
 def figure_interaction_angles(runs, labels):
-    J = len(runs[0].joint_names)
-    fig, axes = _new_figure(J, len(runs))
-    _draw_angles(axes, runs, list(range(J)))
+    joints = angle_joints(runs)
+    fig, axes = _new_figure(len(joints), len(runs))
+    _draw_angles(axes, runs, joints)
     for ax in axes[-1]:
         ax.set_xlabel("t, s")
     _titles(axes, labels)
@@ -260,8 +275,8 @@ def figure_trajectory(runs, labels):
 def figure_summary(runs, labels):
     cones = _cone_lines(runs)
     joints = [j for j in range(len(cones)) if np.isfinite(cones[j])]
-    if not joints:  # no cone anywhere: show every joint's angle
-        joints = list(range(len(cones)))
+    if not joints:  # no cone anywhere: show the spherical joints' angles
+        joints = angle_joints(runs)
     fig, axes = _new_figure(1 + len(joints), len(runs), height_per_row=2.6)
     _draw_cable_forces(axes[0], runs)
     _draw_angles(axes[1:], runs, joints)
@@ -287,7 +302,8 @@ def plot_runs(runs, labels=None, figures=FIGURES) -> dict:
         labels: column titles (default: ``case N`` from each run's problem, else ``run k``).
 
     Returns:
-        {figure name: matplotlib Figure}
+        {figure name: matplotlib Figure} (without ``interaction_angles`` for a robot that has no
+        spherical joint)
     """
     runs = list(runs)
     if not runs:
@@ -301,6 +317,8 @@ def plot_runs(runs, labels=None, figures=FIGURES) -> dict:
     unknown = [f for f in figures if f not in _BUILDERS]
     if unknown:
         raise PlotError(f"unknown figure {unknown[0]!r}; expected one of {', '.join(FIGURES)}")
+    if not angle_joints(runs):  # no socket axis anywhere: no angle to draw
+        figures = [f for f in figures if f != "interaction_angles"]
     return {name: _BUILDERS[name](runs, labels) for name in figures}
 
 

@@ -95,7 +95,7 @@ class ScaledSolver(Solver):
     def needs_scaling(self, qp: QPData) -> bool:
         if not qp.A.shape[0]:
             return False
-        from .kernels import spread
+        from .model.kernels import spread
 
         # C order: one compiled specialisation (qp.A is often the transposed view L.T)
         return spread(np.ascontiguousarray(qp.A, dtype=float), np.ascontiguousarray(qp.b, dtype=float)) \

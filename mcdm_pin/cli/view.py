@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 from ._common import UsageError
+from ._files import file_kind, robot_file
 
 
 def html_file(text: str) -> str:
@@ -31,7 +32,7 @@ def _positive(text: str) -> float:
 
 def _scene_options(args) -> dict:
     return dict(fmax=args.fmax, arrow_scale=args.arrow_scale, start_time=args.time,
-                legend=not args.no_legend)
+                legend=not args.no_legend, links=args.links)
 
 
 def _add_scene_options(p) -> None:
@@ -43,6 +44,9 @@ def _add_scene_options(p) -> None:
     p.add_argument("--time", type=float, metavar="T",
                    help="show the scene paused at trajectory time T, s (default: play)")
     p.add_argument("--no-legend", action="store_true", help="no colour bar / time overlay")
+    p.add_argument("--links", choices=("auto", "solid", "ghost"), default="auto",
+                   help="how links are drawn: auto (default: meshes translucent, so that the cables "
+                        "attached inside a body's skin show; primitive shapes opaque), solid or ghost")
 
 
 # ------------------------------------------------------------------------------------------- view
@@ -84,13 +88,17 @@ def run(args) -> int:
         raise UsageError("give --results FILE.npz or --workspace STORE.zarr (one of them)")
     if args.workspace and not args.frame:
         raise UsageError("--workspace needs --frame LINK: the link whose positions are shown")
+    if args.results and file_kind(args.robot) == "results" and file_kind(args.results) != "results":
+        args.robot, args.results = args.results, args.robot  # given the other way round
+    robot_path = robot_file(args.robot)
     html = args.html
     if html is None and (args.no_wait or args.screenshot):
         html = str(Path(args.results or args.workspace).with_suffix(".html"))
     if args.workspace:
-        robot, scene = _workspace_scene(args)
+        robot, scene = _workspace_scene(robot_path, args)
     else:
-        robot, _, scene = scene_from_files(args.robot, args.results, **_scene_options(args))
+        robot, _, scene = scene_from_files(robot_path, args.results, aspect=size[0] / size[1],
+                                           **_scene_options(args))
     if html is not None:
         path = scene.write_html(html)
         print(f"wrote {path}")
@@ -110,13 +118,13 @@ def run(args) -> int:
     return 0
 
 
-def _workspace_scene(args):
+def _workspace_scene(robot_path, args):
     """``view --workspace``: the poses of a store as a point cloud (mcdm_pin/workspace/cloud.py)."""
     from ..robot import Robot
     from ..workspace import open_workspace
     from ..workspace.cloud import cloud_scene
 
-    robot = Robot.load(args.robot)
+    robot = Robot.load(robot_path)
     return robot, cloud_scene(robot, open_workspace(args.workspace), args.frame, color_by=args.color,
                               pose=args.pose)
 

@@ -18,7 +18,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..trajectory import _is_numeric_row
 from .errors import WorkspaceError
 
 _NO_LIMIT = 1e6  # |limit| at or above this (Pinocchio's stand-in for "none"): no joint limit
@@ -227,7 +226,7 @@ class PosesFile(PoseSet):
         if not rows:
             raise WorkspaceError(f"{self.path}: no poses in the file")
         header = [c.strip() for c in rows[0]]
-        if _is_numeric_row(header):
+        if _numeric(header):
             names = list(self.coordinates)
         else:
             names, rows = header, rows[1:]
@@ -264,3 +263,11 @@ class PosesFile(PoseSet):
     def describe(self) -> dict:
         return dict(kind="file", path=str(self.path), sha256=self.sha256, columns=self.columns,
                     at=self.at, n=len(self))
+
+
+def _numeric(row) -> bool:
+    try:
+        [float(c) for c in row]
+        return True
+    except ValueError:
+        return False

@@ -1,7 +1,7 @@
 r"""Compiled (numba) kernels of the per-instant hot path.
 
-The numpy formulation of the cable terms (:func:`mcdm_pin.cables.cable_geometry` and the products in
-:class:`mcdm_pin.terms.TermsEvaluator`) is a few dozen array operations on arrays of a few hundred
+The numpy formulation of the cable terms (:func:`mcdm_pin.model.geometry.cable_geometry` and the products in
+:class:`mcdm_pin.model.terms.TermsEvaluator`) is a few dozen array operations on arrays of a few hundred
 elements: its cost is numpy's per-call overhead, not arithmetic (0.13 ms of the neck's 0.18 ms terms,
 ``benchmarks/bench_id.py``). The kernel below does the same arithmetic in one compiled pass over the
 route points and segments. It is the only place with explicit loops over cables; the numpy path
@@ -171,7 +171,7 @@ def csr(lists, n):
 def warm_up() -> None:
     """Compile (first run on a machine, ~25 s) or load from numba's cache (~0.3 s) every kernel of the
     hot path, on tiny inputs of the types the library passes, so that no timed instant pays for it."""
-    from .solvers import _kkt
+    from ..solvers import _kkt
 
     z = np.zeros
     i64 = np.int64
