@@ -60,7 +60,7 @@ def margin_colors(value: np.ndarray, limit: float) -> np.ndarray:
 def cloud_scene(robot, ds, frame: str, color_by: str = "needed_f_max", pose: int | None = None,
                 point_size: float | None = None):
     """The viewer's scene of the robot at pose ``pose`` (default: the optimal pose with the largest
-    margin, i.e. the smallest ``color_by``) with every
+    margin, i.e. the smallest ``color_by``, and of equals the nearest to the mean pose) with every
     pose of the store ``ds`` as a point (see the module docstring)."""
     import meshcat.geometry as mg
 
@@ -80,9 +80,13 @@ def cloud_scene(robot, ds, frame: str, color_by: str = "needed_f_max", pose: int
         raise WorkspaceError("color_by needed_cone_deg: the store's problem has no cones (case 3)")
     q = ds["q"].values
     status = ds["status"].values
-    if pose is None:  # the optimal pose with the largest margin
+    if pose is None:  # the optimal pose with the largest margin; of equals, the most central one
         margin = np.where(status == "optimal", ds[color_by].values, np.nan)
-        pose = int(np.nanargmin(margin)) if np.isfinite(margin).any() else 0
+        if np.isfinite(margin).any():
+            best = np.flatnonzero(margin <= np.nanmin(margin) + 1e-9)
+            pose = int(best[np.argmin(np.linalg.norm(q[best] - q.mean(axis=0), axis=1))])
+        else:
+            pose = 0
     if not 0 <= pose < len(q):
         raise WorkspaceError(f"pose: expected an index in 0..{len(q) - 1}, got {pose}")
     setup = Setup(**attrs["setup"])
