@@ -153,6 +153,23 @@ def test_needed_cone_deg_is_where_the_pose_becomes_feasible(two_link):
             assert (status == "optimal") == ok, (pose, angle, status)
 
 
+def test_a_native_ball_joint_is_varied_through_its_rotation_vector(two_link):
+    """The arm with a native ball joint (rotation-vector coordinates) gives the Euler-angle arm's
+    answers and margins at the same rotations (about x only, where the two coordinates agree)."""
+    from .conftest import REPO
+
+    ball = Robot.load(REPO / "robots" / "two_link_sr_ball.yaml")
+    setup = Setup(case=3, cones={"shoulder": 30.0})
+    grid = {"q1_x": (-0.9, 0.9, 3), "q4_x": (-0.3, 0.3, 2)}
+    a = PoseSolver(ball, setup).solve(Grid(ball, {"shoulder_ball.rx": grid["q1_x"],
+                                                  "q4_x": grid["q4_x"]}).all())
+    b = PoseSolver(two_link, setup).solve(Grid(two_link, grid).all())
+    assert list(a["status"]) == list(b["status"]) and "optimal" in set(a["status"])
+    np.testing.assert_allclose(a["f"], b["f"], atol=1e-9)
+    np.testing.assert_allclose(a["needed_f_max"], b["needed_f_max"], rtol=1e-9)
+    np.testing.assert_allclose(a["needed_cone_deg"], b["needed_cone_deg"], atol=margins.CONE_TOL_DEG)
+
+
 # --------------------------------------------------------------------------------------- store
 @pytest.fixture(scope="module")
 def small_store(tmp_path_factory, two_link):

@@ -140,7 +140,7 @@ class PoseSolver:
 
     def assemble(self, q):
         """The pose's assembled problem (``QPData``), for the margins."""
-        terms = self.ident.evaluate(q, self.qd, self.qdd)
+        terms = self.ident.evaluate(self.robot.pin_q(q), self.qd, self.qdd)  # configuration (nq)
         return self.ident.problem.assemble(terms, self.context)
 
 
