@@ -48,6 +48,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import DEFAULT_CASPR, REPO, import_neck, machine, neck_case_options  # noqa: E402
 
 from mcdm_pin.solvers.clarabel_ import cone_rows, conic_form  # noqa: E402
+from peers import opensim_so  # noqa: E402  (OpenSim SO + JRA: a whole-trajectory peer, case 1, --peers opensim)
 PEERS = ("clarabel", "cvxpy", "slsqp", "ipopt")
 # correctness check: objective relative to the reference, relative EOM residual, bounds (N), cones (deg)
 CHECK = dict(obj_rtol=1e-6, obj_atol=1e-8, eom_rtol=1e-7, bound_tol=1e-6, cone_tol_deg=1e-3)
@@ -501,6 +502,7 @@ def run(args) -> dict:
     from mcdm_pin.problem import Context
 
     names = [s.strip() for s in args.peers.split(",") if s.strip()] if args.peers else []
+    with_opensim, names = "opensim" in names, [n for n in names if n != "opensim"]  # a trajectory peer
     unknown = [n for n in names if n not in PEER_CLASSES]
     if unknown:
         raise SystemExit(f"bench_id: unknown peer(s) {unknown}; expected some of {','.join(PEERS)}")
@@ -558,7 +560,7 @@ def run(args) -> dict:
                         and not r["backend"].startswith("mcdm-pin")]
             if ok_peers:
                 min(ok_peers, key=lambda r: r["ratio"])["best_peer"] = True
-            rows += case_rows
+            rows += case_rows + (opensim_so.bench_rows(robot, traj, case, case_rows[0], stats_ms) * with_opensim)
     return dict(robot=label, trajectory=traj.name, instants=len(traj), repeat=args.repeat,
                 peer_repeat=args.peer_repeat or args.repeat, machine=machine(), check_tolerances=CHECK,
                 notes=notes, check_failures=failures, rows=rows, checks={str(k): v for k, v in checks.items()})

@@ -22,7 +22,7 @@ from .results import InstantResult, TrajectoryResult
 from .robot import Robot
 from .sidecar import load_sidecar
 from .solvers import get_solver
-from .terms import Terms, TermsEvaluator, compute_terms
+from .model.terms import Terms, TermsEvaluator, compute_terms
 from .trajectory import Trajectory, csv_trajectory, load_trajectory, quintic_trajectory
 
 __version__ = "0.1.0"

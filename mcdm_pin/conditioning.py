@@ -24,13 +24,15 @@ import numpy as np
 
 
 def euler_singularity(robot, q) -> dict[str, float]:
-    """``{spherical joint: |det S(q)|}`` (``|cos q2|`` for xyz Euler angles; 0 = gimbal lock)."""
+    """``{spherical joint given by angles: |det S(q)|}`` (``|cos q2|`` for xyz Euler angles; 0 = gimbal
+    lock) at coordinates ``q`` (nv). Native ball joints (quaternions) have no singularity and are left
+    out."""
     from .trajectory import SphericalKinematics
 
     q = robot.check_vector(q, "q")
     out = {}
     for joint in robot.joints:
-        if joint.type == "spherical":
+        if joint.type == "spherical" and joint.parametrization != "quaternion":
             out[joint.name] = abs(float(np.linalg.det(SphericalKinematics(robot, joint).S(q[joint.idx_v]))))
     return out
 
@@ -57,7 +59,7 @@ def wrench_closure(robot, q, L: np.ndarray | None = None) -> Closure:
     from scipy.optimize import linprog
 
     if L is None:
-        from .terms import compute_terms
+        from .model.terms import compute_terms
 
         L = compute_terms(robot, q).L
     m, nv = L.shape

@@ -54,6 +54,10 @@ class ResultsError(McdmError, ValueError):
     """A results file cannot be read or does not match the robot."""
 
 
+class MissingPackageError(McdmError, ImportError):
+    """An optional package a feature needs is not installed; the message gives the install command."""
+
+
 class CasprError(McdmError, ValueError):
     """A CASPR model file (``*_bodies.xml``, ``*_cables.xml``, ``*_trajectories.xml``) cannot be
     converted: malformed, inconsistent, or using a CASPR feature mcdm-pin does not support.

@@ -26,7 +26,7 @@ from .results import InstantResult, TrajectoryResult, concat_columns, instant_co
 from .scaling import ScaledSolver
 from .solvers import INACCURATE, INFEASIBLE, OPTIMAL, SOFTENED, Solution, get_solver
 from .solvers.base import cone_violation_deg
-from .terms import TermsEvaluator, interaction_angles
+from .model.terms import TermsEvaluator, interaction_angles
 
 EOM_TOL = tol.EOM_REL
 BOUND_TOL = tol.BOUND_ABS
@@ -114,6 +114,8 @@ class InverseDynamics:
     def _solve(self, q, qd, qdd, f_prev, checked: bool) -> InstantResult:
         """:meth:`solve` inside the BLAS limit; ``checked``: the state was validated already."""
         t0 = time.perf_counter()
+        if not checked:
+            q = self.robot.check_configuration(q)
         terms = self.evaluate(q, qd, qdd, checked=checked)
         if not terms.finite and not (np.all(np.isfinite(terms.tau)) and np.all(np.isfinite(terms.L))):
             raise StateError("the dynamics overflow at this state (non-finite M qdd + h or L): check "
@@ -248,18 +250,19 @@ def _blas_controller():
 
 
 def _check_trajectory(robot, traj) -> None:
-    """Every state of ``traj`` is a finite float vector of length nv (checked once, not per instant)."""
-    for name in ("q", "qd", "qdd"):
+    """Every state of ``traj`` is finite, with configurations of length nq and rates of length nv
+    (checked once, not per instant)."""
+    for name, n in (("q", robot.nq), ("qd", robot.nv), ("qdd", robot.nv)):
         x = getattr(traj, name)
         if not (isinstance(x, np.ndarray) and x.dtype == np.float64 and x.ndim == 2
-                and x.shape[1] == robot.nv and x.shape[0] == len(traj)):
+                and x.shape[1] == n and x.shape[0] == len(traj)):
             for k in range(len(traj)):  # the per-state check names what is wrong
-                robot.check_vector(x[k], f"{name}[{k}]")
+                robot.check_vector(x[k], f"{name}[{k}]", n)
             raise StateError(f"trajectory {traj.name!r}: {name} must be an array of shape "
-                             f"({len(traj)}, {robot.nv})")
+                             f"({len(traj)}, {n})")
         if not np.all(np.isfinite(x)):
             k = int(np.flatnonzero(~np.all(np.isfinite(x), axis=1))[0])
-            robot.check_vector(x[k], f"{name}[{k}]")
+            robot.check_vector(x[k], f"{name}[{k}]", n)
 
 
 _OVERLAP = 3  # instants a batch piece solves before its own first one, to warm its solver up

@@ -8,11 +8,14 @@ figure                   content
 =======================  ==========================================================================
 ``cable_forces``         every cable's force over time, N
 ``interaction_forces``   one row per joint: the interaction force magnitude :math:`|F|`, N
-``interaction_angles``   one row per joint: the angle of :math:`F` from the socket axis, degrees,
-                         with the cone half-angle :math:`\rho^*` as a dashed line
+``interaction_angles``   one row per spherical joint: the angle of :math:`F` from the socket axis,
+                         degrees, with the cone half-angle :math:`\rho^*` as a dashed line (other
+                         joints have no socket axis: the angle means nothing there and is not drawn;
+                         a robot without spherical joints gets no such figure)
 ``trajectory``           the coordinates :math:`q` and their rates :math:`\dot q` (one column when
                          every run has the same trajectory)
-``summary``              cable forces (top) and the angles of the joints that have a cone (bottom)
+``summary``              cable forces (top) and the angles of the joints that have a cone (bottom;
+                         without cones, of the spherical joints)
 =======================  ==========================================================================
 
 Instants without a valid answer (``f`` is NaN there) are gaps in the lines, shaded red and marked with
@@ -135,6 +138,18 @@ def _mark_infeasible(ax, run, labelled: list) -> None:
     labelled.append(True)
 
 
+def angle_joints(runs) -> list[int]:
+    """The joints whose interaction angle means something: those with a socket axis (spherical), from
+    the runs' ``joint_types``. Files written before results carried the types: the joints with a cone
+    in some run, or every joint when none has one (as before)."""
+    types = getattr(runs[0], "joint_types", None)
+    if types is not None and len(types) == len(runs[0].joint_names):
+        return [j for j, kind in enumerate(np.asarray(types).tolist()) if kind == "spherical"]
+    cones = _cone_lines(runs)
+    with_cone = [j for j in range(len(cones)) if np.isfinite(cones[j])]
+    return with_cone or list(range(len(cones)))
+
+
 def _cone_lines(runs) -> np.ndarray:
     """rho* per joint: the first run's finite cone on that joint (NaN where none has one)."""
     out = np.full(len(runs[0].joint_names), np.nan)
@@ -223,9 +238,9 @@ def figure_interaction_forces(runs, labels):
 
 
 def figure_interaction_angles(runs, labels):
-    J = len(runs[0].joint_names)
-    fig, axes = _new_figure(J, len(runs))
-    _draw_angles(axes, runs, list(range(J)))
+    joints = angle_joints(runs)
+    fig, axes = _new_figure(len(joints), len(runs))
+    _draw_angles(axes, runs, joints)
     for ax in axes[-1]:
         ax.set_xlabel("t, s")
     _titles(axes, labels)
@@ -260,8 +275,8 @@ def figure_trajectory(runs, labels):
 def figure_summary(runs, labels):
     cones = _cone_lines(runs)
     joints = [j for j in range(len(cones)) if np.isfinite(cones[j])]
-    if not joints:  # no cone anywhere: show every joint's angle
-        joints = list(range(len(cones)))
+    if not joints:  # no cone anywhere: show the spherical joints' angles
+        joints = angle_joints(runs)
     fig, axes = _new_figure(1 + len(joints), len(runs), height_per_row=2.6)
     _draw_cable_forces(axes[0], runs)
     _draw_angles(axes[1:], runs, joints)
@@ -287,7 +302,8 @@ def plot_runs(runs, labels=None, figures=FIGURES) -> dict:
         labels: column titles (default: ``case N`` from each run's problem, else ``run k``).
 
     Returns:
-        {figure name: matplotlib Figure}
+        {figure name: matplotlib Figure} (without ``interaction_angles`` for a robot that has no
+        spherical joint)
     """
     runs = list(runs)
     if not runs:
@@ -301,6 +317,8 @@ def plot_runs(runs, labels=None, figures=FIGURES) -> dict:
     unknown = [f for f in figures if f not in _BUILDERS]
     if unknown:
         raise PlotError(f"unknown figure {unknown[0]!r}; expected one of {', '.join(FIGURES)}")
+    if not angle_joints(runs):  # no socket axis anywhere: no angle to draw
+        figures = [f for f in figures if f != "interaction_angles"]
     return {name: _BUILDERS[name](runs, labels) for name in figures}
 
 
@@ -332,3 +350,64 @@ def plot_files(paths, out_dir, labels=None, figures=FIGURES, formats=FORMATS, pr
     if labels is None:
         labels = [run_label(r, Path(p).stem) for r, p in zip(runs, paths)]
     return save_figures(plot_runs(runs, labels, figures), out_dir, formats, prefix)
+
+
+# ------------------------------------------------------------------------------------ workspace
+STATUS_COLORS = {"optimal": "#2ca02c", "infeasible": "#bdbdbd", "softened": "#17becf",
+                 "inaccurate": "#ff7f0e", "max_iter": "#9467bd", "error": "#000000"}
+
+
+def figure_workspace(grid, title: str = ""):
+    """Heat maps of a 2-D workspace grid (``mcdm_pin.workspace.as_grid`` of a store): the status of
+    every pose, ``needed_f_max`` (N, the bound ``f_max`` as a black line) and, with cones,
+    ``needed_cone_deg`` (degrees, the cone as a black line). Poses that no bound or no cone makes
+    feasible (``inf``) are hatched."""
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    attrs = grid.attrs["workspace"]
+    axes_spec = [a for a in attrs["poses"]["axes"] if a["n"] > 1]
+    if attrs["poses"]["kind"] != "grid" or len(axes_spec) != 2:
+        raise PlotError("a workspace heat map needs a grid with exactly two axes of more than one "
+                        f"point; this store has {attrs['poses']}")
+    grid = grid.squeeze()
+    ydim, xdim = grid["status"].dims
+    x, y = grid[xdim].values, grid[ydim].values
+    panels = ["status", "needed_f_max"] + (["needed_cone_deg"] if attrs["cones_deg"] else [])
+    fig, axes = _new_figure(1, len(panels), width_per_col=4.4, height_per_row=3.8, sharey="row")
+    status = grid["status"].values
+    words = [w for w in STATUS_COLORS if (status == w).any()]
+    codes = np.select([status == w for w in words], np.arange(len(words)), -1).astype(float)
+    codes[codes < 0] = np.nan
+    ax = axes[0][0]
+    ax.pcolormesh(x, y, codes, cmap=ListedColormap([STATUS_COLORS[w] for w in words]),
+                  vmin=-0.5, vmax=len(words) - 0.5, shading="nearest")
+    ax.legend([Patch(color=STATUS_COLORS[w]) for w in words],
+              [f"{w} ({int((status == w).sum())})" for w in words], fontsize="small", loc="upper right")
+    ax.set_title("status")
+    limits = {"needed_f_max": (float(min(attrs["f_max"])), "smallest common f_max, N"),
+              "needed_cone_deg": (float(max(attrs["cones_deg"].values())) if attrs["cones_deg"] else 0.0,
+                                  "smallest cone half-angle, deg")}
+    for ax, name in zip(axes[0][1:], panels[1:]):
+        value = grid[name].values
+        finite = np.where(np.isfinite(value), value, np.nan)
+        mesh = ax.pcolormesh(x, y, finite, cmap="viridis", shading="nearest",
+                             norm="log" if name == "needed_f_max" and np.nanmin(finite) > 0 else None)
+        if np.isinf(value).any():
+            ax.contourf(x, y, np.isinf(value).astype(float), levels=[0.5, 1.5], colors="none",
+                        hatches=["////"])
+        limit, label = limits[name]
+        if (value < limit).any() and (value > limit).any():
+            big = 2.0 * max(np.nanmax(finite), limit)  # inf drawn beyond the line
+            ax.contour(x, y, np.where(np.isinf(value), big, np.nan_to_num(finite, nan=big)),
+                       levels=[limit], colors="k", linewidths=1.2)
+        fig.colorbar(mesh, ax=ax, label=label)
+        ax.set_title(f"{name} (line: {limit:g}; hatched: none)")
+    units = dict(zip(grid["coordinate"].values, grid["q"].attrs.get("coordinate_units", [])))
+    for ax in axes[0]:
+        ax.set_xlabel(f"{xdim}, {units.get(xdim, grid[xdim].attrs.get('units', ''))}")
+    axes[0][0].set_ylabel(f"{ydim}, {units.get(ydim, grid[ydim].attrs.get('units', ''))}")
+    cones = ", ".join(f"{j} {d:g} deg" for j, d in attrs["cones_deg"].items())
+    fig.suptitle(title or f"{attrs['robot']['name']}: {attrs['problem'].split(':')[0]}"
+                          + (f", cones {cones}" if cones else "") + f"; {len(status.flat)} poses")
+    return fig

@@ -6,7 +6,10 @@
 key                         shape         meaning
 ==========================  ============  =====================================================
 t                           (N,)          time, s
-q                           (N, nv)       coordinates (rad or m), Pinocchio joint order
+q                           (N, nv)       coordinates (rad or m; a native ball joint's rotation
+                                          vector), Pinocchio joint order
+configuration               (N, nq)       Pinocchio's configuration vector (equal to q when every
+                                          joint has nq == nv; absent from older files)
 qd, qdd                     (N, nv)       their first and second time derivatives
 f                           (N, m)        cable forces, N (rows of NaN where no valid answer)
 status                      (N,)          optimal, infeasible, max_iter, softened, inaccurate
@@ -14,6 +17,8 @@ message                     (N,)          what cannot be met (empty when optimal
 objective                   (N,)          objective value without the smoothing term
 eom_residual                (N,)          relative equation-of-motion residual
 joint_names                 (J,)          physical joints
+joint_types                 (J,)          their types (spherical, revolute, ...; absent from
+                                          older files)
 cable_names                 (m,)          cables
 coordinate_names            (nv,)         URDF joint of each coordinate
 interaction_wrench          (N, J, 6)     [F; M] of parent on child, joint point, child frame
@@ -75,7 +80,16 @@ class InstantResult:
 
     @property
     def found(self) -> bool:
+        """A valid answer: ``optimal``, or ``softened`` (cones widened by :attr:`softened_deg`)."""
         return self.status in ("optimal", "softened")
+
+    def __repr__(self) -> str:
+        f = np.asarray(self.f, float)
+        forces = (f"{len(f)} cable forces {np.min(f):.4g}..{np.max(f):.4g} N" if np.all(np.isfinite(f))
+                  else f"no forces ({len(f)} cables)")
+        why = f", {self.message!r}" if self.message else ""
+        return (f"InstantResult({self.status}: {forces}, objective {self.objective:.6g}, "
+                f"{len(self.interaction_wrench)} joints{why})")
 
 
 _COLUMN_TYPES = dict(f=float, status=str, message=str, objective=float, eom_residual=float,
@@ -138,12 +152,39 @@ class TrajectoryResult:
     unique: np.ndarray | None = None
     stage: np.ndarray | None = None
     problem_json: str = ""
+    configuration: np.ndarray | None = None
+    joint_types: np.ndarray | None = None
 
     def __post_init__(self):
         if self.unique is None:
             self.unique = np.zeros(len(self.t), dtype=bool)
         if self.stage is None:
             self.stage = np.full(len(self.t), "", dtype=str)
+        if self.configuration is None:
+            self.configuration = self.q
+
+    def __repr__(self) -> str:
+        """A few lines: what was run, how many instants have an answer, the peak forces (the arrays
+        are attributes: ``run.f``, ``run.status``, ...)."""
+        t, found = np.asarray(self.t, float), self.found
+        span = f"t = {t[0]:g}..{t[-1]:g} s" if len(t) else "no instants"
+        lines = [f"TrajectoryResult({self.robot or 'robot'}, trajectory {self.trajectory or '?'}: "
+                 f"{len(t)} instants, {span}, solver {self.solver or '?'}",
+                 f"  problem: {self.problem or '?'}"]
+        bad = np.flatnonzero(~found)
+        if len(bad):
+            where = ", ".join(f"{t[k]:g}" for k in bad[:5]) + (", ..." if len(bad) > 5 else "")
+            statuses = ", ".join(f"{n} {s}" for s, n in zip(*np.unique(self.status[bad], return_counts=True)))
+            lines.append(f"  answered at {int(found.sum())} of {len(t)} instants; none at t = {where} s "
+                         f"({statuses})")
+        else:
+            lines.append(f"  answered at all {len(t)} instants")
+        if found.any():
+            f = np.asarray(self.f, float)[found]
+            F = self.force_magnitude[found]
+            lines.append(f"  {f.shape[1]} cables: peak force {f.max():.4g} N; {F.shape[1]} joints: peak "
+                         f"interaction force {F.max():.4g} N")
+        return "\n".join(lines) + ")"
 
     @classmethod
     def from_instants(cls, rob, traj, instants: list[InstantResult], cone_deg, **meta):
@@ -152,10 +193,14 @@ class TrajectoryResult:
     @classmethod
     def from_columns(cls, rob, traj, columns: dict, cone_deg, **meta):
         """From the per-instant fields stacked into arrays (:func:`instant_columns`)."""
-        return cls(t=traj.t.copy(), q=traj.q.copy(), qd=traj.qd.copy(), qdd=traj.qdd.copy(), **columns,
+        coords = (traj.q.copy() if rob.nq == rob.nv else
+                  np.array([rob.coordinates(q) for q in traj.q]).reshape(len(traj.t), rob.nv))
+        return cls(t=traj.t.copy(), q=coords, qd=traj.qd.copy(), qdd=traj.qdd.copy(), **columns,
+                   configuration=traj.q.copy(),
                    joint_names=np.array(rob.joint_names, dtype=str),
                    cable_names=np.array(rob.cable_names, dtype=str),
                    coordinate_names=np.array(rob.coordinate_names, dtype=str),
+                   joint_types=np.array([j.type for j in rob.joints], dtype=str),
                    cone_deg=np.asarray(cone_deg, dtype=float), **meta)
 
     def __len__(self) -> int:
@@ -163,6 +208,8 @@ class TrajectoryResult:
 
     @property
     def found(self) -> np.ndarray:
+        """(N,) True at the instants with a valid answer (``optimal`` or ``softened``); the rows of
+        the others are NaN in ``f``, the wrenches and the angles."""
         return np.isin(self.status, ("optimal", "softened"))
 
     @property
@@ -188,7 +235,9 @@ class TrajectoryResult:
 
     def save_npz(self, path) -> Path:
         path = Path(path)
-        data = {k: getattr(self, k) for k in ARRAY_KEYS + NAME_KEYS + ("cone_deg",)}
+        data = {k: getattr(self, k) for k in ARRAY_KEYS + NAME_KEYS + ("cone_deg", "configuration")}
+        if self.joint_types is not None:
+            data["joint_types"] = np.asarray(self.joint_types, dtype=str)
         data.update({k: np.array(getattr(self, k)) for k in META_KEYS})
         np.savez_compressed(path, **data)
         return path
@@ -196,6 +245,7 @@ class TrajectoryResult:
     @classmethod
     def load(cls, path) -> "TrajectoryResult":
         path = Path(path)
+        _check_archive(path)
         try:
             with np.load(path, allow_pickle=False) as z:
                 missing = [k for k in ARRAY_KEYS + NAME_KEYS if k not in z.files and k not in _OPTIONAL]
@@ -208,6 +258,9 @@ class TrajectoryResult:
                     np.full(len(kw["joint_names"]), np.nan)
                 for k in META_KEYS:
                     kw[k] = str(z[k]) if k in z.files else ""
+                for k in ("configuration", "joint_types"):
+                    if k in z.files:
+                        kw[k] = z[k]
         except FileNotFoundError:
             raise ResultsError(f"{path}: file not found") from None
         except (OSError, ValueError) as exc:
@@ -245,6 +298,27 @@ class TrajectoryResult:
             for i in range(len(self.t)):
                 w.writerow([_fmt(v[i]) for v in cols.values()])
         return path
+
+
+def _check_archive(path: Path) -> None:
+    """Refuse an ``.npz`` whose arrays would unpack beyond :data:`~mcdm_pin.limits.MAX_RESULTS_BYTES`
+    (sizes from the archive's directory, before anything is read) or that is not one."""
+    import zipfile
+
+    from .limits import MAX_RESULTS_BYTES
+
+    try:
+        with zipfile.ZipFile(path) as zf:
+            total = sum(info.file_size for info in zf.infolist())
+    except FileNotFoundError:
+        raise ResultsError(f"{path}: file not found") from None
+    except IsADirectoryError:
+        raise ResultsError(f"{path}: is a folder; expected a results file (.npz)") from None
+    except (zipfile.BadZipFile, OSError) as exc:
+        raise ResultsError(f"{path}: not a results file written by mcdm-pin solve --out (.npz): {exc}") from None
+    if total > MAX_RESULTS_BYTES:
+        raise ResultsError(f"{path}: its arrays unpack to {total} bytes; at most {MAX_RESULTS_BYTES} are read "
+                           f"(docs/limits.md)")
 
 
 def _fmt(x) -> str:

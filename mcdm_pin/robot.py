@@ -1,95 +1,32 @@
-"""URDF + sidecar -> :class:`Robot`: the Pinocchio model, its physical joints and its cables.
+"""A loader: URDF + sidecar (or a ``pin.Model`` built in code) -> :class:`Robot`.
 
-A *physical joint* is what the paper calls a joint: a spherical joint (three revolute URDF joints with
-orthogonal axes meeting at one point, joined by massless links), a revolute or a prismatic joint. The
-*coordinates* ``q`` are one number per degree of freedom, in Pinocchio's joint order (the URDF's
-depth-first order), e.g. the xyz Euler angles of a spherical joint; :meth:`Robot.pin_q` turns them into
-Pinocchio's configuration vector (which differs for continuous joints, stored as cos/sin).
+A :class:`Robot` is what the layers above need and nothing more: the Pinocchio model, the
+:class:`~mcdm_pin.model.cables.CableSet`, the physical joints (:mod:`mcdm_pin.model.joints`) and, for
+hybrid robots, the actuators. Every computation on it goes through :mod:`mcdm_pin.model`, the layer in
+Pinocchio's idiom that a Pinocchio user may call directly.
+
+**Configuration and coordinates.** ``q`` is Pinocchio's configuration vector (``nq`` entries); users may
+also give *coordinates*, one number per degree of freedom (``nv``; a rotation vector for a native ball
+joint: :mod:`mcdm_pin.model.charts`). :meth:`Robot.check_configuration` accepts either; for robots whose
+joints all have ``nq == nv`` the two are the same vector.
 """
 
 from __future__ import annotations
 
-import os
-import site
-import sys
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from .exceptions import ModelError, SidecarError, StateError
+from .exceptions import ModelError, ProblemError, SidecarError, StateError
+from .model import charts
+from .model.actuators import Actuator, actuation_matrix
+from .model.cables import Cable, CableSet, RoutePoint
+from .model.joints import PhysicalJoint, group, massless_members, physical_joints
 from .sidecar import Sidecar, _names, load_sidecar
+from .urdf import load_model, package_share_dirs, replace_joints, urdf_joint_axes
 
-_GEOM_TOL = 1e-9  # m and rad: joint points "meet" and axes are "orthogonal" within this
-
-
-@dataclass(frozen=True)
-class PhysicalJoint:
-    """One physical joint.
-
-    Attributes:
-        name: the sidecar's name.
-        type: ``spherical``, ``revolute`` or ``prismatic``.
-        urdf_joints: the URDF joint names, parent side first.
-        pin_ids: their Pinocchio joint ids.
-        child_id: the Pinocchio joint whose frame is the child link's frame at the joint point (the
-            last of ``pin_ids``); the interaction wrench is expressed there.
-        parent_id: the Pinocchio joint of the parent link (0 = the fixed base).
-        socket_placement: the socket frame (fixed in the parent link at the joint point, equal to the
-            child frame when the joint's coordinates are zero) relative to ``parent_id``'s frame.
-        idx_v: the joint's coordinates in ``q``.
-        socket_axis: unit vector in the socket frame: the socket's outward normal, i.e. the
-            direction in which the socket pushes the ball when the ball is pressed into it (the
-            cone requires ``F . socket_axis > 0`` for the force F of the parent on the child).
-        alpha, beta: weights of |F|^2 and |M|^2 in the interaction objective.
-        cone_deg: the largest interaction angle the joint tolerates, or ``None``.
-    """
-
-    name: str
-    type: str
-    urdf_joints: tuple[str, ...]
-    pin_ids: tuple[int, ...]
-    child_id: int
-    parent_id: int
-    socket_placement: pin.SE3
-    idx_v: np.ndarray
-    socket_axis: np.ndarray
-    alpha: float
-    beta: float
-    cone_deg: float | None
-
-    @property
-    def nv(self) -> int:
-        return len(self.idx_v)
-
-
-@dataclass(frozen=True)
-class Cable:
-    name: str
-    f_min: float
-    f_max: float
-    links: tuple[str, ...]
-    points: np.ndarray  # (k, 3) in each link's URDF frame
-
-
-def package_share_dirs() -> list[Path]:
-    """Folders that hold installed packages for ``package://`` URIs, in search order:
-    ``ROS_PACKAGE_PATH`` entries, ``AMENT_PREFIX_PATH``/share, and every ``cmeel.prefix/share``
-    in this interpreter's site-packages (where example-robot-data installs its robots)."""
-    dirs: list[Path] = []
-    for entry in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep):
-        if entry:
-            dirs.append(Path(entry))
-    for entry in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
-        if entry:
-            dirs.append(Path(entry) / "share")
-    candidates = list(site.getsitepackages()) + [site.getusersitepackages()] + sys.path
-    for sp in candidates:
-        share = Path(sp) / "cmeel.prefix" / "share"
-        if share.is_dir() and share not in dirs:
-            dirs.append(share)
-    return dirs
+__all__ = ["Robot", "package_share_dirs", "resolve_package_uri"]
 
 
 def resolve_package_uri(uri: str, sidecar_path=None, key: str = "urdf") -> Path:
@@ -98,10 +35,16 @@ def resolve_package_uri(uri: str, sidecar_path=None, key: str = "urdf") -> Path:
     package, _, inner = rest.partition("/")
     if not package or not inner:
         raise SidecarError(sidecar_path, key, f"expected package://PACKAGE/PATH, got {uri!r}")
+    if package in (".", "..") or "\\" in rest:
+        raise SidecarError(sidecar_path, key, f"expected package://PACKAGE/PATH, got {uri!r}")
     tried = []
     for share in package_share_dirs():
-        candidate = share / package / inner
+        root = (share / package).resolve()
+        candidate = (share / package / inner).resolve()
         tried.append(str(share))
+        if root != candidate and root not in candidate.parents:
+            raise SidecarError(sidecar_path, key, f"{uri!r} leaves the package {package!r}: a package:// path "
+                                                  f"must stay inside its package's folder")
         if candidate.is_file():
             return candidate
     raise SidecarError(sidecar_path, key,
@@ -111,32 +54,57 @@ def resolve_package_uri(uri: str, sidecar_path=None, key: str = "urdf") -> Path:
 
 
 class Robot:
-    """A cable-driven manipulator: Pinocchio model + physical joints + cables.
+    """A cable-driven manipulator: Pinocchio model + cables + physical joints (+ actuators).
 
-    Build one with :meth:`Robot.load` (from a sidecar file) or :meth:`Robot.from_sidecar`.
+    Build one with :meth:`Robot.load` (a sidecar file), :meth:`Robot.from_sidecar` or
+    :meth:`Robot.from_model` (a ``pin.Model`` built in code, no file).
 
     Attributes:
-        model: the (reduced, if joints are locked) Pinocchio model.
-        sidecar: the validated sidecar it was built from.
-        joints: the physical joints, in the sidecar's order.
-        cables: the cables, in the sidecar's order.
-        coordinate_names: the URDF joint name of each coordinate of ``q``.
+        model: the Pinocchio model (reduced, if the sidecar locks joints).
+        cables: the :class:`~mcdm_pin.model.cables.CableSet`.
+        joints: the physical joints (sidecar order, or Pinocchio's joint order for ``from_model``).
+        actuators: the actuated joints' motors (hybrid robots), possibly empty.
+        name: the robot's name; ``sidecar`` and ``urdf_path`` are ``None`` for a robot built in code.
+        nq, nv: sizes of the configuration and of the velocity; ``m`` cables; ``n_act`` actuator
+            components.
+        coordinate_names (nv), configuration_names (nq): see :mod:`mcdm_pin.model.charts`.
     """
 
-    def __init__(self, sidecar: Sidecar, model: pin.Model, urdf_path: Path):
+    def __init__(self, model: pin.Model, cables: CableSet, joints, actuators=(), name: str = "robot",
+                 sidecar: Sidecar | None = None, urdf_path: Path | None = None):
+        cables.check_model(model)
+        self.model = model
+        self.cables = cables
+        self.joints = tuple(joints)
+        self.actuators = tuple(actuators)
+        self.name = name
         self.sidecar = sidecar
         self.urdf_path = urdf_path
-        self.name = sidecar.name
-        self.model = model
-        self._data = model.createData()
-        self.nv = model.nv
-        self.coordinate_names = self._coordinates()
-        self.link_names, self._link_frame = self._links()
-        self.joints = self._physical_joints()
-        self.cables = self._cables()
-        self.f_min = np.array([c.f_min for c in self.cables])
-        self.f_max = np.array([c.f_max for c in self.cables])
-        self._build_routes()
+        self.nq, self.nv = model.nq, model.nv
+        self._parts = charts.chart_parts(model)
+        self.coordinate_names = charts.coordinate_names(model)
+        self.configuration_names = charts.configuration_names(model)
+        self.link_names = tuple(dict.fromkeys(f.name for f in model.frames if f.type == pin.FrameType.BODY))
+        self.f_min, self.f_max = cables.f_min, cables.f_max
+        self._check_joints()
+
+    def _check_joints(self) -> None:
+        covered = {pid for j in self.joints for pid in j.pin_ids}
+        missing = [self.model.names[j] for j in range(1, self.model.njoints) if j not in covered]
+        if missing:
+            raise ModelError(f"Pinocchio joint(s) {_names(missing)} belong to no physical joint")
+        names = [j.name for j in self.joints]
+        if len(set(names)) != len(names):
+            raise ModelError(f"physical joint names must be unique, got {names}")
+        inside = massless_members(self.joints)
+        for k, jid in enumerate(self.cables.point_joint):
+            if int(jid) in inside:
+                cable = self.cables.cables[int(self.cables.point_cable[k])]
+                raise ModelError(f"cable {cable.name!r}: a route point is fixed to the massless body inside "
+                                 f"joint {inside[int(jid)]!r}; attach it to the parent or the child link")
+        for a in self.actuators:
+            if a.joint not in names:
+                raise ModelError(f"actuator on unknown joint {a.joint!r}; expected one of {_names(names)}")
 
     # ----------------------------------------------------------------------------------------- load
     @classmethod
@@ -145,189 +113,118 @@ class Robot:
         return cls.from_sidecar(load_sidecar(path))
 
     @classmethod
+    def from_model(cls, model: pin.Model, cables, joints=None, actuators=(), name: str = "robot") -> "Robot":
+        """A robot from a model built in code. ``cables``: a :class:`CableSet` or what its constructor
+        takes; ``joints``: physical joints (default: every Pinocchio joint on its own,
+        :func:`~mcdm_pin.model.joints.physical_joints`)."""
+        if not isinstance(cables, CableSet):
+            cables = CableSet(model, cables)
+        return cls(model, cables, physical_joints(model) if joints is None else joints, actuators, name)
+
+    @classmethod
     def from_sidecar(cls, sidecar: Sidecar) -> "Robot":
-        if sidecar.urdf_path is None:
-            urdf_path = resolve_package_uri(sidecar.urdf, sidecar.path)
+        sc = sidecar
+        if sc.urdf_path is None:
+            urdf_path = resolve_package_uri(sc.urdf, sc.path)
         else:
-            urdf_path = sidecar.urdf_path
+            urdf_path = sc.urdf_path
             if not urdf_path.is_file():
-                raise sidecar.error("urdf", f"URDF file not found: {urdf_path}")
+                raise sc.error("urdf", f"URDF file not found: {urdf_path}")
+        model = load_model(urdf_path)
+        model.gravity.linear = np.array(sc.gravity, dtype=float)
+        model = _lock_joints(model, sc)
+        model = _native_joints(model, sc, urdf_path)
+        joints = _physical_joints(model, sc, urdf_path)
+        cables = _cables(model, sc, joints)
+        actuators = _actuators(sc, joints)
         try:
-            model = pin.buildModelFromUrdf(str(urdf_path))
-        except Exception as exc:  # pinocchio raises ValueError/RuntimeError with urdfdom's text
-            first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            raise ModelError(f"{urdf_path}: cannot load the URDF ({first})") from None
-        _check_model_numbers(model, urdf_path)
-        model.gravity.linear = np.array(sidecar.gravity, dtype=float)
-        model = _lock_joints(model, sidecar)
-        return cls(sidecar, model, urdf_path)
+            return cls(model, cables, joints, actuators, sc.name, sc, urdf_path)
+        except ModelError as exc:
+            raise sc.error("joints", str(exc)) from None
 
     # ------------------------------------------------------------------------------------ structure
-    def _coordinates(self) -> tuple[str, ...]:
-        m = self.model
-        names = [""] * m.nv
-        simple_q, simple_v, rub_q, rub_v = [], [], [], []
-        for j in range(1, m.njoints):
-            jm = m.joints[j]
-            short = jm.shortname()
-            if jm.nv != 1 or not (short.startswith("JointModelR") or short.startswith("JointModelP")):
-                raise ModelError(f"{self.urdf_path}: joint {m.names[j]!r} is a {short}; only revolute, "
-                                 f"continuous and prismatic URDF joints are supported (a floating or "
-                                 f"planar base is not)")
-            names[jm.idx_v] = m.names[j]
-            if jm.nq == 1:
-                simple_q.append(jm.idx_q)
-                simple_v.append(jm.idx_v)
-            else:  # continuous joint: cos, sin
-                rub_q.append(jm.idx_q)
-                rub_v.append(jm.idx_v)
-        self._simple_q, self._simple_v = np.array(simple_q, int), np.array(simple_v, int)
-        self._rub_q, self._rub_v = np.array(rub_q, int), np.array(rub_v, int)
-        return tuple(names)
-
-    def _links(self):
-        frames = {}
-        for fid, frame in enumerate(self.model.frames):
-            if frame.type == pin.FrameType.BODY and frame.name not in frames:
-                frames[frame.name] = fid
-        return tuple(frames), frames
-
-    def link_placement(self, link: str):
-        """(Pinocchio joint id, placement of the link's URDF frame in that joint's frame)."""
-        frame = self.model.frames[self._link_frame[link]]
-        return int(frame.parentJoint), frame.placement
-
-    def _physical_joints(self) -> tuple[PhysicalJoint, ...]:
-        sc, m = self.sidecar, self.model
-        q0 = self.pin_q(np.zeros(self.nv))
-        data = m.createData()
-        pin.computeJointJacobians(m, data, q0)
-        used: dict[str, str] = {}
-        joints = []
-        for spec in sc.joints:
-            ids = []
-            for i, uname in enumerate(spec.urdf_joints):
-                key = f"{spec.key}.urdf_joints[{i}]"
-                if uname in sc.locked_joints:
-                    raise sc.error(key, f"URDF joint {uname!r} is also listed in locked_joints")
-                if not m.existJointName(uname):
-                    raise sc.error(key, f"unknown URDF joint {uname!r}; expected one of "
-                                        f"{_names(self.coordinate_names)}")
-                ids.append(int(m.getJointId(uname)))
-                used[uname] = spec.name
-            for i, j in enumerate(ids):
-                short = m.joints[j].shortname()
-                want = "JointModelP" if spec.type == "prismatic" else "JointModelR"
-                if not short.startswith(want):
-                    raise sc.error(f"{spec.key}.urdf_joints[{i}]",
-                                   f"URDF joint {m.names[j]!r} is a {short}; a {spec.type} joint needs "
-                                   f"{'prismatic' if spec.type == 'prismatic' else 'revolute'} URDF joints")
-            if spec.type == "spherical":
-                _check_spherical(sc, spec, m, data, ids)
-            idx_v = np.array([m.joints[j].idx_v for j in ids], dtype=int)
-            joints.append(PhysicalJoint(
-                name=spec.name, type=spec.type, urdf_joints=spec.urdf_joints, pin_ids=tuple(ids),
-                child_id=ids[-1], parent_id=int(m.parents[ids[0]]),
-                socket_placement=m.jointPlacements[ids[0]].copy(), idx_v=idx_v,
-                socket_axis=np.array(spec.socket_axis), alpha=spec.alpha, beta=spec.beta,
-                cone_deg=spec.cone_deg))
-        missing = [n for n in self.coordinate_names if n not in used]
-        if missing:
-            raise sc.error("joints", f"URDF joint(s) {_names(missing)} are movable but belong to no "
-                                     f"physical joint: list them under joints or under locked_joints")
-        return tuple(joints)
-
-    def _cables(self) -> tuple[Cable, ...]:
-        sc = self.sidecar
-        massless = {}
-        for j in self.joints:
-            for pid in j.pin_ids[:-1]:
-                massless[pid] = j.name
-        cables = []
-        for spec in sc.cables:
-            jids = []
-            for p in spec.route:
-                if p.link not in self._link_frame:
-                    raise sc.error(f"{p.key}.link", f"unknown link {p.link!r}; expected one of "
-                                                    f"{_names(self.link_names)}")
-                jid, _ = self.link_placement(p.link)
-                if jid in massless:
-                    raise sc.error(f"{p.key}.link",
-                                   f"link {p.link!r} is an intermediate massless link of spherical joint "
-                                   f"{massless[jid]!r}; attach cables to the parent or child link")
-                jids.append(jid)
-            if len(set(jids)) < 2:
-                raise sc.error(f"{spec.key}.route",
-                               f"cable {spec.name!r} has no segment spanning two different bodies "
-                               f"(every point is on {spec.route[0].link!r} or a link rigidly fixed to "
-                               f"it), so it cannot move anything")
-            cables.append(Cable(name=spec.name, f_min=spec.f_min, f_max=spec.f_max,
-                                links=tuple(p.link for p in spec.route),
-                                points=np.array([p.point for p in spec.route], dtype=float)))
-        return tuple(cables)
-
-    def _build_routes(self):
-        """Flatten every route into arrays: point -> (Pinocchio joint, point in that joint's frame),
-        segment -> (start point, end point, cable)."""
-        jid, local, seg_a, seg_b, seg_c = [], [], [], [], []
-        for c, cable in enumerate(self.cables):
-            start = len(jid)
-            for link, p in zip(cable.links, cable.points):
-                j, placement = self.link_placement(link)
-                jid.append(j)
-                local.append(placement.act(p))
-            n = len(cable.links)
-            seg_a.extend(range(start, start + n - 1))
-            seg_b.extend(range(start + 1, start + n))
-            seg_c.extend([c] * (n - 1))
-        self.point_joint = np.array(jid, dtype=int)
-        self.point_local = np.array(local, dtype=float)
-        self.seg_a = np.array(seg_a, dtype=int)
-        self.seg_b = np.array(seg_b, dtype=int)
-        self.seg_cable = np.array(seg_c, dtype=int)
-        # segments whose two ends are on one body apply no wrench (they only add length)
-        self.seg_active = self.point_joint[self.seg_a] != self.point_joint[self.seg_b]
-        # subtree indicator: sub[i, j] = 1 when joint j is in the subtree of joint i (i included)
-        nj = self.model.njoints
-        sub = np.zeros((nj, nj))
-        for j in range(nj):
-            k = j
-            while True:
-                sub[k, j] = 1.0
-                if k == 0:
-                    break
-                k = self.model.parents[k]
-        self.subtree = sub
-
-    # --------------------------------------------------------------------------------------- state
     @property
     def m(self) -> int:
         """Number of cables."""
-        return len(self.cables)
+        return self.cables.m
+
+    @property
+    def n_act(self) -> int:
+        """Number of actuator components (hybrid robots; 0 otherwise)."""
+        return sum(len(a.idx_v) for a in self.actuators)
 
     @property
     def cable_names(self) -> tuple[str, ...]:
-        return tuple(c.name for c in self.cables)
+        return self.cables.names
 
     @property
     def joint_names(self) -> tuple[str, ...]:
         return tuple(j.name for j in self.joints)
 
+    @property
+    def actuation(self) -> np.ndarray:
+        """(nv, n_act) the actuation matrix ``S`` (:func:`~mcdm_pin.model.actuators.actuation_matrix`)."""
+        return actuation_matrix(self.nv, self.actuators)
+
     def joint(self, name: str) -> PhysicalJoint:
         for j in self.joints:
             if j.name == name:
                 return j
-        from .exceptions import ProblemError
         raise ProblemError(f"unknown joint {name!r}; expected one of {_names(self.joint_names)}")
 
+    def link_placement(self, link: str):
+        """(Pinocchio joint id, placement of the frame ``link`` in that joint's frame)."""
+        from .model.cables import find_frame
+
+        frame = self.model.frames[find_frame(self.model, link)]
+        return int(frame.parentJoint), frame.placement
+
+    # ---------------------------------------------------------------------------------------- state
+    def configuration(self, coords) -> np.ndarray:
+        """Coordinates (nv) -> Pinocchio's configuration (nq)."""
+        return charts.configuration(self.model, coords, self._parts)
+
+    def coordinates(self, q) -> np.ndarray:
+        """Pinocchio's configuration (nq) -> coordinates (nv)."""
+        return charts.coordinates(self.model, q, self._parts)
+
     def pin_q(self, q) -> np.ndarray:
-        """Coordinates (one per degree of freedom) -> Pinocchio configuration vector."""
-        q = np.asarray(q, dtype=float)
-        out = np.zeros(self.model.nq)
-        out[self._simple_q] = q[self._simple_v]
-        if len(self._rub_q):
-            out[self._rub_q] = np.cos(q[self._rub_v])
-            out[self._rub_q + 1] = np.sin(q[self._rub_v])
+        """The configuration of ``q`` given as a configuration (nq) or as coordinates (nv)."""
+        return self.check_configuration(q)
+
+    def check_configuration(self, q, name: str = "q") -> np.ndarray:
+        """``q`` as Pinocchio's configuration: a finite vector of length nq, or of length nv
+        (coordinates, converted); :class:`StateError` otherwise. A quaternion must have unit norm
+        (to 1e-6; it is normalised)."""
+        try:
+            arr = np.asarray(q, dtype=float)
+        except (TypeError, ValueError):
+            raise StateError(f"{name}: expected {self.nq} numbers, got {type(q).__name__}") from None
+        if arr.ndim != 1 or arr.shape[0] not in (self.nq, self.nv):
+            want = f"{self.nq}" if self.nq == self.nv else f"{self.nq} (configuration) or {self.nv} (coordinates)"
+            raise StateError(f"{name}: expected a vector of length {want}, got shape {arr.shape}")
+        if not np.all(np.isfinite(arr)):
+            bad = np.flatnonzero(~np.isfinite(arr))
+            raise StateError(f"{name}: expected finite numbers, entries {bad.tolist()} are not")
+        if self.nq == self.nv:
+            return arr
+        if arr.shape[0] == self.nv:
+            return self.configuration(arr)
+        out = arr.copy()
+        for p in self._parts:
+            if p.kind in (charts.BALL, charts.FREE):
+                s = p.idx_q + (3 if p.kind == charts.FREE else 0)
+                norm = float(np.linalg.norm(out[s:s + 4]))
+                if abs(norm - 1.0) > 1e-6:
+                    raise StateError(f"{name}: the quaternion of joint {p.joint!r} has norm {norm:.9g}; "
+                                     f"expected 1")
+                out[s:s + 4] /= norm
+            elif p.kind in (charts.ANGLE, charts.PLANAR):
+                s = p.idx_q + (2 if p.kind == charts.PLANAR else 0)
+                norm = float(np.hypot(out[s], out[s + 1]))
+                if abs(norm - 1.0) > 1e-6:
+                    raise StateError(f"{name}: (cos, sin) of joint {p.joint!r} has norm {norm:.9g}; expected 1")
+                out[s:s + 2] /= norm
         return out
 
     def check_vector(self, x, name: str, n: int | None = None) -> np.ndarray:
@@ -344,32 +241,21 @@ class Robot:
             raise StateError(f"{name}: expected finite numbers, entries {bad.tolist()} are not")
         return arr
 
+    # compatibility: the flattened routes, as the layers above read them
+    point_joint = property(lambda self: self.cables.point_joint)
+    point_local = property(lambda self: self.cables.point_local)
+    seg_a = property(lambda self: self.cables.seg_a)
+    seg_b = property(lambda self: self.cables.seg_b)
+    seg_cable = property(lambda self: self.cables.seg_cable)
+    seg_active = property(lambda self: self.cables.seg_active)
+
     def __repr__(self) -> str:
-        return (f"Robot({self.name!r}: {len(self.joints)} joints, {self.nv} DoF, {self.m} cables, "
-                f"urdf={str(self.urdf_path)!r})")
+        where = f", urdf={str(self.urdf_path)!r}" if self.urdf_path is not None else ""
+        act = f", {self.n_act} actuators" if self.actuators else ""
+        return f"Robot({self.name!r}: {len(self.joints)} joints, {self.nv} DoF, {self.m} cables{act}{where})"
 
 
-def _check_model_numbers(model: pin.Model, urdf_path) -> None:
-    """Reject masses, inertias and placements that are not finite or so large that the dynamics
-    overflow (a CASPR mass of 1e308 kg gave inf terms and crashed the solver: tests/test_fuzz.py)."""
-    from .sidecar import MAX_MAGNITUDE
-
-    for j in range(model.njoints):
-        inertia = model.inertias[j]
-        checks = (("mass", np.array([inertia.mass]), "kg"), ("centre of mass", inertia.lever, "m"),
-                  ("inertia", inertia.inertia, "kg m^2"),
-                  ("joint origin", model.jointPlacements[j].translation, "m"))
-        for what, values, unit in checks:
-            values = np.asarray(values, dtype=float)
-            if not np.all(np.isfinite(values)) or np.abs(values).max(initial=0.0) > MAX_MAGNITUDE:
-                owner = "the fixed base" if j == 0 else f"the body moved by URDF joint {model.names[j]!r}"
-                raise ModelError(f"{urdf_path}: {what} of {owner} is {values.tolist()} {unit}; expected "
-                                 f"finite numbers of magnitude at most {MAX_MAGNITUDE:g}")
-        if inertia.mass < 0:
-            raise ModelError(f"{urdf_path}: mass of the body moved by URDF joint {model.names[j]!r} is "
-                             f"{inertia.mass!r} kg; expected >= 0")
-
-
+# ------------------------------------------------------------------------------------ sidecar helpers
 def _lock_joints(model: pin.Model, sc: Sidecar) -> pin.Model:
     if not sc.locked_joints:
         return model
@@ -392,35 +278,113 @@ def _lock_joints(model: pin.Model, sc: Sidecar) -> pin.Model:
     return pin.buildReducedModel(model, ids, q_ref)
 
 
-def _check_spherical(sc: Sidecar, spec, m: pin.Model, data: pin.Data, ids: list[int]) -> None:
-    key = f"{spec.key}.urdf_joints"
-    names = spec.urdf_joints
-    for k in (1, 2):
-        if m.parents[ids[k]] != ids[k - 1]:
-            raise sc.error(key, f"a spherical joint needs three URDF joints in series; the parent joint "
-                                f"of {names[k]!r} is {m.names[m.parents[ids[k]]]!r}, not {names[k - 1]!r}")
-        t = m.jointPlacements[ids[k]].translation
-        if np.linalg.norm(t) > _GEOM_TOL:
-            raise sc.error(key, f"a spherical joint needs three URDF joints meeting at one point; "
-                                f"{names[k]!r} sits {np.linalg.norm(t):.3g} m from {names[k - 1]!r}")
-    # axes, in the first joint's frame at q = 0
-    axes = []
-    for k, j in enumerate(ids):
-        S = pin.getJointJacobian(m, data, j, pin.ReferenceFrame.WORLD)[:, m.joints[j].idx_v]
-        axes.append(S[3:] / np.linalg.norm(S[3:]))
-    for a, b in ((0, 1), (0, 2), (1, 2)):
-        c = abs(float(axes[a] @ axes[b]))
-        if c > _GEOM_TOL:
-            raise sc.error(key, f"a spherical joint needs mutually orthogonal axes; {names[a]!r} and "
-                                f"{names[b]!r} make {np.degrees(np.arccos(min(c, 1.0))):.6g} deg")
-    for k in (0, 1):
-        j = ids[k]
-        inertia = m.inertias[j]
-        if inertia.mass > 0 or np.abs(inertia.inertia).max() > 0:
-            raise sc.error(key, f"a spherical joint needs massless links between its URDF joints; the "
-                                f"link after {names[k]!r} has mass {inertia.mass:.6g} kg (or inertia)")
-        children = [c for c in range(1, m.njoints) if m.parents[c] == j and c != ids[k + 1]]
-        if children:
-            raise sc.error(key, f"the massless link after {names[k]!r} also carries joint "
-                                f"{m.names[children[0]]!r}; nothing may hang between a spherical "
-                                f"joint's URDF joints")
+def _urdf_joint(model: pin.Model, sc: Sidecar, spec, i: int) -> int:
+    uname = spec.urdf_joints[i]
+    key = f"{spec.key}.urdf_joints[{i}]"
+    if uname in sc.locked_joints:
+        raise sc.error(key, f"URDF joint {uname!r} is also listed in locked_joints")
+    if not model.existJointName(uname):
+        names = [model.names[j] for j in range(1, model.njoints)]
+        raise sc.error(key, f"unknown URDF joint {uname!r}; expected one of {_names(names)}")
+    return int(model.getJointId(uname))
+
+
+def _native_joints(model: pin.Model, sc: Sidecar, urdf_path) -> pin.Model:
+    """Single-URDF-joint declarations: a ``floating`` joint declared spherical becomes a native ball
+    joint; ``free`` needs a ``floating`` joint; ``planar`` a ``planar`` joint with axis +z."""
+    replace = {}
+    axes = None
+    for spec in sc.joints:
+        if len(spec.urdf_joints) != 1 or spec.type in ("revolute", "prismatic"):
+            continue
+        j = _urdf_joint(model, sc, spec, 0)
+        short = model.joints[j].shortname()
+        key = f"{spec.key}.urdf_joints[0]"
+        if spec.type in ("spherical", "free"):
+            if short != "JointModelFreeFlyer":
+                forms = ("3 revolute URDF joints (xyz Euler angles) or 1 URDF 'floating' joint (a native ball "
+                         "joint)" if spec.type == "spherical" else "1 URDF 'floating' joint")
+                raise sc.error(f"{spec.key}.urdf_joints", f"a {spec.type} joint needs {forms}; "
+                                                          f"{spec.urdf_joints[0]!r} is a {short}")
+            if spec.type == "spherical":
+                replace[j] = (pin.JointModelSphericalZYX() if spec.parametrization == "zyx"
+                              else pin.JointModelSpherical())
+        elif spec.type == "planar":
+            if short != "JointModelPlanar":
+                raise sc.error(key, f"a planar joint given by one URDF joint needs a URDF 'planar' joint; "
+                                    f"{spec.urdf_joints[0]!r} is a {short}")
+            axes = axes if axes is not None else urdf_joint_axes(urdf_path)
+            axis = axes.get(spec.urdf_joints[0], (None, np.array([1.0, 0, 0])))[1]
+            if not np.allclose(axis / max(np.linalg.norm(axis), 1e-300), [0.0, 0.0, 1.0], atol=1e-9):
+                raise sc.error(key, f"URDF planar joint {spec.urdf_joints[0]!r} has axis {axis.tolist()}; "
+                                    f"Pinocchio moves every planar joint in the xy plane of its frame, so the "
+                                    f"axis must be 0 0 1 (turn the joint's origin rpy instead)")
+        elif spec.type == "universal" and short != "JointModelUniversal":
+            raise sc.error(key, f"a universal joint needs two revolute URDF joints, got one {short}")
+    return replace_joints(model, replace) if replace else model
+
+
+def _physical_joints(model: pin.Model, sc: Sidecar, urdf_path) -> tuple[PhysicalJoint, ...]:
+    joints = []
+    used: set[int] = set()
+    for spec in sc.joints:
+        ids = [_urdf_joint(model, sc, spec, i) for i in range(len(spec.urdf_joints))]
+        try:
+            pj = group(model, spec.name, spec.type, ids)
+            if spec.type == "spherical" and pj.parametrization != spec.parametrization:
+                raise ModelError(f"expected a {spec.parametrization} spherical joint, got {pj.parametrization}")
+            pj = pj.with_settings(alpha=spec.alpha, beta=spec.beta, cone_deg=spec.cone_deg,
+                                  socket_axis=spec.socket_axis)
+        except ModelError as exc:
+            key = f"{spec.key}.urdf_joints" + ("[0]" if len(ids) == 1 else "")
+            raise sc.error(key, f"{exc} (in {urdf_path})") from None
+        used.update(ids)
+        joints.append(pj)
+    missing = [model.names[j] for j in range(1, model.njoints) if j not in used]
+    if missing:
+        raise sc.error("joints", f"URDF joint(s) {_names(missing)} are movable but belong to no physical "
+                                 f"joint: list them under joints or under locked_joints")
+    return tuple(joints)
+
+
+def _cables(model: pin.Model, sc: Sidecar, joints) -> CableSet:
+    from .model.cables import find_frame
+
+    links = {f.name for f in model.frames if f.type == pin.FrameType.BODY}
+    inside = massless_members(joints)
+    cables = []
+    for spec in sc.cables:
+        route = []
+        for p in spec.route:
+            if p.link not in links:
+                raise sc.error(f"{p.key}.link", f"unknown link {p.link!r}; expected one of "
+                                                f"{_names(dict.fromkeys(f.name for f in model.frames if f.type == pin.FrameType.BODY))}")
+            jid = int(model.frames[find_frame(model, p.link)].parentJoint)
+            if jid in inside:
+                raise sc.error(f"{p.key}.link",
+                               f"link {p.link!r} is an intermediate massless link of joint {inside[jid]!r}; "
+                               f"attach cables to the parent or child link")
+            route.append(RoutePoint(p.link, p.point))
+        cables.append(Cable(spec.name, tuple(route), spec.f_min, spec.f_max))
+    try:
+        return CableSet(model, cables)
+    except ModelError as exc:
+        for k, spec in enumerate(sc.cables):
+            if repr(spec.name) in str(exc):
+                raise sc.error(f"{spec.key}.route", str(exc)) from None
+        raise sc.error("cables", str(exc)) from None
+
+
+def _actuators(sc: Sidecar, joints) -> tuple[Actuator, ...]:
+    out = []
+    by_name = {j.name: j for j in joints}
+    for spec in sc.joints:
+        a = spec.actuated
+        if a is None:
+            continue
+        j = by_name[spec.name]
+        if len(a.min) != j.nv:
+            raise sc.error(f"{a.key}.min", f"expected {j.nv} bound(s), one per degree of freedom of the "
+                                          f"{j.type} joint {j.name!r}, got {len(a.min)}")
+        out.append(Actuator(j.name, j.idx_v, np.array(a.min), np.array(a.max), a.weight))
+    return tuple(out)

@@ -66,11 +66,11 @@ def _pow2(x):
 def spread(A: np.ndarray, b: np.ndarray) -> float:
     """How badly scaled ``A x = b`` is: the largest ratio between the largest and smallest non-zero row
     maxima, column maxima and right-hand-side entries (1 when all are zero). Compiled when the
-    kernels are (:func:`mcdm_pin.kernels.spread`)."""
+    kernels are (:func:`mcdm_pin.model.kernels.spread`)."""
     from . import jit
 
     if jit.ready():
-        from .kernels import spread as compiled
+        from .model.kernels import spread as compiled
 
         # C order: one compiled specialisation (qp.A is often the transposed view L.T)
         return compiled(np.ascontiguousarray(A, dtype=float), np.ascontiguousarray(b, dtype=float))

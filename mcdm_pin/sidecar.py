@@ -15,18 +15,19 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
-
+from . import yaml12
 from .exceptions import SidecarError
+from .limits import MAX_CABLES, MAX_MAGNITUDE, MAX_ROUTE_POINTS, MAX_SAMPLES, MAX_SIDECAR_BYTES
 
 SUPPORTED_VERSIONS = (1,)
-JOINT_TYPES = ("spherical", "revolute", "prismatic")
+JOINT_TYPES = ("spherical", "revolute", "prismatic", "universal", "planar", "translation", "free")
+# how many URDF joints each type takes
+URDF_JOINT_COUNTS = {"spherical": (1, 3), "revolute": (1,), "prismatic": (1,), "universal": (2,),
+                     "planar": (1, 3), "translation": (2, 3), "free": (1,)}
+PARAMETRIZATIONS = {1: ("quaternion", "zyx"), 3: ("euler-xyz",)}  # spherical: by URDF joint count
 SPHERICAL_MODES = ("axis-angle", "per-coordinate")
 TRAJECTORY_TYPES = ("quintic", "csv")
 
-# the largest magnitude accepted for any number: larger finite values (1e308 kg, a point at 1e300 m)
-# overflow to inf in the dynamics (found by tests/test_fuzz.py)
-MAX_MAGNITUDE = 1e100
 
 _FLOAT_RE = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 
@@ -42,6 +43,18 @@ class JointSpec:
     alpha: float = 1.0
     beta: float = 0.0
     cone_deg: float | None = None
+    key: str = ""
+    parametrization: str | None = None  # spherical joints: euler-xyz | quaternion | zyx
+    actuated: "ActuatorSpec | None" = None
+
+
+@dataclass(frozen=True)
+class ActuatorSpec:
+    """``actuated:`` of a joint (hybrid robots): bounds per degree of freedom and the weight of tau^2."""
+
+    min: tuple[float, ...]
+    max: tuple[float, ...]
+    weight: float = 1.0
     key: str = ""
 
 
@@ -125,13 +138,17 @@ class _Reader:
         if isinstance(value, bool) or value is None:
             raise self.fail(key, f"expected a number, got {_kind(value)}")
         if isinstance(value, str):
-            # PyYAML reads "1e3" (no dot) as a string; accept plain decimal notation only.
+            # a quoted number in plain decimal notation is accepted (data built in code, old files)
             if not _FLOAT_RE.match(value.strip()):
-                raise self.fail(key, f"expected a number, got the string {value!r}")
+                raise self.fail(key, f"expected a number, got the string {_short(value)}")
             value = float(value)
         if not isinstance(value, (int, float)):
             raise self.fail(key, f"expected a number, got {_kind(value)}")
-        x = float(value)
+        try:
+            x = float(value)
+        except OverflowError:
+            raise self.fail(key, f"expected a number of magnitude at most {MAX_MAGNITUDE:g}, got an integer "
+                                 f"of {len(str(abs(value)))} digits") from None
         if not math.isfinite(x):
             raise self.fail(key, f"expected a finite number, got {value!r}")
         if abs(x) > MAX_MAGNITUDE:
@@ -161,6 +178,10 @@ class _Reader:
         return value
 
 
+def _short(text: str, n: int = 60) -> str:
+    return repr(text[:n]) + ("..." if len(text) > n else "")
+
+
 def _kind(value) -> str:
     if value is None:
         return "nothing (null)"
@@ -186,7 +207,9 @@ def _join(key: str, sub: str) -> str:
 
 TOP_KEYS = ("version", "name", "description", "urdf", "gravity", "joints", "cables", "locked_joints",
             "trajectories")
-JOINT_KEYS = ("type", "urdf_joints", "socket_axis", "alpha", "beta", "cone_deg")
+JOINT_KEYS = ("type", "urdf_joints", "parametrization", "socket_axis", "alpha", "beta", "cone_deg",
+              "actuated")
+ACTUATED_KEYS = ("min", "max", "weight")
 CABLE_KEYS = ("name", "f_min", "f_max", "route")
 POINT_KEYS = ("link", "point")
 QUINTIC_KEYS = ("type", "q_start", "q_end", "duration", "dt", "spherical")
@@ -202,20 +225,30 @@ def load_sidecar(path) -> Sidecar:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        size = path.stat().st_size
+        if size > MAX_SIDECAR_BYTES:
+            raise SidecarError(path, "", f"the file has {size} bytes; a sidecar may have at most "
+                                         f"{MAX_SIDECAR_BYTES} (docs/limits.md)")
+        text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise SidecarError(path, "", "file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SidecarError(path, "", f"cannot read the file ({exc})") from None
+    except IsADirectoryError:
+        raise SidecarError(path, "", "is a folder; expected a sidecar YAML file") from None
+    except UnicodeDecodeError:
+        raise SidecarError(path, "", "not UTF-8 text; expected a sidecar YAML file (is it a URDF, a CSV "
+                                     "or a results file?)") from None
+    except OSError as exc:
+        raise SidecarError(path, "", f"cannot read the file ({exc.strerror or exc})") from None
+    head = text.lstrip()[:200]
+    if head.startswith("<"):
+        kind = "a URDF" if "<robot" in text[:4096] else "an XML file"
+        raise SidecarError(path, "", f"this is {kind}, not a sidecar: pass the sidecar YAML that names it "
+                                     f"(docs/sidecar.md)")
     try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise SidecarError(path, "", f"malformed YAML{where}: {problem}") from None
-    except RecursionError:
-        raise SidecarError(path, "", "malformed YAML: nesting too deep") from None
+        data = yaml12.load(text)
+    except yaml12.YamlError as exc:
+        where = f" at line {exc.line}" if exc.line else ""
+        raise SidecarError(path, "", f"malformed YAML{where}: {exc.problem}") from None
     return parse_sidecar(data, path=path)
 
 
@@ -281,13 +314,13 @@ def _parse_joints(r: _Reader, raw) -> tuple[JointSpec, ...]:
         spec = r.mapping(spec, key, JOINT_KEYS, required=("type", "urdf_joints"))
         jtype = r.choice(spec["type"], f"{key}.type", JOINT_TYPES)
         uj = spec["urdf_joints"]
-        n_expected = 3 if jtype == "spherical" else 1
-        if isinstance(uj, str) and n_expected == 1:
+        counts = URDF_JOINT_COUNTS[jtype]
+        if isinstance(uj, str) and 1 in counts:
             uj = [uj]
-        if not isinstance(uj, list) or len(uj) != n_expected:
+        if not isinstance(uj, list) or len(uj) not in counts:
+            want = " or ".join(str(c) for c in counts)
             raise r.fail(f"{key}.urdf_joints",
-                         f"a {jtype} joint needs a list of {n_expected} URDF joint name"
-                         f"{'s' if n_expected > 1 else ''}, got {_kind(uj)}")
+                         f"a {jtype} joint needs a list of {want} URDF joint name(s), got {_kind(uj)}")
         names = tuple(r.string(u, f"{key}.urdf_joints[{i}]") for i, u in enumerate(uj))
         for i, u in enumerate(names):
             if u in seen_urdf:
@@ -301,19 +334,46 @@ def _parse_joints(r: _Reader, raw) -> tuple[JointSpec, ...]:
         axis = tuple(a / norm for a in axis)
         alpha = r.number(spec.get("alpha", 1.0), f"{key}.alpha", lo=0.0)
         beta = r.number(spec.get("beta", 0.0), f"{key}.beta", lo=0.0)
+        parametrization = None
+        if jtype == "spherical":
+            allowed = PARAMETRIZATIONS[len(uj)]
+            parametrization = r.choice(spec.get("parametrization", allowed[0]), f"{key}.parametrization", allowed)
+        elif "parametrization" in spec:
+            raise r.fail(f"{key}.parametrization", "a parametrization is chosen for spherical joints only")
+        actuated = None
+        if spec.get("actuated") is not None:
+            actuated = _parse_actuated(r, spec["actuated"], f"{key}.actuated")
         cone = spec.get("cone_deg")
         if cone is not None:
             if jtype != "spherical":
                 raise r.fail(f"{key}.cone_deg", "a stability cone is defined for spherical joints only")
             cone = r.number(cone, f"{key}.cone_deg", lo=0.0, hi=90.0, lo_open=True, hi_open=True)
         joints.append(JointSpec(name=jname, type=jtype, urdf_joints=names, socket_axis=axis,
-                                alpha=alpha, beta=beta, cone_deg=cone, key=key))
+                                alpha=alpha, beta=beta, cone_deg=cone, key=key,
+                                parametrization=parametrization, actuated=actuated))
     return tuple(joints)
+
+
+def _parse_actuated(r: _Reader, raw, key: str) -> ActuatorSpec:
+    """``{min: [...], max: [...], weight: w}``: one bound per degree of freedom (checked against the
+    joint by the loader), a single number meaning one degree of freedom."""
+    raw = r.mapping(raw, key, ACTUATED_KEYS, required=("min", "max"))
+    lo = raw["min"] if isinstance(raw["min"], list) else [raw["min"]]
+    hi = raw["max"] if isinstance(raw["max"], list) else [raw["max"]]
+    lo = r.vector(lo, f"{key}.min", None)
+    hi = r.vector(hi, f"{key}.max", len(lo))
+    for i, (a, b) in enumerate(zip(lo, hi)):
+        if not a < b:
+            raise r.fail(f"{key}.max[{i}]", f"expected max > min = {a!r}, got {b!r}")
+    weight = r.number(raw.get("weight", 1.0), f"{key}.weight", lo=0.0)
+    return ActuatorSpec(min=lo, max=hi, weight=weight, key=key)
 
 
 def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:
     if not isinstance(raw, list) or not raw:
         raise r.fail("cables", f"expected a non-empty list of cables, got {_kind(raw)}")
+    if len(raw) > MAX_CABLES:
+        raise r.fail("cables", f"expected at most {MAX_CABLES} cables (docs/limits.md), got {len(raw)}")
     cables = []
     names: dict[str, int] = {}
     for i, spec in enumerate(raw):
@@ -328,6 +388,9 @@ def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:
         if not f_max > f_min:
             raise r.fail(f"{key}.f_max", f"expected f_max > f_min = {f_min!r}, got {f_max!r}")
         route = spec["route"]
+        if isinstance(route, list) and len(route) > MAX_ROUTE_POINTS:
+            raise r.fail(f"{key}.route", f"expected at most {MAX_ROUTE_POINTS} points (docs/limits.md), "
+                                         f"got {len(route)}")
         if not isinstance(route, list) or len(route) < 2:
             got = f"{len(route)} point(s)" if isinstance(route, list) else _kind(route)
             raise r.fail(f"{key}.route", f"expected a list of at least two {{link, point}}, got {got}")
@@ -359,8 +422,9 @@ def _parse_trajectory(r: _Reader, name, spec, base_dir: Path) -> TrajectorySpec:
     dt = r.number(spec["dt"], f"{key}.dt", lo=0.0, lo_open=True)
     if dt > duration:
         raise r.fail(f"{key}.dt", f"expected dt <= duration = {duration!r}, got {dt!r}")
-    if duration / dt > 10_000_000:
-        raise r.fail(f"{key}.dt", f"expected at most 1e7 samples, got duration/dt = {duration / dt:.3g}")
+    if duration / dt + 1 > MAX_SAMPLES:
+        raise r.fail(f"{key}.dt", f"expected at most {MAX_SAMPLES} samples (docs/limits.md), got "
+                                  f"duration/dt + 1 = {duration / dt + 1:.3g}")
     mode = r.choice(spec.get("spherical", "axis-angle"), f"{key}.spherical", SPHERICAL_MODES)
     return TrajectorySpec(name=name, type="quintic", q_start=q0, q_end=q1, duration=duration, dt=dt,
                           spherical=mode, key=key)

@@ -1,21 +1,31 @@
-r"""Trajectories: rest-to-rest quintics (spherical joints about one fixed axis) and CSV files.
+r"""Trajectories: rest-to-rest quintics (on SO(3) and SE(3) for ball and free joints) and CSV files.
 
-**Quintic.** Every coordinate not in a spherical joint follows
-:math:`q(t) = q_0 + (q_1 - q_0)\, s(t/T)` with :math:`s(\tau) = 10\tau^3 - 15\tau^4 + 6\tau^5` (zero
-velocity and acceleration at both ends). A spherical joint turns about one fixed axis (CASPR's and the
-source paper's interpolation): with :math:`R_0, R_1` its start and end orientations (socket -> child)
-and :math:`R_0^T R_1 = \exp([\phi]_\times)`,
+A :class:`Trajectory` holds samples of Pinocchio's configuration ``q`` (N, nq) and of its velocity and
+acceleration ``qd``, ``qdd`` (N, nv: the tangent space). A *plan* (:func:`plan`) evaluates the same
+motion at any time, for replays and dense forces.
+
+**Quintic.** Start and end are given in coordinates (:mod:`mcdm_pin.model.charts`). Every coordinate
+follows :math:`x(t) = x_0 + (x_1 - x_0)\, s(t/T)` with :math:`s(\tau) = 10\tau^3 - 15\tau^4 + 6\tau^5`
+(zero velocity and acceleration at both ends), except rotations: a spherical joint (native ball joint,
+ZYX or xyz Euler angles) and the orientation of a free joint turn about one fixed axis (CASPR's and the
+source paper's interpolation): with :math:`R_0, R_1` the start and end orientations and
+:math:`R_0^T R_1 = \exp([\phi]_\times)`,
 
 .. math:: R(t) = R_0 \exp(s(t/T)[\phi]_\times), \qquad \omega = \dot s\,\phi, \qquad \dot\omega = \ddot s\,\phi
 
-(child frame). The Euler angles follow by Newton's method on SO(3) from the previous sample (to 1e-14
-rad), their rates from :math:`\omega = S(q)\dot q` and :math:`\dot\omega = S\ddot q + \dot S\dot q`.
-``spherical: per-coordinate`` applies the scalar quintic to each Euler angle instead.
+(child frame). Euler angles follow by Newton's method on SO(3) from the previous sample (to 1e-14 rad),
+their rates from :math:`\omega = S(q)\dot q` and :math:`\dot\omega = S\ddot q + \dot S\dot q`. A free
+joint's position follows the scalar quintic in its parent frame (translation and rotation decoupled);
+its velocity is Pinocchio's :math:`(R^T\dot p, \omega)`. ``spherical: per-coordinate`` applies the scalar
+quintic to each coordinate instead.
 
-**CSV.** Columns ``t, q_1 ... q_nv`` (an optional header row of names). Velocities and accelerations
-are the first and second derivatives of the interpolating quintic B-spline through the samples
-(``scipy.interpolate.make_interp_spline(k=5)``, not-a-knot ends), so ``qdd`` is continuous; at least 6
-samples with strictly increasing times are required.
+**CSV.** Columns ``t`` and the nv coordinates, optionally followed by nv columns ``qd:NAME`` and nv
+columns ``qdd:NAME``: Pinocchio's velocity and acceleration (tangent space), taken exactly as given.
+Without them the rates are the derivatives of the interpolating quintic B-spline through the samples
+(``scipy.interpolate.make_interp_spline(k=5)``, not-a-knot ends), mapped to the tangent space exactly
+(:func:`mcdm_pin.model.charts.tangent`); at least 6 samples with strictly increasing times. The first
+row may be a header: a row of names (no cell a number); any other row that does not parse is an error
+naming its row and column.
 """
 
 from __future__ import annotations
@@ -23,13 +33,15 @@ from __future__ import annotations
 import csv
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 import pinocchio as pin
 
 from .exceptions import SidecarError, TrajectoryError
+from .limits import MAX_CSV_BYTES, MAX_SAMPLES
+from .model import charts
 from .sidecar import TrajectorySpec, _names
-
 
 # |det S| = |cos q2| below which a spherical joint's Euler-angle rates are refused (within 0.057 deg
 # of gimbal lock the rates, and their rounding errors, are amplified more than 1000 times)
@@ -38,13 +50,26 @@ SINGULAR_DET = 1e-3
 
 @dataclass
 class Trajectory:
-    """Sampled joint trajectory: ``t`` (N,), ``q``, ``qd``, ``qdd`` (N, nv)."""
+    """Sampled trajectory: ``t`` (N,), ``q`` (N, nq) configurations, ``qd``, ``qdd`` (N, nv)."""
 
     name: str
     t: np.ndarray
     q: np.ndarray
     qd: np.ndarray
     qdd: np.ndarray
+
+    def __post_init__(self):
+        try:
+            self.t = np.asarray(self.t, dtype=float).reshape(-1)
+            arrays = [np.asarray(getattr(self, k), dtype=float) for k in ("q", "qd", "qdd")]
+        except (TypeError, ValueError) as exc:
+            raise TrajectoryError(f"trajectory {self.name!r}: expected arrays of numbers ({exc})") from None
+        n = len(self.t)
+        for key, arr in zip(("q", "qd", "qdd"), arrays):
+            if arr.ndim != 2 or arr.shape[0] != n:
+                raise TrajectoryError(f"trajectory {self.name!r}: {key} has shape {arr.shape}; expected "
+                                      f"{n} rows, one per time in t")
+        self.q, self.qd, self.qdd = arrays
 
     def __len__(self) -> int:
         return len(self.t)
@@ -67,36 +92,30 @@ def quintic_profile(t: np.ndarray, duration: float):
 
 
 class SphericalKinematics:
-    """Rotation and Euler-rate map of one spherical joint made of three revolute URDF joints."""
+    """Rotation (socket -> child) and angle-rate map of a spherical joint given by three angles: an
+    xyz Euler triple of revolute joints or a native ``JointModelSphericalZYX``. Computed by Pinocchio on
+    a copy of the joint's own chain (first placement set to identity)."""
 
     def __init__(self, robot, joint):
         m = robot.model
-        data = m.createData()
-        q0 = robot.pin_q(np.zeros(robot.nv))
-        self.axes = []  # each URDF joint's axis in its own frame
-        for j in joint.pin_ids:
-            Jl = pin.computeJointJacobian(m, data, q0, j)  # LOCAL frame of joint j
-            a = Jl[3:, m.joints[j].idx_v]
-            self.axes.append(a / np.linalg.norm(a))
-        # fixed rotations between the URDF joints (the first is part of the socket frame)
-        self.P = [np.eye(3)] + [m.jointPlacements[j].rotation.copy() for j in joint.pin_ids[1:]]
+        sub = pin.Model()
+        parent = 0
+        for k, pid in enumerate(joint.pin_ids):
+            placement = pin.SE3.Identity() if k == 0 else m.jointPlacements[pid]
+            parent = sub.addJoint(parent, m.joints[pid], placement, m.names[pid])
+        self.model, self.data, self.last = sub, sub.createData(), parent
         self.name = joint.name
+        self._zero = np.zeros(3)
 
     def rotation(self, th) -> np.ndarray:
         """Socket -> child rotation at angles ``th`` (3,)."""
-        R = np.eye(3)
-        for P, a, x in zip(self.P, self.axes, th):
-            R = R @ P @ pin.exp3(a * x)
-        return R
+        pin.forwardKinematics(self.model, self.data, np.asarray(th, dtype=float))
+        return self.data.oMi[self.last].rotation.copy()
 
     def S(self, th) -> np.ndarray:
         """(3, 3) map from angle rates to the child-frame angular velocity."""
-        cols = [None, None, None]
-        R_k_child = np.eye(3)  # rotation from the child frame to frame k (after joint k turns)
-        for k in (2, 1, 0):
-            cols[k] = R_k_child.T @ self.axes[k]
-            R_k_child = self.P[k] @ pin.exp3(self.axes[k] * th[k]) @ R_k_child
-        return np.column_stack(cols)
+        J = pin.computeJointJacobian(self.model, self.data, np.asarray(th, dtype=float), self.last)
+        return J[3:].copy()
 
     def rates(self, th, omega, omega_dot):
         """Angle rates and accelerations for a child-frame angular velocity and acceleration."""
@@ -106,16 +125,14 @@ class SphericalKinematics:
             raise TrajectoryError(
                 f"joint {self.name!r}: the Euler angles {np.round(th, 6).tolist()} rad are "
                 f"{np.degrees(np.arccos(min(abs(det), 1.0))):.4g} deg from 90 deg, at the singularity "
-                f"of xyz Euler angles (gimbal lock: |det S| = |cos q2| = {abs(det):.2e} < {SINGULAR_DET:g}); "
-                f"the angle rates of this motion are undefined or amplified by 1/|cos q2| there. Keep "
-                f"the middle angle away from +-90 deg, e.g. turn the joint's socket frame (the first URDF "
-                f"joint's origin rpy) so that the motion stays near q2 = 0")
+                f"of the Euler angles (gimbal lock: |det S| = |cos q2| = {abs(det):.2e} < {SINGULAR_DET:g}); "
+                f"the angle rates of this motion are undefined or amplified by 1/|det S| there. Keep "
+                f"the middle angle away from +-90 deg (e.g. turn the joint's socket frame), or declare the "
+                f"joint a native ball joint (parametrization: quaternion), which has no singularity")
         thd = np.linalg.solve(S, omega)
-        # dS/dt thd = sum_k -(sum_{j>k} S_j thd_j) x S_k thd_k
-        cols = S * thd
-        bias = np.zeros(3)
-        for k in range(3):
-            bias -= np.cross(cols[:, k + 1:].sum(axis=1), cols[:, k])
+        # S thdd + dS/dt thd = omega_dot; dS/dt thd is the child's angular acceleration at thdd = 0
+        pin.forwardKinematics(self.model, self.data, np.asarray(th, dtype=float), thd, self._zero)
+        bias = self.data.a[self.last].angular
         thdd = np.linalg.solve(S, omega_dot - bias)
         return thd, thdd
 
@@ -135,9 +152,9 @@ class SphericalKinematics:
 
 
 def resolve_configuration(robot, value, key: str, path=None) -> np.ndarray:
-    """A sidecar configuration (list in coordinate order, or mapping joint -> values) -> q (nv,)."""
+    """A sidecar configuration (list in coordinate order, or mapping joint -> values) -> coordinates (nv)."""
     if isinstance(value, dict):
-        q = np.zeros(robot.nv)
+        x = np.zeros(robot.nv)
         for jname, vals in value.items():
             if jname not in robot.joint_names:
                 raise SidecarError(path, f"{key}.{jname}", f"unknown joint {jname!r}; expected one of "
@@ -147,107 +164,253 @@ def resolve_configuration(robot, value, key: str, path=None) -> np.ndarray:
                 raise SidecarError(path, f"{key}.{jname}",
                                    f"expected {joint.nv} value(s) for {joint.type} joint {jname!r}, "
                                    f"got {len(vals)}")
-            q[joint.idx_v] = vals
-        return q
+            x[joint.idx_v] = vals
+        return x
     if len(value) != robot.nv:
         raise SidecarError(path, key, f"expected {robot.nv} values (coordinates "
                                       f"{', '.join(robot.coordinate_names)}), got {len(value)}")
     return np.array(value, dtype=float)
 
 
+# ----------------------------------------------------------------------------------------- plans
+Plan = Callable[[float], tuple[np.ndarray, np.ndarray, np.ndarray]]
+
+
+class QuinticPlan:
+    """The rest-to-rest quintic from coordinates ``x0`` to ``x1`` in ``duration`` s, at any time
+    (module docstring). ``spherical``: ``axis-angle`` (default) or ``per-coordinate``."""
+
+    def __init__(self, robot, x0, x1, duration: float, spherical: str = "axis-angle"):
+        if spherical not in ("axis-angle", "per-coordinate"):
+            raise TrajectoryError(f"spherical: expected 'axis-angle' or 'per-coordinate', got {spherical!r}")
+        if not (np.isfinite(duration) and duration > 0):
+            raise TrajectoryError(f"expected a finite duration > 0, got {duration!r}")
+        self.robot, self.T = robot, float(duration)
+        self.x0 = robot.check_vector(x0, "q_start")
+        self.x1 = robot.check_vector(x1, "q_end")
+        self.rotations = []  # (joint, kind, idx of its rotation in v, kinematics, R0, phi)
+        if spherical == "axis-angle":
+            for joint in robot.joints:
+                if joint.type == "free":
+                    iv = joint.idx_v[3:]
+                    R0, R1 = pin.exp3(self.x0[iv]), pin.exp3(self.x1[iv])
+                    self.rotations.append((joint, "free", iv, None, R0, pin.log3(R0.T @ R1)))
+                elif joint.type == "spherical":
+                    iv = joint.idx_v
+                    if joint.parametrization == "quaternion":
+                        kin, R0, R1 = None, pin.exp3(self.x0[iv]), pin.exp3(self.x1[iv])
+                    else:
+                        kin = SphericalKinematics(robot, joint)
+                        R0, R1 = kin.rotation(self.x0[iv]), kin.rotation(self.x1[iv])
+                    self.rotations.append((joint, "ball", iv, kin, R0, pin.log3(R0.T @ R1)))
+
+    def __call__(self, t, guess=None):
+        """``(q, v, a)`` at time ``t``; ``guess``: Euler angles to start Newton from (previous sample)."""
+        s, ds, dds = (float(x[0]) for x in quintic_profile(np.array([float(t)]), self.T))
+        dx = self.x1 - self.x0
+        x, xd, xdd = self.x0 + s * dx, ds * dx, dds * dx
+        rot = []
+        for joint, kind, iv, kin, R0, phi in self.rotations:
+            R = R0 @ pin.exp3(s * phi)
+            if kind == "free" or kin is None:
+                x[iv], xd[iv], xdd[iv] = pin.log3(R), 0.0, 0.0  # overwritten below in the tangent space
+            else:
+                th = kin.angles(R, x[iv] if guess is None else guess[iv])
+                x[iv] = th
+                xd[iv], xdd[iv] = kin.rates(th, ds * phi, dds * phi)
+                continue
+            rot.append((joint, kind, iv, R, ds * phi, dds * phi))
+        q, v, a = charts.tangent(self.robot.model, x, xd, xdd, self.robot._parts)
+        for joint, kind, iv, R, w, wd in rot:
+            v[iv], a[iv] = w, wd
+            if kind == "free":
+                it = joint.idx_v[:3]
+                vl = R.T @ xd[it]
+                v[it], a[it] = vl, R.T @ xdd[it] - np.cross(w, vl)
+        return q, v, a, x
+
+
 def quintic_trajectory(robot, q_start, q_end, duration: float, dt: float,
                        spherical: str = "axis-angle", name: str = "quintic") -> Trajectory:
-    """Rest-to-rest quintic from ``q_start`` to ``q_end`` sampled every ``dt`` (module docstring)."""
-    q0 = robot.check_vector(q_start, "q_start")
-    q1 = robot.check_vector(q_end, "q_end")
-    if not (duration > 0 and dt > 0 and dt <= duration):
-        raise TrajectoryError(f"expected 0 < dt <= duration, got dt={dt!r}, duration={duration!r}")
+    """Rest-to-rest quintic between two configurations in coordinates (nv), sampled every ``dt``
+    (module docstring)."""
+    if not (np.isfinite(duration) and np.isfinite(dt) and duration > 0 and dt > 0 and dt <= duration):
+        raise TrajectoryError(f"expected finite 0 < dt <= duration, got dt={dt!r}, duration={duration!r}")
+    if duration / dt + 1 > MAX_SAMPLES:
+        raise TrajectoryError(f"expected at most {MAX_SAMPLES} samples (docs/limits.md), got duration/dt + 1 = "
+                              f"{duration / dt + 1:.3g}")
     n = int(np.floor(duration / dt + 1e-9)) + 1
+    plan_ = QuinticPlan(robot, q_start, q_end, duration, spherical)
     t = np.arange(n) * dt
-    s, ds, dds = quintic_profile(t, duration)
-    dq = q1 - q0
-    q = q0 + np.outer(s, dq)
-    qd = np.outer(ds, dq)
-    qdd = np.outer(dds, dq)
-    if spherical == "axis-angle":
-        for joint in robot.joints:
-            if joint.type != "spherical":
-                continue
-            kin = SphericalKinematics(robot, joint)
-            iv = joint.idx_v
-            R0 = kin.rotation(q0[iv])
-            phi = pin.log3(R0.T @ kin.rotation(q1[iv]))
-            th = q0[iv].copy()
-            for k in range(n):
-                target = R0 @ pin.exp3(phi * s[k])
-                th = kin.angles(target, th)
-                q[k, iv] = th
-                qd[k, iv], qdd[k, iv] = kin.rates(th, ds[k] * phi, dds[k] * phi)
-            if abs(t[-1] - duration) <= 1e-9 * duration:  # the last sample is the end pose
-                q[-1, iv] = kin.angles(kin.rotation(q1[iv]), q[-1, iv])
-    elif spherical != "per-coordinate":
-        raise TrajectoryError(f"spherical: expected 'axis-angle' or 'per-coordinate', got {spherical!r}")
-    return Trajectory(name, t, q, qd, qdd)
+    if not plan_.rotations and all(p.kind == charts.IDENTITY for p in robot._parts):
+        s, ds, dds = quintic_profile(t, duration)  # every coordinate is a configuration entry
+        dx = plan_.x1 - plan_.x0
+        return Trajectory(name, t, plan_.x0 + np.outer(s, dx), np.outer(ds, dx), np.outer(dds, dx))
+    Q, V, A = np.empty((n, robot.nq)), np.empty((n, robot.nv)), np.empty((n, robot.nv))
+    guess = plan_.x0
+    for k in range(n):
+        Q[k], V[k], A[k], guess = plan_(t[k], guess)
+    if abs(t[-1] - duration) <= 1e-9 * duration and plan_.rotations:  # the last sample is the end pose
+        for joint, kind, iv, kin, R0, phi in plan_.rotations:
+            if kin is not None:
+                th = kin.angles(kin.rotation(plan_.x1[iv]), guess[iv])
+                Q[-1, joint.idx_q] = th
+    return Trajectory(name, t, Q, V, A)
 
 
-def csv_trajectory(robot, path, name: str | None = None) -> Trajectory:
-    """Read ``t, q...`` columns from a CSV file and differentiate a quintic spline through them."""
-    from scipy.interpolate import make_interp_spline
-
-    path = Path(path)
+# -------------------------------------------------------------------------------------------- CSV
+def _csv_rows(path: Path) -> list[list[str]]:
     try:
-        with path.open(newline="", encoding="utf-8") as fh:
-            rows = [row for row in csv.reader(fh) if row and any(c.strip() for c in row)]
+        size = path.stat().st_size
+        if size > MAX_CSV_BYTES:
+            raise TrajectoryError(f"{path}: the file has {size} bytes; a trajectory CSV may have at most "
+                                  f"{MAX_CSV_BYTES} (docs/limits.md)")
+        rows = []
+        # utf-8-sig: a byte-order mark written by spreadsheets is not part of the first cell
+        with path.open(newline="", encoding="utf-8-sig") as fh:
+            for row in csv.reader(fh):
+                if row and any(c.strip() for c in row):
+                    rows.append(row)
+                    if len(rows) > MAX_SAMPLES + 1:
+                        raise TrajectoryError(f"{path}: more than {MAX_SAMPLES} rows (docs/limits.md)")
+        return rows
     except FileNotFoundError:
         raise TrajectoryError(f"{path}: file not found") from None
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+    except IsADirectoryError:
+        raise TrajectoryError(f"{path}: is a folder; expected a CSV file") from None
+    except UnicodeDecodeError:
+        raise TrajectoryError(f"{path}: not UTF-8 text; expected a CSV file") from None
+    except (OSError, csv.Error) as exc:
         raise TrajectoryError(f"{path}: cannot read the CSV ({exc})") from None
-    if rows and not _is_numeric_row(rows[0]):
-        rows = rows[1:]  # header
-    values = []
-    for i, row in enumerate(rows):
-        if len(row) != robot.nv + 1:
-            raise TrajectoryError(f"{path}: row {i + 1}: expected {robot.nv + 1} columns (t, "
-                                  f"{', '.join(robot.coordinate_names)}), got {len(row)}")
-        try:
-            values.append([float(c) for c in row])
-        except ValueError:
-            raise TrajectoryError(f"{path}: row {i + 1}: expected numbers, got {row}") from None
-    data = np.array(values, dtype=float).reshape(-1, robot.nv + 1)
-    if len(data) < 6:
-        raise TrajectoryError(f"{path}: expected at least 6 samples for a quintic spline, got {len(data)}")
-    if not np.all(np.isfinite(data)):
-        raise TrajectoryError(f"{path}: expected finite numbers only")
-    t = data[:, 0]
-    if np.any(np.diff(t) <= 0):
-        k = int(np.flatnonzero(np.diff(t) <= 0)[0])
-        raise TrajectoryError(f"{path}: times must increase strictly; row {k + 2} has t={t[k + 1]!r} "
-                              f"after t={t[k]!r}")
-    spline = make_interp_spline(t, data[:, 1:], k=5)
-    return Trajectory(name or path.stem, t, data[:, 1:].copy(), spline(t, 1), spline(t, 2))
 
 
-def _is_numeric_row(row) -> bool:
+def _is_number(cell: str) -> bool:
     try:
-        [float(c) for c in row]
+        float(cell)
         return True
     except ValueError:
         return False
 
 
+def read_csv(robot, path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """``(t, coordinates, qd, qdd)`` of a trajectory CSV (``qd``, ``qdd`` ``None`` when absent)."""
+    path = Path(path)
+    rows = _csv_rows(path)
+    nv = robot.nv
+    names = ["t", *robot.coordinate_names]
+    full = names + [f"qd:{c}" for c in robot.coordinate_names] + [f"qdd:{c}" for c in robot.coordinate_names]
+    first = 0
+    if rows and not any(_is_number(c) for c in rows[0]):
+        header = [c.strip() for c in rows[0]]
+        if len(header) == len(full) and header != full:
+            k = next(i for i, (a, b) in enumerate(zip(header, full)) if a != b)
+            raise TrajectoryError(f"{path}: row 1, column {k + 1}: header {header[k]!r}; with qd/qdd columns "
+                                  f"the header must name them, expected {full[k]!r}")
+        first = 1
+    width = len(rows[first]) if len(rows) > first else 0
+    if width not in (1 + nv, 1 + 3 * nv):
+        raise TrajectoryError(f"{path}: row {first + 1}: expected {1 + nv} columns (t, "
+                              f"{', '.join(robot.coordinate_names)}) or {1 + 3 * nv} (with qd:/qdd: columns), "
+                              f"got {width}")
+    values = []
+    for i in range(first, len(rows)):
+        row = rows[i]
+        if len(row) != width:
+            raise TrajectoryError(f"{path}: row {i + 1}: expected {width} columns, got {len(row)}")
+        try:
+            values.append([float(c) for c in row])
+        except ValueError:
+            col = next(j for j, c in enumerate(row) if not _is_number(c))
+            raise TrajectoryError(f"{path}: row {i + 1}, column {col + 1}: expected a number, got "
+                                  f"{row[col]!r}") from None
+    data = np.array(values, dtype=float).reshape(-1, width)
+    if not np.all(np.isfinite(data)):
+        i, j = np.argwhere(~np.isfinite(data))[0]
+        raise TrajectoryError(f"{path}: row {i + first + 1}, column {j + 1}: expected a finite number")
+    t = data[:, 0]
+    if len(t) and np.any(np.diff(t) <= 0):
+        k = int(np.flatnonzero(np.diff(t) <= 0)[0])
+        raise TrajectoryError(f"{path}: times must increase strictly; row {k + first + 2} has "
+                              f"t={t[k + 1]!r} after t={t[k]!r}")
+    if width == 1 + nv:
+        return t, data[:, 1:], None, None
+    return t, data[:, 1:1 + nv], data[:, 1 + nv:1 + 2 * nv], data[:, 1 + 2 * nv:]
+
+
+def csv_trajectory(robot, path, name: str | None = None) -> Trajectory:
+    """Read a trajectory CSV (module docstring)."""
+    path = Path(path)
+    t, x, qd, qdd = read_csv(robot, path)
+    name = name or path.stem
+    if qd is not None:
+        if len(t) < 1:
+            raise TrajectoryError(f"{path}: no samples")
+        Q = np.array([robot.configuration(xi) for xi in x]).reshape(len(t), robot.nq)
+        return Trajectory(name, t, Q, qd, qdd)
+    if len(t) < 6:
+        raise TrajectoryError(f"{path}: expected at least 6 samples for a quintic spline, got {len(t)}")
+    return _spline_trajectory(robot, name, t, x)
+
+
+def _spline_trajectory(robot, name, t, x) -> Trajectory:
+    from scipy.interpolate import make_interp_spline
+
+    spline = make_interp_spline(t, x, k=5)
+    xd, xdd = spline(t, 1), spline(t, 2)
+    Q, V, A = np.empty((len(t), robot.nq)), np.empty_like(xd), np.empty_like(xdd)
+    for k in range(len(t)):
+        Q[k], V[k], A[k] = charts.tangent(robot.model, x[k], xd[k], xdd[k], robot._parts)
+    return Trajectory(name, t, Q, V, A)
+
+
+# ---------------------------------------------------------------------------------------- sidecar
 def trajectory_from_spec(robot, spec: TrajectorySpec) -> Trajectory:
-    path = robot.sidecar.path
     if spec.type == "csv":
         return csv_trajectory(robot, spec.file, name=spec.name)
-    q0 = resolve_configuration(robot, spec.q_start, f"{spec.key}.q_start", path)
-    q1 = resolve_configuration(robot, spec.q_end, f"{spec.key}.q_end", path)
-    return quintic_trajectory(robot, q0, q1, spec.duration, spec.dt, spec.spherical, name=spec.name)
+    x0, x1 = _ends(robot, spec)
+    return quintic_trajectory(robot, x0, x1, spec.duration, spec.dt, spec.spherical, name=spec.name)
+
+
+def _ends(robot, spec: TrajectorySpec):
+    path = robot.sidecar.path if robot.sidecar is not None else None
+    return (resolve_configuration(robot, spec.q_start, f"{spec.key}.q_start", path),
+            resolve_configuration(robot, spec.q_end, f"{spec.key}.q_end", path))
+
+
+def plan(robot, spec: TrajectorySpec) -> Plan:
+    """The motion of a sidecar trajectory at any time: ``t -> (q, v, a)``. Quintics are evaluated
+    exactly; CSV trajectories through the quintic spline of their samples (coordinates and, when the
+    file has them, the given rates at the samples)."""
+    if spec.type == "csv":
+        from scipy.interpolate import make_interp_spline
+
+        t, x, qd, _ = read_csv(robot, spec.file)
+        spline = make_interp_spline(t, x, k=5)
+
+        def state(tt):
+            return charts.tangent(robot.model, spline(tt), spline(tt, 1), spline(tt, 2), robot._parts)
+
+        return state
+    x0, x1 = _ends(robot, spec)
+    quintic = QuinticPlan(robot, x0, x1, spec.duration, spec.spherical)
+    samples = quintic_trajectory(robot, x0, x1, spec.duration, spec.dt, spec.spherical) if quintic.rotations else None
+
+    def state(tt):
+        guess = None
+        if samples is not None:  # Newton starts from the nearest sample (the same branch of angles)
+            k = int(np.clip(np.rint(tt / spec.dt), 0, len(samples) - 1))
+            guess = robot.coordinates(samples.q[k])
+        q, v, a, _ = quintic(tt, guess)
+        return q, v, a
+
+    return state
 
 
 def load_trajectory(robot, name: str) -> Trajectory:
     """The sidecar's trajectory ``name``."""
-    specs = robot.sidecar.trajectories
+    specs = robot.sidecar.trajectories if robot.sidecar is not None else {}
     if name not in specs:
-        raise TrajectoryError(f"{robot.sidecar.path}: no trajectory {name!r}; expected one of "
+        where = robot.sidecar.path if robot.sidecar is not None else robot.name
+        raise TrajectoryError(f"{where}: no trajectory {name!r}; expected one of "
                               f"{_names(specs) if specs else '(none defined)'}")
     return trajectory_from_spec(robot, specs[name])

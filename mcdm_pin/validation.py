@@ -10,22 +10,32 @@ from .exceptions import McdmError
 def validation_report(robot) -> list[tuple[str, str]]:
     """``[(level, text)]`` with level ``ok``, ``warn`` or ``fail``."""
     from .inverse_dynamics import InverseDynamics
-    from .terms import compute_terms
+    from .model.terms import compute_terms
 
-    out = [("ok", f"sidecar valid; URDF loaded; every movable URDF joint ({robot.nv}) belongs to one "
-                  f"of {len(robot.joints)} physical joints")]
+    out = [("ok", f"sidecar valid; URDF loaded; every movable URDF joint ({robot.model.njoints - 1}, "
+                  f"{robot.nv} DoF) belongs to one of {len(robot.joints)} physical joints")]
     q0 = np.zeros(robot.nv)
     try:
         terms = compute_terms(robot, q0)
     except McdmError as exc:
         return out + [("fail", f"cannot evaluate the model at q = 0: {exc}")]
     eig = np.linalg.eigvalsh(terms.M)
-    if eig.min() > 0:
+    tol = 1e-12 * max(1.0, float(np.abs(eig).max()))
+    empty = _massless_subtrees(robot.model)
+    if empty:
+        out.append(("fail", f"the body moved by joint {empty[0]!r} and everything after it have no mass and "
+                            f"no inertia: the mass matrix is singular there and its motion has no dynamics "
+                            f"(give the child link an <inertial>)"))
+    elif eig.min() > tol:
         out.append(("ok", f"mass matrix positive definite at q = 0 (eigenvalues {eig.min():.3g} .. "
                           f"{eig.max():.3g})"))
+    elif eig.min() >= -tol:
+        out.append(("warn", f"mass matrix singular at q = 0 (smallest eigenvalue {eig.min():.3g}): some body "
+                            f"has no inertia about an axis it turns about; inverse dynamics is still defined "
+                            f"(forward dynamics, e.g. mcdm-pin verify, is not)"))
     else:
-        out.append(("fail", f"mass matrix not positive definite at q = 0 (smallest eigenvalue "
-                            f"{eig.min():.3g}): a subtree has no mass or inertia"))
+        out.append(("fail", f"mass matrix indefinite at q = 0 (smallest eigenvalue {eig.min():.3g}): some "
+                            f"body's inertia is not physical"))
     rank = np.linalg.matrix_rank(terms.L, tol=1e-9 * max(1.0, np.abs(terms.L).max()))
     if rank == robot.nv:
         sv = np.linalg.svd(terms.L, compute_uv=False)
@@ -54,3 +64,14 @@ def validation_report(robot) -> list[tuple[str, str]]:
             out.append(("ok", f"joint {j.name}: stability cone {j.cone_deg:g} deg about socket axis "
                               f"{np.round(j.socket_axis, 6).tolist()}"))
     return out
+
+
+def _massless_subtrees(model) -> list[str]:
+    """Joints whose whole subtree (the body they move and everything after it) has no mass and no
+    inertia."""
+    nj = model.njoints
+    mass = np.array([model.inertias[j].mass + np.abs(model.inertias[j].inertia).sum() for j in range(nj)])
+    total = mass.copy()
+    for j in range(nj - 1, 0, -1):
+        total[model.parents[j]] += total[j]
+    return [model.names[j] for j in range(1, nj) if total[j] == 0.0]

@@ -19,32 +19,14 @@ def two_link():
     return Robot.load(TWO_LINK)
 
 
-def ensure_chromium() -> str | None:
-    """The test set-up for the render test: Debian's ``chromium``, installed with apt-get when it is
-    missing and we may (root, apt-get present; package download only, no browser download of its
-    own). Returns the executable, or None when it cannot be had here."""
-    import os
-    import shutil
-    import subprocess
-
-    from mcdm_pin.viewer import find_chromium
-
-    exe = find_chromium()
-    if exe or os.environ.get("MCDM_PIN_NO_APT"):
-        return exe
-    if shutil.which("apt-get") is None or os.geteuid() != 0:
-        return None
-    env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
-    for cmd in (["apt-get", "update", "-qq"], ["apt-get", "install", "-y", "-qq", "chromium"]):
-        if subprocess.run(cmd, env=env, capture_output=True, timeout=900).returncode != 0:
-            return None
-    return find_chromium()
-
-
 @pytest.fixture(scope="session")
 def chromium():
-    exe = ensure_chromium()
+    """A Chromium for the render tests; they skip with the install hint when there is none (tests
+    never install software: .ci/run installs Debian's chromium before running them)."""
+    from mcdm_pin.viewer import find_chromium
+    from mcdm_pin.viewer.screenshot import INSTALL_HINT
+
+    exe = find_chromium()
     if exe is None:
-        pytest.skip("no Chromium and it cannot be installed here (needs root and apt-get: "
-                    "apt-get install chromium)")
+        pytest.skip(f"no Chromium for the render tests: {INSTALL_HINT}")
     return exe

@@ -85,3 +85,71 @@ def test_bad_sidecar_in_info_is_one_line(tmp_path):
     code, out, err = cli("info", bad)
     assert code == 2 and "cables[0].f_min" in err and "Traceback" not in err
     assert len(err.strip().splitlines()) == 1
+
+
+def _variant(tmp_path, old, new, name="variant.yaml"):
+    text = TWO_LINK.read_text()
+    assert old in text
+    path = tmp_path / name
+    path.write_text(text.replace(old, new).replace("../urdf/", str(REPO / "urdf") + "/"))
+    return path
+
+
+def test_info_checks_every_trajectory_and_says_where_it_fails(tmp_path, capsys):
+    """info used to check only the zero pose: a sidecar whose trajectory has a q_start of the wrong
+    length passed (exit 0), and a routing that holds q = 0 but fails along the motion passed too."""
+    bad = _variant(tmp_path, "q_start: [0.2, -0.2, -0.1, 0.2]", "q_start: [0.2, -0.2, -0.1]")
+    assert main(["info", str(bad)]) == 1
+    out = capsys.readouterr().out
+    assert "[fail] trajectory traj2: cannot be built:" in out and "q_start: expected 4 values" in out
+    assert "[ok] trajectory traj1: 101 instants over 1 s; case 1 feasible at all 11 instants checked" in out
+    # cables of at most 30 N hold the zero pose but not the fast part of traj1 (case 1 needs 53.8 N)
+    weak = _variant(tmp_path, "f_max: 1000.0", "f_max: 30.0")
+    assert main(["info", str(weak)]) == 0  # infeasible instants are a warning: the robot is valid
+    out = capsys.readouterr().out
+    assert "[ok] holds the zero pose against gravity" in out
+    line = next(x for x in out.splitlines() if "trajectory traj1" in x)
+    assert line.startswith("  [warn]") and "case 1 has no answer at 6 of 11 instants checked (t = 0.1, 0.2, 0.3" in line
+    assert "a common f_max of 42.8448 N would suffice" in line
+
+
+def test_info_given_a_urdf_or_a_results_file_says_what_it_is(tmp_path):
+    code, out, err = cli("info", REPO / "urdf" / "two_link_sr.urdf")
+    assert code == 2 and "is a URDF" in err and "robots/two_link_sr.yaml" in err and "YAML at line" not in err
+    npz = tmp_path / "run.npz"
+    np.savez(npz, t=np.zeros(2))
+    code, out, err = cli("info", npz)
+    assert code == 2 and "is a results file (.npz" in err and "codec" not in err
+
+
+def test_no_library_module_imports_the_command_line():
+    """The command line is a package on top: nothing below imports it (or argparse), so that it can
+    change without touching the library (``python -m mcdm_pin`` is its entry point)."""
+    import ast
+
+    offenders = []
+    for path in (REPO / "mcdm_pin").rglob("*.py"):
+        rel = path.relative_to(REPO / "mcdm_pin")
+        if rel.parts[0] == "cli" or rel.name == "__main__.py":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):  # the module and each name imported from it
+                base = "." * node.level + (node.module or "")
+                names = [base] + [f"{base}.{a.name}".replace("..", ".") if node.module else base + a.name
+                                  for a in node.names]
+            else:
+                continue
+            for name in names:
+                parts = name.lstrip(".").split(".")
+                if name == "argparse" or "mcdm_pin.cli" in name or (name.startswith(".") and "cli" in parts[:1]):
+                    offenders.append(f"{rel}: {name}")
+    assert not offenders, offenders
+
+
+@pytest.mark.parametrize("command", ["info", "solve", "import-caspr", "view", "plot", "verify"])
+def test_every_command_has_help(command, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main([command, "--help"])
+    assert exc.value.code == 0 and "usage: mcdm-pin" in capsys.readouterr().out

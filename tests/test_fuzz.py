@@ -83,7 +83,7 @@ def outcome(kind: str, load) -> None:
             msg = str(exc)
             assert msg.strip(), f"empty message from {type(exc).__name__}"
             if isinstance(exc, SidecarError):
-                assert exc.key or any(s in msg for s in ("malformed YAML", "cannot read", "file not found",
+                assert exc.key or any(s in msg for s in ("malformed YAML", "cannot read", "file not found", "not UTF-8", "not a sidecar",
                                                      "expected a mapping with keys")), msg
             if isinstance(exc, CasprError):
                 assert exc.element or "cannot" in msg or "malformed" in msg, msg
@@ -239,7 +239,7 @@ def test_mutated_sidecar_text_loads_or_raises_mcdm_error(text):
 def test_invalid_utf8_sidecar(tmp_path):
     path = tmp_path / "robot.yaml"
     path.write_bytes(b"version: 1\nname: \xff\xfe\n")
-    with pytest.raises(SidecarError, match="cannot read"):
+    with pytest.raises(SidecarError, match="not UTF-8 text"):
         Robot.load(path)
 
 

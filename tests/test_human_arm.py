@@ -56,7 +56,7 @@ def test_cables(robot):
     assert len(two_link) >= 2, two_link
     assert {"biceps_long", "triceps_long"} <= set(two_link)
     # every degree of freedom is crossed by at least one cable pulling each way at q = 0
-    from mcdm_pin.terms import compute_terms
+    from mcdm_pin.model.terms import compute_terms
 
     L = compute_terms(robot, np.zeros(robot.nv)).L
     assert np.linalg.matrix_rank(L) == robot.nv
@@ -64,7 +64,7 @@ def test_cables(robot):
 
 
 def test_L_matches_finite_differences(robot):
-    from mcdm_pin.terms import TermsEvaluator
+    from mcdm_pin.model.terms import TermsEvaluator
 
     rng = np.random.default_rng(7)
     evaluate = TermsEvaluator(robot)

@@ -1,6 +1,6 @@
 """The compiled hot path (issue 6) against its numpy reference formulation.
 
-``mcdm_pin.kernels.cable_terms`` (numba) replaces the numpy formulation of the cable terms, and
+``mcdm_pin.model.kernels.cable_terms`` (numba) replaces the numpy formulation of the cable terms, and
 ``mcdm_pin.solvers._kkt`` the numpy active-set solve; both must give the same numbers. Tolerance
 1e-12 relative: the two compute the same sums in a different order, so they differ by rounding only
 (a few ulps of the largest entry).
@@ -17,7 +17,7 @@ from hypothesis import seed as hseed
 
 from mcdm_pin import TermsEvaluator
 from mcdm_pin.exceptions import StateError
-from mcdm_pin.kernels import spread
+from mcdm_pin.model.kernels import spread
 
 from .robotgen import robots
 from .test_properties import SEED, SETTINGS, load, seeds, state
@@ -26,6 +26,7 @@ FIELDS = ("M", "h", "tau", "lengths", "L", "u", "RT", "R_socket", "points")
 
 
 def assert_same_terms(robot, q, qd, qdd):
+    q = robot.check_configuration(q)  # the evaluator takes Pinocchio's configuration (nq)
     fast = TermsEvaluator(robot)(q, qd, qdd)
     ref = TermsEvaluator(robot, compiled=False)(q, qd, qdd)
     for name in FIELDS:

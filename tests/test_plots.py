@@ -95,3 +95,19 @@ def test_runs_of_different_robots_are_refused(runs):
     other = type(runs[1])(**{**runs[1].__dict__, "joint_names": np.array(["a", "b"])})
     with pytest.raises(ResultsError, match="joint_names .* do not match"):
         plot_runs([runs[0], other])
+
+
+def test_interaction_angles_only_for_joints_with_a_socket_axis(runs, two_link):
+    """The angle from the socket axis means something only for spherical joints: the 2-link arm's
+    revolute elbow gets no angle row (it had one, e.g. 92.7 deg for the human elbow)."""
+    assert list(runs[0].joint_types) == ["spherical", "revolute"]
+    figs = plot_runs(runs, figures=["interaction_angles", "summary"])
+    gids = {ln.get_gid() for ax in figs["interaction_angles"].axes for ln in ax.get_lines()}
+    assert "angle:shoulder" in gids and "angle:elbow" not in gids
+    assert len(figs["interaction_angles"].axes) == 2  # one row (shoulder) x two runs
+    # a case-1 run alone (no cone anywhere): the summary shows the spherical joints' angles
+    gids = {ln.get_gid() for ax in plot_runs(runs[:1], figures=["summary"])["summary"].axes for ln in ax.get_lines()}
+    assert "angle:shoulder" in gids and "angle:elbow" not in gids
+    # a robot without spherical joints: no angle figure at all
+    only_revolute = type(runs[0])(**{**runs[0].__dict__, "joint_types": np.array(["revolute", "revolute"])})
+    assert "interaction_angles" not in plot_runs([only_revolute])

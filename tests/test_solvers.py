@@ -9,7 +9,7 @@ import pytest
 from mcdm_pin import (InteractionCone, InverseDynamics, MinCableForces, MinCableForceSum,
                       MinInteractions, Problem, Smoothing, load_trajectory)
 from mcdm_pin.problem import Context
-from mcdm_pin.terms import compute_terms
+from mcdm_pin.model.terms import compute_terms
 
 pytest.importorskip("clarabel")
 

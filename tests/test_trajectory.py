@@ -74,7 +74,7 @@ def test_csv_trajectory_differentiates_a_quintic_spline(two_link, tmp_path):
     ("t,a,b,c,d\n0,0,0,0,0\n", "at least 6"),
     ("0,0,0,0\n" * 7, "columns"),
     ("".join(f"{t},0,0,0,0\n" for t in [0, 1, 2, 2, 3, 4, 5]), "increase"),
-    ("".join(f"{t},0,x,0,0\n" for t in range(7)), "numbers"),
+    ("".join(f"{t},0,x,0,0\n" for t in range(7)), r"row 1, column 3: expected a number"),
 ])
 def test_bad_csv(two_link, tmp_path, text, message):
     path = tmp_path / "bad.csv"

@@ -1,4 +1,5 @@
-"""Forward-dynamics replay (issue 7, item 1): the computed forces produce the planned motion."""
+"""Forward-dynamics replay (issue 7, item 1): the computed forces produce the planned motion; the
+verdict (issue 15): converged, diverged (with a window that works) or not converged."""
 
 from __future__ import annotations
 
@@ -8,9 +9,9 @@ import pytest
 from mcdm_pin import InverseDynamics, ResultsError, Robot, load_trajectory
 from mcdm_pin.cli import main
 from mcdm_pin.trajectory import quintic_trajectory
-from mcdm_pin.verify import convergence, planned_state, replay, resolved_forces
+from mcdm_pin.verify import convergence, judge, planned_state, replay, resolved_forces
 
-from .conftest import SHARED, TWO_LINK
+from .conftest import REPO, SHARED, TWO_LINK, TWO_LINK_URDF
 
 RUNS = {}
 
@@ -96,17 +97,92 @@ def test_replay_rejects_a_result_of_another_robot(two_link, tmp_path):
         replay(two_link, res, integrator="leapfrog")
 
 
-def test_cli_verify_prints_the_convergence_table(two_link, tmp_path, capsys):
+def test_cli_verify_prints_the_convergence_table_and_the_verdict(two_link, tmp_path, capsys):
     path = run(two_link, "traj2", 1).save(tmp_path / "run.npz")
-    assert main(["verify", str(path), str(TWO_LINK), "--levels", "3"]) == 0
+    assert main(["verify", str(TWO_LINK), str(path), "--levels", "3"]) == 0
     out = capsys.readouterr().out
     assert "from the first solved instant t = 0.01 s" in out
     assert "max |q_h - q_h/2|" in out and "rk4 (order 4)" in out
     rows = [line.split() for line in out.splitlines() if line.strip().startswith(("1 ", "2 ", "4 "))]
     assert len(rows) == 3 and 3.8 < float(rows[0][5]) < 4.2
-    assert main(["verify", str(path), str(TWO_LINK), "--levels", "2", "--resolve"]) == 0
+    assert "verdict: converged" in out and "floor set by interpolating f" in out
+    assert main(["verify", str(TWO_LINK), str(path), "--levels", "2", "--resolve"]) == 0
     assert "re-solved on the plan" in capsys.readouterr().out
-    assert main(["verify", str(path), str(TWO_LINK), "--substeps", "0"]) == 2
+    assert main(["verify", str(TWO_LINK), str(path), "--substeps", "0"]) == 2
+
+
+def test_verify_takes_its_files_in_either_order_and_names_what_each_is(two_link, tmp_path, capsys):
+    """Every other command takes ROBOT first; verify accepts both orders (told apart by content), and
+    a URDF, two sidecars or two results files get one line naming each file, never a codec error."""
+    path = run(two_link, "traj2", 1).save(tmp_path / "run.npz")
+    assert main(["verify", str(path), str(TWO_LINK), "--levels", "3"]) == 0  # the old order still works
+    capsys.readouterr()
+    cases = [([str(TWO_LINK_URDF), str(path)], "is a URDF; mcdm-pin reads a robot from its cable sidecar"),
+             ([str(TWO_LINK), str(TWO_LINK)], "got " + str(TWO_LINK) + " (a cable sidecar (YAML))"),
+             ([str(path), str(path)], "(a results file (.npz, from mcdm-pin solve --out))")]
+    for files, message in cases:
+        assert main(["verify", *files]) == 2
+        err = capsys.readouterr().err
+        assert message in err and "codec" not in err and len(err.strip().splitlines()) == 1
+    # the URDF message points at the sidecar that names it
+    assert main(["verify", str(TWO_LINK_URDF), str(path)]) == 2
+    assert "robots/two_link_sr.yaml" in capsys.readouterr().err
+
+
+@pytest.fixture(scope="module")
+def weak_arm(tmp_path_factory):
+    """The 2-link arm with realistic (small) link inertias, 4e-4 kg m^2 instead of 1 kg m^2: standing
+    upright on weak cables (f_min 1 mN) it is open-loop unstable under force control (growth rate
+    ~16 1/s): errors grow 1e7-fold over the 1 s of traj1."""
+    folder = tmp_path_factory.mktemp("weak")
+    urdf = TWO_LINK_URDF.read_text().replace('ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"',
+                                             'ixx="4e-4" ixy="0" ixz="0" iyy="4e-4" iyz="0" izz="1e-5"')
+    (folder / "weak.urdf").write_text(urdf)
+    (folder / "weak.yaml").write_text(TWO_LINK.read_text().replace("../urdf/two_link_sr.urdf", "weak.urdf")
+                                      .replace("name: two_link_sr", "name: weak_arm"))
+    robot = Robot.load(folder / "weak.yaml")
+    res = InverseDynamics.for_case(robot, 1).solve_trajectory(load_trajectory(robot, "traj1"),
+                                                               progress=False)
+    assert res.found.all()
+    return robot, res, res.save(folder / "weak.npz")
+
+
+def test_unstable_arm_is_called_diverged_and_the_window_that_works_is_found(weak_arm, capsys):
+    """Before issue 15, verify printed the same ~8 rad error at every step size with a footer blaming
+    interpolation (and exit 0). The integrator converges (order ~4), but the open-loop growth amplifies
+    the interpolation error past the motion's range: the verdict is 'diverged', and the window search
+    finds --window 6 (1 / (growth rate x dt) = 1 / (16.5 x 0.01)), where the replay follows the plan to
+    2.6e-5 rad (measured)."""
+    robot, res, path = weak_arm
+    table = convergence(robot, res, "rk4", levels=3)
+    assert 14 < table.growth_rate < 19  # measured 16.5 1/s (at t = 0.25 s)
+    assert np.all(table.plan_error > 5.0)  # measured 8.07 rad at every step
+    assert abs(table.observed_order[-1] - 4) < 0.3  # the integrator is not the cause
+    verdict = judge(robot, res, table, "rk4")
+    assert verdict.status == "diverged" and not verdict.converged
+    assert verdict.window == 6 and verdict.window_error < 1e-4
+    windowed = convergence(robot, res, "rk4", levels=3, window=verdict.window)
+    assert windowed.plan_error.max() < 1e-4
+    assert judge(robot, res, windowed, "rk4", window=verdict.window).status == "converged"
+    # the command line: exit 1 and the suggestion; then exit 0 with it
+    assert main(["verify", str(robot.sidecar.path), str(path), "--levels", "3"]) == 1
+    out = capsys.readouterr().out
+    assert "verdict: diverged" in out and "open-loop unstable" in out and "--window 6" in out
+    assert "floor set by interpolating" not in out
+    assert main(["verify", str(robot.sidecar.path), str(path), "--levels", "3", "--window", "6"]) == 0
+    assert "verdict: converged" in capsys.readouterr().out
+
+
+def test_quaternion_ball_joint_replay_keeps_rk4_order():
+    """The native ball joint (quaternion) is integrated on SO(3) (Runge-Kutta-Munthe-Kaas): on a motion
+    about a general axis the self error still falls at order 4 (measured 4.04, 4.02), and on traj1
+    the ball-joint arm replays exactly like the Euler-triple arm (plan error 8.029e-4 rad both)."""
+    ball = Robot.load(REPO / "robots" / "two_link_sr_ball.yaml")
+    traj = quintic_trajectory(ball, [0.2, -0.2, -0.1, 0.2], [-0.5, 0.5, 0.2, -0.2], 1.0, 0.02, name="t2")
+    res = InverseDynamics.for_case(ball, 1).solve_trajectory(traj, progress=False)
+    table = convergence(ball, res, "rk4", levels=4)
+    assert np.all(np.abs(table.observed_order - 4) < 0.2)
+    assert judge(ball, res, table).status == "converged"
 
 
 NECK = SHARED / "reference" / "caspr" / "8S_neck"
@@ -122,8 +198,8 @@ def test_neck_replay_in_windows(tmp_path):
                              trajectories_xml=NECK / "8S_neck_trajectories.xml", trajectory_ids=["roll"])
     robot = Robot.load(imp.sidecar)
     res = InverseDynamics.for_case(robot, 1).solve_trajectory(load_trajectory(robot, "roll"), progress=False)
-    with pytest.raises(Exception, match="exp\\(3"):
-        replay(robot, res)  # diverges, and says why
+    whole = replay(robot, res)  # diverges (the state stops being finite), and says when
+    assert whole.diverged_at is not None and whole.max_error == np.inf and whole.growth_rate > 100
     table = convergence(robot, res, "rk4", substeps=4, levels=3, window=1)
     assert table.reports[0].growth_rate > 100
     assert 3.3 < table.observed_order[0] < 4.3

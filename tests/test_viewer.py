@@ -1,12 +1,10 @@
-"""mcdm_pin.viewer: the Meshcat scene of a solved trajectory, its HTML file, the CLI, and a real render
-in headless Chromium.
+"""mcdm_pin.viewer: the Meshcat scene of a solved trajectory, its HTML file, the CLI, and real renders
+in headless Chromium whose pixels are checked.
 
-The render test needs Debian's ``chromium``: the ``chromium`` fixture (tests/conftest.py) installs it
-with ``apt-get install chromium`` when it is missing (CI runs as root); ``MCDM_PIN_CHROMIUM`` may name
-another binary. It starts Chromium
-with no network (every host name resolves to nothing, every proxied request goes to a closed local
-port; the page is a local file), takes a screenshot and compares it with one of the same viewer
-environment with nothing in it.
+The render tests need a Chromium: Debian's ``chromium`` (``.ci/run`` installs it, visibly, before the
+tests; the tests themselves never install anything) or ``MCDM_PIN_CHROMIUM``; without one they skip
+with the install hint. Chromium runs with no network (every host name resolves to nothing, every
+proxied request goes to a closed local port; the page is a local file).
 """
 
 from __future__ import annotations
@@ -18,13 +16,16 @@ import re
 import numpy as np
 import pytest
 
-from mcdm_pin import InverseDynamics, load_trajectory
+from mcdm_pin import InverseDynamics, Robot, load_trajectory
 from mcdm_pin.cli import main
 from mcdm_pin.exceptions import ResultsError
-from mcdm_pin.viewer import (CONE_OK_RGB, CONE_OUT_RGB, TURBO, build_scene, empty_scene,
+from mcdm_pin.viewer import (CABLE_MAP, CONE_OK_RGB, CONE_OUT_RGB, build_scene, empty_scene, mute,
                              nice_ceil, screenshot, tension_rgb)
+from mcdm_pin.viewer.camera import FILL, FOV_DEG, camera_basis
 
-from .conftest import TWO_LINK
+from .conftest import REPO, TWO_LINK
+
+HUMAN = REPO / "robots" / "human_arm.yaml"
 
 
 @pytest.fixture(scope="module")
@@ -39,13 +40,23 @@ def _tracks(scene, path):
 
 
 def test_colour_scale_is_fixed_and_documented():
-    assert nice_ceil(53.7) == 100.0 and nice_ceil(158.3) == 200.0 and nice_ceil(0.3) == 0.5
+    # a finer "nice" top: the 2-link arm's 53.8 N peak is drawn on 0..60 N, not 0..100 N
+    assert nice_ceil(53.8) == 60.0 and nice_ceil(125.2) == 150.0 and nice_ceil(158.3) == 200.0
+    assert nice_ceil(0.3) == 0.3 and nice_ceil(401.0) == 500.0 and nice_ceil(10.0) == 10.0
+    for x in np.geomspace(1e-3, 1e5, 200):
+        assert x <= nice_ceil(x) <= 1.34 * x  # at most a third above the peak
     rgb = tension_rgb([0.0, 50.0, 100.0, 250.0, np.nan], 100.0)
-    np.testing.assert_allclose(rgb[0], TURBO[0])
-    np.testing.assert_allclose(rgb[2], TURBO[-1])
-    np.testing.assert_allclose(rgb[3], TURBO[-1])  # above the scale: the top colour
-    np.testing.assert_allclose(rgb[1], TURBO[5])
+    np.testing.assert_allclose(rgb[0], CABLE_MAP[0])
+    np.testing.assert_allclose(rgb[2], CABLE_MAP[-1])
+    np.testing.assert_allclose(rgb[3], CABLE_MAP[-1])  # above the scale: the top colour
     assert np.allclose(rgb[4], rgb[4][0])  # no answer: grey
+    # a cable at its minimum force is a clear blue, not turbo's near-black: far from the muted steel and
+    # greys of primitive links and from the ghosted (80 % grey) skins, at any lighting (0.3..1.1 x)
+    assert CABLE_MAP[0].max() > 0.75
+    links = [mute(rgb) for rgb in [(0.35, 0.45, 0.6), (0.6, 0.6, 0.6), (0.2, 0.2, 0.2), (0.9, 0.9, 0.9)]]
+    links += [mute(rgb, 0.8) for rgb in [(0.0, 0.0, 0.8), (0.8, 0.0, 0.0), (0.0, 0.8, 0.0)]]
+    for link in links:
+        assert min(np.linalg.norm(s * link - CABLE_MAP[0]) for s in np.linspace(0.3, 1.1, 17)) > 0.2
 
 
 def test_scene_animates_every_cable_segment_by_tension(two_link, runs):
@@ -70,6 +81,12 @@ def test_scene_animates_every_cable_segment_by_tension(two_link, runs):
     hd = _tracks(scene, "/meshcat/mcdm/forces/shoulder/head")["scale"].values[:, 0]
     head = 0.065 * scene.extent
     np.testing.assert_allclose(sh + hd * head, run.force_magnitude[:, 0] * scene.arrow_scale, atol=1e-6)
+    # every arrow says which joint it belongs to: a label sprite that follows the joint point
+    for joint in two_link.joint_names:
+        label = [c for c in scene.commands if c["type"] == "set_object" and c["path"] ==
+                 f"/meshcat/mcdm/labels/{joint}/label"]
+        assert len(label) == 1 and label[0]["object"]["object"]["type"] == "Sprite"
+        assert "visible" in _tracks(scene, f"/meshcat/mcdm/labels/{joint}")
     # keys are the trajectory's time
     assert [k["time"] for k in tr["position"].lower()["keys"]] == pytest.approx(run.t.tolist())
 
@@ -101,6 +118,8 @@ def test_infeasible_instants_are_grey_and_arrows_hidden(two_link, runs):
     assert np.allclose(colors[bad], 0.55)
     visible = _tracks(scene, "/meshcat/mcdm/forces/shoulder")["visible"].values
     assert not visible[bad].any() and visible[20]
+    label = _tracks(scene, "/meshcat/mcdm/labels/shoulder")["visible"].values
+    np.testing.assert_array_equal(label, visible)
     assert '"infeasible"' in scene.html()
 
 
@@ -138,6 +157,67 @@ def test_cli_view_and_solve_html(tmp_path, capsys):
     assert main(["view", str(TWO_LINK), "--results", str(npz), "--html", str(tmp_path / "v.txt")]) == 2
     assert main(["view", str(TWO_LINK), "--results", str(npz), "--no-wait", "--time", "5"]) == 2
     assert "outside the trajectory" in capsys.readouterr().err
+    # the files the other way round are told apart by their content; a URDF is named for what it is
+    assert main(["view", str(npz), "--results", str(TWO_LINK), "--html", str(tmp_path / "w.html")]) == 0
+    assert main(["view", str(REPO / "urdf" / "two_link_sr.urdf"), "--results", str(npz), "--no-wait"]) == 2
+    err = capsys.readouterr().err
+    assert "is a URDF" in err and "robots/two_link_sr.yaml" in err
+
+
+def test_links_are_drawn_from_pinocchios_visual_model(two_link, runs):
+    """The URDF's visuals come from pin.buildGeomFromUrdf (no XML read by hand): link1's 0.2 m cylinder
+    of radius 12 mm, centred 0.1 m up its frame, in its URDF colour muted."""
+    scene = build_scene(two_link, runs[1])
+    objects = {c["path"]: c["object"] for c in scene.commands if c["type"] == "set_object"}
+    geo = objects["/meshcat/mcdm/links/link1/visual0"]["geometries"][0]
+    assert geo["type"] == "CylinderGeometry" and geo["height"] == pytest.approx(0.2)
+    assert geo["radiusTop"] == pytest.approx(0.012)
+    pose = [c["matrix"] for c in scene.commands if c["type"] == "set_transform"
+            and c["path"] == "/meshcat/mcdm/links/link1/visual0"][0]
+    assert np.reshape(pose, (4, 4)).T[:3, 3] == pytest.approx([0.0, 0.0, 0.1])
+    # the massless links inside the Euler-triple shoulder get no simple shape
+    assert not any(p.startswith("/meshcat/mcdm/bodies/q1_x/bone") for p in objects)
+    import mcdm_pin.viewer as viewer
+    from pathlib import Path
+    for module in Path(viewer.__file__).parent.glob("*.py"):
+        text = module.read_text()
+        assert "xml.etree" not in text and "ElementTree" not in text
+        assert len(text.splitlines()) < 400, f"{module.name}: one job per module"
+
+
+def test_the_human_stands_upright_with_muted_translucent_skin():
+    """example-robot-data's human is built y-up: the scene turns its world so that gravity (-y) points
+    down the screen; its bright skin meshes are drawn muted and translucent so that the muscles inside
+    show."""
+    robot = Robot.load(HUMAN)
+    run = InverseDynamics.for_case(robot, 1).solve_trajectory(load_trajectory(robot, "reach_forward")
+                                                              .subsample(5), progress=False)
+    scene = build_scene(robot, run)
+    np.testing.assert_allclose(scene.up @ np.array([0.0, -9.81, 0.0]), [0.0, 0.0, -9.81], atol=1e-12)
+    meshes = [c["object"] for c in scene.commands if c["type"] == "set_object"
+              and c["object"]["object"]["type"] == "Mesh"
+              and c["object"]["geometries"][0]["type"] == "BufferGeometry"]
+    assert len(meshes) >= 20  # the body's meshes, loaded by Pinocchio (coal) from the installed package
+    for m in meshes:
+        mat = m["materials"][0]
+        rgb = np.array([(mat["color"] >> s) & 255 for s in (16, 8, 0)]) / 255
+        assert mat["opacity"] == pytest.approx(0.3) and np.ptp(rgb) < 0.2  # translucent, near grey
+
+
+def test_camera_frames_every_point():
+    rng = np.random.default_rng(3)
+    pts = rng.normal(size=(200, 3)) * [0.3, 0.1, 0.5] + [0.2, -0.1, 0.05]
+    for direction in ([0.85, -0.45, 0.38], [0.0, 1.0, 0.2], [-1.0, 0.3, 0.6]):
+        target, cam = camera_basis(direction)[0], None
+        from mcdm_pin.viewer.camera import camera_position
+        target, cam = camera_position(pts, direction, aspect=1.25)
+        u, right, up = camera_basis(cam)
+        p = pts - target - cam
+        depth = p @ -u
+        x = (p @ right) / depth / (np.tan(np.radians(FOV_DEG) / 2) * 1.25)
+        y = (p @ up) / depth / np.tan(np.radians(FOV_DEG) / 2)
+        assert max(np.abs(x).max(), np.abs(y).max()) == pytest.approx(FILL, abs=1e-6)  # tight ...
+        assert abs(x.max() + x.min()) < 0.02 and abs(y.max() + y.min()) < 0.02  # ... and centred
 
 
 # ------------------------------------------------------------------------------ headless chromium
@@ -150,26 +230,102 @@ def _near(img, rgb, tol=0.06):
     return np.all(np.abs(img - np.asarray(rgb)) < tol, axis=2)
 
 
-def test_chromium_renders_the_scene_with_coloured_cables(chromium, two_link, runs, tmp_path):
-    run = runs[1]
-    k = int(np.argmin(np.abs(run.t - 0.2)))  # cables 2 and 6 pull hard, the others barely
-    scene = build_scene(two_link, run, start_time=float(run.t[k]), legend=False)
-    empty = empty_scene(scene.center, scene.extent)
-    png = screenshot(scene.write_html(tmp_path / "scene.html"), tmp_path / "scene.png")
-    png0 = screenshot(empty.write_html(tmp_path / "empty.html"), tmp_path / "empty.png")
+def _render(scene, tmp_path, name):
+    """Screenshots of the scene and of its environment alone (same camera), and the mask of the
+    pixels the robot changes."""
+    png = screenshot(scene.write_html(tmp_path / f"{name}.html"), tmp_path / f"{name}.png")
+    png0 = screenshot(empty_scene(scene).write_html(tmp_path / f"{name}_empty.html"), tmp_path / f"{name}_empty.png")
     img, ref = _img(png), _img(png0)
     assert img.shape == ref.shape == (800, 1000, 3)
-    # the empty Meshcat scene is not blank (gradient, grid, axes) ...
-    assert ref.std() > 0.01
-    # ... and the robot changes a good part of it
-    changed = np.any(np.abs(img - ref) > 0.1, axis=2)
-    assert changed.mean() > 0.03, f"only {changed.mean():.4f} of the pixels differ from the empty scene"
-    # cables are unlit: their pixels have exactly the scale's colours; at this instant the scale gives
-    # at least two clearly different colours, each seen on screen (and not in the empty scene)
-    colors = tension_rgb(run.f[k], scene.fmax)
+    return img, ref, np.any(np.abs(img - ref) > 0.1, axis=2)
+
+
+def _bbox_share(mask):
+    """(height, width) of the robot's pixel bounding box as shares of the image's (rows and columns
+    with at least 3 robot pixels)."""
+    rows, cols = np.flatnonzero(mask.sum(axis=1) >= 3), np.flatnonzero(mask.sum(axis=0) >= 3)
+    return (rows[-1] - rows[0] + 1) / mask.shape[0], (cols[-1] - cols[0] + 1) / mask.shape[1]
+
+
+def _stray_lines(img, mask):
+    """Pixels of the upper-left block (300 x 330) that are not the robot's and differ by more than 0.05
+    from their row's background (Meshcat's background is a vertical gradient: every row is uniform).
+    The band of grid lines of the old viewer gave 5552 such pixels on the 2-link arm, 0 now."""
+    block, robot = img[:300, :330], mask[:300, :330]
+    dev = np.abs(block - np.median(block, axis=1, keepdims=True)).max(axis=2)
+    return int((dev[~robot] > 0.05).sum())
+
+
+def _pixel(scene, p_world, shape=(800, 1000)):
+    """(row, col) of a robot-world point in the screenshot (Meshcat's camera: vertical field of view 75
+    deg, looking at the display origin from ``scene.camera``, z up)."""
+    d = scene.up @ np.asarray(p_world, float) - scene.center - scene.camera
+    u, right, up = camera_basis(scene.camera)
+    depth = d @ -u
+    t = np.tan(np.radians(FOV_DEG) / 2)
+    x, y = (d @ right) / depth / (t * shape[1] / shape[0]), (d @ up) / depth / t
+    return int(round((1 - y) / 2 * shape[0] - 0.5)), int(round((1 + x) / 2 * shape[1] - 0.5))
+
+
+def test_chromium_two_link_framed_no_stray_grid_and_minimum_force_cables_stand_out(chromium, two_link, runs,
+                                                                                   tmp_path):
+    run = runs[1]
+    k = int(np.argmin(np.abs(run.t - 0.2)))  # cables 2 and 6 pull hard, the others sit at 1 mN
+    scene = build_scene(two_link, run, start_time=float(run.t[k]), legend=False)
+    img, ref, mask = _render(scene, tmp_path, "two_link")
+    assert ref.std() > 0.01  # the environment is not blank (gradient, floor grid)
+    # framed: measured 0.82 of the height and 0.61 of the width (the old camera: 0.62 and 0.44)
+    h, w = _bbox_share(mask)
+    assert max(h, w) > 0.75 and h * w > 0.4, (h, w)
+    assert _stray_lines(img, mask) == 0
+    # cables are unlit: their pixels have exactly the scale's colours; at this instant at least two
+    # clearly different colours are seen on screen (and not in the empty scene)
     seen = []
-    for rgb in colors:
+    for rgb in tension_rgb(run.f[k], scene.fmax):
         n = int(np.sum(_near(img, rgb) & ~_near(ref, rgb)))
         if n >= 15 and all(np.abs(rgb - s).max() > 0.25 for s in seen):
             seen.append(rgb)
     assert len(seen) >= 2, f"cable colours on screen: {seen}"
+    # minimum-force cables against the links: project points along the cables at 1 mN and along
+    # both links into the picture and compare the colours found there
+    from mcdm_pin import compute_terms
+    terms = compute_terms(two_link, run.q[k])
+    low = [i for i in range(two_link.m) if run.f[k, i] < 0.01]
+    cable_px = []
+    for i in low:
+        a, b = (terms.points[p] for p in (two_link.cables.seg_a[i], two_link.cables.seg_b[i]))
+        for s in np.linspace(0.1, 0.9, 25):
+            r, c = _pixel(scene, a + s * (b - a))
+            cable_px.append(img[r, c])
+    cable_px = np.array(cable_px)
+    on_cable = np.linalg.norm(cable_px - CABLE_MAP[0], axis=1) < 0.1
+    assert on_cable.sum() >= 20, on_cable.sum()  # found where the camera model says they are
+    link_px = []
+    for jid in (3, 4):  # link1 and link2: 0.2 m along each joint frame's z
+        from mcdm_pin.viewer.scene import kinematics
+        T = kinematics(two_link, run).joint_T[k, jid]
+        for s in np.linspace(0.05, 0.18, 12):
+            r, c = _pixel(scene, T[:3, :3] @ [0.0, 0.0, s] + T[:3, 3])
+            link_px.append(img[r, c])
+    link = np.median(np.array(link_px), axis=0)
+    cable = np.median(cable_px[on_cable], axis=0)
+    # distinct in colour (chroma = max - min channel): a saturated blue cable on a grey link, measured
+    # 0.53 against 0.07; the old viewer's near-black violet on steel measured 0.16 against 0.18
+    assert np.ptp(cable) - np.ptp(link) > 0.3, (cable, link)
+    assert np.linalg.norm(link - cable) > 0.3  # measured 0.35 (old: 0.31)
+
+
+def test_chromium_human_arm_upright_and_framed(chromium, tmp_path):
+    robot = Robot.load(HUMAN)
+    run = InverseDynamics.for_case(robot, 1).solve_trajectory(load_trajectory(robot, "reach_forward")
+                                                              .subsample(16), progress=False)
+    scene = build_scene(robot, run, start_time=1.0, legend=False)
+    img, ref, mask = _render(scene, tmp_path, "human")
+    h, w = _bbox_share(mask)
+    # upright (the old viewer drew it lying on its side: 0.58 high, 0.91 wide) and framed
+    assert h > 0.8 and h > 1.3 * w, (h, w)
+    assert _stray_lines(img, mask) == 0
+    # the muscles are on screen: pixels of the cable scale's colours, unlit, not in the empty scene
+    cable_colors = tension_rgb(run.f[run.t == 1.0][0], scene.fmax)
+    n = sum(int(np.sum(_near(img, rgb, 0.04) & ~_near(ref, rgb, 0.04))) for rgb in np.unique(cable_colors, axis=0))
+    assert n > 300, n

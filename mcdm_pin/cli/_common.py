@@ -89,8 +89,16 @@ def parse_cones(robot, text: str | None):
     return out
 
 
+def printable(text) -> str:
+    """``text`` with control characters escaped (a name must not move the cursor or print a fake line)."""
+    text = str(text)
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in text)
+
+
 def table(headers, rows) -> str:
-    cells = [list(map(str, headers))] + [[str(c) for c in r] for r in rows]
+    cells = [[printable(c) for c in headers]] + [[printable(c) for c in r] for r in rows]
     widths = [max(len(r[i]) for r in cells) for i in range(len(headers))]
     lines = []
     for k, r in enumerate(cells):
@@ -106,3 +114,36 @@ def numeric(c: str) -> bool:
         return True
     except ValueError:
         return False
+
+
+def check_outputs(outputs, inputs=(), option: str = "--out") -> list:
+    """Check every output path before any work is done: its folder exists and is writable, it is not a
+    folder, it is not given twice, and it is none of the run's input files (never overwrite an input).
+    ``outputs``: ``[(option, path)]`` or paths; ``inputs``: ``[(what, path)]``."""
+    import os
+    from pathlib import Path
+
+    seen: dict = {}
+    resolved_inputs = {}
+    for what, path in inputs:
+        if path is not None:
+            resolved_inputs[Path(path).resolve()] = what
+    checked = []
+    for item in outputs:
+        opt, path = item if isinstance(item, tuple) else (option, item)
+        path = Path(path)
+        full = path.resolve()
+        if full in seen:
+            raise UsageError(f"{opt} {path}: given twice")
+        seen[full] = True
+        if full in resolved_inputs:
+            raise UsageError(f"{opt} {path}: is an input of this run ({resolved_inputs[full]}); choose another file")
+        folder = full.parent
+        if not folder.is_dir():
+            raise UsageError(f"{opt} {path}: the folder {path.parent} does not exist")
+        if full.is_dir():
+            raise UsageError(f"{opt} {path}: is a folder; expected a file name")
+        if not os.access(folder, os.W_OK) or (full.exists() and not os.access(full, os.W_OK)):
+            raise UsageError(f"{opt} {path}: cannot be written (no permission)")
+        checked.append(path)
+    return checked

@@ -1,23 +1,32 @@
-"""``mcdm-pin info ROBOT.yaml``: a robot's links, joints, cables and a validation report."""
+"""``mcdm-pin info ROBOT.yaml``: a robot's links, joints, cables, a validation report and a check of
+every trajectory (built in full, and solved at a handful of its instants)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ._common import table
+from ._common import UsageError, table
+from ._files import robot_file
 
 
 def add(sub):
-    p = sub.add_parser("info", help="show a robot's links, joints, cables and a validation report")
+    p = sub.add_parser("info", help="show a robot's links, joints, cables, a validation report and a "
+                                    "check of every trajectory")
     p.add_argument("robot", help="cable sidecar (YAML)")
+    p.add_argument("--samples", type=int, default=11,
+                   help="instants of each trajectory at which the problem is solved (default 11, spread "
+                        "evenly, first and last included; 0: only build the trajectories)")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
     from ..robot import Robot
+    from ..trajectory_checks import check_trajectories
     from ..validation import validation_report
 
-    robot = Robot.load(args.robot)
+    if args.samples < 0:
+        raise UsageError(f"--samples: expected a number >= 0, got {args.samples}")
+    robot = Robot.load(robot_file(args.robot))
     sc = robot.sidecar
     print(f"robot {robot.name}: {len(robot.joints)} joints, {robot.nv} DoF, {robot.m} cables")
     print(f"  sidecar  {sc.path}")
@@ -48,8 +57,12 @@ def run(args) -> int:
             f"{n} ({t.type}{'' if t.type == 'csv' else f', {t.duration:g} s, dt {t.dt:g}'})"
             for n, t in sc.trajectories.items()))
     print("\nvalidation:")
+    report = validation_report(robot)
+    if sc.trajectories:
+        checks = check_trajectories(robot, samples=args.samples)
+        report += [(c.level, c.text()) for c in checks]
     ok = True
-    for level, text in validation_report(robot):
+    for level, text in report:
         print(f"  [{level}] {text}")
         ok &= level != "fail"
     return 0 if ok else 1

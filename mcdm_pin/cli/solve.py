@@ -6,7 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import UsageError, parse_cones, parse_weights, table
+from ._common import UsageError, check_outputs, parse_cones, parse_weights, printable, table
+from ._files import robot_file
 from .view import html_file, solve_html_hook
 
 
@@ -51,7 +52,8 @@ def run_solve(args):
     from ..robot import Robot
     from ..trajectory import load_trajectory
 
-    robot = Robot.load(args.robot)
+    robot = Robot.load(robot_file(args.robot))
+    _check_outputs(args, robot)
     if args.samples is not None and args.samples < 1:
         raise UsageError(f"--samples: expected a positive number, got {args.samples}")
     if not np.isfinite(args.smoothing) or args.smoothing < 0:
@@ -75,6 +77,16 @@ def run_solve(args):
     result = ident.solve_trajectory(traj, progress=False if args.quiet else None, workers=args.workers)
     result.problem = f"case {args.case}: " + result.problem
     return robot, result
+
+
+def _check_outputs(args, robot) -> None:
+    """Every output path checked before solving (a run must not be lost at the end), never an input."""
+    inputs = [("the sidecar", robot.sidecar.path), ("the URDF", robot.urdf_path)]
+    spec = robot.sidecar.trajectories.get(args.trajectory)
+    if spec is not None and spec.type == "csv":
+        inputs.append((f"trajectory {args.trajectory!r}'s CSV", spec.file))
+    outs = [("--out", o) for o in args.out] + ([("--html", args.html)] if getattr(args, "html", None) else [])
+    check_outputs(outs, inputs)
 
 
 def run(args) -> int:
@@ -108,13 +120,17 @@ def summary(result) -> str:
     lines += ["", table(["cable", "peak f N", "at t s", "min f N"], rows)]
     rows = []
     Fmag = result.force_magnitude
+    types = list(result.joint_types) if result.joint_types is not None else ["spherical"] * len(result.joint_names)
     for j, name in enumerate(result.joint_names):
         if np.any(np.isfinite(Fmag[:, j])):
             k = int(np.nanargmax(Fmag[:, j]))
-            a = int(np.nanargmax(result.interaction_angle_deg[:, j]))
             cone = result.cone_deg[j]
-            rows.append([name, f"{Fmag[k, j]:.4f}", f"{t[k]:.3f}",
-                         f"{result.interaction_angle_deg[a, j]:.4f}", f"{t[a]:.3f}",
+            if types[j] == "spherical":  # an interaction angle means something only about a socket axis
+                a = int(np.nanargmax(result.interaction_angle_deg[:, j]))
+                angle = [f"{result.interaction_angle_deg[a, j]:.4f}", f"{t[a]:.3f}"]
+            else:
+                angle = ["-", "-"]
+            rows.append([name, f"{Fmag[k, j]:.4f}", f"{t[k]:.3f}", *angle,
                          "-" if not np.isfinite(cone) else f"{cone:g}"])
         else:
             rows.append([name, "-", "-", "-", "-", "-"])
@@ -125,7 +141,7 @@ def summary(result) -> str:
     if len(bad):
         lines.append(f"no valid answer at {len(bad)} of {len(t)} instants:")
         for k in bad[:20]:
-            lines.append(f"  t = {t[k]:.3f} s  {result.status[k]}: {result.message[k]}")
+            lines.append(f"  t = {t[k]:.3f} s  {result.status[k]}: {printable(result.message[k])}")
         if len(bad) > 20:
             lines.append(f"  ... and {len(bad) - 20} more")
     else:

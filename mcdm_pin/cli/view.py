@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 from ._common import UsageError
+from ._files import file_kind, robot_file
 
 
 def html_file(text: str) -> str:
@@ -31,7 +32,7 @@ def _positive(text: str) -> float:
 
 def _scene_options(args) -> dict:
     return dict(fmax=args.fmax, arrow_scale=args.arrow_scale, start_time=args.time,
-                legend=not args.no_legend)
+                legend=not args.no_legend, links=args.links)
 
 
 def _add_scene_options(p) -> None:
@@ -43,13 +44,24 @@ def _add_scene_options(p) -> None:
     p.add_argument("--time", type=float, metavar="T",
                    help="show the scene paused at trajectory time T, s (default: play)")
     p.add_argument("--no-legend", action="store_true", help="no colour bar / time overlay")
+    p.add_argument("--links", choices=("auto", "solid", "ghost"), default="auto",
+                   help="how links are drawn: auto (default: meshes translucent, so that the cables "
+                        "attached inside a body's skin show; primitive shapes opaque), solid or ghost")
 
 
 # ------------------------------------------------------------------------------------------- view
 def add(sub):
     p = sub.add_parser("view", help="3-D view of a solved trajectory (Meshcat: live, or one HTML file)")
     p.add_argument("robot", help="cable sidecar (YAML)")
-    p.add_argument("--results", required=True, help="results file written by solve --out (.npz)")
+    p.add_argument("--results", help="results file written by solve --out (.npz)")
+    p.add_argument("--workspace", metavar="STORE.zarr",
+                   help="instead of --results: a workspace store, its poses as a point cloud of "
+                        "--frame's position coloured by --color")
+    p.add_argument("--frame", help="with --workspace: the link (or frame) whose positions are shown")
+    p.add_argument("--color", default="needed_f_max", choices=("needed_f_max", "needed_cone_deg"),
+                   help="with --workspace: the margin that colours the points (default needed_f_max)")
+    p.add_argument("--pose", type=int, help="with --workspace: the pose the robot is drawn at "
+                                            "(default: the optimal one with the largest margin)")
     p.add_argument("--html", type=html_file, metavar="FILE.html",
                    help="write one self-contained HTML file (opens offline) instead of serving")
     p.add_argument("--no-wait", action="store_true",
@@ -72,10 +84,21 @@ def run(args) -> int:
         assert len(size) == 2 and min(size) > 0
     except (ValueError, AssertionError):
         raise UsageError(f"--size: expected WIDTHxHEIGHT in pixels, got {args.size!r}") from None
+    if (args.results is None) == (args.workspace is None):
+        raise UsageError("give --results FILE.npz or --workspace STORE.zarr (one of them)")
+    if args.workspace and not args.frame:
+        raise UsageError("--workspace needs --frame LINK: the link whose positions are shown")
+    if args.results and file_kind(args.robot) == "results" and file_kind(args.results) != "results":
+        args.robot, args.results = args.results, args.robot  # given the other way round
+    robot_path = robot_file(args.robot)
     html = args.html
     if html is None and (args.no_wait or args.screenshot):
-        html = str(Path(args.results).with_suffix(".html"))
-    robot, result, scene = scene_from_files(args.robot, args.results, **_scene_options(args))
+        html = str(Path(args.results or args.workspace).with_suffix(".html"))
+    if args.workspace:
+        robot, scene = _workspace_scene(robot_path, args)
+    else:
+        robot, _, scene = scene_from_files(robot_path, args.results, aspect=size[0] / size[1],
+                                           **_scene_options(args))
     if html is not None:
         path = scene.write_html(html)
         print(f"wrote {path}")
@@ -85,13 +108,25 @@ def run(args) -> int:
     # SIGTERM exits normally too, so that Meshcat's exit handler stops its server process
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
     vis = scene.serve()
-    print(f"serving {robot.name} / {args.results} at {vis.url()} (press Ctrl-C to stop)", flush=True)
+    print(f"serving {robot.name} / {args.results or args.workspace} at {vis.url()} (press Ctrl-C to stop)",
+          flush=True)
     try:
         while True:
             time.sleep(1.0)
     except KeyboardInterrupt:
         print("stopped")
     return 0
+
+
+def _workspace_scene(robot_path, args):
+    """``view --workspace``: the poses of a store as a point cloud (mcdm_pin/workspace/cloud.py)."""
+    from ..robot import Robot
+    from ..workspace import open_workspace
+    from ..workspace.cloud import cloud_scene
+
+    robot = Robot.load(robot_path)
+    return robot, cloud_scene(robot, open_workspace(args.workspace), args.frame, color_by=args.color,
+                              pose=args.pose)
 
 
 def solve_html_hook(args, robot, result) -> None:

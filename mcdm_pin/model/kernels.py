@@ -1,7 +1,7 @@
 r"""Compiled (numba) kernels of the per-instant hot path.
 
-The numpy formulation of the cable terms (:func:`mcdm_pin.cables.cable_geometry` and the products in
-:class:`mcdm_pin.terms.TermsEvaluator`) is a few dozen array operations on arrays of a few hundred
+The numpy formulation of the cable terms (:func:`mcdm_pin.model.geometry.cable_geometry` and the products in
+:class:`mcdm_pin.model.terms.TermsEvaluator`) is a few dozen array operations on arrays of a few hundred
 elements: its cost is numpy's per-call overhead, not arithmetic (0.13 ms of the neck's 0.18 ms terms,
 ``benchmarks/bench_id.py``). The kernel below does the same arithmetic in one compiled pass over the
 route points and segments. It is the only place with explicit loops over cables; the numpy path
@@ -184,15 +184,15 @@ def warm_calls():
 def warm_up() -> None:
     """Load every registered kernel from numba's cache, or start compiling them without waiting
     (:func:`mcdm_pin.jit.prepare`)."""
-    from . import jit
+    from .. import jit
 
     jit.prepare()
 
 
 def _register() -> None:
-    from . import jit
+    from .. import jit
 
-    jit.register("mcdm_pin.kernels", warm_calls)
+    jit.register("mcdm_pin.model.kernels", warm_calls)
 
 
 _register()

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .exceptions import StateError
+from ..exceptions import StateError
 
 
 @dataclass
@@ -54,38 +54,38 @@ def _cross(a, b):
 
 
 class CableMaps:
-    """Precomputed index maps of a robot's cable routes for :func:`cable_geometry`.
+    """Precomputed index maps of a cable set's routes for :func:`cable_geometry`.
 
     Args:
-        robot: the robot.
+        cables: the :class:`~mcdm_pin.model.cables.CableSet`.
         point_body: (P,) body index of each route point (into the placements given later).
         n_bodies: number of bodies (placements).
     """
 
-    def __init__(self, robot, point_body, n_bodies: int):
+    def __init__(self, cables, point_body, n_bodies: int):
         from scipy import sparse
 
         self.point_body = np.asarray(point_body, dtype=int)
-        act = robot.seg_active
-        a, b, c = robot.seg_a[act], robot.seg_b[act], robot.seg_cable[act]
+        act = cables.seg_active
+        a, b, c = cables.seg_a[act], cables.seg_b[act], cables.seg_cable[act]
         self.act_a, self.act_b = a, b
         self.ends = np.concatenate([b, a])  # end points: B (sign +1) then A (sign -1)
         self.end_body = self.point_body[self.ends]
         self.end_cable = np.concatenate([c, c])
-        self.n_bodies, self.m = n_bodies, robot.m
+        self.n_bodies, self.m = n_bodies, cables.m
         self.act = act
         self.all_active = bool(np.all(act))
         self.point_index = np.arange(len(self.point_body))
-        self.seg_to_cable = np.zeros((robot.m, len(robot.seg_a)))
-        self.seg_to_cable[robot.seg_cable, np.arange(len(robot.seg_a))] = 1.0
+        self.seg_to_cable = np.zeros((cables.m, len(cables.seg_a)))
+        self.seg_to_cable[cables.seg_cable, np.arange(len(cables.seg_a))] = 1.0
         n_end = len(self.ends)
         # scatter: (body, cable) <- end point
         self.scatter = sparse.csr_matrix(
-            (np.ones(n_end), (self.end_body * robot.m + self.end_cable, np.arange(n_end))),
-            shape=(n_bodies * robot.m, n_end))
+            (np.ones(n_end), (self.end_body * cables.m + self.end_cable, np.arange(n_end))),
+            shape=(n_bodies * cables.m, n_end))
 
 
-def cable_geometry(robot, oR: np.ndarray, op: np.ndarray, maps: CableMaps | None = None) -> CableGeometry:
+def cable_geometry(cables, oR: np.ndarray, op: np.ndarray, maps: CableMaps | None = None) -> CableGeometry:
     """Cable geometry from body placements.
 
     Args:
@@ -96,13 +96,13 @@ def cable_geometry(robot, oR: np.ndarray, op: np.ndarray, maps: CableMaps | None
     point of an active segment, in the order of ``maps.ends``.
     """
     if maps is None:
-        maps = CableMaps(robot, robot.point_joint, len(oR))
+        maps = CableMaps(cables, cables.point_joint, len(oR))
     pj = maps.point_body
     # every point in every body's frame in one product, then each point's own body picked out
     nb = len(oR)
-    Y = robot.point_local @ oR.transpose(0, 2, 1).transpose(1, 0, 2).reshape(3, 3 * nb)
+    Y = cables.point_local @ oR.transpose(0, 2, 1).transpose(1, 0, 2).reshape(3, 3 * nb)
     X = Y.reshape(-1, nb, 3)[maps.point_index, pj] + op[pj]
-    d = X[robot.seg_b] - X[robot.seg_a]
+    d = X[cables.seg_b] - X[cables.seg_a]
     seg_len = np.sqrt((d * d).sum(axis=1))
     lengths = maps.seg_to_cable @ seg_len
     if maps.all_active:
@@ -111,7 +111,7 @@ def cable_geometry(robot, oR: np.ndarray, op: np.ndarray, maps: CableMaps | None
         la, da = seg_len[maps.act], d[maps.act]
     if la.size and la.min() <= 1e-12:
         s = int(np.flatnonzero(maps.act)[np.argmin(la)])
-        raise StateError(f"cable {robot.cables[robot.seg_cable[s]].name!r}: a segment has zero length "
+        raise StateError(f"cable {cables.cables[cables.seg_cable[s]].name!r}: a segment has zero length "
                          f"at this configuration, so its direction is undefined")
     u = da / la[:, None]
     n_act = len(u)

@@ -1,0 +1,47 @@
+"""``mcdm-pin export-opensim ROBOT.yaml OUT.osim``: write a robot as an OpenSim model."""
+
+from __future__ import annotations
+
+from ._common import UsageError, parse_float
+
+
+def add(sub):
+    p = sub.add_parser("export-opensim", help="write a robot as an OpenSim model (.osim; needs the optional "
+                                              "package opensim)")
+    p.add_argument("robot", help="cable sidecar (YAML)")
+    p.add_argument("out", help="the OpenSim model file to write (.osim)")
+    p.add_argument("--optimal-force", metavar="F0",
+                   help="optimal force of every cable's PathActuator, N (default: the largest f_max); a "
+                        "control c means a tension c*F0, bounded by f_min/F0 .. f_max/F0")
+    p.add_argument("--check", type=int, default=5, metavar="N",
+                   help="read the written file back and compare its mass matrix, inverse dynamics, cable "
+                        "lengths and moment arms with ours at N random states (default 5; 0: skip)")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args) -> int:
+    from ..export.opensim import describe, export_opensim
+    from ..robot import Robot
+
+    robot = Robot.load(args.robot)
+    f0 = None if args.optimal_force is None else parse_float(args.optimal_force, "--optimal-force")
+    if f0 is not None and f0 <= 0:
+        raise UsageError(f"--optimal-force: expected a force > 0 N, got {args.optimal_force!r}")
+    path = export_opensim(robot, args.out, f0)
+    spec = describe(robot)
+    kinds = ", ".join(f"{j.name} ({j.kind})" for j in spec.joints)
+    print(f"wrote {path}: {len(spec.bodies)} bodies, joints {kinds}, {len(spec.cables)} PathActuators")
+    if args.check > 0:
+        from ..export.opensim_eval import OpenSimModel, compare_with_pinocchio
+
+        om = OpenSimModel(robot, path=path)
+        print(f"optimal force {om.optimal_force:g} N; controls bounded by f_min/F0 .. f_max/F0")
+        worst = compare_with_pinocchio(robot, om, args.check)
+        print(f"checked against Pinocchio at {args.check} random states (largest relative difference):")
+        for key, value in worst.items():
+            print(f"  {key.replace('_', ' '):17s} {value:.1e}")
+        if max(worst.values()) > 1e-9:
+            print("warning: the written model differs from ours by more than 1e-9")
+            return 1
+    return 0
