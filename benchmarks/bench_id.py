@@ -127,7 +127,7 @@ class ClarabelPeer(Peer):
         import clarabel
 
         # the library's conic form, timed here: building it is part of calling Clarabel
-        P, c, A, b, cones = conic_form(qp)
+        P, c, A, b, cones, _ = conic_form(qp)
         settings = clarabel.DefaultSettings()
         settings.verbose = False
         if self.tight:
@@ -169,7 +169,7 @@ class CvxpyPeer(Peer):
         for T, t in zip(self.T, self.t):
             s = T @ f + t
             cons.append(cp.SOC(s[0], s[1:]))
-        self.prob = cp.Problem(cp.Minimize(cp.sum_squares(self.K @ f) + self.c @ f), cons)
+        self.prob = cp.Problem(cp.Minimize(0.5 * cp.sum_squares(self.K @ f) + self.c @ f), cons)
         assert self.prob.is_dcp(dpp=True)
         self._set(qp)
         with warnings.catch_warnings():
@@ -239,7 +239,7 @@ class SlsqpPeer(Peer):
     def solve(self, qp):
         from scipy.optimize import Bounds, minimize
 
-        P2, c = 2.0 * qp.P, qp.c
+        P, c = qp.P, qp.c
         cons = []
         if len(qp.b):
             A, b = qp.A, qp.b
@@ -250,7 +250,7 @@ class SlsqpPeer(Peer):
                              jac=lambda f: _cone_values(T, t, f)[1]))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            res = minimize(lambda f: (f @ qp.P @ f + c @ f, P2 @ f + c), _start(qp, self.f_prev),
+            res = minimize(lambda f: (0.5 * f @ P @ f + c @ f, P @ f + c), _start(qp, self.f_prev),
                            jac=True, method="SLSQP", bounds=Bounds(qp.lb, qp.ub), constraints=cons,
                            options=dict(ftol=1e-8, maxiter=1000))
         if not res.success:
@@ -269,10 +269,10 @@ class _IpoptNLP:
         self.hrows, self.hcols = np.tril_indices(n)
 
     def objective(self, f):
-        return float(f @ self.qp.P @ f + self.qp.c @ f)
+        return float(0.5 * f @ self.qp.P @ f + self.qp.c @ f)
 
     def gradient(self, f):
-        return 2.0 * self.qp.P @ f + self.qp.c
+        return self.qp.P @ f + self.qp.c
 
     def constraints(self, f):
         parts = [self.qp.A @ f]
@@ -293,7 +293,7 @@ class _IpoptNLP:
         return self.hrows, self.hcols
 
     def hessian(self, f, lam, obj_factor):
-        H = obj_factor * 2.0 * self.qp.P
+        H = obj_factor * self.qp.P
         if self.k:
             # d^2 (-|s12|) = -T12^T (I - u u^T) T12 / |s12|
             _, _, s12, nrm = _cone_values(self.T, self.t, f)

@@ -15,7 +15,9 @@ And a robot whose numbers are all large or all small (links of 1e6 kg, forces to
 more than ``SPREAD`` (three decades), then the variables' unit set by their bounds and each row by
 its size; :math:`s_k > 0` per cone: cones are invariant under positive scaling of :math:`F_k`), the
 objective divided by its own size, and bounds :math:`l/d \le x \le u/d`, the scaled problem has the
-same solution set mapped by :math:`D`. Every factor is a power of two (no rounding). A problem whose
+same solution set mapped by :math:`D`. The variables' unit is the size the equations ask for
+(``|b_i| / max_j |A_ij|``), at least the lower bounds' (not the upper bounds: a force limit is often
+orders of magnitude above the forces that occur). Every factor is a power of two (no rounding). A problem whose
 factors all lie within ``SPREAD`` of one is passed through untouched (the usual case: the neck, the
 arms), so well-scaled problems pay nothing.
 
@@ -63,24 +65,25 @@ def _pow2(x):
     return np.exp2(np.round(np.log2(x)))
 
 
-def spread(A: np.ndarray, b: np.ndarray) -> float:
-    """How badly scaled ``A x = b`` is: the largest ratio between the largest and smallest non-zero row
-    maxima, column maxima and right-hand-side entries (1 when all are zero). Compiled when the
-    kernels are (:func:`mcdm_pin.model.kernels.spread`)."""
+def spread(A: np.ndarray) -> float:
+    """How badly scaled the rows and columns of ``A`` are: the larger of the ratios between the
+    largest and smallest non-zero row maxima and column maxima of ``|A|`` (1 when ``A`` is zero).
+    (The right-hand side is left out: an equation whose torque happens to be near zero is not badly
+    scaled.) Compiled when the kernels are (:func:`mcdm_pin.model.kernels.spread`)."""
     from . import jit
 
     if jit.ready():
         from .model.kernels import spread as compiled
 
         # C order: one compiled specialisation (qp.A is often the transposed view L.T)
-        return compiled(np.ascontiguousarray(A, dtype=float), np.ascontiguousarray(b, dtype=float))
+        return compiled(np.ascontiguousarray(A, dtype=float), np.zeros(0))
     B = np.abs(A)
     out = 1.0
-    for v in (B.max(axis=1, initial=0.0), B.max(axis=0, initial=0.0), np.abs(b)):
+    for v in (B.max(axis=1, initial=0.0), B.max(axis=0, initial=0.0)):
         v = v[v > 0]
         if len(v):
             out = max(out, float(v.max() / v.min()))
-    return out if B.any() else 1.0
+    return out
 
 
 @dataclass
@@ -109,39 +112,54 @@ def _outside(v: float) -> bool:
 
 def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool = False) -> Scaling | None:
     """The factors of the module docstring, or ``None`` when all lie within ``SPREAD`` of one (and
-    ``force`` is false): computed from maxima only, without copying the problem."""
-    if qp.A.shape[0] and spread(qp.A, qp.b) > SPREAD:
-        r, d = equilibrate(qp.A)
+    ``force`` is false): computed from maxima only, without copying the problem (a uniform variable
+    scale, the usual case, is handled as a scalar)."""
+    m, n = qp.A.shape
+    absA = np.abs(qp.A) if m else None
+    ruiz = m and (spread(qp.A) > SPREAD or f_scale is not None)
+    if ruiz:
+        r, d = equilibrate(qp.A) if spread(qp.A) > SPREAD else (np.ones(m), np.ones(n))
+        if f_scale is not None:
+            d = d * _pow2(np.asarray(f_scale, dtype=float))
+        rows = (absA * d[None, :]).max(axis=1, initial=0.0) * r
+        dmax = float(d.max())
     else:
-        r, d = np.ones(qp.A.shape[0]), np.ones(qp.n)
-    if f_scale is not None:
-        d = d * _pow2(np.asarray(f_scale, dtype=float))
-    # the variables' unit: their largest finite bound
+        r, d = None, 1.0
+        rows = absA.max(axis=1, initial=0.0) if m else np.zeros(0)
+        dmax = 1.0
+    # the variables' unit: the size the equations ask for (|b_i| / max_j |A_ij|), at least the
+    # lower bounds' (an upper bound is a limit, often far above the forces that occur)
     with np.errstate(invalid="ignore", divide="ignore"):
-        lb, ub = np.abs(qp.lb / d), np.abs(qp.ub / d)
-    unit = max(float(lb[np.isfinite(lb)].max(initial=0.0)), float(ub[np.isfinite(ub)].max(initial=0.0)))
-    if unit > 0 and _outside(unit):
-        d = d * float(_pow2(unit))
-    if qp.A.shape[0]:
-        row = np.abs(qp.A * d[None, :]).max(axis=1, initial=0.0) * r
-        row[row == 0] = 1.0
-        r = r / np.where((row < 1 / SPREAD) | (row > SPREAD), _pow2(row), 1.0)
-    if qp.P_factor is not None and qp._P is None:
-        size = max(float(np.abs(qp.P_diag * d * d).max(initial=0.0)),
-                   float(((qp.P_factor * d[None, :]) ** 2).sum(axis=0).max(initial=0.0)))
+        lb = np.abs(qp.lb / d)
+        unit = float(lb[np.isfinite(lb)].max(initial=0.0))
+        if m:
+            need = np.abs(qp.b * (1.0 if r is None else r))[rows > 0] / rows[rows > 0]
+            unit = max(unit, float(need.max(initial=0.0)))
+    u = float(_pow2(unit)) if unit > 0 and _outside(unit) else 1.0
+    d = d * u
+    rows = rows * u
+    row_f = np.where((rows > 0) & ((rows < 1 / SPREAD) | (rows > SPREAD)), _pow2(np.where(rows > 0, rows, 1.0)), 1.0)
+    r = (np.ones(m) if r is None else r) / row_f
+    scalar = np.ndim(d) == 0
+    if qp._P is not None:
+        size = float(np.abs(qp.P).max(initial=0.0)) * u * u if scalar else \
+            float(np.abs(d[:, None] * qp.P * d[None, :]).max(initial=0.0))
     else:
-        size = float(np.abs(d[:, None] * qp.P * d[None, :]).max(initial=0.0))
-    size = max(size, float(np.abs(d * qp.c).max(initial=0.0)), 1e-300)
+        dd = d if not scalar else np.full(n, d)
+        size = max(float(np.abs(qp.P_diag * dd * dd).max(initial=0.0)),
+                   float(((qp.P_factor * dd[None, :]) ** 2).sum(axis=0).max(initial=0.0)))
+    size = max(size, float(np.abs(qp.c).max(initial=0.0)) * (u if scalar else dmax * u), 1e-300)
     obj = float(_pow2(size)) if _outside(size) else 1.0
     cone_s = np.ones(len(qp.cones))
     if qp.cones:
         G, g = qp.cone_arrays()[:2]
-        sizes = np.maximum(np.abs(G * d[None, None, :]).max(axis=(1, 2)), np.abs(g).max(axis=1))
-        sizes = np.maximum(sizes, 1e-300)
+        sizes = np.abs(G).max(axis=(1, 2)) * u if scalar else np.abs(G * d[None, None, :]).max(axis=(1, 2))
+        sizes = np.maximum(np.maximum(sizes, np.abs(g).max(axis=1)), 1e-300)
         cone_s = np.where((sizes < 1 / SPREAD) | (sizes > SPREAD), 1.0 / _pow2(sizes), 1.0)
-    if not force and np.all(d == 1.0) and np.all(r == 1.0) and obj == 1.0 and np.all(cone_s == 1.0):
+    if not force and u == 1.0 and (scalar or np.all(d == 1.0)) and np.all(r == 1.0) and obj == 1.0 \
+            and np.all(cone_s == 1.0):
         return None
-    return Scaling(d, r, obj, cone_s)
+    return Scaling(np.full(n, d) if scalar else d, r, obj, cone_s)
 
 
 def apply_scaling(qp: QPData, s: Scaling) -> QPData:

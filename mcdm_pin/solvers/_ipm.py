@@ -182,7 +182,8 @@ def _factor(H0, diag, T, Vc, A, iu, il, su, zu, sl, zl):
     """Form ``H = H0 + barrier diagonal + sum_k T_k^T V_k T_k`` and factor it (Cholesky, lower, in a
     new array), then the Schur complement ``S = A H^-1 A^T = Y^T Y`` with ``Y = L^-1 A^T``.
     ``diag``: ``H0`` is diagonal and there are no cones (then ``H`` is diagonal: no dense work).
-    Returns ``(L, Y, Ls)``."""
+    Returns ``(L, Y, Ls, floored)``: ``floored`` when a pivot had to be replaced (a dependent
+    equation, a singular ``H``): the solves then take a step of iterative refinement."""
     n = H0.shape[0]
     neq = A.shape[0]
     K = T.shape[0]
@@ -222,8 +223,11 @@ def _factor(H0, diag, T, Vc, A, iu, il, su, zu, sl, zl):
     for i in range(n):
         scale = max(scale, L[i, 0] if diag else L[i, i])
     floor = 1e-30 * scale
+    floored = False
     if diag:
         for i in range(n):
+            if not L[i, 0] > floor:
+                floored = True
             L[i, 0] = np.sqrt(max(L[i, 0], floor))
     else:
         for j in range(n):
@@ -234,6 +238,7 @@ def _factor(H0, diag, T, Vc, A, iu, il, su, zu, sl, zl):
             d = Lj[j] - acc
             if not d > floor:
                 d = floor
+                floored = True
             d = np.sqrt(d)
             Lj[j] = d
             inv = 1.0 / d
@@ -282,6 +287,7 @@ def _factor(H0, diag, T, Vc, A, iu, il, su, zu, sl, zl):
         d = Lj[j] - acc
         if not d > 1e-13 * sscale:
             d = 1e300
+            floored = True
         d = np.sqrt(d)
         Lj[j] = d
         inv = 1.0 / d
@@ -291,7 +297,7 @@ def _factor(H0, diag, T, Vc, A, iu, il, su, zu, sl, zl):
             for k in range(j):
                 acc += Li[k] * Lj[k]
             Li[j] = (Li[j] - acc) * inv
-    return L, Y, Ls
+    return L, Y, Ls, floored
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
@@ -452,9 +458,14 @@ def _max_step(su, dsu, sl, dsl, sc, dsc):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _residuals(x, y, zu, zl, zc, su, sl, sc, H0, c, A, b, iu, il, lb, ub, T, t):
+def _residuals(x, y, zu, zl, zc, su, sl, sc, H0, diag, c, A, b, iu, il, lb, ub, T, t):
     n = x.shape[0]
-    Hx = H0 @ x
+    if diag:
+        Hx = np.empty(n)
+        for i in range(n):
+            Hx[i] = H0[i, i] * x[i]
+    else:
+        Hx = H0 @ x
     rx = Hx + c + A.T @ y
     for q in range(iu.shape[0]):
         rx[iu[q]] += zu[q]
@@ -545,41 +556,18 @@ def ipm_solve(H, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax,
         for e in range(3):
             hscale = max(hscale, abs(t[k, e]))
     cscale = max(1.0, _inf_norm(c))
-    refine = 1
     empty_state = np.zeros(0, dtype=np.int8)
     empty_b = np.zeros(0, dtype=np.bool_)
     empty_f = np.zeros(0)
     empty_d = np.zeros((0, 3))
 
-    # ---- initial point: the Newton system with W = I (CVXOPT's coneqp), shifted into the cones
-    su = np.ones(nu)
-    zu = np.ones(nu)
-    sl = np.ones(nl)
-    zl = np.ones(nl)
+    # ---- initial point (Mehrotra's idea for LPs): the minimiser of the objective, slightly
+    # regularised, on the equations alone; slacks kept at least theta inside, duals mu0 / slack. On
+    # the neck (forces of ~1 N under limits of 1000 N) this saves the 4-5 iterations that CVXOPT's
+    # start (the middle of the box) spends shrinking from 1000 N to 1 N.
+    x, y, su, zu, sl, zl, sc, zc = _start(H, diag, c, A, b, lb, ub, T, t, iu, il)
     Wc2 = np.zeros((K, 3, 3))
     Vc = np.zeros((K, 3, 3))
-    for k in range(K):
-        for e in range(3):
-            Wc2[k, e, e] = 1.0
-            Vc[k, e, e] = 1.0
-    L, Y, Ls = _factor(H, diag, T, Vc, A, iu, il, su, zu, sl, zl)
-    hu = np.empty(nu)
-    for q in range(nu):
-        hu[q] = ub[iu[q]]
-    hl = np.empty(nl)
-    for q in range(nl):
-        hl[q] = -lb[il[q]]
-    x, y, dzu, dzl, dzc = _newton(-c, b, hu, hl, t.copy(), L, Y, Ls, H, diag, T, A, Vc, iu, il, su, zu,
-                                  sl, zl, refine)
-    su = -dzu.copy()
-    sl = -dzl.copy()
-    sc = -dzc.copy()
-    zu = dzu.copy()
-    zl = dzl.copy()
-    zc = dzc.copy()
-    _shift_into_cones(su, sl, sc)
-    _shift_into_cones(zu, zl, zc)
-
     Wk = np.empty((3, 3))
     Wik = np.empty((3, 3))
     Winv = np.zeros((K, 3, 3))
@@ -591,7 +579,7 @@ def ipm_solve(H, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax,
     last_cact = np.zeros(K, dtype=np.bool_)
     it = 0
     for it in range(max_iter):
-        rx, ry, rzu, rzl, rzc, pobj = _residuals(x, y, zu, zl, zc, su, sl, sc, H, c, A, b, iu, il,
+        rx, ry, rzu, rzl, rzc, pobj = _residuals(x, y, zu, zl, zc, su, sl, sc, H, diag, c, A, b, iu, il,
                                                  lb, ub, T, t)
         gap = _dot(su, zu) + _dot(sl, zl)
         for k in range(K):
@@ -606,8 +594,18 @@ def ipm_solve(H, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax,
             for e in range(3):
                 pres = max(pres, abs(rzc[k, e]) / hscale)
         dres = _inf_norm(rx) / cscale
-        gap_rel = gap / max(1.0, abs(pobj))
+        # relative to the objective, with an absolute floor of 1e-13 (the data are of order one)
+        gap_rel = gap / max(1e-13 / max(eps, 1e-300), abs(pobj))
         if pres <= eps and dres <= eps and gap_rel <= eps:
+            # converged: the active set it points at, once more, for the exact point
+            if crossover_gap > 0.0:
+                state, cact, cdir = _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, G, gc, ax, basis0)
+                if _new_guess(state, cact, last_state, last_cact):
+                    code, f, mus, grad, st, ca, dirs, nxt, yy = _kkt.active_set_solve(
+                        H, c, A, b, lb, ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, 10,
+                        as_tols[0], as_tols[1], as_tols[2], as_tols[3], as_tols[4])
+                    if code == _kkt.FOUND:
+                        return (CROSSOVER, f, yy, -grad, zc, it, st, ca, mus, dirs)
             return (SOLVED, x, y, _zbox(zu, zl, iu, il, n), zc, it, empty_state, empty_b, empty_f,
                     empty_d)
         # primal infeasibility certificate: A^T y + G^T z = 0, b^T y + h^T z < 0
@@ -638,7 +636,7 @@ def ipm_solve(H, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax,
                         empty_f, empty_d)
         # ---- crossover: the active set the iterate points at, verified by the active-set solver
         if crossover_gap > 0.0 and gap_rel <= crossover_gap and pres <= 1e3 * crossover_gap \
-                and attempts < 3:
+                and attempts < 8:
             state, cact, cdir = _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, G, gc, ax, basis0)
             if _new_guess(state, cact, last_state, last_cact):
                 attempts += 1
@@ -656,7 +654,8 @@ def ipm_solve(H, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax,
             Winv[k] = Wik
             Wc2[k] = Wk @ Wk
             Vc[k] = Wik @ Wik
-        L, Y, Ls = _factor(H, diag, T, Vc, A, iu, il, su, zu, sl, zl)
+        L, Y, Ls, floored = _factor(H, diag, T, Vc, A, iu, il, su, zu, sl, zl)
+        refine = 1 if floored else 0
         # ---- predictor (affine scaling direction): bz = -rz + s
         dx, dy, dzu, dzl, dzc = _newton(-rx, -ry, -rzu + su, -rzl + sl, -rzc + sc, L, Y, Ls, H, diag, T,
                                         A, Vc, iu, il, su, zu, sl, zl, refine)
@@ -709,6 +708,53 @@ def ipm_solve(H, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax,
             if code == _kkt.FOUND:
                 return (CROSSOVER, f, yy, -grad, zc, it + 1, st, ca, mus, dirs)
     return (end, x, y, _zbox(zu, zl, iu, il, n), zc, it + 1, empty_state, empty_b, empty_f, empty_d)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _start(H, diag, c, A, b, lb, ub, T, t, iu, il):
+    """The initial point (see :func:`ipm_solve`)."""
+    n = c.shape[0]
+    K = T.shape[0]
+    nu, nl = iu.shape[0], il.shape[0]
+    hmax = 0.0
+    for i in range(n):
+        hmax = max(hmax, abs(H[i, i]))
+    cmax = _inf_norm(c)
+    delta = max(1e-6 * hmax, 1e-3 * cmax, 1e-12)
+    su = np.ones(nu)
+    zu = np.full(nu, delta)
+    sl = np.ones(nl)
+    zl = np.full(nl, delta)
+    Vc = np.zeros((K, 3, 3))
+    for k in range(K):
+        for e in range(3):
+            Vc[k, e, e] = delta
+    L, Y, Ls, floored = _factor(H, diag, T, Vc, A, iu, il, su, zu, sl, zl)
+    x, y, _, _, _ = _newton(-c, b, np.zeros(nu), np.zeros(nl), np.zeros((K, 3)), L, Y, Ls, H, diag, T, A,
+                            Vc, iu, il, su, zu, sl, zl, 1)
+    xs = max(1.0, _inf_norm(x))
+    theta = 1e-1 * xs
+    g = H @ x + c
+    mu0 = theta * max(1.0, _inf_norm(g))
+    for q in range(nu):
+        su[q] = max(ub[iu[q]] - x[iu[q]], theta)
+        zu[q] = mu0 / su[q]
+    for q in range(nl):
+        sl[q] = max(x[il[q]] - lb[il[q]], theta)
+        zl[q] = mu0 / sl[q]
+    sc = np.empty((K, 3))
+    zc = np.empty((K, 3))
+    for k in range(K):
+        for e in range(3):
+            sc[k, e] = _dot(T[k, e], x) + t[k, e]
+        nrm = np.sqrt(sc[k, 1] ** 2 + sc[k, 2] ** 2)
+        if sc[k, 0] - nrm < theta:
+            sc[k, 0] = nrm + theta
+        det = sc[k, 0] ** 2 - nrm ** 2
+        zc[k, 0] = mu0 * sc[k, 0] / det
+        zc[k, 1] = -mu0 * sc[k, 1] / det
+        zc[k, 2] = -mu0 * sc[k, 2] / det
+    return x, y, su, zu, sl, zl, sc, zc
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -149,7 +149,7 @@ def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state) -> Soluti
     nxt_cones = {c.joint: (dirs[k], float(mus[k])) for k, c in enumerate(qp.cones) if cact[k] and mus[k] > 0}
     return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z,
                     z_cone=cone_duals(qp, np.where(cact, mus, 0.0), dirs) if qp.cones else np.zeros((0, 3)),
-                    active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt_state))
+                    active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt_state), verified=True)
 
 
 _NO_CONES = np.zeros(0, dtype=np.bool_)
@@ -201,10 +201,13 @@ class Polish(Stage):
     name = "polish"
     refines = True
 
+    def __init__(self, max_pivots: int = 30):
+        self.max_pivots = max_pivots
+
     def run(self, qp, sol, deadline):
         if sol.active is not None or not jit.ready():  # an active-set stage's answer is exact already
             return sol
-        hit = try_active_set(qp, ActiveSet.from_duals(qp, sol), max_pivots=2)
+        hit = try_active_set(qp, ActiveSet.from_duals(qp, sol), max_pivots=self.max_pivots)
         if hit is None:
             return sol
         return hit.but(stage=f"{sol.stage}>{self.name}", iterations=sol.iterations, rounds=sol.rounds,

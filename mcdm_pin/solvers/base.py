@@ -52,6 +52,8 @@ class Solution:
         unique: whether the first-stage optimum is provably unique (``None``: not decided).
         active: the optimum's active set, when the stage knows it
             (:class:`~mcdm_pin.solvers.active_set.ActiveSet`).
+        verified: the point and its duals passed the compiled active-set solver's KKT check (tighter
+            than :mod:`.check`'s), so the check stage does not repeat it.
     """
 
     x: np.ndarray
@@ -66,6 +68,7 @@ class Solution:
     stage: str = ""
     unique: bool | None = None
     active: object = field(default=None, repr=False)
+    verified: bool = False
 
     @property
     def f(self) -> np.ndarray:

@@ -22,7 +22,7 @@ REASONS = {_ipm.MAX_ITER: "iteration limit", _ipm.NUMERICAL: "numerical breakdow
 
 
 def ipm_arguments(qp, max_iter: int = tol.IPM_MAX_ITER, eps: float = tol.IPM_EPS,
-                  crossover_gap: float = tol.IPM_CROSSOVER_GAP, max_pivots: int = 10) -> tuple:
+                  crossover_gap: float = tol.IPM_CROSSOVER_GAP, max_pivots: int = 30) -> tuple:
     """The arguments of :func:`._ipm.ipm_solve` for ``qp`` (C-ordered float arrays and Python scalars:
     one compiled specialisation serves every call)."""
     c_ = np.ascontiguousarray
@@ -46,7 +46,8 @@ def ipm_solve(qp, **options) -> Solution:
         sol = active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt)
         return sol.but(iterations=int(it), stage="ipm")
     if code == _ipm.SOLVED:
-        return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z, z_cone=zc, iterations=int(it), stage="ipm")
+        return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z, z_cone=zc, iterations=int(it), stage="ipm",
+                        verified=False)
     if code == _ipm.INFEASIBLE_CERT:
         what = "the bounds and the cones" if qp.cones else "the bounds"
         return failure(n, INFEASIBLE, f"no point meets the equation of motion and {what} (an "

@@ -77,6 +77,15 @@ def is_unique(qp, sol: Solution) -> bool:
         return True
     J = np.vstack([qp.A[:, free]] + [np.asarray(r)[free][None, :] for _, r in rows]) if (len(qp.b) or rows) \
         else np.zeros((0, nf))
+    if J.shape[0] >= nf:
+        # the usual case (a vertex): J has full column rank, the null space is empty
+        try:
+            JtJ = J.T @ J
+            Lc = np.linalg.cholesky(JtJ)
+            if np.diag(Lc).min() ** 2 > 1e-10 * max(np.abs(JtJ).max(), 1e-300):
+                return True
+        except np.linalg.LinAlgError:
+            pass
     if J.shape[0]:
         _, s, Vt = np.linalg.svd(J, full_matrices=True)
         rank = int((s > 1e-10 * max(s.max(initial=0.0), 1e-300)).sum())
@@ -164,8 +173,10 @@ class LeastNorm(Stage):
             note = (f"least-norm stage failed ({out.status}: {out.message}); the answer is optimal but "
                     f"may not be the least-norm one")
             return sol.but(unique=False, message=f"{sol.message}; {note}" if sol.message else note)
-        x = out.x
+        from .check import project_to_bounds
+
+        x = project_to_bounds(qp, out).x
         # stage 2's multipliers of the original rows are not those of the original problem: the
         # first stage's duals stay (they certify x too: x lies on the same optimal face)
         return sol.but(x=x, objective=qp.objective(x), unique=False, stage=f"{sol.stage}>{self.name}",
-                       iterations=sol.iterations + out.iterations, active=None)
+                       iterations=sol.iterations + out.iterations, active=None, verified=False)
