@@ -128,7 +128,7 @@ class InverseDynamics:
         softened = 0.0
         needed_f_max = needed_cone = float("nan")
         if sol.status == INFEASIBLE and self.diagnose:
-            message, needed_f_max, needed_cone = diagnose_infeasible(qp, self.robot.cable_names)
+            message, needed_f_max, needed_cone = diagnose_infeasible(qp, _variable_names(self.robot))
             if message.startswith("bounds"):
                 from .conditioning import wrench_closure
                 closure = wrench_closure(self.robot, terms.q, terms.L)
@@ -142,14 +142,16 @@ class InverseDynamics:
                     message = f"cones widened by {softened:.6g} deg: {message}"
         t2 = time.perf_counter()
         eom = float("nan")
+        m = self.robot.m
+        act = self.problem.actuation
         if sol.found:
-            sol, eom = _check(qp, terms, sol)
+            sol, eom = _check(qp, terms, sol, m, act)
             message = sol.message or message
-        f = sol.x
+        f, tau_act = sol.x[:m], sol.x[m:]
         if sol.found:
             wrench = terms.wrenches(f)
             objective = (sol.objective if not self.problem.has_smoothing and np.isfinite(sol.objective)
-                         else self.problem.value(terms, f, context, qp))
+                         else self.problem.value(terms, sol.x, context, qp))
         else:
             wrench = np.full((len(self.robot.joints), 6), np.nan)
             objective = float("nan")
@@ -161,7 +163,7 @@ class InverseDynamics:
             interaction_angle_deg=angles, iterations=sol.iterations, rounds=sol.rounds,
             time_model_s=t1 - t0, time_solve_s=t2 - t1, message=message, softened_deg=softened,
             needed_f_max=needed_f_max, needed_cone_deg=needed_cone, unique=bool(sol.unique and sol.found),
-            stage=sol.stage)
+            stage=sol.stage, tau_act=tau_act)
 
     def solve_trajectory(self, traj, progress: bool | None = None, workers: int = 1) -> TrajectoryResult:
         """Solve every instant of ``traj`` in order, warm-starting each from the previous one.
@@ -283,17 +285,18 @@ def _terms_of(objective):
     return objective.terms if isinstance(objective, Sum) else [objective]
 
 
-def _check(qp: QPData, terms, sol: Solution) -> tuple[Solution, float]:
+def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None) -> tuple[Solution, float]:
     """Downgrade a solution that breaks a constraint beyond tolerance to ``inaccurate``. Returns the
-    solution and its relative equation-of-motion residual."""
+    solution and its relative equation-of-motion residual (``m`` cables; ``actuation``: the problem's
+    actuated joints, whose torques follow the cable forces in ``sol.x``)."""
     f = sol.x
     problems = []
-    eom = terms.eom_residual(f)
+    eom = terms.eom_residual(f[:m], None if actuation is None else -actuation.S @ f[m:])
     if not eom <= tol.EOM_REL:
         problems.append(f"equation-of-motion residual {eom:.2e} > {tol.EOM_REL:g}")
     broken = max(float((qp.lb - f).max(initial=0.0)), float((f - qp.ub).max(initial=0.0)))
     if not broken <= tol.BOUND_ABS:
-        problems.append(f"cable bounds broken by {broken:.2e} N")
+        problems.append(f"cable (or actuator) bounds broken by {broken:.2e}")
     if qp.cones and sol.status == OPTIMAL:
         viol = cone_violation_deg(qp, f)
         if not viol.max() <= tol.CONE_DEG:
@@ -412,3 +415,13 @@ def soften_cones(qp: QPData, solver, needed: float | None = None) -> tuple[Solut
     if sol.status != OPTIMAL:
         return sol, widening
     return sol.but(status=SOFTENED), widening
+
+
+def _variable_names(robot) -> list[str]:
+    """The unknowns' names: the cables, then the actuator components (hybrid robots)."""
+    return list(robot.cable_names) + actuator_names(robot)
+
+
+def actuator_names(robot) -> list[str]:
+    """One name per actuator component (``JOINT`` or ``JOINT[i]``), in the order of ``tau_act``."""
+    return [n for a in getattr(robot, "actuators", ()) for n in a.names]

@@ -5,8 +5,13 @@ r"""Objectives + constraints -> one quadratic problem with cones, at one instant
     \min_x\; \tfrac12\, x^T P x + c^T x + r \quad \text{s.t.}\quad A x = b,\;\; l \le x \le u,\;\;
     \|F_{k,\perp}\| \le \tan\rho^*_k\, F_{k,z}\;\; (F_k = g_k + G_k x).
 
-The variables ``x`` are the cable forces (then, for actuated joints, the actuator torques); nothing
-here or in the solvers assumes ``l >= 0`` or that every variable is a cable.
+The variables ``x`` are the cable forces, then, for a hybrid robot (actuated joints, HCDM), the
+actuator torques/forces: ``x = [f; tau_act]``, with the equation of motion
+``L^T f - S tau_act = -(M qdd + h)`` (:mod:`mcdm_pin.model.actuators`), the actuators' bounds, and
+``w_a |tau_a|^2`` (the sidecar's ``actuated: weight``) added to every case's objective: CASPR's
+convention, where the joint actuators join the cables as weighted unknowns of the same program. An
+actuator's torque acts inside its joint, so the interaction wrenches and the cones depend on ``f``
+only. Nothing here or in the solvers assumes ``l >= 0`` or that every variable is a cable.
 
 :func:`case_problem` builds the source paper's three cases. A :class:`Problem` is data:
 :meth:`Problem.spec` gives a JSON-able description and :meth:`Problem.from_spec` rebuilds it.
@@ -181,6 +186,12 @@ class Problem:
                             [w for t, w in zip(terms, weights) if not isinstance(t, Smoothing)])
         self.has_smoothing = any(isinstance(t, Smoothing) for t in terms)
         self._plan = self._make_plan()
+        self.actuation = _Actuation.of(robot)
+
+    @property
+    def n_variables(self) -> int:
+        """Unknowns per instant: the cables, then the actuator components (hybrid robots)."""
+        return self.robot.m + (0 if self.actuation is None else self.actuation.n)
 
     @property
     def cone_constraints(self) -> list[InteractionCone]:
@@ -245,7 +256,7 @@ class Problem:
             qp.cones, qp._cone_arrays = batch(terms)
         elif batch is not None:
             qp.cones = batch(terms)[0] + cones
-        return qp
+        return qp if self.actuation is None else self.actuation.extend(qp, plan["eom"], terms.L.shape[1])
 
     def _make_plan(self) -> dict:
         """What :meth:`assemble` does at every instant, decided once: the equation of motion and the
@@ -275,6 +286,46 @@ class Problem:
 
     def describe(self) -> str:
         return f"minimise {self.objective!r} subject to {', '.join(map(repr, self.constraints))}"
+
+
+class _Actuation:
+    """The actuated joints' part of every instant's problem (module docstring): ``S``, bounds, weights."""
+
+    def __init__(self, S, lo, hi, weight):
+        self.S, self.lo, self.hi, self.weight = S, lo, hi, weight
+        self.n = S.shape[1]
+
+    @classmethod
+    def of(cls, robot) -> "_Actuation | None":
+        acts = tuple(getattr(robot, "actuators", ()) or ())
+        if not acts:
+            return None
+        lo = np.concatenate([a.tau_min for a in acts])
+        hi = np.concatenate([a.tau_max for a in acts])
+        w = np.concatenate([np.full(len(a.idx_v), float(a.weight)) for a in acts])
+        # w |tau|^2 = 1/2 tau (2 w) tau: the Hessian's diagonal is 2 w (case 1's f^T f has 2 I)
+        return cls(robot.actuation, lo, hi, 2.0 * w)
+
+    def extend(self, qp: QPData, eom: bool, nv: int) -> QPData:
+        """``qp`` over ``[f; tau_act]``: the equation of motion's rows gain ``-S``, every other row and
+        cone a zero block; the actuators' bounds and ``w |tau|^2`` are added."""
+        m, k = qp.n, self.n
+        A = np.hstack([qp.A, np.zeros((qp.A.shape[0], k))])
+        if eom:
+            A[:nv, m:] = -self.S
+        pad = lambda G: np.hstack([G, np.zeros((G.shape[0], k))])  # noqa: E731
+        cones = [ConeData(c.joint, pad(c.G), c.g, c.axis, c.angle_deg, c.basis) for c in qp.cones]
+        if qp.structured:
+            P, P_diag, P_factor = None, np.concatenate([qp.P_diag, self.weight]), pad(qp.P_factor)
+        else:
+            P = np.zeros((m + k, m + k))
+            P[:m, :m] = qp.P
+            P[m:, m:] = np.diag(self.weight)
+            P_diag = P_factor = None
+        norm_weight = None if qp.norm_weight is None else np.concatenate([qp.norm_weight, np.ones(k)])
+        return QPData(P, np.concatenate([qp.c, np.zeros(k)]), qp.r, A, qp.b,
+                      np.concatenate([qp.lb, self.lo]), np.concatenate([qp.ub, self.hi]), cones,
+                      P_diag=P_diag, P_factor=P_factor, norm_weight=norm_weight)
 
 
 def case_problem(robot, case: int, alpha: dict | None = None, beta: dict | None = None,

@@ -112,10 +112,6 @@ class PoseSolver:
         self.cones = bool(self.ident.problem.cone_constraints)
         self.context = Context(robot)
 
-    def forget(self) -> None:
-        """Drop every warm start (``InverseDynamics.reset()`` once the solver stream has it)."""
-        self.ident.solver.reset()
-
     def solve(self, q: np.ndarray) -> dict[str, np.ndarray]:
         """Results of poses ``q`` (n, nv): the store's per-pose variables."""
         robot = self.robot
@@ -126,7 +122,7 @@ class PoseSolver:
                    interaction_angle_deg=np.full((n, J), np.nan),
                    needed_f_max=np.full(n, np.nan), needed_cone_deg=np.full(n, np.nan))
         for k in range(n):
-            self.forget()
+            self.ident.reset()
             res = self.ident.solve(out["q"][k], self.qd, self.qdd)
             out["status"][k] = res.status
             out["objective"][k] = res.objective
