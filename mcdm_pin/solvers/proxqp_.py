@@ -233,6 +233,7 @@ class SQPPolish(Stage):
             if d is not None and (mult[k] > 0 or _violation(cone, x_prev) is not None):
                 dirs[k] = d
         iterations, warm = sol.iterations, None
+        obj_prev = np.inf
         for rounds in range(1, self.max_rounds + 1):
             if now() > deadline:
                 return failure(n, BUDGET, "SQP polish: budget exhausted", iterations, sol.rounds + rounds - 1,
@@ -256,13 +257,19 @@ class SQPPolish(Stage):
             zc = z[n:]
             violated = [k for k, cone in enumerate(cones) if _violation(cone, x) is not None]
             step = np.linalg.norm(x - x_prev) / (1.0 + np.linalg.norm(x))
+            obj = qp.objective(x)
+            # where the optimum is not unique (a positive semidefinite objective) the iterates may
+            # slide along the optimal face: a settled objective ends the loop too (the polish and
+            # least-norm stages then pick the face's point, the check stage verifies it)
+            settled = rounds > 1 and abs(obj - obj_prev) <= tol.SQP_STEP * max(abs(obj), 1e-12)
+            obj_prev = obj
             x_prev = x
             for k, cone in enumerate(cones):
                 m = float(zc[owner == k].sum())
                 d = _perp_dir(cone, x)
                 if (dirs[k] is not None or k in violated) and d is not None:
                     dirs[k], mult[k] = d, m
-            if not violated and step <= tol.SQP_STEP:
+            if not violated and (step <= tol.SQP_STEP or settled):
                 ys, zb, z_cone = _duals(qp, y, z, owner, [[dirs[k]] if dirs[k] is not None else []
                                                            for k in range(len(cones))])
                 return Solution(x, OPTIMAL, qp.objective(x), y=ys, z=zb, z_cone=z_cone, iterations=iterations,
