@@ -177,6 +177,9 @@ def test_cli_export_and_check(osim, tmp_path, capsys):
     from mcdm_pin.cli import main
 
     out = tmp_path / "sub" / "arm.osim"
+    assert main(["export-opensim", str(TWO_LINK), str(out), "--check", "2"]) == 2  # no folder sub/: nothing made
+    assert "the folder" in capsys.readouterr().err and not out.parent.exists()
+    out.parent.mkdir()
     assert main(["export-opensim", str(TWO_LINK), str(out), "--check", "2"]) == 0
     text = capsys.readouterr().out
     assert out.is_file() and "8 PathActuators" in text and "moment arms" in text

@@ -179,14 +179,17 @@ def test_proxqp_stall_is_answered_by_the_cascade():
 
 def test_generator_covers_feasible_and_infeasible_instants():
     """The solver property above is only meaningful if both outcomes occur (counts from the run)."""
-    if not SOLVER_STATS:
-        pytest.skip("run together with test_solver_meets_constraints_and_agrees_with_clarabel")
+    if not SOLVER_STATS:  # run alone: run the property here (it fills SOLVER_STATS)
+        test_solver_meets_constraints_and_agrees_with_clarabel()
     optimal = sum(n for k, n in SOLVER_STATS.items() if "optimal/optimal" in k)
     infeasible = sum(n for k, n in SOLVER_STATS.items() if "infeasible/" in k)
     print(SOLVER_STATS)
     assert optimal >= 20 and infeasible >= 5, SOLVER_STATS
     stalled = sum(n for k, n in SOLVER_STATS.items() if "max_iter/" in k)
     assert stalled == 0, SOLVER_STATS
+    # an "inaccurate" answer (checked and found wanting) is counted and bounded, not skipped
+    inaccurate = sum(n for k, n in SOLVER_STATS.items() if k.split(": ")[1].startswith("inaccurate/"))
+    assert inaccurate <= 0.02 * sum(SOLVER_STATS.values()), SOLVER_STATS
 
 
 def test_one_dof_robot(tmp_path):
