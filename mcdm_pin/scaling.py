@@ -16,8 +16,9 @@ more than ``SPREAD`` (three decades), then the variables' unit set by their boun
 its size; :math:`s_k > 0` per cone: cones are invariant under positive scaling of :math:`F_k`), the
 objective divided by its own size, and bounds :math:`l/d \le x \le u/d`, the scaled problem has the
 same solution set mapped by :math:`D`. The variables' unit is the size the equations ask for
-(``|b_i| / max_j |A_ij|``), at least the lower bounds' (not the upper bounds: a force limit is often
-orders of magnitude above the forces that occur). Every factor is a power of two (no rounding). A problem whose
+(``|b_i| / max_j |A_ij|``), at least the geometric middle of the bounds, ``sqrt(max f_min * min f_max)``
+(the lower bounds alone when no upper bound is finite), so that scaling every mass and every bound by
+``k`` gives the same scaled problem whatever ``k`` (``tests/test_reference.py``). Every factor is a power of two (no rounding). A problem whose
 factors all lie within ``SPREAD`` of one is passed through untouched (the usual case: the neck, the
 arms), so well-scaled problems pay nothing.
 
@@ -128,10 +129,18 @@ def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool =
         rows = absA.max(axis=1, initial=0.0) if m else np.zeros(0)
         dmax = 1.0
     # the variables' unit: the size the equations ask for (|b_i| / max_j |A_ij|), at least the
-    # lower bounds' (an upper bound is a limit, often far above the forces that occur)
+    # geometric middle of the bounds (the lower bound alone when no upper bound is finite: an upper
+    # bound is a limit, often far above the forces that occur). An instant that asks for no force
+    # (the 2-link arm at rest) then gets the same unit whatever the robot's scale: with the lower
+    # bound as the unit, links of 1e-6 kg put the bounds at 1 and 1e6 and Clarabel stopped with
+    # InsufficientProgress where the unscaled robot solves
     with np.errstate(invalid="ignore", divide="ignore"):
         lb = np.abs(qp.lb / d)
         unit = float(lb[np.isfinite(lb)].max(initial=0.0))
+        ub = np.abs(qp.ub / d)
+        ub = ub[np.isfinite(ub) & (ub > 0)]
+        if unit > 0 and len(ub) and float(ub.min()) > unit:
+            unit = float(np.sqrt(unit * float(ub.min())))
         if m:
             need = np.abs(qp.b * (1.0 if r is None else r))[rows > 0] / rows[rows > 0]
             unit = max(unit, float(need.max(initial=0.0)))

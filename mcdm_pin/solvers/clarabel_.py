@@ -33,10 +33,11 @@ def conic_form(qp: QPData):
 
     n = qp.n
     blocks, rhs, cones = [], [], []
-    if len(qp.b):
-        blocks.append(qp.A)
-        rhs.append(qp.b)
-        cones.append(clarabel.ZeroConeT(len(qp.b)))
+    rows = independent_rows(qp.A, qp.b)
+    if len(rows):
+        blocks.append(qp.A[rows])
+        rhs.append(qp.b[rows])
+        cones.append(clarabel.ZeroConeT(len(rows)))
     hi, lo = np.flatnonzero(np.isfinite(qp.ub)), np.flatnonzero(np.isfinite(qp.lb))
     if len(hi) or len(lo):
         eye = np.eye(n)
@@ -50,7 +51,30 @@ def conic_form(qp: QPData):
         cones += [clarabel.SecondOrderConeT(3)] * len(qp.cones)
     A = sparse.csc_matrix(np.vstack(blocks)) if blocks else sparse.csc_matrix((0, n))
     b = np.concatenate(rhs) if rhs else np.zeros(0)
-    return sparse.csc_matrix(np.triu(qp.P)), qp.c, A, b, cones, (len(qp.b), hi, lo)
+    return sparse.csc_matrix(np.triu(qp.P)), qp.c, A, b, cones, (rows, hi, lo)
+
+
+def independent_rows(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Indices of a maximal set of independent, consistent equations of ``A x = b`` (all of them when
+    ``A`` has full row rank, or when the dependent ones contradict the others: then the problem is
+    infeasible and Clarabel shall say so). Where the equation of motion loses rank (the 2-link arm at
+    rest at q = 0: rank 3 of 4) the dependent row made Clarabel stop with ``InsufficientProgress``."""
+    m = A.shape[0]
+    if m == 0:
+        return np.arange(0)
+    from scipy.linalg import qr
+
+    _, R, piv = qr(A.T, mode="economic", pivoting=True)
+    d = np.abs(np.diag(R))
+    rank = int((d > 1e-12 * max(float(d.max(initial=0.0)), 1e-300)).sum())
+    if rank == m:
+        return np.arange(m)
+    keep = np.sort(piv[:rank])
+    x = np.linalg.lstsq(A[keep], b[keep], rcond=None)[0]
+    scale = max(float(np.abs(b).max(initial=0.0)), float((np.abs(A) @ np.abs(x)).max(initial=0.0)), 1e-300)
+    if np.abs(A @ x - b).max(initial=0.0) > 1e-9 * scale:
+        return np.arange(m)
+    return keep
 
 
 def clarabel_solve(qp: QPData, tol_: float = tol.CLARABEL_TOL, max_iter: int = 200,
@@ -59,7 +83,8 @@ def clarabel_solve(qp: QPData, tol_: float = tol.CLARABEL_TOL, max_iter: int = 2
     import clarabel
 
     n = qp.n
-    P, c, A, b, cones, (neq, hi, lo) = conic_form(qp)
+    P, c, A, b, cones, (rows, hi, lo) = conic_form(qp)
+    neq = len(rows)
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.max_iter = max_iter
@@ -74,7 +99,8 @@ def clarabel_solve(qp: QPData, tol_: float = tol.CLARABEL_TOL, max_iter: int = 2
     if status in ("Solved", "AlmostSolved"):
         x = np.array(sol.x)
         zz = np.array(sol.z)
-        y = zz[:neq]
+        y = np.zeros(len(qp.b))  # a dropped (dependent) equation's multiplier is zero
+        y[rows] = zz[:neq]
         z = np.zeros(n)
         z[hi] += zz[neq:neq + len(hi)]
         z[lo] -= zz[neq + len(hi):neq + len(hi) + len(lo)]
