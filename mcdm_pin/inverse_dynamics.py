@@ -344,12 +344,19 @@ def diagnose_infeasible(qp: QPData, cable_names=None):
         return ("solver: reported infeasible, but the equation of motion can be met within the bounds "
                 "(a numerical failure of the solver)", nan, nan)
     need = needed_cone_deg(qp)
-    binding = _binding_cones(qp, need)
     if len(qp.cones) == 1:
         cone = qp.cones[0]
-        return (f"cone: the stability cone of {cone.joint} ({cone.angle_deg:g} deg; feasible from "
-                f"{need:.4f} deg) cannot be met within the cable bounds", nan, float(need))
+        where = (f"feasible from {need:.4f} deg" if need < 90.0 else
+                 "only a half-space would do: the force must lie in the socket's plane" if need == 90.0 else
+                 "no cone will do: the force must point out of the socket")
+        return (f"cone: the stability cone of {cone.joint} ({cone.angle_deg:g} deg; {where}) cannot be met "
+                f"within the cable bounds", nan, float(need))
     names_c = ", ".join(f"{c.joint} ({c.angle_deg:g} deg)" for c in qp.cones)
+    if not need < 90.0:
+        return (f"cones: the stability cones of {names_c} cannot be met together within the cable bounds; "
+                f"{'only half-spaces would do' if need == 90.0 else 'no common cone will do: a force must point out of its socket'}",
+                nan, float(need))
+    binding = _binding_cones(qp, need)
     return (f"cones: the stability cones of {names_c} cannot be met together within the cable bounds; "
             f"a common half-angle of {need:.4f} deg would do (binding there: {', '.join(binding)})",
             nan, float(need))

@@ -78,7 +78,8 @@ def _load_cached(disp, args) -> bool:
 def cached() -> bool:
     """Whether every registered kernel can be loaded from the cache (loads those that can)."""
     try:
-        return all([_load_cached(disp, args) for disp, args in _all_calls()])
+        calls = _all_calls()
+        return bool(calls) and all([_load_cached(disp, args) for disp, args in calls])
     except Exception:  # noqa: BLE001 - numba internals changed: treat as not cached
         return False
 
@@ -115,7 +116,8 @@ def _start_background() -> bool:
     log = Path(tempfile.gettempdir()) / "mcdm_pin_jit.log"
     try:
         with open(log, "a") as out:
-            subprocess.Popen([sys.executable, "-m", "mcdm_pin.jit"], stdin=subprocess.DEVNULL, stdout=out,
+            subprocess.Popen([sys.executable, "-c", "import sys; from mcdm_pin import jit; sys.exit(jit._main())"],
+                             stdin=subprocess.DEVNULL, stdout=out,
                              stderr=out, start_new_session=True, env=dict(os.environ), close_fds=True)
     except OSError:
         return False
@@ -148,9 +150,14 @@ def prepare(policy: str | None = None, quiet: bool = False) -> bool:
     return False
 
 
-def _main() -> int:
-    """The background process: compile under the lock, then exit."""
+def _main(argv=None) -> int:
+    """The background process: compile under the lock, then exit (``--list``: print how many kernel
+    specialisations are registered and whether the cache holds them all, compile nothing)."""
     import fcntl
+
+    if "--list" in (sys.argv[1:] if argv is None else argv):
+        print(f"{len(_all_calls())} kernel specialisations registered; cached: {cached()}", flush=True)
+        return 0
 
     with open(_lock_path(), "a") as fh:
         fcntl.flock(fh, fcntl.LOCK_EX)
@@ -163,4 +170,10 @@ def _main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(_main())
+    # run the package's module, not this __main__ copy: the kernel modules register into
+    # mcdm_pin.jit's registry, which this copy does not see (with its own empty registry the
+    # background process found "everything cached" and compiled nothing: every later run on a new
+    # machine stayed on the uncompiled path)
+    from mcdm_pin import jit as _jit
+
+    sys.exit(_jit._main())

@@ -107,3 +107,18 @@ def test_spread_matches_numpy():
             continue
         want = max(rows.max() / rows.min(), cols.max() / cols.min(), bb.max() / bb.min() if len(bb) else 1)
         assert spread(A, b) == pytest.approx(want, rel=1e-15)
+
+
+def test_background_compiler_sees_every_kernel():
+    """``python -m mcdm_pin.jit`` (the detached process that compiles the kernels on a new machine)
+    must see the kernels the library registers: run as ``__main__`` it once had its own, empty
+    registry, found "everything cached", compiled nothing, and every later run stayed uncompiled."""
+    import subprocess
+    import sys
+
+    from mcdm_pin import jit
+
+    expected = len(jit._all_calls())
+    out = subprocess.run([sys.executable, "-m", "mcdm_pin.jit", "--list"], capture_output=True, text=True,
+                         timeout=120, check=True).stdout
+    assert expected >= 4 and out.startswith(f"{expected} kernel specialisations registered"), out
