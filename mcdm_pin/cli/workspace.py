@@ -19,7 +19,7 @@ def add(sub):
     p.add_argument("--weights", help="alpha (and beta) per joint: JOINT=ALPHA[:BETA],...")
     p.add_argument("--frame", choices=("socket", "child"), default="socket",
                    help="frame of the cone's force (default socket)")
-    p.add_argument("--solver", default="proxqp", help="proxqp (default) or clarabel")
+    p.add_argument("--solver", default="default", help="default (the full chain), compiled, proxqp or clarabel")
     poses = p.add_mutually_exclusive_group(required=True)
     poses.add_argument("--grid", action="append", metavar="COORD=LO:HI:N",
                        help="a grid axis (repeatable; the last varies fastest); coordinates as "

@@ -40,7 +40,7 @@ class Setup:
         cones: ``{joint: degrees}`` (case 3; default: the sidecar's ``cone_deg``).
         alpha, beta: ``{joint: weight}`` overriding the sidecar's (cases 2 and 3).
         frame: the cones' frame, ``socket`` or ``child``.
-        solver: back-end name (``proxqp``, ``clarabel``).
+        solver: back-end name (``default``, ``compiled``, ``proxqp``, ``clarabel``).
         qd, qdd: constant coordinate rates (nv numbers each) at every pose; ``None``: zero (static).
         margins: compute ``needed_f_max`` and (case 3) ``needed_cone_deg`` at every pose.
     """
@@ -50,7 +50,7 @@ class Setup:
     alpha: dict | None = None
     beta: dict | None = None
     frame: str = "socket"
-    solver: str = "proxqp"
+    solver: str = "default"
     qd: list | None = None
     qdd: list | None = None
     margins: bool = True
