@@ -598,7 +598,9 @@ def run(args) -> dict:
                         and not r["backend"].startswith("mcdm-pin")]
             if ok_peers:
                 min(ok_peers, key=lambda r: r["ratio"])["best_peer"] = True
-            rows += case_rows + (opensim_so.bench_rows(robot, traj, case, case_rows[0], stats_ms) * with_opensim)
+            rows += case_rows
+            if with_opensim:
+                rows += opensim_so.bench_rows(robot, traj, case, case_rows[0], stats_ms)
     return dict(robot=label, trajectory=traj.name, instants=len(traj), repeat=args.repeat, cold=bool(args.cold),
                 peer_repeat=args.peer_repeat or args.repeat, machine=machine(), check_tolerances=CHECK,
                 notes=notes, check_failures=failures, rows=rows, checks={str(k): v for k, v in checks.items()})
