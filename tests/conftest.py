@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
+
+# the tests run on the compiled kernels (a clean clone compiles them once, about a minute, before the
+# first solve; the uncompiled path of a first run has its own tests: tests/test_uncompiled.py)
+os.environ.setdefault("MCDM_PIN_JIT", "wait")
 
 REPO = Path(__file__).resolve().parents[1]
 TWO_LINK = REPO / "robots" / "two_link_sr.yaml"
