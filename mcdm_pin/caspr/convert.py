@@ -207,7 +207,7 @@ def _trajectories(result: CasprImport, tfile, data: dict, tmp: Path, name: str, 
             data["trajectories"] = dict(specs, **{tid: spec})
             load_trajectory(_load(data, tmp, urdf_name), tid)
         except (SamplingError, McdmError) as exc:
-            result.refused[tid] = f"{tr.element}: {exc}"
+            result.refused[tid] = f"{tr.element}: {str(exc).replace(str(tmp) + os.sep, '')}"
             if csv_path is not None:
                 csv_path.unlink()
             continue

@@ -90,13 +90,26 @@ def euler_S(convention: str, angles, rates=None):
 
 
 # ------------------------------------------------------------------------------------ splines
-def _poly(c, tau, order):
-    """Value (order 0), rate (1) or acceleration (2) of polynomials ``c`` (deg+1, n) at ``tau`` (N,)."""
-    deg = c.shape[0] - 1
-    out = np.zeros((len(tau), c.shape[1]))
-    for k in range(order, deg + 1):
-        f = np.prod(np.arange(k - order + 1, k + 1)) if order else 1.0
-        out += f * np.outer(tau ** (k - order), c[k])
+# end-state (Hermite) bases on s in [0, 1], as polynomial coefficients in powers of s: the spline is
+# sum_i c_i h_i(s) with c = (x0, T v0, T^2 a0, x1, T v1, T^2 a1) (quintic), (x0, T v0, x1, T v1) (cubic);
+# they are exactly 0 or 1 at the ends, so every segment meets its end states to the last bit (a
+# set-point segment of one time step holds still at both samples)
+_HERMITE = {
+    "quintic": np.array([[1, 0, 0, -10, 15, -6], [0, 1, 0, -6, 8, -3], [0, 0, 0.5, -1.5, 1.5, -0.5],
+                         [0, 0, 0, 10, -15, 6], [0, 0, 0, -4, 7, -3], [0, 0, 0, 0.5, -1, 0.5]]),
+    "cubic": np.array([[1, 0, -3, 2], [0, 1, -2, 1], [0, 0, 3, -2], [0, 0, -1, 1]]),
+    "linear": np.array([[1, -1], [0, 1]]),
+}
+
+
+def _basis(kind: str, s: np.ndarray, order: int) -> np.ndarray:
+    """(N, k) the bases' ``order``-th derivative with respect to s."""
+    H = _HERMITE[kind]
+    deg = H.shape[1] - 1
+    out = np.zeros((len(s), H.shape[0]))
+    for p in range(order, deg + 1):
+        f = float(np.prod(np.arange(p - order + 1, p + 1)))
+        out += f * np.outer(s ** (p - order), H[:, p])
     return out
 
 
@@ -104,22 +117,15 @@ def spline(kind: str, t, t_s, t_e, x0, v0, a0, x1, v1, a1, blend=None):
     """``(x, x_dot, x_ddot)`` (N, n) of CASPR's spline ``kind`` between the end states (n,), at the
     absolute times ``t`` of the segment's grid, which runs from ``t_s`` to ``t_e``."""
     x0, v0, a0, x1, v1, a1 = (np.atleast_1d(np.asarray(z, dtype=float)) for z in (x0, v0, a0, x1, v1, a1))
-    T, tau = t_e - t_s, np.asarray(t, dtype=float) - t_s
+    t = np.asarray(t, dtype=float)
     if kind == "parabolic":
-        return _parabolic(np.asarray(t, dtype=float), t_s, t_e, x0, x1, blend)
-    if kind == "linear":
-        rows = [[1, 0], [1, T]]
-        rhs = [x0, x1]
-    elif kind == "cubic":
-        rows = [[1, 0, 0, 0], [0, 1, 0, 0], [1, T, T**2, T**3], [0, 1, 2 * T, 3 * T**2]]
-        rhs = [x0, v0, x1, v1]
-    else:
-        rows = [[1, 0, 0, 0, 0, 0], [0, 1, 0, 0, 0, 0], [0, 0, 2, 0, 0, 0],
-                [1, T, T**2, T**3, T**4, T**5], [0, 1, 2 * T, 3 * T**2, 4 * T**3, 5 * T**4],
-                [0, 0, 2, 6 * T, 12 * T**2, 20 * T**3]]
-        rhs = [x0, v0, a0, x1, v1, a1]
-    c = np.linalg.solve(np.array(rows, dtype=float), np.array(rhs))
-    return _poly(c, tau, 0), _poly(c, tau, 1), _poly(c, tau, 2)
+        return _parabolic(t, t_s, t_e, x0, x1, blend)
+    T = t_e - t_s
+    s = (t - t_s) / T
+    c = {"quintic": [x0, T * v0, T**2 * a0, x1, T * v1, T**2 * a1], "cubic": [x0, T * v0, x1, T * v1],
+         "linear": [x0, x1]}[kind]
+    c = np.array(c)
+    return _basis(kind, s, 0) @ c, _basis(kind, s, 1) @ c / T, _basis(kind, s, 2) @ c / T**2
 
 
 def _parabolic(t, t_s, t_e, x_s, x_e, tb):

@@ -119,7 +119,8 @@ def read_trajectories(path, bodies, only=None) -> TrajectoryFile:
             if not el.get("id"):
                 raise _Refused(f"{where}: missing id attribute")
             if tid in kept or tid in refused:
-                raise _Refused(f"{where}: duplicate id (ids must be unique)")
+                tid = f"{tid} (element {k})"
+                raise _Refused(f"{where}: duplicate id (ids must be unique; element {k} of joint_trajectories)")
             kept[tid] = _read_one(path, el, tid, where, bodies)
         except _Refused as exc:
             refused.setdefault(tid, str(exc))
@@ -247,9 +248,9 @@ def _read_file(path, el, tid, where, bodies) -> CasprTrajectory:
     try:
         lines = file.read_text(encoding="utf-8").splitlines()
     except FileNotFoundError:
-        _fail(f"{where}@filename", f"the file {name!r} is not next to {path.name} ({file} not found)")
+        _fail(f"{where}@filename", f"the file {name!r} is not next to {path.name} (not found)")
     except (OSError, UnicodeDecodeError) as exc:
-        _fail(f"{where}@filename", f"cannot read {file} ({exc})")
+        _fail(f"{where}@filename", f"cannot read {name!r} ({type(exc).__name__})")
     fw = f"{name}"
     head = lines[0].split("time_step,") if lines else []
     if len(head) != 2:
