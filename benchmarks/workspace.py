@@ -78,7 +78,7 @@ def clarabel_direct(robot, setup, q, store):
     for k, pose in enumerate(q):
         qp = assembler.assemble(pose)
         t0 = time.perf_counter()
-        P, c, A, b, cones = conic_form(qp)
+        P, c, A, b, cones, _ = conic_form(qp)
         settings = clarabel.DefaultSettings()
         settings.verbose = False
         sol = clarabel.DefaultSolver(P, c, A, b, cones, settings).solve()

@@ -1,9 +1,12 @@
-"""State -> terms -> problem -> solver -> result, for one instant or a whole trajectory.
+"""State -> terms -> problem -> solver chain -> check -> result, for one instant or a whole trajectory.
 
-Every answer is checked before it is returned: the equation-of-motion residual, the cable bounds and
-the cones must hold to the stated tolerances, otherwise the instant is reported ``inaccurate`` (no
-point that silently breaks a constraint is returned as optimal). An infeasible instant is diagnosed:
-the message says whether the cable bounds alone, a single cone, or the cones together cannot be met.
+Every answer is checked before it is returned: the solver chain's last stage checks the KKT conditions
+(:mod:`mcdm_pin.solvers.check`), and here the equation-of-motion residual, the bounds and the cones
+must hold on the *original* problem to the tolerances of :mod:`mcdm_pin.tolerances`, otherwise the
+instant is reported ``inaccurate`` (no point that silently breaks a constraint is returned as optimal).
+An infeasible instant is diagnosed (:func:`diagnose_infeasible`): the message says whether the cable
+bounds or the cones cannot be met, and the f_max or cone angle that would do
+(:mod:`mcdm_pin.solvers.margins`).
 """
 
 from __future__ import annotations
@@ -14,6 +17,8 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from . import jit
+from . import tolerances as tol
 from .exceptions import ProblemError, StateError
 from .objectives import Smoothing, Sum
 from .problem import Context, Problem, QPData, case_problem
@@ -23,9 +28,9 @@ from .solvers import INACCURATE, INFEASIBLE, OPTIMAL, SOFTENED, Solution, get_so
 from .solvers.base import cone_violation_deg
 from .model.terms import TermsEvaluator, interaction_angles
 
-EOM_TOL = 1e-8  # relative equation-of-motion residual
-BOUND_TOL = 1e-9  # N
-CONE_TOL_DEG = 1e-6  # degrees
+EOM_TOL = tol.EOM_REL
+BOUND_TOL = tol.BOUND_ABS
+CONE_TOL_DEG = tol.CONE_DEG
 
 
 class InverseDynamics:
@@ -34,12 +39,16 @@ class InverseDynamics:
     Args:
         robot: the :class:`~mcdm_pin.robot.Robot`.
         problem: a :class:`~mcdm_pin.problem.Problem` (or use :meth:`for_case`).
-        solver: a back-end name (``proxqp``, ``clarabel``) or a :class:`~mcdm_pin.solvers.Solver`.
-        soften: for instants where the cones cannot be met, return the forces that make the largest
-            cone violation smallest (status ``softened``) instead of ``infeasible``.
+        solver: a back-end name (``default``, ``compiled``, ``proxqp``, ``clarabel``; see
+            :mod:`mcdm_pin.solvers.cascade`) or a :class:`~mcdm_pin.solvers.Solver`.
+        soften: for instants where the cones cannot be met, return the forces with every cone at
+            least at the smallest common half-angle that makes the instant feasible (status
+            ``softened``) instead of ``infeasible``.
         diagnose: for infeasible instants, find what conflicts and the f_max or cone angle that
-            would make them feasible (:func:`diagnose_infeasible`; a few LPs and, for cones, a
-            bisection of ~20 solves). Off: the message only says that the instant is infeasible.
+            would make them feasible (:func:`diagnose_infeasible`: an LP and a few cone programs).
+            Off: the message only says that the instant is infeasible.
+        budget_s: per-instant time budget of the solver chain, seconds (``None``: none): a solve
+            that has not answered by then is reported with status ``budget``.
         blas_threads: threads the BLAS library may use while solving (default 1; ``None``: leave
             it alone). The matrices of one instant are small, and waking BLAS worker threads cost
             milliseconds on a loaded machine: with them the model of a 16-link chain's case 3 took
@@ -48,28 +57,34 @@ class InverseDynamics:
             lifted afterwards.
     """
 
-    def __init__(self, robot, problem: Problem, solver="proxqp", soften: bool = False,
-                 diagnose: bool = True, blas_threads: int | None = 1):
+    def __init__(self, robot, problem: Problem, solver="default", soften: bool = False,
+                 diagnose: bool = True, blas_threads: int | None = 1, budget_s: float | None = tol.BUDGET_S):
         self.robot = robot
         self.blas_threads = blas_threads
         self._limited = False
         self.diagnose = diagnose
         self.problem = problem
-        # badly scaled robots (grams next to tonnes, mm next to m) are solved on an equilibrated
-        # copy; well-scaled ones pass straight through (mcdm_pin/scaling.py)
-        self.solver = ScaledSolver(get_solver(solver))
+        # every back-end solves a copy scaled to magnitudes of order one (mcdm_pin/scaling.py);
+        # well-scaled problems pass straight through
+        self.solver = ScaledSolver(get_solver(solver, budget_s=budget_s) if isinstance(solver, str) else solver)
         self.soften = soften
-        self.evaluate = TermsEvaluator(robot)
-        from .model.kernels import warm_up
-
-        warm_up()  # compiled kernels ready before the first (timed) instant
+        # the compiled kernels, loaded from numba's cache or compiled in the background: this run
+        # uses the uncompiled path meanwhile (mcdm_pin/jit.py)
+        compiled = jit.prepare()
+        self.evaluate = TermsEvaluator(robot, compiled=compiled)
 
     @classmethod
-    def for_case(cls, robot, case: int, solver="proxqp", soften: bool = False, diagnose: bool = True,
-                 blas_threads: int | None = 1, **options):
+    def for_case(cls, robot, case: int, solver="default", soften: bool = False, diagnose: bool = True,
+                 blas_threads: int | None = 1, budget_s: float | None = tol.BUDGET_S, **options):
         """The paper's case 1, 2 or 3 (options as :func:`~mcdm_pin.problem.case_problem`)."""
         return cls(robot, case_problem(robot, case, **options), solver=solver, soften=soften,
-                   diagnose=diagnose, blas_threads=blas_threads)
+                   diagnose=diagnose, blas_threads=blas_threads, budget_s=budget_s)
+
+    def reset(self) -> None:
+        """Forget every warm start (the next instant is solved cold, as if it were the first)."""
+        self.solver.reset()
+        if not self.evaluate.compiled and jit.ready():
+            self.evaluate = TermsEvaluator(self.robot, compiled=True)
 
     @contextmanager
     def _blas_limit(self):
@@ -113,27 +128,30 @@ class InverseDynamics:
         softened = 0.0
         needed_f_max = needed_cone = float("nan")
         if sol.status == INFEASIBLE and self.diagnose:
-            message, needed_f_max, needed_cone = diagnose_infeasible(qp, self.solver,
-                                                                     self.robot.cable_names)
+            message, needed_f_max, needed_cone = diagnose_infeasible(qp, _variable_names(self.robot))
             if message.startswith("bounds"):
                 from .conditioning import wrench_closure
                 closure = wrench_closure(self.robot, terms.q, terms.L)
                 if not closure.closed:
                     message = f"{message}; {closure.message}"
-            if self.soften and qp.cones and not message.startswith("bounds"):
-                sol, softened = soften_cones(qp, self.solver)
+            elif message.startswith("solver"):
+                sol = sol.but(status=INACCURATE)
+            if self.soften and qp.cones and message.startswith("cone"):
+                sol, softened = soften_cones(qp, self.solver, needed_cone)
                 if sol.status == SOFTENED:
                     message = f"cones widened by {softened:.6g} deg: {message}"
         t2 = time.perf_counter()
         eom = float("nan")
+        m = self.robot.m
+        act = self.problem.actuation
         if sol.found:
-            sol, eom = _check(qp, terms, sol)
+            sol, eom = _check(qp, terms, sol, m, act)
             message = sol.message or message
-        f = sol.f
+        f, tau_act = sol.x[:m], sol.x[m:]
         if sol.found:
             wrench = terms.wrenches(f)
             objective = (sol.objective if not self.problem.has_smoothing and np.isfinite(sol.objective)
-                         else self.problem.value(terms, f, context, qp))
+                         else self.problem.value(terms, sol.x, context, qp))
         else:
             wrench = np.full((len(self.robot.joints), 6), np.nan)
             objective = float("nan")
@@ -144,7 +162,8 @@ class InverseDynamics:
             interaction_wrench=wrench, interaction_force_socket=F_socket,
             interaction_angle_deg=angles, iterations=sol.iterations, rounds=sol.rounds,
             time_model_s=t1 - t0, time_solve_s=t2 - t1, message=message, softened_deg=softened,
-            needed_f_max=needed_f_max, needed_cone_deg=needed_cone)
+            needed_f_max=needed_f_max, needed_cone_deg=needed_cone, unique=bool(sol.unique and sol.found),
+            stage=sol.stage, tau_act=tau_act)
 
     def solve_trajectory(self, traj, progress: bool | None = None, workers: int = 1) -> TrajectoryResult:
         """Solve every instant of ``traj`` in order, warm-starting each from the previous one.
@@ -153,10 +172,10 @@ class InverseDynamics:
             progress: show a progress bar (after 1.5 s) on a terminal; ``None``: when stderr is a tty.
             workers: processes to use (batch mode). The trajectory is cut into ``workers``
                 contiguous pieces solved in parallel, each warm-started along itself (a piece starts
-                solving three instants before its first own one, to warm up). Every instant's answer is the verified optimum of the
-                same problem, so the results equal the sequential run's to solver tolerance (for
-                problems whose optimum is unique: the forces too). Not with smoothing, whose
-                every instant depends on the previous one.
+                solving three instants before its first own one, to warm up). Every instant's answer
+                is the verified optimum of the same problem, and the least-norm one where the optimum
+                is not unique, so the results equal the sequential run's to solver tolerance. Not with
+                smoothing, whose every instant depends on the previous one.
         """
         if workers is None or workers < 1:
             raise ProblemError(f"workers must be a positive integer, got {workers!r}")
@@ -172,14 +191,15 @@ class InverseDynamics:
             columns = instant_columns(self._solve_range(traj, range(len(traj)), progress))
         return TrajectoryResult.from_columns(
             self.robot, traj, columns, self.cone_deg, robot=self.robot.name,
-            problem=self.problem.describe(), solver=self.solver.name, trajectory=traj.name)
+            problem=self.problem.describe(), solver=self.solver.name, trajectory=traj.name,
+            problem_json=self.problem.to_json())
 
     def _solve_range(self, traj, indices, progress=False) -> list[InstantResult]:
         with self._blas_limit():
             return self._solve_range_limited(traj, indices, progress)
 
     def _solve_range_limited(self, traj, indices, progress=False) -> list[InstantResult]:
-        self.solver.reset()
+        self.reset()
         instants: list[InstantResult] = []
         f_prev = None
         bar = None
@@ -265,41 +285,46 @@ def _terms_of(objective):
     return objective.terms if isinstance(objective, Sum) else [objective]
 
 
-def _check(qp: QPData, terms, sol: Solution) -> tuple[Solution, float]:
+def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None) -> tuple[Solution, float]:
     """Downgrade a solution that breaks a constraint beyond tolerance to ``inaccurate``. Returns the
-    solution and its relative equation-of-motion residual."""
-    f = sol.f
+    solution and its relative equation-of-motion residual (``m`` cables; ``actuation``: the problem's
+    actuated joints, whose torques follow the cable forces in ``sol.x``)."""
+    f = sol.x
     problems = []
-    eom = terms.eom_residual(f)
-    if not eom <= EOM_TOL:
-        problems.append(f"equation-of-motion residual {eom:.2e} > {EOM_TOL:g}")
+    eom = terms.eom_residual(f[:m], None if actuation is None else -actuation.S @ f[m:])
+    if not eom <= tol.EOM_REL:
+        problems.append(f"equation-of-motion residual {eom:.2e} > {tol.EOM_REL:g}")
     broken = max(float((qp.lb - f).max(initial=0.0)), float((f - qp.ub).max(initial=0.0)))
-    if not broken <= BOUND_TOL:
-        problems.append(f"cable bounds broken by {broken:.2e} N")
+    if not broken <= tol.BOUND_ABS:
+        problems.append(f"cable (or actuator) bounds broken by {broken:.2e}")
     if qp.cones and sol.status == OPTIMAL:
         viol = cone_violation_deg(qp, f)
-        if not viol.max() <= CONE_TOL_DEG:
+        if not viol.max() <= tol.CONE_DEG:
             k = int(np.argmax(viol))
             problems.append(f"cone of {qp.cones[k].joint!r} broken by {viol[k]:.2e} deg")
     if not problems:
         return sol, eom
-    return Solution(sol.f, INACCURATE, sol.objective, sol.iterations, sol.rounds, "; ".join(problems)), eom
+    return sol.but(status=INACCURATE, message="; ".join(problems)), eom
 
 
-def diagnose_infeasible(qp: QPData, solver, cable_names=None):
+def diagnose_infeasible(qp: QPData, cable_names=None):
     """What cannot be met at an infeasible instant, and what would make it feasible.
 
     Returns ``(message, needed_f_max, needed_cone_deg)``:
 
-    - bounds alone (equation of motion within ``[f_min, f_max]``, an LP decided by HiGHS): the
-      message names the cables whose bounds must give (an elastic LP: the least total violation) and
-      ``needed_f_max`` is the smallest common upper bound that would do (``inf``: none would, the
-      cables would have to push);
-    - one cone alone: named, with ``needed_cone_deg`` its smallest feasible half-angle (bisection
-      to 1e-4 deg);
-    - only the cones together: ``needed_cone_deg`` is the largest cone after the smallest common
-      widening that makes the instant feasible.
+    - bounds alone (equation of motion within the bounds, an LP decided by HiGHS): the message names
+      the cables whose bounds must give (an elastic LP: the least total violation) and
+      ``needed_f_max`` is the smallest common upper bound that would do
+      (:func:`~mcdm_pin.solvers.margins.needed_f_max`; ``inf``: none would, the cables would have to
+      push);
+    - the cones: ``needed_cone_deg`` is the smallest common half-angle of all cones that makes the
+      instant feasible (:func:`~mcdm_pin.solvers.margins.needed_cone_deg`, a few cone programs), and
+      the message names the cones that bind there;
+    - neither (the bounds' LP is feasible and there is no cone): the solver's infeasibility was
+      false; the message starts with ``solver`` and the caller reports the instant ``inaccurate``.
     """
+    from .solvers.margins import needed_cone_deg, needed_f_max
+
     names = list(cable_names) if cable_names is not None else [f"cable {i}" for i in range(qp.n)]
     nan = float("nan")
     if _feasible_lp(qp) is None:
@@ -309,30 +334,45 @@ def diagnose_infeasible(qp: QPData, solver, cable_names=None):
             parts.append("above f_max: " + ", ".join(names[i] for i in above))
         if below:
             parts.append("below f_min: " + ", ".join(names[i] for i in below))
-        need = _smallest_common_fmax(qp)
+        need = needed_f_max(qp.without_cones())
         tail = (f"; a common f_max of {need:.6g} N would suffice" if np.isfinite(need) else
                 "; no f_max suffices (some cable would have to push)")
         where = f" (the least change needs forces {'; '.join(parts)})" if parts else ""
         return ("bounds: the equation of motion cannot be met with cable forces within "
                 f"[f_min, f_max]{where}{tail}", need, nan)
-    alone = []
-    for cone in qp.cones:
-        if solver.fresh().solve(qp.with_cones([cone])).status == INFEASIBLE:
-            alone.append(cone)
-    if alone:
-        worst = None
-        texts = []
-        for cone in alone:
-            need = _smallest_angle(qp.with_cones([cone]), solver)
-            texts.append(f"{cone.joint} ({cone.angle_deg:g} deg; feasible from {need:.4f} deg)")
-            worst = need if worst is None else max(worst, need)
-        return (f"cone: the stability cone of {', '.join(texts)} cannot be met within the cable "
-                f"bounds", nan, float(worst))
-    delta = _smallest_angle(qp, solver) - max(c.angle_deg for c in qp.cones)
+    if not qp.cones:
+        return ("solver: reported infeasible, but the equation of motion can be met within the bounds "
+                "(a numerical failure of the solver)", nan, nan)
+    need = needed_cone_deg(qp)
+    if len(qp.cones) == 1:
+        cone = qp.cones[0]
+        where = (f"feasible from {need:.4f} deg" if need < 90.0 else
+                 "only a half-space would do: the force must lie in the socket's plane" if need == 90.0 else
+                 "no cone will do: the force must point out of the socket")
+        return (f"cone: the stability cone of {cone.joint} ({cone.angle_deg:g} deg; {where}) cannot be met "
+                f"within the cable bounds", nan, float(need))
     names_c = ", ".join(f"{c.joint} ({c.angle_deg:g} deg)" for c in qp.cones)
-    return (f"cones: the stability cones of {names_c} cannot be met together within the cable "
-            f"bounds; widening all by {delta:.4f} deg would do", nan,
-            float(max(c.angle_deg for c in qp.cones) + delta))
+    if not need < 90.0:
+        return (f"cones: the stability cones of {names_c} cannot be met together within the cable bounds; "
+                f"{'only half-spaces would do' if need == 90.0 else 'no common cone will do: a force must point out of its socket'}",
+                nan, float(need))
+    binding = _binding_cones(qp, need)
+    return (f"cones: the stability cones of {names_c} cannot be met together within the cable bounds; "
+            f"a common half-angle of {need:.4f} deg would do (binding there: {', '.join(binding)})",
+            nan, float(need))
+
+
+def _binding_cones(qp: QPData, angle_deg: float) -> list[str]:
+    """The cones at their limit when every cone is at ``angle_deg`` (solved by Clarabel)."""
+    if not np.isfinite(angle_deg) or angle_deg >= 90.0:
+        return [c.joint for c in qp.cones]
+    from .solvers.clarabel_ import clarabel_solve
+
+    wide = qp.with_cones([c.with_angle(max(c.angle_deg, angle_deg) + 1e-6) for c in qp.cones])
+    sol = clarabel_solve(wide)
+    if sol.status != OPTIMAL:
+        return [c.joint for c in qp.cones]
+    return [c.joint for c in wide.cones if c.angle_of(sol.x) >= angle_deg - 1e-3]
 
 
 def _feasible_lp(qp: QPData):
@@ -343,7 +383,7 @@ def _feasible_lp(qp: QPData):
     return res.x if res.status == 0 else None
 
 
-def _elastic_bounds(qp: QPData, tol: float = 1e-9):
+def _elastic_bounds(qp: QPData, rel: float = 1e-9):
     """Cables whose bounds must give, by the least total violation (relative to each bound)."""
     from scipy.optimize import linprog
 
@@ -360,66 +400,35 @@ def _elastic_bounds(qp: QPData, tol: float = 1e-9):
     if res.status != 0:
         return [], []
     s_lo, s_hi = res.x[n:2 * n], res.x[2 * n:]
-    return (np.flatnonzero(s_lo > tol * (1.0 + np.abs(qp.lb))).tolist(),
-            np.flatnonzero(s_hi > tol * (1.0 + np.abs(qp.ub))).tolist())
+    return (np.flatnonzero(s_lo > rel * (1.0 + np.abs(qp.lb))).tolist(),
+            np.flatnonzero(s_hi > rel * (1.0 + np.abs(qp.ub))).tolist())
 
 
-def _smallest_common_fmax(qp: QPData) -> float:
-    """min t such that A f = b, f_min <= f <= t (inf when even an unbounded f_max fails)."""
-    from scipy.optimize import linprog
+def soften_cones(qp: QPData, solver, needed: float | None = None) -> tuple[Solution, float]:
+    """Every cone at least at the smallest common half-angle that makes the instant feasible
+    (``needed``: that angle when known), solved there. Returns the solution (status ``softened``)
+    and the largest widening, degrees."""
+    from .solvers.margins import needed_cone_deg
 
-    n = qp.n
-    c = np.zeros(n + 1)
-    c[-1] = 1.0
-    A_ub = np.hstack([np.eye(n), -np.ones((n, 1))])
-    res = linprog(c, A_ub=A_ub, b_ub=np.zeros(n), A_eq=np.hstack([qp.A, np.zeros((len(qp.b), 1))]),
-                  b_eq=qp.b, bounds=[(lo, None) for lo in qp.lb] + [(float(qp.lb.max()), None)],
-                  method="highs")
-    return float(res.x[-1]) if res.status == 0 else float("inf")
-
-
-def _smallest_angle(qp: QPData, solver, tol_deg: float = 1e-4) -> float:
-    """The smallest half-angle, common widening of every cone of ``qp``, that is feasible
-    (returned as the largest widened cone's angle); inf when none below 90 deg is."""
-    from .constraints import ConeData
-
-    top = max(c.angle_deg for c in qp.cones)
-
-    def ok(delta):
-        cones = [ConeData(c.joint, c.G, c.g, c.axis, min(c.angle_deg + delta, 89.999999), c.basis)
-                 for c in qp.cones]
-        return solver.fresh().solve(qp.with_cones(cones)).status == OPTIMAL
-
-    lo, hi = 0.0, 90.0 - min(c.angle_deg for c in qp.cones)
-    if not ok(hi):
-        return float("inf")
-    while hi - lo > tol_deg:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (lo, mid) if ok(mid) else (mid, hi)
-    return top + hi
-
-
-def soften_cones(qp: QPData, solver, tol_deg: float = 1e-4) -> tuple[Solution, float]:
-    """Widen every cone by the smallest common angle that makes the instant feasible (bisection to
-    ``tol_deg``) and solve there. Returns the solution (status ``softened``) and the widening."""
-    from .constraints import ConeData
-
-    def widened(delta):
-        return qp.with_cones([ConeData(c.joint, c.G, c.g, c.axis, min(c.angle_deg + delta, 89.999999),
-                                       c.basis) for c in qp.cones])
-
-    lo, hi = 0.0, 90.0 - min(c.angle_deg for c in qp.cones)
-    if solver.fresh().solve(widened(hi)).status != OPTIMAL:
-        sol = solver.fresh().solve(qp)
-        return Solution(sol.f, INFEASIBLE, sol.objective, sol.iterations, sol.rounds,
-                        "no force presses the balls into their sockets at all"), 0.0
-    while hi - lo > tol_deg:
-        mid = 0.5 * (lo + hi)
-        if solver.fresh().solve(widened(mid)).status == OPTIMAL:
-            hi = mid
-        else:
-            lo = mid
-    sol = solver.fresh().solve(widened(hi))
+    need = needed_cone_deg(qp) if needed is None or not np.isfinite(needed) else needed
+    if not np.isfinite(need) or need >= 90.0:
+        return Solution(np.full(qp.n, np.nan), INFEASIBLE, float("nan"),
+                        message="no force presses the balls into their sockets at all"), 0.0
+    # a hair above the limit: at exactly the limit the feasible set is a single point
+    angle = min(need + 1e-7, 89.999999)
+    cones = [c.with_angle(max(c.angle_deg, angle)) for c in qp.cones]
+    sol = solver.fresh().solve(qp.with_cones(cones))
+    widening = max(c.angle_deg - c0.angle_deg for c, c0 in zip(cones, qp.cones))
     if sol.status != OPTIMAL:
-        return sol, hi
-    return Solution(sol.f, SOFTENED, sol.objective, sol.iterations, sol.rounds), hi
+        return sol, widening
+    return sol.but(status=SOFTENED), widening
+
+
+def _variable_names(robot) -> list[str]:
+    """The unknowns' names: the cables, then the actuator components (hybrid robots)."""
+    return list(robot.cable_names) + actuator_names(robot)
+
+
+def actuator_names(robot) -> list[str]:
+    """One name per actuator component (``JOINT`` or ``JOINT[i]``), in the order of ``tau_act``."""
+    return [n for a in getattr(robot, "actuators", ()) for n in a.names]

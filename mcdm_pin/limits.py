@@ -23,6 +23,8 @@ MAX_CABLES = 100_000
 MAX_ROUTE_POINTS = 10_000
 #: samples of one trajectory (1e6 instants at 0.3 ms each is five minutes of solving)
 MAX_SAMPLES = 1_000_000
+#: poses of one workspace (its store holds every pose's forces)
+MAX_WORKSPACE_POSES = 100_000_000
 #: bytes of a trajectory CSV file
 MAX_CSV_BYTES = 512 * 2**20
 #: bytes of a CASPR XML file

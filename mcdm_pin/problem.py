@@ -2,21 +2,32 @@ r"""Objectives + constraints -> one quadratic problem with cones, at one instant
 
 .. math::
 
-    \min_f\; f^T P f + c^T f + r \quad \text{s.t.}\quad A f = b,\;\; f_{min} \le f \le f_{max},\;\;
-    \|F_{k,\perp}\| \le \tan\rho^*_k\, F_{k,z}\;\; (F_k = g_k + G_k f).
+    \min_x\; \tfrac12\, x^T P x + c^T x + r \quad \text{s.t.}\quad A x = b,\;\; l \le x \le u,\;\;
+    \|F_{k,\perp}\| \le \tan\rho^*_k\, F_{k,z}\;\; (F_k = g_k + G_k x).
 
-:func:`case_problem` builds the source paper's three cases.
+The variables ``x`` are the cable forces, then, for a hybrid robot (actuated joints, HCDM), the
+actuator torques/forces: ``x = [f; tau_act]``, with the equation of motion
+``L^T f - S tau_act = -(M qdd + h)`` (:mod:`mcdm_pin.model.actuators`), the actuators' bounds, and
+``w_a |tau_a|^2`` (the sidecar's ``actuated: weight``) added to every case's objective: CASPR's
+convention, where the joint actuators join the cables as weighted unknowns of the same program. An
+actuator's torque acts inside its joint, so the interaction wrenches and the cones depend on ``f``
+only. Nothing here or in the solvers assumes ``l >= 0`` or that every variable is a cable.
+
+:func:`case_problem` builds the source paper's three cases. A :class:`Problem` is data:
+:meth:`Problem.spec` gives a JSON-able description and :meth:`Problem.from_spec` rebuilds it.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import json
+from dataclasses import dataclass
 
 import numpy as np
 
-from .constraints import CableForceBounds, ConeData, Constraint, EquationOfMotion, InteractionCone
+from .constraints import (CableForceBounds, ConeData, Constraint, EquationOfMotion, InteractionCone,
+                          constraint_from_spec)
 from .exceptions import ProblemError
-from .objectives import MinCableForces, MinInteractions, Objective, Smoothing, Sum
+from .objectives import MinCableForces, MinInteractions, Objective, Smoothing, Sum, objective_from_spec
 
 
 @dataclass
@@ -28,64 +39,122 @@ class Context:
     f_prev: np.ndarray | None = None
 
 
-@dataclass
 class QPData:
-    """One instant's problem, ready for a back-end (see the module docstring)."""
+    """One instant's problem, ready for a back-end (see the module docstring).
 
-    P: np.ndarray
-    c: np.ndarray
-    r: float
-    A: np.ndarray
-    b: np.ndarray
-    lb: np.ndarray
-    ub: np.ndarray
-    cones: list[ConeData] = field(default_factory=list)
-    _cone_arrays: tuple | None = field(default=None, repr=False, compare=False)
-    _H: np.ndarray | None = field(default=None, repr=False, compare=False)
+    Args:
+        P: (n, n) symmetric positive semidefinite Hessian, or ``None`` when ``P_diag`` and
+            ``P_factor`` give it (then formed on first use).
+        c: (n,), r: the linear and constant terms.
+        A: (k, n), b: (k,): equalities.
+        lb, ub: (n,) bounds (may be infinite, may be negative).
+        cones: :class:`~mcdm_pin.constraints.ConeData` list.
+        P_diag, P_factor: optional structure ``P = diag(P_diag) + P_factor^T P_factor`` (the compiled
+            solver factors this far faster than a dense ``P``).
+        norm_weight: (n,) weights of the least-norm stage, which picks among equally optimal points
+            the one of least ``sum_i norm_weight_i x_i^2`` (``None``: ones, i.e. ``|x|^2``). A scaled
+            copy carries the weights that keep that norm the original variables' ``|f|^2``.
+    """
+
+    __slots__ = ("_P", "c", "r", "A", "b", "lb", "ub", "cones", "P_diag", "P_factor", "norm_weight",
+                 "_cone_arrays")
+
+    def __init__(self, P, c, r, A, b, lb, ub, cones=(), *, P_diag=None, P_factor=None, norm_weight=None,
+                 cone_arrays=None):
+        self._P = P
+        self.c, self.r, self.A, self.b, self.lb, self.ub = c, float(r), A, b, lb, ub
+        self.cones = list(cones)
+        self.P_diag, self.P_factor = P_diag, P_factor
+        self.norm_weight = norm_weight
+        self._cone_arrays = cone_arrays
+        if P is None and (P_diag is None or P_factor is None):
+            raise ProblemError("QPData: give P or both P_diag and P_factor")
+
+    @property
+    def P(self) -> np.ndarray:
+        if self._P is None:
+            F = self.P_factor
+            self._P = F.T @ F
+            self._P[np.diag_indices_from(self._P)] += self.P_diag
+        return self._P
 
     @property
     def n(self) -> int:
         return len(self.c)
 
     @property
-    def H(self) -> np.ndarray:
-        """The objective's Hessian ``2 P``."""
-        if self._H is None:
-            self._H = 2.0 * self.P
-        return self._H
+    def structured(self) -> bool:
+        return self.P_diag is not None and self.P_factor is not None
 
     def cone_arrays(self) -> tuple:
         """The cones stacked for vectorised and compiled code: ``G`` (k, 3, n), ``g`` (k, 3),
         ``axis`` (k, 3), ``tan`` (k,), ``basis0`` (k, 3) (a unit vector normal to each axis)."""
-        if self._cone_arrays is None and not self.cones:
-            n = self.n
-            self._cone_arrays = (np.zeros((0, 3, n)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0),
-                                 np.zeros((0, 3)))
-        elif self._cone_arrays is None:
+        if self._cone_arrays is None:
             n, cs = self.n, self.cones
+            k = len(cs)
             self._cone_arrays = (
-                np.array([c.G for c in cs], dtype=float).reshape(len(cs), 3, n),
-                np.array([c.g for c in cs], dtype=float).reshape(len(cs), 3),
-                np.array([c.axis for c in cs], dtype=float).reshape(len(cs), 3),
-                np.array([c.tan for c in cs], dtype=float),
-                np.array([c.basis[0] for c in cs], dtype=float).reshape(len(cs), 3))
+                np.array([c.G for c in cs], dtype=float).reshape(k, 3, n),
+                np.array([c.g for c in cs], dtype=float).reshape(k, 3),
+                np.array([c.axis for c in cs], dtype=float).reshape(k, 3),
+                np.array([c.tan for c in cs], dtype=float).reshape(k),
+                np.array([c.basis[0] for c in cs], dtype=float).reshape(k, 3))
         return self._cone_arrays
 
-    def objective(self, f) -> float:
-        f = np.asarray(f, dtype=float)
-        return float(f @ self.P @ f + self.c @ f + self.r)
+    def cone_rows(self) -> tuple[np.ndarray, np.ndarray]:
+        r"""Per cone, ``T (3, n)`` and ``t (3,)`` with ``s = T x + t`` in the second-order cone
+        ``|s[1:]| <= s[0]``: ``s = [sin(rho) a.F, cos(rho) e1.F, cos(rho) e2.F]`` (rows of norm <= 1
+        for any half-angle, so a cone near 90 degrees is as well scaled as one near 0). Stacked:
+        (K, 3, n), (K, 3)."""
+        if not self.cones:
+            return np.zeros((0, 3, self.n)), np.zeros((0, 3))
+        W = np.empty((len(self.cones), 3, 3))
+        for k, c in enumerate(self.cones):
+            rho = np.radians(c.angle_deg)
+            W[k, 0] = np.sin(rho) * c.axis
+            W[k, 1:] = np.cos(rho) * c.basis
+        G, g = self.cone_arrays()[:2]
+        return W @ G, np.einsum("kab,kb->ka", W, g)
+
+    def objective(self, x) -> float:
+        """``1/2 x^T P x + c^T x + r``."""
+        x = np.asarray(x, dtype=float)
+        if self._P is None:
+            Fx = self.P_factor @ x
+            return float(0.5 * (Fx @ Fx + self.P_diag @ (x * x)) + self.c @ x + self.r)
+        return float(0.5 * x @ self._P @ x + self.c @ x + self.r)
+
+    def gradient(self, x) -> np.ndarray:
+        """``P x + c``."""
+        if self._P is None:
+            return self.P_factor.T @ (self.P_factor @ x) + self.P_diag * x + self.c
+        return self._P @ x + self.c
+
+    def replace(self, **changes) -> "QPData":
+        """A copy with some fields replaced (arrays are shared, not copied)."""
+        fields = dict(P=self._P, c=self.c, r=self.r, A=self.A, b=self.b, lb=self.lb, ub=self.ub,
+                      cones=self.cones, P_diag=self.P_diag, P_factor=self.P_factor,
+                      norm_weight=self.norm_weight)
+        if "cones" not in changes:
+            fields["cone_arrays"] = self._cone_arrays
+        if "P" in changes and "P_diag" not in changes:
+            fields["P_diag"] = fields["P_factor"] = None
+        fields.update(changes)
+        P = fields.pop("P")
+        return QPData(P, **fields)
 
     def without_cones(self) -> "QPData":
-        return QPData(self.P, self.c, self.r, self.A, self.b, self.lb, self.ub, [])
+        return self.replace(cones=[])
 
     def with_cones(self, cones) -> "QPData":
-        return QPData(self.P, self.c, self.r, self.A, self.b, self.lb, self.ub, list(cones))
+        return self.replace(cones=list(cones))
 
 
 class Problem:
-    """An inverse-dynamics problem: an objective and constraints.
+    """An inverse-dynamics problem: an objective and constraints, bound to a robot.
 
-    The equation of motion and the cable bounds are always included (added if missing).
+    The equation of motion and the cable bounds are always included (added if missing). The
+    objective and constraints given are not changed: the problem keeps bound copies
+    (:meth:`~mcdm_pin.objectives.Objective.bind`).
 
     Args:
         robot: the :class:`~mcdm_pin.robot.Robot`.
@@ -95,7 +164,6 @@ class Problem:
 
     def __init__(self, robot, objective: Objective, constraints=()):
         self.robot = robot
-        self.objective = objective
         constraints = list(constraints)
         if not any(isinstance(c, EquationOfMotion) for c in constraints):
             constraints.insert(0, EquationOfMotion())
@@ -104,30 +172,58 @@ class Problem:
         for c in constraints:
             if not isinstance(c, Constraint):
                 raise ProblemError(f"expected Constraint objects, got {c!r}")
-        self.constraints = constraints
-        objective.validate(robot)
-        for c in constraints:
-            c.validate(robot)
-        names = [c.joint for c in constraints if isinstance(c, InteractionCone)]
+        if not isinstance(objective, Objective):
+            raise ProblemError(f"expected an Objective, got {objective!r}")
+        self.objective = objective.bind(robot)
+        self.constraints = [c.bind(robot) for c in constraints]
+        names = [c.joint for c in self.constraints if isinstance(c, InteractionCone)]
         if len(set(names)) != len(names):
             raise ProblemError(f"more than one cone on a joint: {names}")
         # the user's objective without smoothing terms: what is reported as "objective"
-        terms = objective.terms if isinstance(objective, Sum) else [objective]
-        weights = objective.weights if isinstance(objective, Sum) else [1.0]
+        terms = self.objective.terms if isinstance(self.objective, Sum) else [self.objective]
+        weights = self.objective.weights if isinstance(self.objective, Sum) else [1.0]
         self._primary = Sum([t for t in terms if not isinstance(t, Smoothing)],
                             [w for t, w in zip(terms, weights) if not isinstance(t, Smoothing)])
         self.has_smoothing = any(isinstance(t, Smoothing) for t in terms)
-        self._plan = None
+        self._plan = self._make_plan()
+        self.actuation = _Actuation.of(robot)
+
+    @property
+    def n_variables(self) -> int:
+        """Unknowns per instant: the cables, then the actuator components (hybrid robots)."""
+        return self.robot.m + (0 if self.actuation is None else self.actuation.n)
 
     @property
     def cone_constraints(self) -> list[InteractionCone]:
         return [c for c in self.constraints if isinstance(c, InteractionCone)]
 
+    # ------------------------------------------------------------------------------- as data
+    def spec(self) -> dict:
+        """A JSON-able description: ``{"objective": {...}, "constraints": [{...}, ...]}``."""
+        return {"version": 1, "objective": self.objective.spec(),
+                "constraints": [c.spec() for c in self.constraints]}
+
+    def to_json(self) -> str:
+        return json.dumps(self.spec(), sort_keys=True)
+
+    @classmethod
+    def from_spec(cls, robot, spec) -> "Problem":
+        """The problem described by ``spec`` (a dict from :meth:`spec`, or its JSON text)."""
+        if isinstance(spec, str):
+            try:
+                spec = json.loads(spec)
+            except json.JSONDecodeError as exc:
+                raise ProblemError(f"problem spec: not valid JSON ({exc})") from None
+        if not isinstance(spec, dict) or "objective" not in spec:
+            raise ProblemError(f"problem spec: expected a mapping with 'objective' and 'constraints', "
+                               f"got {spec!r}")
+        return cls(robot, objective_from_spec(spec["objective"]),
+                   [constraint_from_spec(c) for c in spec.get("constraints", [])])
+
+    # ------------------------------------------------------------------------------ assembly
     def assemble(self, terms, context: Context) -> QPData:
         quad = self.objective.quadratic(terms, context)
         m = terms.L.shape[0]
-        if self._plan is None:
-            self._plan = self._make_plan(context.robot)
         plan = self._plan
         A_rows, b_rows, cones = [], [], []
         lb = ub = None
@@ -154,15 +250,15 @@ class Problem:
         else:
             A, b = np.zeros((0, m)), np.zeros(0)
         P = quad.P if getattr(self.objective, "symmetric", False) else 0.5 * (quad.P + quad.P.T)
-        qp = QPData(P=P, c=quad.c, r=quad.r, A=A, b=b, lb=lb, ub=ub, cones=cones)
+        qp = QPData(P, quad.c, quad.r, A, b, lb, ub, cones, P_diag=quad.diag, P_factor=quad.factor)
         batch = plan["cones"]
         if batch is not None and not cones:
             qp.cones, qp._cone_arrays = batch(terms)
         elif batch is not None:
             qp.cones = batch(terms)[0] + cones
-        return qp
+        return qp if self.actuation is None else self.actuation.extend(qp, plan["eom"], terms.L.shape[1])
 
-    def _make_plan(self, robot) -> dict:
+    def _make_plan(self) -> dict:
         """What :meth:`assemble` does at every instant, decided once: the equation of motion and the
         cable bounds directly, the cones in one batch, other constraints through their methods."""
         from .constraints.cone import ConeBatch
@@ -179,7 +275,7 @@ class Problem:
             else:
                 general.append(con)
         return dict(general=general, eom=eom, bounds=bounds,
-                    cones=ConeBatch(robot, cone_cons) if cone_cons else None)
+                    cones=ConeBatch(cone_cons) if cone_cons else None)
 
     def value(self, terms, f, context: Context, qp: QPData | None = None) -> float:
         """The objective at ``f`` without smoothing terms (``qp``: the assembled problem, reused
@@ -190,6 +286,46 @@ class Problem:
 
     def describe(self) -> str:
         return f"minimise {self.objective!r} subject to {', '.join(map(repr, self.constraints))}"
+
+
+class _Actuation:
+    """The actuated joints' part of every instant's problem (module docstring): ``S``, bounds, weights."""
+
+    def __init__(self, S, lo, hi, weight):
+        self.S, self.lo, self.hi, self.weight = S, lo, hi, weight
+        self.n = S.shape[1]
+
+    @classmethod
+    def of(cls, robot) -> "_Actuation | None":
+        acts = tuple(getattr(robot, "actuators", ()) or ())
+        if not acts:
+            return None
+        lo = np.concatenate([a.tau_min for a in acts])
+        hi = np.concatenate([a.tau_max for a in acts])
+        w = np.concatenate([np.full(len(a.idx_v), float(a.weight)) for a in acts])
+        # w |tau|^2 = 1/2 tau (2 w) tau: the Hessian's diagonal is 2 w (case 1's f^T f has 2 I)
+        return cls(robot.actuation, lo, hi, 2.0 * w)
+
+    def extend(self, qp: QPData, eom: bool, nv: int) -> QPData:
+        """``qp`` over ``[f; tau_act]``: the equation of motion's rows gain ``-S``, every other row and
+        cone a zero block; the actuators' bounds and ``w |tau|^2`` are added."""
+        m, k = qp.n, self.n
+        A = np.hstack([qp.A, np.zeros((qp.A.shape[0], k))])
+        if eom:
+            A[:nv, m:] = -self.S
+        pad = lambda G: np.hstack([G, np.zeros((G.shape[0], k))])  # noqa: E731
+        cones = [ConeData(c.joint, pad(c.G), c.g, c.axis, c.angle_deg, c.basis) for c in qp.cones]
+        if qp.structured:
+            P, P_diag, P_factor = None, np.concatenate([qp.P_diag, self.weight]), pad(qp.P_factor)
+        else:
+            P = np.zeros((m + k, m + k))
+            P[:m, :m] = qp.P
+            P[m:, m:] = np.diag(self.weight)
+            P_diag = P_factor = None
+        norm_weight = None if qp.norm_weight is None else np.concatenate([qp.norm_weight, np.ones(k)])
+        return QPData(P, np.concatenate([qp.c, np.zeros(k)]), qp.r, A, qp.b,
+                      np.concatenate([qp.lb, self.lo]), np.concatenate([qp.ub, self.hi]), cones,
+                      P_diag=P_diag, P_factor=P_factor, norm_weight=norm_weight)
 
 
 def case_problem(robot, case: int, alpha: dict | None = None, beta: dict | None = None,
@@ -223,3 +359,6 @@ def case_problem(robot, case: int, alpha: dict | None = None, beta: dict | None 
             raise ProblemError("case 3 needs at least one cone: give cone_deg in the sidecar or --cone")
         constraints = [InteractionCone(j, deg, frame=frame) for j, deg in chosen.items()]
     return Problem(robot, objective, constraints)
+
+
+__all__ = ["Context", "QPData", "Problem", "case_problem", "ConeData"]

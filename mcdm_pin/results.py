@@ -33,15 +33,26 @@ needed_f_max                (N,)          infeasible by the bounds: smallest com
                                           would do, N (inf: none; NaN: not this case)
 needed_cone_deg             (N,)          infeasible by the cones: smallest half-angle that would
                                           do, degrees (NaN: not this case)
+unique                      (N,)          the optimum is provably unique (False: the least-norm
+                                          optimum was picked among equally optimal forces, or
+                                          no answer)
+stage                       (N,)          the solver stage that answered (``ipm``,
+                                          ``warm_active_set``, ``proxqp>polish``, ...)
+tau_act                     (N, n_act)    hybrid robots: the actuated joints' torques (N m)
+                                          or forces (N), one column per actuator component
+                                          (n_act = 0 without actuators)
+actuator_names              (n_act,)      ``JOINT`` or ``JOINT[i]`` per tau_act column
 robot, problem, solver,     ()            strings describing the run
 trajectory
+problem_json                ()            the problem as data (``Problem.spec()`` as JSON;
+                                          ``Problem.from_spec(robot, text)`` rebuilds it)
 ==========================  ============  =====================================================
 """
 
 from __future__ import annotations
 
 import csv
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -68,6 +79,9 @@ class InstantResult:
     softened_deg: float = 0.0
     needed_f_max: float = float("nan")
     needed_cone_deg: float = float("nan")
+    unique: bool = False
+    stage: str = ""
+    tau_act: np.ndarray = field(default_factory=lambda: np.zeros(0))  # actuated joints (hybrid robots)
 
     @property
     def found(self) -> bool:
@@ -86,13 +100,16 @@ class InstantResult:
 _COLUMN_TYPES = dict(f=float, status=str, message=str, objective=float, eom_residual=float,
                      interaction_wrench=float, interaction_force_socket=float, interaction_angle_deg=float,
                      time_model_s=float, time_solve_s=float, iterations=int, rounds=int, softened_deg=float,
-                     needed_f_max=float, needed_cone_deg=float)
+                     needed_f_max=float, needed_cone_deg=float, unique=bool, stage=str, tau_act=float)
 
 
 def instant_columns(instants: list[InstantResult]) -> dict:
     """The instants' fields stacked into arrays, one per field (the trajectory-result columns)."""
-    return {name: np.array([getattr(r, name) for r in instants], dtype=dtype)
-            for name, dtype in _COLUMN_TYPES.items()}
+    out = {name: np.array([getattr(r, name) for r in instants], dtype=dtype)
+           for name, dtype in _COLUMN_TYPES.items()}
+    if out["tau_act"].ndim == 1:  # no instant, or no actuator: (N, 0)
+        out["tau_act"] = out["tau_act"].reshape(len(instants), -1)
+    return out
 
 
 def concat_columns(parts: list[dict]) -> dict:
@@ -102,9 +119,11 @@ def concat_columns(parts: list[dict]) -> dict:
 
 ARRAY_KEYS = ("t", "q", "qd", "qdd", "f", "status", "message", "objective", "eom_residual",
               "interaction_wrench", "interaction_force_socket", "interaction_angle_deg", "time_model_s",
-              "time_solve_s", "iterations", "rounds", "softened_deg", "needed_f_max", "needed_cone_deg")
+              "time_solve_s", "iterations", "rounds", "softened_deg", "needed_f_max", "needed_cone_deg",
+              "unique", "stage")
 NAME_KEYS = ("joint_names", "cable_names", "coordinate_names")
-META_KEYS = ("robot", "problem", "solver", "trajectory")
+META_KEYS = ("robot", "problem", "solver", "trajectory", "problem_json")
+_OPTIONAL = {"needed_f_max": float("nan"), "needed_cone_deg": float("nan"), "unique": False, "stage": ""}
 
 
 @dataclass
@@ -138,10 +157,23 @@ class TrajectoryResult:
     problem: str = ""
     solver: str = ""
     trajectory: str = ""
+    unique: np.ndarray | None = None
+    stage: np.ndarray | None = None
+    problem_json: str = ""
     configuration: np.ndarray | None = None
     joint_types: np.ndarray | None = None
+    tau_act: np.ndarray | None = None
+    actuator_names: np.ndarray | None = None
 
     def __post_init__(self):
+        if self.tau_act is None:
+            self.tau_act = np.zeros((len(self.t), 0))
+        if self.actuator_names is None:
+            self.actuator_names = np.array([], dtype=str)
+        if self.unique is None:
+            self.unique = np.zeros(len(self.t), dtype=bool)
+        if self.stage is None:
+            self.stage = np.full(len(self.t), "", dtype=str)
         if self.configuration is None:
             self.configuration = self.q
 
@@ -183,6 +215,8 @@ class TrajectoryResult:
                    cable_names=np.array(rob.cable_names, dtype=str),
                    coordinate_names=np.array(rob.coordinate_names, dtype=str),
                    joint_types=np.array([j.type for j in rob.joints], dtype=str),
+                   actuator_names=np.array([n for a in getattr(rob, "actuators", ()) for n in a.names],
+                                           dtype=str),
                    cone_deg=np.asarray(cone_deg, dtype=float), **meta)
 
     def __len__(self) -> int:
@@ -220,6 +254,8 @@ class TrajectoryResult:
         data = {k: getattr(self, k) for k in ARRAY_KEYS + NAME_KEYS + ("cone_deg", "configuration")}
         if self.joint_types is not None:
             data["joint_types"] = np.asarray(self.joint_types, dtype=str)
+        data["tau_act"] = np.asarray(self.tau_act, dtype=float)
+        data["actuator_names"] = np.asarray(self.actuator_names, dtype=str)
         data.update({k: np.array(getattr(self, k)) for k in META_KEYS})
         np.savez_compressed(path, **data)
         return path
@@ -230,18 +266,17 @@ class TrajectoryResult:
         _check_archive(path)
         try:
             with np.load(path, allow_pickle=False) as z:
-                optional = ("needed_f_max", "needed_cone_deg")
-                missing = [k for k in ARRAY_KEYS + NAME_KEYS if k not in z.files and k not in optional]
+                missing = [k for k in ARRAY_KEYS + NAME_KEYS if k not in z.files and k not in _OPTIONAL]
                 if missing:
                     raise ResultsError(f"{path}: not an mcdm-pin results file (missing {', '.join(missing)})")
                 kw = {k: z[k] for k in ARRAY_KEYS + NAME_KEYS if k in z.files}
-                for k in optional:
-                    kw.setdefault(k, np.full(len(kw["t"]), np.nan))
+                for k, fill in _OPTIONAL.items():
+                    kw.setdefault(k, np.full(len(kw["t"]), fill))
                 kw["cone_deg"] = z["cone_deg"] if "cone_deg" in z.files else \
                     np.full(len(kw["joint_names"]), np.nan)
                 for k in META_KEYS:
                     kw[k] = str(z[k]) if k in z.files else ""
-                for k in ("configuration", "joint_types"):
+                for k in ("configuration", "joint_types", "tau_act", "actuator_names"):
                     if k in z.files:
                         kw[k] = z[k]
         except FileNotFoundError:
@@ -258,6 +293,8 @@ class TrajectoryResult:
                 cols[f"{prefix}[{name}]"] = arr[:, i]
         for i, name in enumerate(self.cable_names):
             cols[f"f[{name}]"] = self.f[:, i]
+        for i, name in enumerate(self.actuator_names):
+            cols[f"tau_act[{name}]"] = self.tau_act[:, i]
         cols.update(status=self.status, objective=self.objective, eom_residual=self.eom_residual)
         comps = ("Fx", "Fy", "Fz", "Mx", "My", "Mz")
         for j, name in enumerate(self.joint_names):
@@ -269,7 +306,7 @@ class TrajectoryResult:
         cols.update(time_model_s=self.time_model_s, time_solve_s=self.time_solve_s,
                     iterations=self.iterations, rounds=self.rounds, softened_deg=self.softened_deg,
                     needed_f_max=self.needed_f_max, needed_cone_deg=self.needed_cone_deg,
-                    message=self.message)
+                    unique=self.unique, stage=self.stage, message=self.message)
         return cols
 
     def save_csv(self, path) -> Path:

@@ -1,30 +1,48 @@
-r"""Problem scaling for badly scaled robots: solve an equilibrated copy of the QP, return unscaled forces.
+r"""Problem scaling: every back-end solves a copy of the problem whose magnitudes are of order one, and
+the answer (point and duals) is mapped back.
 
-A robot with grams next to tonnes and millimetres next to metres gives equation-of-motion rows whose
-sizes differ by many orders of magnitude (a tonne's gravity torque next to a gram's) and columns of
-``L^T`` of very different sizes (millimetre and metre lever arms); ProxQP's first-order iterations
-then stall at their iteration limit (measured: ``tests/test_conditioning.py``). With
+Two things go wrong on badly scaled robots. A robot with grams next to tonnes and millimetres next to
+metres gives equation-of-motion rows whose sizes differ by many orders of magnitude and columns of
+``L^T`` of very different sizes (ProxQP's first-order iterations then stall, ``tests/test_conditioning.py``).
+And a robot whose numbers are all large or all small (links of 1e6 kg, forces to 1e12 N; links of
+1e-6 kg) meets absolute tolerances that mean nothing at its scale (Clarabel reported false
+"infeasible" at 1e6 kg). With
 
 .. math:: f = D x, \qquad A f = b \;\to\; (R A D)\, x = R b, \qquad
           F_k = g_k + G_k f \;\to\; s_k F_k = s_k g_k + (s_k G_k D)\, x
 
-(:math:`R`, :math:`D` positive diagonal from a few Ruiz equilibration sweeps of ``A``, :math:`s_k > 0`
-per cone; cones are invariant under positive scaling of :math:`F_k`), the objective
-:math:`x^T (D P D) x + (D c)^T x` divided by its own size, and bounds :math:`l/d \le x \le u/d`, the
-scaled problem has the same solution set mapped by :math:`D`. The answer is unscaled (``f = D x``), its
-objective re-evaluated on the original problem, and the runner then checks it against the *original*
-constraints, so scaling can never hide a violated equation of motion or bound.
+(:math:`R`, :math:`D` positive diagonal: Ruiz equilibration when the equation of motion spreads over
+more than ``SPREAD`` (three decades), then the variables' unit set by their bounds and each row by
+its size; :math:`s_k > 0` per cone: cones are invariant under positive scaling of :math:`F_k`), the
+objective divided by its own size, and bounds :math:`l/d \le x \le u/d`, the scaled problem has the
+same solution set mapped by :math:`D`. The variables' unit is the size the equations ask for
+(``|b_i| / max_j |A_ij|``), at least the geometric middle of the bounds, ``sqrt(max f_min * min f_max)``
+(the lower bounds alone when no upper bound is finite), so that scaling every mass and every bound by
+``k`` gives the same scaled problem whatever ``k`` (``tests/test_reference.py``). Every factor is a power of two (no rounding). A problem whose
+factors all lie within ``SPREAD`` of one is passed through untouched (the usual case: the neck, the
+arms), so well-scaled problems pay nothing.
 
-Use: ``ScaledSolver(get_solver("proxqp"))`` is a :class:`~mcdm_pin.solvers.Solver` like any other.
+The answer is unscaled (``f = D x``; ``y = o R y_s``, ``z = o z_s / d``, cone duals ``o s_k z_s``,
+with ``o`` the objective's scale), its objective re-evaluated on the original problem, and the runner
+then checks it against the *original* constraints, so scaling can never hide a violated constraint.
+The least-norm stage keeps minimising the original ``|f|^2`` (the scaled copy carries the weights
+``d^2``).
+
+Use: ``ScaledSolver(get_solver("default"))`` is a :class:`~mcdm_pin.solvers.Solver` like any other.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from .constraints import ConeData
 from .problem import QPData
 from .solvers.base import Solution, Solver
+
+SPREAD = 1e3
+"""Scale only when some factor would exceed this (either way)."""
 
 
 def equilibrate(A: np.ndarray, sweeps: int = 10) -> tuple[np.ndarray, np.ndarray]:
@@ -44,71 +62,159 @@ def equilibrate(A: np.ndarray, sweeps: int = 10) -> tuple[np.ndarray, np.ndarray
     return _pow2(r), _pow2(d)
 
 
-def _pow2(x: np.ndarray) -> np.ndarray:
+def _pow2(x):
     return np.exp2(np.round(np.log2(x)))
 
 
-def scale_problem(qp: QPData, f_scale: np.ndarray | None = None):
-    """Return ``(scaled QPData, d, objective_scale)``; ``f = d * x``."""
-    if qp.A.shape[0]:
-        r, d = equilibrate(qp.A)
+def spread(A: np.ndarray) -> float:
+    """How badly scaled the rows and columns of ``A`` are: the larger of the ratios between the
+    largest and smallest non-zero row maxima and column maxima of ``|A|`` (1 when ``A`` is zero).
+    (The right-hand side is left out: an equation whose torque happens to be near zero is not badly
+    scaled.) Compiled when the kernels are (:func:`mcdm_pin.model.kernels.spread`)."""
+    from . import jit
+
+    if jit.ready():
+        from .model.kernels import spread as compiled
+
+        # C order: one compiled specialisation (qp.A is often the transposed view L.T)
+        return compiled(np.ascontiguousarray(A, dtype=float), np.zeros(0))
+    B = np.abs(A)
+    out = 1.0
+    for v in (B.max(axis=1, initial=0.0), B.max(axis=0, initial=0.0)):
+        v = v[v > 0]
+        if len(v):
+            out = max(out, float(v.max() / v.min()))
+    return out
+
+
+@dataclass
+class Scaling:
+    """``f = d x``; rows of ``A`` times ``r``; objective divided by ``obj``; cone ``k``'s force times
+    ``cone[k]``."""
+
+    d: np.ndarray
+    r: np.ndarray
+    obj: float
+    cone: np.ndarray
+
+    def unscale(self, qp: QPData, sol: Solution) -> Solution:
+        x = self.d * sol.x
+        objective = qp.objective(x) if np.all(np.isfinite(x)) else float("nan")
+        o = self.obj
+        y = None if sol.y is None else o * self.r * sol.y
+        z = None if sol.z is None else o * sol.z / self.d
+        zc = None if sol.z_cone is None else o * self.cone[:, None] * sol.z_cone
+        return sol.but(x=x, objective=objective, y=y, z=z, z_cone=zc)
+
+
+def _outside(v: float) -> bool:
+    return not 1.0 / SPREAD <= v <= SPREAD
+
+
+def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool = False) -> Scaling | None:
+    """The factors of the module docstring, or ``None`` when all lie within ``SPREAD`` of one (and
+    ``force`` is false): computed from maxima only, without copying the problem (a uniform variable
+    scale, the usual case, is handled as a scalar)."""
+    m, n = qp.A.shape
+    absA = np.abs(qp.A) if m else None
+    ruiz = m and (spread(qp.A) > SPREAD or f_scale is not None)
+    if ruiz:
+        r, d = equilibrate(qp.A) if spread(qp.A) > SPREAD else (np.ones(m), np.ones(n))
+        if f_scale is not None:
+            d = d * _pow2(np.asarray(f_scale, dtype=float))
+        rows = (absA * d[None, :]).max(axis=1, initial=0.0) * r
+        dmax = float(d.max())
     else:
-        r, d = np.zeros(0), np.ones(qp.n)
-    if f_scale is not None:
-        d = d * _pow2(np.asarray(f_scale, dtype=float))
+        r, d = None, 1.0
+        rows = absA.max(axis=1, initial=0.0) if m else np.zeros(0)
+        dmax = 1.0
+    # the variables' unit: the size the equations ask for (|b_i| / max_j |A_ij|), at least the
+    # geometric middle of the bounds (the lower bound alone when no upper bound is finite: an upper
+    # bound is a limit, often far above the forces that occur). An instant that asks for no force
+    # (the 2-link arm at rest) then gets the same unit whatever the robot's scale: with the lower
+    # bound as the unit, links of 1e-6 kg put the bounds at 1 and 1e6 and Clarabel stopped with
+    # InsufficientProgress where the unscaled robot solves
+    with np.errstate(invalid="ignore", divide="ignore"):
+        lb = np.abs(qp.lb / d)
+        unit = float(lb[np.isfinite(lb)].max(initial=0.0))
+        ub = np.abs(qp.ub / d)
+        ub = ub[np.isfinite(ub) & (ub > 0)]
+        if unit > 0 and len(ub) and float(ub.min()) > unit:
+            unit = float(np.sqrt(unit * float(ub.min())))
+        if m:
+            need = np.abs(qp.b * (1.0 if r is None else r))[rows > 0] / rows[rows > 0]
+            unit = max(unit, float(need.max(initial=0.0)))
+    u = float(_pow2(unit)) if unit > 0 and _outside(unit) else 1.0
+    d = d * u
+    rows = rows * u
+    row_f = np.where((rows > 0) & ((rows < 1 / SPREAD) | (rows > SPREAD)), _pow2(np.where(rows > 0, rows, 1.0)), 1.0)
+    r = (np.ones(m) if r is None else r) / row_f
+    scalar = np.ndim(d) == 0
+    if qp._P is not None:
+        size = float(np.abs(qp.P).max(initial=0.0)) * u * u if scalar else \
+            float(np.abs(d[:, None] * qp.P * d[None, :]).max(initial=0.0))
+    else:
+        dd = d if not scalar else np.full(n, d)
+        size = max(float(np.abs(qp.P_diag * dd * dd).max(initial=0.0)),
+                   float(((qp.P_factor * dd[None, :]) ** 2).sum(axis=0).max(initial=0.0)))
+    size = max(size, float(np.abs(qp.c).max(initial=0.0)) * (u if scalar else dmax * u), 1e-300)
+    obj = float(_pow2(size)) if _outside(size) else 1.0
+    cone_s = np.ones(len(qp.cones))
+    if qp.cones:
+        G, g = qp.cone_arrays()[:2]
+        sizes = np.abs(G).max(axis=(1, 2)) * u if scalar else np.abs(G * d[None, None, :]).max(axis=(1, 2))
+        sizes = np.maximum(np.maximum(sizes, np.abs(g).max(axis=1)), 1e-300)
+        cone_s = np.where((sizes < 1 / SPREAD) | (sizes > SPREAD), 1.0 / _pow2(sizes), 1.0)
+    if not force and u == 1.0 and (scalar or np.all(d == 1.0)) and np.all(r == 1.0) and obj == 1.0 \
+            and np.all(cone_s == 1.0):
+        return None
+    return Scaling(np.full(n, d) if scalar else d, r, obj, cone_s)
+
+
+def apply_scaling(qp: QPData, s: Scaling) -> QPData:
+    """The scaled copy of ``qp`` (module docstring)."""
+    d, r, obj = s.d, s.r, s.obj
     A = r[:, None] * qp.A * d[None, :]
-    b = r * qp.b
-    P = d[:, None] * qp.P * d[None, :]
-    c = d * qp.c
-    obj = max(np.abs(P).max(initial=0.0), np.abs(c).max(initial=0.0), 1e-300)
-    obj = float(_pow2(np.array([obj]))[0])
-    cones = []
-    for cone in qp.cones:
-        G = cone.G * d[None, :]
-        s = float(_pow2(np.array([1.0 / max(np.abs(G).max(initial=0.0), np.abs(cone.g).max(initial=0.0),
-                                             1e-300)]))[0])
-        cones.append(ConeData(cone.joint, s * G, s * cone.g, cone.axis, cone.angle_deg, cone.basis))
-    scaled = QPData(P=P / obj, c=c / obj, r=qp.r / obj, A=A, b=b, lb=qp.lb / d, ub=qp.ub / d, cones=cones)
-    return scaled, d, obj
+    P_diag = None if qp.P_diag is None else d * qp.P_diag * d / obj
+    P_factor = None if qp.P_factor is None else qp.P_factor * d[None, :] / np.sqrt(obj)
+    P = None if (P_factor is not None and qp._P is None) else d[:, None] * qp.P * d[None, :] / obj
+    cones = [ConeData(c.joint, s.cone[k] * c.G * d[None, :], s.cone[k] * c.g, c.axis, c.angle_deg, c.basis)
+             for k, c in enumerate(qp.cones)]
+    norm_w = d * d if qp.norm_weight is None else qp.norm_weight * d * d
+    return QPData(P, d * qp.c / obj, qp.r / obj, A, r * qp.b, qp.lb / d, qp.ub / d, cones, P_diag=P_diag,
+                  P_factor=P_factor, norm_weight=norm_w)
+
+
+def scale_problem(qp: QPData, f_scale: np.ndarray | None = None, force: bool = False):
+    """``(scaled QPData, Scaling)``, or ``(qp, None)`` when no scaling is needed."""
+    s = scaling_factors(qp, f_scale, force)
+    return (qp, None) if s is None else (apply_scaling(qp, s), s)
 
 
 class ScaledSolver(Solver):
-    """Wrap a back-end: solve the equilibrated problem, return the unscaled answer (module docstring).
+    """Wrap a back-end: solve the scaled problem, return the unscaled answer (module docstring).
 
     Args:
         inner: the back-end (a :class:`~mcdm_pin.solvers.Solver`).
-        only_if_worse_than: skip scaling when the EoM matrix's row and column norms already lie within
-            this ratio (well-scaled problems keep the inner back-end's warm starts untouched).
     """
 
-    def __init__(self, inner: Solver, only_if_worse_than: float = 1e3):
+    def __init__(self, inner: Solver):
         self.inner = inner
-        self.only_if_worse_than = only_if_worse_than
         self.name = inner.name
 
     def fresh(self) -> "ScaledSolver":
-        return ScaledSolver(self.inner.fresh(), self.only_if_worse_than)
+        return ScaledSolver(self.inner.fresh())
 
     def reset(self) -> None:
         self.inner.reset()
 
     def needs_scaling(self, qp: QPData) -> bool:
-        if not qp.A.shape[0]:
-            return False
-        from .model.kernels import spread
-
-        # C order: one compiled specialisation (qp.A is often the transposed view L.T)
-        return spread(np.ascontiguousarray(qp.A, dtype=float), np.ascontiguousarray(qp.b, dtype=float)) \
-            > self.only_if_worse_than
+        return scale_problem(qp)[1] is not None
 
     def solve(self, qp: QPData) -> Solution:
-        if not self.needs_scaling(qp):
-            return self.inner.solve(qp)
-        scaled, d, _ = scale_problem(qp)
+        scaled, scaling = scale_problem(qp)
         sol = self.inner.solve(scaled)
-        f = d * sol.f
-        objective = qp.objective(f) if np.all(np.isfinite(f)) else float("nan")
-        return Solution(f, sol.status, objective, sol.iterations, sol.rounds, sol.message)
+        return sol if scaling is None else scaling.unscale(qp, sol)
 
     def __getattr__(self, name):  # expose the inner back-end's settings and helpers
         if name == "inner":

@@ -272,6 +272,39 @@ def cli_cases() -> list[Case]:
     return cases
 
 
+def command_cases() -> list[Case]:
+    """The commands beyond solve: workspace and export-opensim."""
+    cases = []
+    ws = ["workspace", "robot.yaml", "--out", "ws.zarr", "--no-margins", "--scheduler", "inline", "-q"]
+
+    def add(name, argv, field, file=None, files=None):
+        cases.append(Case("commands", name, files or _base(), list(argv), field, file))
+
+    add("workspace grid syntax", ws + ["--grid", "q1_x=0:1"], r"--grid")
+    add("workspace unknown coordinate", ws + ["--grid", "wrist=0:1:3"], r"grid: unknown coordinate 'wrist'")
+    add("workspace grid of 0", ws + ["--grid", "q1_x=0:1:0"], r"grid q1_x: expected a positive whole number")
+    add("workspace grid nan", ws + ["--grid", "q1_x=nan:1:3"], r"--grid")
+    add("workspace random 0", ws + ["--random", "0"], r"random: expected a positive number of poses")
+    add("workspace random huge", ws + ["--random", "100000000000"], r"random: expected at most \d+ poses")
+    add("workspace grid huge", ws + ["--grid", "q1_x=0:1:100000", "--grid", "q4_x=0:1:100000"], r"grid q4_x: the grid would have")
+    add("workspace poses missing", ws + ["--poses", "nope.csv"], r"nope\.csv", "nope.csv")
+    add("workspace poses bad header", ws + ["--poses", "wave.csv"], r"wave\.csv", "wave.csv")
+    add("workspace chunk 0", ws + ["--random", "5", "--chunk", "0"], r"--chunk")
+    add("workspace workers 0", ws + ["--random", "5", "--workers", "0"], r"--workers")
+    add("workspace scheduler url", ["workspace", "robot.yaml", "--out", "ws.zarr", "--random", "5", "--scheduler", "udp:/x"],
+        r"scheduler: expected local, inline or tcp://HOST:PORT")
+    add("workspace out not zarr", ["workspace", "robot.yaml", "--out", "ws.txt", "--random", "5"], r"--out")
+    add("workspace out missing folder", ["workspace", "robot.yaml", "--out", "no/ws.zarr", "--random", "5"], r"--out")
+    add("workspace cone on case 1", ws + ["--random", "5", "--cone", "shoulder=20"], r"--cone")
+    add("workspace at unknown", ws + ["--grid", "q1_x=0:1:3", "--at", "knee=1"], r"at: unknown coordinate 'knee'")
+    add("export suffix", ["export-opensim", "robot.yaml", "arm.txt"], r"\.osim")
+    add("export missing folder", ["export-opensim", "robot.yaml", "no/arm.osim"], r"OUT no/arm\.osim: the folder no does not exist")
+    add("export the urdf", ["export-opensim", "arm.urdf", "arm.osim"], r"arm\.urdf is a URDF", "arm.urdf")
+    add("export over the sidecar", ["export-opensim", "robot.yaml", "robot.yaml"], r"\.osim|robot\.yaml")
+    add("export force negative", ["export-opensim", "robot.yaml", "arm.osim", "--optimal-force", "-1"], r"--optimal-force")
+    return cases
+
+
 def results_cases() -> list[Case]:
     import numpy as np
 
@@ -296,7 +329,7 @@ def results_cases() -> list[Case]:
 
 
 def all_cases() -> list[Case]:
-    return sidecar_cases() + urdf_cases() + csv_cases() + cli_cases() + results_cases()
+    return sidecar_cases() + urdf_cases() + csv_cases() + cli_cases() + command_cases() + results_cases()
 
 
 if __name__ == "__main__":

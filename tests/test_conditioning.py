@@ -147,13 +147,19 @@ def test_badly_scaled_robots_meet_the_tolerances(g, sd, case):
         if prox.status not in ("optimal", "infeasible") and ref.status == "optimal":
             SCALED_STATS["proxqp failed, clarabel solved"] = SCALED_STATS.get("proxqp failed, clarabel solved", 0) + 1
         SCALED_STATS["examples"] = SCALED_STATS.get("examples", 0) + 1
+        # an answer of the default chain's Clarabel stage compared with Clarabel compares Clarabel
+        # with itself: counted (bounded below), not compared
+        by_clarabel = prox.stage.startswith("clarabel")
+        if by_clarabel:
+            key_c = f"answered by the clarabel stage ({prox.status})"
+            SCALED_STATS[key_c] = SCALED_STATS.get(key_c, 0) + 1
         if prox.status == "infeasible":
             assert ref.status != "optimal"
         if prox.status == "optimal":
             f = prox.f
             assert prox.eom_residual <= 1e-8
             assert np.all(f >= robot.f_min - 1e-9) and np.all(f <= robot.f_max + 1e-9)
-            if ref.status == "optimal" and "AlmostSolved" not in ref.message:
+            if ref.status == "optimal" and "AlmostSolved" not in ref.message and not by_clarabel:
                 # where Clarabel reached full accuracy the two agree; its reduced-accuracy
                 # ("AlmostSolved") answers are no reference (seen: 3 % worse, and 5.6e-6 better at
                 # a point 1e5 times larger on a flat optimal ridge)
@@ -183,18 +189,19 @@ def test_issue_range_objective_matches_clarabel_strictly(g, sd, case):
     the same strict check also passed with MCDM_HYPOTHESIS_SEED=1, 2, 3 and 4)."""
     with tempfile.TemporaryDirectory() as d:
         robot, prox, ref = solve_both(g, sd, case, d)
+        by_clarabel = prox.stage.startswith("clarabel")  # then the comparison would be Clarabel's with itself
         if prox.status == "infeasible":
             assert ref.status != "optimal"
         if prox.status == "optimal":
             assert prox.eom_residual <= 1e-8
             assert np.all(prox.f >= robot.f_min - 1e-9) and np.all(prox.f <= robot.f_max + 1e-9)
-            if ref.status == "optimal" and "AlmostSolved" not in ref.message:
+            if ref.status == "optimal" and "AlmostSolved" not in ref.message and not by_clarabel:
                 assert abs(prox.objective - ref.objective) <= 1e-6 * max(abs(ref.objective), 1e-12)
 
 
 def test_scaled_examples_are_really_badly_scaled():
-    if not SCALED_STATS:
-        pytest.skip("run together with test_badly_scaled_robots_meet_the_tolerances")
+    if not SCALED_STATS:  # run alone: run the property here (it fills SCALED_STATS)
+        test_badly_scaled_robots_meet_the_tolerances()
     print(SCALED_STATS)
     # which badly scaled features the examples hit depends on the modules loaded (hypothesis mines
     # their constants); the deterministic robot below covers all of them every time
@@ -203,6 +210,11 @@ def test_scaled_examples_are_really_badly_scaled():
     # measured with ScaledSolver: 0 of 150 run alone, a few per cent in the full suite (other examples)
     failed = SCALED_STATS.get("proxqp failed, clarabel solved", 0)
     assert failed <= 0.1 * SCALED_STATS["examples"], SCALED_STATS
+    # comparisons that were Clarabel against itself (the default chain's Clarabel stage answered)
+    # the default chain's optimal answers are not Clarabel's (that comparison would be Clarabel's with
+    # itself); its infeasible ones often are (tests/test_properties.py checks those with HiGHS)
+    assert SCALED_STATS.get("answered by the clarabel stage (optimal)", 0) <= 0.05 * SCALED_STATS["examples"], \
+        SCALED_STATS
 
 
 def test_grams_tonnes_millimetres_and_meganewtons(tmp_path):

@@ -335,9 +335,12 @@ def test_broken_caspr_xml_raises_caspr_error(tmp_path, text):
 
 def test_fuzz_counts_are_reported():
     """Both outcomes occur (the mutations reach past the first check) - counts from this run."""
+    if not any(COUNTS.values()):  # run alone: run the fuzzers here (they fill COUNTS)
+        test_mutated_sidecar_loads_or_raises_mcdm_error()
+        test_mutated_sidecar_text_loads_or_raises_mcdm_error()
+        if not _caspr_available():
+            test_mutated_caspr_xml_imports_or_raises_mcdm_error()
     ran = {k: v for k, v in COUNTS.items() if v}
-    if not ran:
-        pytest.skip("run together with the fuzz tests above")
     print(ran)
     for kind, counts in ran.items():
         total = sum(counts.values())
@@ -353,4 +356,4 @@ def test_numbers_in_messages_are_finite_checks():
 
     with pytest.raises(SidecarError, match=r"gravity\[0\]") as info:
         parse_sidecar(doc, path=None, base_dir=TWO_LINK.parent)
-    assert not math.isfinite(float("1e400")) and "finite" in str(info.value)
+    assert "finite" in str(info.value)

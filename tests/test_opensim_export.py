@@ -177,8 +177,37 @@ def test_cli_export_and_check(osim, tmp_path, capsys):
     from mcdm_pin.cli import main
 
     out = tmp_path / "sub" / "arm.osim"
+    assert main(["export-opensim", str(TWO_LINK), str(out), "--check", "2"]) == 2  # no folder sub/: nothing made
+    assert "the folder" in capsys.readouterr().err and not out.parent.exists()
+    out.parent.mkdir()
     assert main(["export-opensim", str(TWO_LINK), str(out), "--check", "2"]) == 0
     text = capsys.readouterr().out
     assert out.is_file() and "8 PathActuators" in text and "moment arms" in text
     assert main(["export-opensim", str(TWO_LINK), str(out), "--optimal-force", "0"]) == 2
     assert "--optimal-force: expected a force > 0 N" in capsys.readouterr().err
+
+
+def test_names_opensim_refuses_are_rewritten(osim, tmp_path):
+    """OpenSim refuses spaces, slashes and ``\\ * +`` in a component's name; the neck's cables are named
+    like ``cleid-mast (right)``. They become ``_``, duplicates get ``#2``, and the model still matches
+    Pinocchio's dynamics and moment arms."""
+    import yaml
+
+    from mcdm_pin import Robot
+    from mcdm_pin.export import OpenSimModel, export_opensim
+    from mcdm_pin.export.opensim_eval import compare_with_pinocchio
+
+    sc = yaml.safe_load(TWO_LINK.read_text())
+    sc["urdf"] = str((TWO_LINK.parent / sc["urdf"]).resolve())
+    sc.pop("trajectories", None)
+    sc["cables"][0]["name"] = "cleid-mast (right)"
+    sc["cables"][1]["name"] = "cleid-mast/right"
+    sc["cables"][2]["name"] = "a*b+c"
+    (tmp_path / "arm.yaml").write_text(yaml.safe_dump(sc, sort_keys=False))
+    robot = Robot.load(tmp_path / "arm.yaml")
+    path = export_opensim(robot, tmp_path / "arm.osim")
+    om = OpenSimModel(robot, path=path)
+    names = [c.name for c in om.spec.cables]
+    assert names[:3] == ["cleid-mast_(right)", "cleid-mast_right", "a_b_c"]
+    worst = compare_with_pinocchio(robot, om, samples=4, seed=2)
+    assert max(worst.values()) < TOL, worst

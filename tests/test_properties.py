@@ -30,7 +30,7 @@ from hypothesis import strategies as st
 
 from mcdm_pin import InverseDynamics, compute_terms
 
-from .fd import lengths_jacobian
+from .fd import bounds_lp_feasible, lengths_jacobian
 from .robotgen import GenRobot, robots
 
 pytest.importorskip("clarabel")
@@ -132,13 +132,25 @@ def test_solver_meets_constraints_and_agrees_with_clarabel(g, seed, case):
         note(f"case {case}: proxqp {prox.status} ({prox.message}), clarabel {ref.status} ({ref.message})")
         key = f"case {case}: {prox.status}/{ref.status}"
         SOLVER_STATS[key] = SOLVER_STATS.get(key, 0) + 1
+        # the default chain has Clarabel as a fallback: an answer of that stage compared with
+        # Clarabel would be Clarabel vs Clarabel, so it is counted (and bounded below), not compared
+        by_clarabel = prox.stage.startswith("clarabel")
+        if by_clarabel:
+            key_c = f"answered by the clarabel stage ({prox.status})"
+            SOLVER_STATS[key_c] = SOLVER_STATS.get(key_c, 0) + 1
+            if prox.status == "infeasible" and case < 3:
+                # no cones: HiGHS decides the bounds LP independently
+                assert not bounds_lp_feasible(robot, q, qd, qdd)
+                SOLVER_STATS["clarabel's infeasible confirmed by HiGHS"] = \
+                    SOLVER_STATS.get("clarabel's infeasible confirmed by HiGHS", 0) + 1
         if prox.status == "infeasible":
             assert ref.status != "optimal"
         if ref.status == "infeasible":
             assert prox.status != "optimal"
         # ProxQP alone stalled on ~1 in 100 generated robots (51k iterations, "max_iter"); the
-        # back-end now answers those with Clarabel (ProxQPSolver._solve_fallback), so every
-        # instant gets an answer: optimal, infeasible or (checked and found wanting) inaccurate
+        # default chain answers those with its compiled interior-point method (Clarabel as the last
+        # resort), so every instant gets an answer: optimal, infeasible or (checked and found
+        # wanting) inaccurate
         assert prox.status in ("optimal", "infeasible", "inaccurate")
         if prox.status == "optimal":
             f = prox.f
@@ -147,13 +159,14 @@ def test_solver_meets_constraints_and_agrees_with_clarabel(g, seed, case):
             if case == 3:
                 cones = np.array([j.cone_deg if j.cone_deg else np.inf for j in robot.joints])
                 assert np.all(prox.interaction_angle_deg <= cones + CONE_TOL_DEG)
-            if ref.status == "optimal":
+            if ref.status == "optimal" and not by_clarabel:
                 assert abs(prox.objective - ref.objective) <= OBJ_RTOL * max(abs(ref.objective), 1e-12)
 
 
-def test_proxqp_stall_is_answered_by_clarabel():
+def test_proxqp_stall_is_answered_by_the_cascade():
     """The generated robot on which ProxQP stalled (tests/regressions.py): ProxQP alone still
-    reports its iteration limit; the default back-end answers with Clarabel's optimum, checked."""
+    reports its iteration limit; the default chain answers (its compiled interior-point method, or
+    Clarabel as the last resort) with Clarabel's optimum, checked."""
     from mcdm_pin.solvers import ProxQPSolver
 
     from .regressions import PROXQP_STALL, PROXQP_STALL_SEED
@@ -161,26 +174,45 @@ def test_proxqp_stall_is_answered_by_clarabel():
     with tempfile.TemporaryDirectory() as d:
         robot = PROXQP_STALL.load(d)
         q, qd, qdd, _ = state(robot, PROXQP_STALL_SEED)
-        alone = InverseDynamics.for_case(robot, 2, solver=ProxQPSolver(fallback=False)).solve(q, qd, qdd)
+        alone = InverseDynamics.for_case(robot, 2, solver=ProxQPSolver(active_set=False, fallback=False)
+                                         ).solve(q, qd, qdd)
         ours = InverseDynamics.for_case(robot, 2).solve(q, qd, qdd)
         ref = InverseDynamics.for_case(robot, 2, solver="clarabel").solve(q, qd, qdd)
     assert alone.status == "max_iter"
-    assert ours.status == "optimal" and "answered by Clarabel" in ours.message
+    assert ours.status == "optimal" and not ours.stage.startswith(("proxqp", "clarabel"))
     assert ours.eom_residual <= EOM_TOL
     assert np.all(ours.f >= robot.f_min - BOUND_TOL) and np.all(ours.f <= robot.f_max + BOUND_TOL)
     assert ours.objective == pytest.approx(ref.objective, rel=OBJ_RTOL)
+    # the optimum is not unique there (a flat ridge): both chains return the least-norm forces
+    assert not ours.unique and not ref.unique
+    assert np.abs(ours.f - ref.f).max() <= 1e-6 * np.abs(ref.f).max()
 
 
 def test_generator_covers_feasible_and_infeasible_instants():
     """The solver property above is only meaningful if both outcomes occur (counts from the run)."""
-    if not SOLVER_STATS:
-        pytest.skip("run together with test_solver_meets_constraints_and_agrees_with_clarabel")
+    if not SOLVER_STATS:  # run alone: run the property here (it fills SOLVER_STATS)
+        test_solver_meets_constraints_and_agrees_with_clarabel()
+    total = sum(n for k, n in SOLVER_STATS.items() if k.startswith("case"))
+    # comparisons with Clarabel that compared Clarabel with itself: few (the compiled method or
+    # the active set answers the rest)
+    # an optimal answer of the default chain is never Clarabel's (then the comparison above would be
+    # Clarabel's with itself); its "infeasible" often is (the compiled method does not always
+    # certify infeasibility): those of cases 1 and 2 were confirmed by HiGHS, those of case 3
+    # (cones: no LP decides them) are bounded
+    assert SOLVER_STATS.get("answered by the clarabel stage (optimal)", 0) <= 0.02 * total, SOLVER_STATS
+    unconfirmed = SOLVER_STATS.get("answered by the clarabel stage (infeasible)", 0) - \
+        SOLVER_STATS.get("clarabel's infeasible confirmed by HiGHS", 0)
+    assert unconfirmed <= 0.15 * total, SOLVER_STATS
     optimal = sum(n for k, n in SOLVER_STATS.items() if "optimal/optimal" in k)
     infeasible = sum(n for k, n in SOLVER_STATS.items() if "infeasible/" in k)
     print(SOLVER_STATS)
     assert optimal >= 20 and infeasible >= 5, SOLVER_STATS
     stalled = sum(n for k, n in SOLVER_STATS.items() if "max_iter/" in k)
     assert stalled == 0, SOLVER_STATS
+    # an "inaccurate" answer (checked and found wanting) is counted and bounded, not skipped
+    inaccurate = sum(n for k, n in SOLVER_STATS.items() if k.startswith("case") and
+                     k.split(": ")[1].startswith("inaccurate/"))
+    assert inaccurate <= 0.02 * total, SOLVER_STATS
 
 
 def test_one_dof_robot(tmp_path):

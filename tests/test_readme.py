@@ -115,8 +115,8 @@ def _table_rows(lines):
 
 def test_readme_worked_example_output_is_a_fresh_runs(capsys):
     """The README's sample output of `mcdm-pin solve ... traj1 --case 3`: the same lines, the same
-    peaks to 1e-3 (the time of a peak is compared only where the peak is not a tie at the lower bound,
-    and the timing line not at all: it is this machine's)."""
+    peaks to 1e-3 (the time of a peak is compared only where the peak is not a tie at the lower bound
+    or at the cone, and the timing line not at all: it is this machine's)."""
     from mcdm_pin.cli import main
 
     text = README.read_text()
@@ -135,6 +135,8 @@ def test_readme_worked_example_output_is_a_fresh_runs(capsys):
                 assert a == "-"
             elif name.startswith("cable") and k == 1 and row[0] == row[2]:
                 continue  # at its lower bound all along: any instant is "the" peak
+            elif k == 3 and row[4] != "-" and abs(float(row[2]) - float(row[4])) < 1e-3:
+                continue  # the angle held at the cone over a span: any instant of it is "the" maximum
             else:
                 assert float(a) == pytest.approx(float(b), abs=1e-3), (name, k, a, b)
     assert re.match(r"time per instant: model [\d.]+ ms, solve [\d.]+ ms", shown[-1])

@@ -203,3 +203,22 @@ def test_neck_replay_in_windows(tmp_path):
     table = convergence(robot, res, "rk4", substeps=4, levels=3, window=1)
     assert table.reports[0].growth_rate > 100
     assert 3.3 < table.observed_order[0] < 4.3
+
+
+def test_problem_of_a_run_is_rebuilt_from_its_problem_json(two_link):
+    """``--resolve`` re-solves the problem the run solved: from ``problem_json`` any problem rebuilds
+    (smoothing included, which the problem string could not give), and files without it (older runs)
+    still rebuild the paper's cases from the problem string."""
+    from mcdm_pin import InverseDynamics, load_trajectory
+    from mcdm_pin.verify import problem_from_run
+
+    traj = load_trajectory(two_link, "traj1").subsample(5)
+    ident = InverseDynamics.for_case(two_link, 3, smoothing=0.1)
+    run = ident.solve_trajectory(traj, progress=False)
+    assert problem_from_run(two_link, run).spec() == ident.problem.spec()
+    plain = InverseDynamics.for_case(two_link, 3).solve_trajectory(traj, progress=False)
+    plain.problem_json = ""
+    assert problem_from_run(two_link, plain).spec() == InverseDynamics.for_case(two_link, 3).problem.spec()
+    run.problem_json = ""
+    with pytest.raises(ResultsError, match="smoothing"):
+        problem_from_run(two_link, run)

@@ -39,6 +39,17 @@ def _tracks(scene, path):
     return {tr.name: tr for tr in scene.tracks[path]}
 
 
+def expected_rgb(f, fmax):
+    """The cable colour scale written out independently of the viewer: the documented colours at equal
+    steps of [0, fmax], linear in between, clipped at both ends; no answer (NaN) grey."""
+    f = np.atleast_1d(np.asarray(f, dtype=float))
+    stops = np.linspace(0.0, fmax, len(CABLE_MAP))
+    x = np.clip(np.where(np.isfinite(f), f, 0.0), 0.0, fmax)
+    out = np.stack([np.interp(x, stops, CABLE_MAP[:, c]) for c in range(3)], axis=-1)
+    out[~np.isfinite(f)] = 0.55
+    return out
+
+
 def test_colour_scale_is_fixed_and_documented():
     # a finer "nice" top: the 2-link arm's 53.8 N peak is drawn on 0..60 N, not 0..100 N
     assert nice_ceil(53.8) == 60.0 and nice_ceil(125.2) == 150.0 and nice_ceil(158.3) == 200.0
@@ -46,6 +57,7 @@ def test_colour_scale_is_fixed_and_documented():
     for x in np.geomspace(1e-3, 1e5, 200):
         assert x <= nice_ceil(x) <= 1.34 * x  # at most a third above the peak
     rgb = tension_rgb([0.0, 50.0, 100.0, 250.0, np.nan], 100.0)
+    np.testing.assert_allclose(rgb, expected_rgb([0.0, 50.0, 100.0, 250.0, np.nan], 100.0), atol=1e-12)
     np.testing.assert_allclose(rgb[0], CABLE_MAP[0])
     np.testing.assert_allclose(rgb[2], CABLE_MAP[-1])
     np.testing.assert_allclose(rgb[3], CABLE_MAP[-1])  # above the scale: the top colour
@@ -69,7 +81,8 @@ def test_scene_animates_every_cable_segment_by_tension(two_link, runs):
         assert path in objects
         tr = _tracks(scene, path)
         np.testing.assert_allclose(tr["body.material.color"].values,
-                                   tension_rgb(run.f[:, two_link.cable_names.index(c.name)], scene.fmax))
+                                   expected_rgb(run.f[:, two_link.cable_names.index(c.name)], scene.fmax),
+                                   atol=1e-12)
         # the cylinder spans the attachment points: its length is the cable length
         lengths = tr["scale"].values[:, 1]
         k = 37
@@ -281,7 +294,7 @@ def test_chromium_two_link_framed_no_stray_grid_and_minimum_force_cables_stand_o
     # cables are unlit: their pixels have exactly the scale's colours; at this instant at least two
     # clearly different colours are seen on screen (and not in the empty scene)
     seen = []
-    for rgb in tension_rgb(run.f[k], scene.fmax):
+    for rgb in expected_rgb(run.f[k], scene.fmax):
         n = int(np.sum(_near(img, rgb) & ~_near(ref, rgb)))
         if n >= 15 and all(np.abs(rgb - s).max() > 0.25 for s in seen):
             seen.append(rgb)
@@ -326,6 +339,6 @@ def test_chromium_human_arm_upright_and_framed(chromium, tmp_path):
     assert h > 0.8 and h > 1.3 * w, (h, w)
     assert _stray_lines(img, mask) == 0
     # the muscles are on screen: pixels of the cable scale's colours, unlit, not in the empty scene
-    cable_colors = tension_rgb(run.f[run.t == 1.0][0], scene.fmax)
+    cable_colors = expected_rgb(run.f[run.t == 1.0][0], scene.fmax)
     n = sum(int(np.sum(_near(img, rgb, 0.04) & ~_near(ref, rgb, 0.04))) for rgb in np.unique(cable_colors, axis=0))
     assert n > 300, n

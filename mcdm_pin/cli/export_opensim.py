@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
-from ._common import UsageError, parse_float
+from pathlib import Path
+
+from ._common import UsageError, check_outputs, parse_float
+from ._files import robot_file
 
 
 def add(sub):
@@ -24,7 +27,10 @@ def run(args) -> int:
     from ..export.opensim import describe, export_opensim
     from ..robot import Robot
 
-    robot = Robot.load(args.robot)
+    if Path(args.out).suffix.lower() != ".osim":
+        raise UsageError(f"OUT: expected a file name ending in .osim, got {args.out!r}")
+    robot = Robot.load(robot_file(args.robot))
+    check_outputs([("OUT", args.out)], [("the sidecar", robot.sidecar.path), ("the URDF", robot.urdf_path)])
     f0 = None if args.optimal_force is None else parse_float(args.optimal_force, "--optimal-force")
     if f0 is not None and f0 <= 0:
         raise UsageError(f"--optimal-force: expected a force > 0 N, got {args.optimal_force!r}")

@@ -21,7 +21,13 @@ def add(sub):
     p.add_argument("--cone", help="cone half-angle per joint: JOINT=DEG,... or all=DEG (case 3)")
     p.add_argument("--frame", choices=("socket", "child"), default="socket",
                    help="frame of the cone's force (default socket, the source paper's)")
-    p.add_argument("--solver", default="proxqp", help="proxqp (default) or clarabel (exact reference)")
+    p.add_argument("--solver", default="default",
+                   help="default (the compiled active set and interior-point method, ProxQP and "
+                        "Clarabel as fallbacks), or one method alone: compiled, proxqp, clarabel "
+                        "(the exact reference)")
+    p.add_argument("--budget", type=float, default=1.0, metavar="SECONDS",
+                   help="time budget per instant (default 1 s): an instant not solved by then is "
+                        "reported with status 'budget'")
     p.add_argument("--samples", type=int, help="solve N instants spread over the trajectory")
     p.add_argument("--smoothing", type=float, default=0.0, help="weight of |f - f_prev|^2 (default 0)")
     p.add_argument("--soften", action="store_true",
@@ -62,8 +68,10 @@ def run_solve(args):
     from ..problem import case_problem
     problem = case_problem(robot, args.case, alpha=alpha, beta=beta, cones=cones, frame=args.frame,
                            smoothing=args.smoothing)
+    if not args.budget > 0:
+        raise UsageError(f"--budget: expected a positive number of seconds, got {args.budget}")
     ident = InverseDynamics(robot, problem, solver=args.solver, soften=args.soften,
-                            diagnose=not args.no_diagnosis)
+                            diagnose=not args.no_diagnosis, budget_s=args.budget)
     if args.workers < 1:
         raise UsageError(f"--workers: expected a positive number, got {args.workers}")
     result = ident.solve_trajectory(traj, progress=False if args.quiet else None, workers=args.workers)

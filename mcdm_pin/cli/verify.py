@@ -45,7 +45,7 @@ def _resolved(robot, result, robot_path):
     if result.trajectory not in specs:
         raise UsageError(f"--resolve: the run's trajectory {result.trajectory!r} is not in "
                          f"{robot_path} (it has {', '.join(specs) or 'none'})")
-    ident = InverseDynamics(robot, problem_from_run(robot, result), solver=result.solver or "proxqp")
+    ident = InverseDynamics(robot, problem_from_run(robot, result), solver=result.solver or "default")
     return resolved_forces(ident, planned_state(robot, specs[result.trajectory]))
 
 

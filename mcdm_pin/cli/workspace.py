@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._files import robot_file
 from ._common import UsageError, parse_cones, parse_float, parse_pairs, parse_weights
 
 
@@ -18,7 +19,7 @@ def add(sub):
     p.add_argument("--weights", help="alpha (and beta) per joint: JOINT=ALPHA[:BETA],...")
     p.add_argument("--frame", choices=("socket", "child"), default="socket",
                    help="frame of the cone's force (default socket)")
-    p.add_argument("--solver", default="proxqp", help="proxqp (default) or clarabel")
+    p.add_argument("--solver", default="default", help="default (the full chain), compiled, proxqp or clarabel")
     poses = p.add_mutually_exclusive_group(required=True)
     poses.add_argument("--grid", action="append", metavar="COORD=LO:HI:N",
                        help="a grid axis (repeatable; the last varies fastest); coordinates as "
@@ -87,7 +88,8 @@ def build(args):
     from ..robot import Robot
     from ..workspace import Grid, PosesFile, RandomPoses, Setup
 
-    robot = Robot.load(args.robot)
+    robot = Robot.load(robot_file(args.robot))
+    _check_out(args, robot)
     alpha, beta = parse_weights(robot, args.weights)
     cones = parse_cones(robot, args.cone)
     if cones and args.case != 3:
@@ -107,6 +109,23 @@ def build(args):
                   solver=args.solver, qd=_rates(robot, args.qd, "--qd"),
                   qdd=_rates(robot, args.qdd, "--qdd"), margins=not args.no_margins)
     return robot, poses, setup
+
+
+def _check_out(args, robot) -> None:
+    """The store's path checked before any pose is solved: a ``.zarr`` folder name in an existing
+    folder, not one of the run's inputs."""
+    from pathlib import Path
+
+    out = Path(args.out)
+    if out.suffix != ".zarr":
+        raise UsageError(f"--out {out}: expected a store name ending in .zarr")
+    if not out.resolve().parent.is_dir():
+        raise UsageError(f"--out {out}: the folder {out.parent} does not exist")
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"--out {out}: is a file, not a Zarr store")
+    inputs = {Path(p).resolve() for p in (robot.sidecar.path, robot.urdf_path, args.poses) if p is not None}
+    if out.resolve() in inputs:
+        raise UsageError(f"--out {out}: is an input of this run; choose another name")
 
 
 def run(args) -> int:

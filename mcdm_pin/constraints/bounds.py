@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..exceptions import ProblemError
+from ..objectives.base import array_spec, optional_array
 from .base import Constraint
 
 
@@ -13,18 +14,26 @@ class CableForceBounds(Constraint):
         self.f_min = None if f_min is None else np.asarray(f_min, dtype=float)
         self.f_max = None if f_max is None else np.asarray(f_max, dtype=float)
 
-    def validate(self, robot) -> None:
+    def bind(self, robot) -> "CableForceBounds":
         lo = robot.f_min if self.f_min is None else self.f_min
         hi = robot.f_max if self.f_max is None else self.f_max
         if lo.shape != (robot.m,) or hi.shape != (robot.m,):
             raise ProblemError(f"CableForceBounds: expected {robot.m} lower and upper bounds")
         if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))) or np.any(lo < 0) or np.any(hi <= lo):
             raise ProblemError("CableForceBounds: expected finite bounds with 0 <= f_min < f_max")
+        return self
 
     def bounds(self, terms, context):
         r = context.robot
         return (r.f_min if self.f_min is None else self.f_min,
                 r.f_max if self.f_max is None else self.f_max)
+
+    def spec(self) -> dict:
+        return {"type": "CableForceBounds", "f_min": array_spec(self.f_min), "f_max": array_spec(self.f_max)}
+
+    @classmethod
+    def from_spec(cls, spec: dict) -> "CableForceBounds":
+        return cls(optional_array(spec, "f_min"), optional_array(spec, "f_max"))
 
     def __repr__(self) -> str:
         return "CableForceBounds()"

@@ -26,57 +26,66 @@ class InteractionCone(Constraint):
         frame: ``socket`` (default, the source paper's convention) or ``child``.
     """
 
-    def __init__(self, joint: str, angle_deg: float | None = None, frame: str = "socket"):
+    def __init__(self, joint: str, angle_deg: float | None = None, frame: str = "socket",
+                 _index: int | None = None, _basis: np.ndarray | None = None):
         if frame not in FRAMES:
             raise ProblemError(f"InteractionCone: frame must be one of {FRAMES}, got {frame!r}")
         self.joint, self.angle_deg, self.frame = joint, angle_deg, frame
-        self._index = None
+        self.bound = _index is not None
+        self.index, self.basis = _index, _basis
 
-    def validate(self, robot) -> None:
+    def bind(self, robot) -> "InteractionCone":
         joint = robot.joint(self.joint)
         if joint.type != "spherical":
             raise ProblemError(f"InteractionCone: joint {self.joint!r} is {joint.type}; cones apply to "
                                f"spherical joints")
-        if self.angle_deg is None:
+        angle = self.angle_deg
+        if angle is None:
             if joint.cone_deg is None:
                 raise ProblemError(f"InteractionCone: joint {self.joint!r} has no cone_deg in the sidecar; "
                                    f"give an angle")
-            self.angle_deg = joint.cone_deg
-        if not (0.0 < float(self.angle_deg) < 90.0):
+            angle = joint.cone_deg
+        if not (0.0 < float(angle) < 90.0):
             raise ProblemError(f"InteractionCone: angle for {self.joint!r} must be in (0, 90) deg, "
-                               f"got {self.angle_deg!r}")
-        self._index = robot.joint_names.index(self.joint)
-        self._basis = perpendicular_basis(joint.socket_axis)
+                               f"got {angle!r}")
+        return InteractionCone(self.joint, float(angle), self.frame, _index=robot.joint_names.index(self.joint),
+                               _basis=perpendicular_basis(joint.socket_axis))
 
     def cones(self, terms, context) -> list[ConeData]:
-        if self._index is None:
-            self.validate(context.robot)
-        a = self._index
+        if not self.bound:
+            return self.bind(context.robot).cones(terms, context)
+        a = self.index
         G, g = terms.RT[a, :3], terms.u[a, :3]
         if self.frame == "socket":
             Rs = terms.R_socket[a]
             G, g = Rs @ G, Rs @ g
         return [ConeData(joint=self.joint, G=G, g=g, axis=terms.socket_axes[a],
-                         angle_deg=float(self.angle_deg), basis=self._basis)]
+                         angle_deg=float(self.angle_deg), basis=self.basis)]
+
+    def spec(self) -> dict:
+        return {"type": "InteractionCone", "joint": self.joint,
+                "angle_deg": None if self.angle_deg is None else float(self.angle_deg), "frame": self.frame}
+
+    @classmethod
+    def from_spec(cls, spec: dict) -> "InteractionCone":
+        return cls(spec["joint"], spec.get("angle_deg"), spec.get("frame", "socket"))
 
     def __repr__(self) -> str:
         return f"InteractionCone({self.joint!r}, {self.angle_deg}, frame={self.frame!r})"
 
 
 class ConeBatch:
-    """All :class:`InteractionCone` constraints of a problem evaluated at once: one batched product
-    for every cone's ``G, g`` instead of one small product per cone (the per-instant hot path)."""
+    """All bound :class:`InteractionCone` constraints of a problem evaluated at once: one batched
+    product for every cone's ``G, g`` instead of one small product per cone (the per-instant hot
+    path)."""
 
-    def __init__(self, robot, cones: list[InteractionCone]):
-        for c in cones:
-            if c._index is None:
-                c.validate(robot)
+    def __init__(self, cones: list[InteractionCone]):
         self.cones = cones
-        self.index = np.array([c._index for c in cones], dtype=int)
+        self.index = np.array([c.index for c in cones], dtype=int)
         self.socket = np.array([c.frame == "socket" for c in cones])
         self.all_socket = bool(self.socket.all())
         self.tan = np.array([np.tan(np.radians(float(c.angle_deg))) for c in cones])
-        self.basis0 = np.array([c._basis[0] for c in cones]).reshape(len(cones), 3)
+        self.basis0 = np.array([c.basis[0] for c in cones]).reshape(len(cones), 3)
 
     def __call__(self, terms) -> tuple[list[ConeData], tuple]:
         idx = self.index
@@ -91,5 +100,5 @@ class ConeBatch:
             G[s], g[s] = Rs @ G[s], np.einsum("kab,kb->ka", Rs, g[s])
         axes = terms.socket_axes[idx]
         data = [ConeData(joint=c.joint, G=G[k], g=g[k], axis=axes[k], angle_deg=float(c.angle_deg),
-                         basis=c._basis) for k, c in enumerate(self.cones)]
+                         basis=c.basis) for k, c in enumerate(self.cones)]
         return data, (G, g, axes, self.tan, self.basis0)

@@ -9,5 +9,12 @@ class EquationOfMotion(Constraint):
     def equalities(self, terms, context):
         return terms.L.T, -terms.tau
 
+    def spec(self) -> dict:
+        return {"type": "EquationOfMotion"}
+
+    @classmethod
+    def from_spec(cls, spec: dict) -> "EquationOfMotion":
+        return cls()
+
     def __repr__(self) -> str:
         return "EquationOfMotion()"

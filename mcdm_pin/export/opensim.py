@@ -151,13 +151,28 @@ def describe(robot) -> RobotSpec:
         bodies.append(BodySpec(names[jid], jid, float(inertia.mass), np.array(inertia.lever),
                                np.array(inertia.inertia)))
     cs = robot.cables
-    cables = []
+    cables, taken = [], set()
     for k, cable in enumerate(cs.cables):
         rows = np.flatnonzero(cs.point_cable == k)
         pts = tuple((names[int(cs.point_joint[r])], tuple(float(x) for x in cs.point_local[r])) for r in rows)
-        cables.append(CableSpec(cable.name, pts, float(cable.f_min), float(cable.f_max)))
+        cables.append(CableSpec(osim_name(cable.name, taken), pts, float(cable.f_min), float(cable.f_max)))
     return RobotSpec(str(robot.name), np.array(model.gravity.linear), tuple(bodies), joints, tuple(cables),
                      tuple(robot.coordinate_names))
+
+
+_OSIM_INVALID = "\\*+ \t\n/"  # characters OpenSim refuses in a component's name
+
+
+def osim_name(name: str, taken: set) -> str:
+    """``name`` as OpenSim accepts it: each character OpenSim refuses in a component name (space, tab,
+    newline, ``\\ * + /``) becomes ``_``, and ``#2``, ``#3``, ... keeps it unique among ``taken``
+    (updated). The neck's cables are named like ``cleid-mast (right)``: ``cleid-mast_(right)``."""
+    out = "".join("_" if ch in _OSIM_INVALID else ch for ch in str(name)) or "_"
+    base, k = out, 2
+    while out in taken:
+        out, k = f"{base}#{k}", k + 1
+    taken.add(out)
+    return out
 
 
 def _body_names(model: pin.Model) -> dict[int, str]:

@@ -7,8 +7,9 @@ elements: its cost is numpy's per-call overhead, not arithmetic (0.13 ms of the 
 route points and segments. It is the only place with explicit loops over cables; the numpy path
 stays as the reference it is tested against (``tests/test_kernels.py``).
 
-Compiled on first use and cached on disk (numba ``cache=True``: ``__pycache__`` beside this file,
-or ``NUMBA_CACHE_DIR``), so only the first run on a machine pays the compilation (a few seconds).
+Compiled once per machine and cached on disk (numba ``cache=True``: ``__pycache__`` beside this
+file, or ``NUMBA_CACHE_DIR``); :mod:`mcdm_pin.jit` loads the cache or compiles in the background, so
+no run waits for it.
 """
 
 from __future__ import annotations
@@ -168,19 +169,30 @@ def csr(lists, n):
     return ptr, idx
 
 
-def warm_up() -> None:
-    """Compile (first run on a machine, ~25 s) or load from numba's cache (~0.3 s) every kernel of the
-    hot path, on tiny inputs of the types the library passes, so that no timed instant pays for it."""
-    from ..solvers import _kkt
-
+def warm_calls():
+    """This module's kernels with example arguments of the types the library passes (registered
+    with :mod:`mcdm_pin.jit`, which loads them from numba's cache or compiles them)."""
     z = np.zeros
     i64 = np.int64
-    spread(z((1, 2)), z(1))
-    cable_terms(np.tile(np.eye(4), (1, 1, 1)), z((1, 6)), z((2, 3)), z(2, dtype=i64),
-                np.array([0], dtype=i64), np.array([1], dtype=i64), np.array([0], dtype=i64),
-                np.array([False]), z(2, dtype=i64), z(0, dtype=i64), z(2, dtype=i64), z(0, dtype=i64),
-                z(0, dtype=i64), z(0, dtype=i64), z((0, 3, 3)), 1, 0)
-    n = 2
-    _kkt.active_set_solve(np.eye(n), z(n), np.ones((1, n)), np.ones(1), z(n), np.ones(n), z(n, dtype=np.int8),
-                          z((0, 3, n)), z((0, 3)), z((0, 3)), z(0), z((0, 3)), z(0, dtype=np.bool_), z((0, 3)),
-                          2, 2, 1e-10, 1e-12, 1e-9, 1e-11, 1e-12)
+    return [(spread, (z((1, 2)), z(1))),
+            (cable_terms, (np.tile(np.eye(4), (1, 1, 1)), z((1, 6)), z((2, 3)), z(2, dtype=i64),
+                           np.array([0], dtype=i64), np.array([1], dtype=i64), np.array([0], dtype=i64),
+                           np.array([False]), z(2, dtype=i64), z(0, dtype=i64), z(2, dtype=i64),
+                           z(0, dtype=i64), z(0, dtype=i64), z(0, dtype=i64), z((0, 3, 3)), 1, 0))]
+
+
+def warm_up() -> None:
+    """Load every registered kernel from numba's cache, or start compiling them without waiting
+    (:func:`mcdm_pin.jit.prepare`)."""
+    from .. import jit
+
+    jit.prepare()
+
+
+def _register() -> None:
+    from .. import jit
+
+    jit.register("mcdm_pin.model.kernels", warm_calls)
+
+
+_register()

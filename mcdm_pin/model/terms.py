@@ -122,13 +122,18 @@ class Terms:
         F = self.socket_forces(f) if frame == "socket" else self.wrenches(f)[:, :3]
         return interaction_angles(F, self.socket_axes)
 
-    def eom_residual(self, f) -> float:
-        """Relative equation-of-motion residual ``|tau + L^T f|_inf / scale`` with
-        ``scale = max(|tau|_inf, max_i sum_c |L_ci f_c|)``."""
+    def eom_residual(self, f, extra=None) -> float:
+        """Relative equation-of-motion residual ``|tau + L^T f + extra|_inf / scale`` with
+        ``scale = max(|tau|_inf, max_i sum_c |L_ci f_c|, |extra|_inf)`` (``extra`` (nv,): further
+        generalised forces on the left-hand side, e.g. ``-S tau_act`` of a hybrid robot's actuators)."""
         f = np.asarray(f, dtype=float)
         r = self.tau + self.L.T @ f
+        extra_scale = 0.0
+        if extra is not None:
+            r = r + extra
+            extra_scale = float(np.abs(extra).max(initial=0.0))
         scale = max(np.abs(self.tau).max(initial=0.0), (np.abs(self.L.T) @ np.abs(f)).max(initial=0.0),
-                    1e-300)
+                    extra_scale, 1e-300)
         return float(np.abs(r).max(initial=0.0) / scale)
 
 

@@ -1,5 +1,9 @@
 r"""Case 2: :math:`J(f) = \sum_a \alpha_a |F_a|^2 + \beta_a |M_a|^2` with
-:math:`p_a = [F_a; M_a] = u_a + R_a^T f` (positive semidefinite in :math:`f`)."""
+:math:`p_a = [F_a; M_a] = u_a + R_a^T f` (positive semidefinite in :math:`f`).
+
+With :math:`K = \sqrt{w}\, R^T` (the rows of non-zero weight) and :math:`k = \sqrt{w}\, u`:
+:math:`J = |K f + k|^2`, so ``P = 2 K^T K`` (factor :math:`\sqrt2 K`), ``c = 2 K^T k``, ``r = |k|^2``.
+"""
 
 from __future__ import annotations
 
@@ -17,14 +21,19 @@ class MinInteractions(Objective):
         beta: ``{joint: weight}`` of |M|^2 (N^-2 m^-2); likewise.
     """
 
-    symmetric = True  # P = R^T W R is formed symmetric (see quadratic)
+    symmetric = True  # P = K^T K is formed symmetric (see quadratic)
 
-    def __init__(self, alpha: dict | None = None, beta: dict | None = None):
+    def __init__(self, alpha: dict | None = None, beta: dict | None = None, _w: np.ndarray | None = None):
         self.alpha = dict(alpha or {})
         self.beta = dict(beta or {})
-        self._w = None
+        self.bound = _w is not None
+        self._w = _w
+        if _w is not None:
+            w = _w.reshape(-1)
+            self._keep = np.flatnonzero(w != 0.0)
+            self._sqrt_w = np.sqrt(w[self._keep])
 
-    def validate(self, robot) -> None:
+    def bind(self, robot) -> "MinInteractions":
         names = robot.joint_names
         for label, d in (("alpha", self.alpha), ("beta", self.beta)):
             for k, v in d.items():
@@ -35,26 +44,31 @@ class MinInteractions(Objective):
                     raise ProblemError(f"MinInteractions: {label}[{k!r}] must be finite and >= 0, got {v!r}")
         a = np.array([self.alpha.get(j.name, j.alpha) for j in robot.joints], dtype=float)
         b = np.array([self.beta.get(j.name, j.beta) for j in robot.joints], dtype=float)
-        self._w = np.concatenate([np.repeat(a[:, None], 3, 1), np.repeat(b[:, None], 3, 1)], axis=1)
-        w = self._w.reshape(-1)
-        self._keep = np.flatnonzero(w != 0.0)
-        self._sqrt_w = np.sqrt(w[self._keep])
+        w = np.concatenate([np.repeat(a[:, None], 3, 1), np.repeat(b[:, None], 3, 1)], axis=1)
+        return MinInteractions(self.alpha, self.beta, _w=w)
 
     def weights(self, robot) -> np.ndarray:
         """(J, 6) weights of the squared wrench components."""
-        self.validate(robot)
-        return self._w
+        return self.bind(robot)._w
 
     def quadratic(self, terms, context) -> Quadratic:
-        if self._w is None:
-            self.validate(context.robot)
+        if not self.bound:
+            return self._bound_for(context).quadratic(terms, context)
         keep, sw = self._keep, self._sqrt_w
-        SR = sw[:, None] * terms.RT.reshape(len(self._w.reshape(-1)), -1)[keep]  # sqrt(w) R, (k, m)
-        su = sw * terms.u.reshape(-1)[keep]
-        P = SR.T @ SR  # exactly symmetric (a Gram matrix: BLAS syrk-like product of SR with itself)
-        c = 2.0 * (su @ SR)
-        r = float(su @ su)
-        return Quadratic(P, c, r)
+        K = sw[:, None] * terms.RT.reshape(self._w.size, -1)[keep]  # sqrt(w) R^T, (k, m)
+        k = sw * terms.u.reshape(-1)[keep]
+        F = np.sqrt(2.0) * K
+        P = F.T @ F  # exactly symmetric (a Gram matrix)
+        c = 2.0 * (k @ K)
+        return Quadratic(P, c, float(k @ k), np.zeros(P.shape[0]), F)
+
+    def spec(self) -> dict:
+        return {"type": "MinInteractions", "alpha": {k: float(v) for k, v in self.alpha.items()},
+                "beta": {k: float(v) for k, v in self.beta.items()}}
+
+    @classmethod
+    def from_spec(cls, spec: dict) -> "MinInteractions":
+        return cls(spec.get("alpha") or None, spec.get("beta") or None)
 
     def __repr__(self) -> str:
         return f"MinInteractions(alpha={self.alpha or 'sidecar'}, beta={self.beta or 'sidecar'})"

@@ -20,9 +20,17 @@ class Smoothing(Objective):
         m = terms.L.shape[0]
         prev = context.f_prev
         if prev is None or self.weight == 0.0 or not np.all(np.isfinite(prev)):
-            return Quadratic(np.zeros((m, m)), np.zeros(m), 0.0)
+            return Quadratic(np.zeros((m, m)), np.zeros(m), 0.0, np.zeros(m), np.zeros((0, m)))
         w = self.weight
-        return Quadratic(w * np.eye(m), -2.0 * w * prev, float(w * prev @ prev))
+        return Quadratic(2.0 * w * np.eye(m), -2.0 * w * prev, float(w * prev @ prev), np.full(m, 2.0 * w),
+                         np.zeros((0, m)))
+
+    def spec(self) -> dict:
+        return {"type": "Smoothing", "weight": self.weight}
+
+    @classmethod
+    def from_spec(cls, spec: dict) -> "Smoothing":
+        return cls(spec["weight"])
 
     def __repr__(self) -> str:
         return f"Smoothing({self.weight:g})"

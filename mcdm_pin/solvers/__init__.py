@@ -1,26 +1,22 @@
-"""Solver back-ends behind one signature: ``solver.solve(qp: QPData) -> Solution``."""
+"""Solvers: stages behind one signature, chained into back-ends (:mod:`.cascade`)."""
 
 from __future__ import annotations
 
-from ..exceptions import SolverError
-from .base import (ERROR, INACCURATE, INFEASIBLE, MAX_ITER, OPTIMAL, SOFTENED, STATUSES, Solution,
-                   Solver)
+from .. import tolerances as _tol
+from .base import (BUDGET, ERROR, INACCURATE, INFEASIBLE, MAX_ITER, OPTIMAL, SOFTENED, STATUSES, Solution,
+                   Solver, Stage)
+from .cascade import BACKENDS, Cascade, make_solver
 from .proxqp_ import ProxQPSolver
 
-BACKENDS = ("proxqp", "clarabel")
 
-
-def get_solver(name: str = "proxqp", **options) -> Solver:
-    """A back-end by name: ``proxqp`` (default) or ``clarabel`` (exact reference, optional)."""
+def get_solver(name="default", budget_s: float | None = _tol.BUDGET_S, **options) -> Solver:
+    """A back-end by name (:data:`BACKENDS`): ``default`` (the full cascade), ``compiled`` (the compiled
+    active set and interior-point method alone), ``proxqp`` (ProxQP alone), ``clarabel`` (Clarabel
+    alone, the exact reference); a :class:`Solver` is returned as it is."""
     if isinstance(name, Solver):
         return name
-    if name == "proxqp":
-        return ProxQPSolver(**options)
-    if name == "clarabel":
-        from .clarabel_ import ClarabelSolver
-        return ClarabelSolver(**options)
-    raise SolverError(f"unknown solver {name!r}; expected one of {', '.join(BACKENDS)}")
+    return make_solver(name, budget_s=budget_s, **options)
 
 
-__all__ = ["get_solver", "Solver", "Solution", "ProxQPSolver", "BACKENDS", "STATUSES", "OPTIMAL",
-           "INFEASIBLE", "MAX_ITER", "SOFTENED", "INACCURATE", "ERROR"]
+__all__ = ["get_solver", "Solver", "Solution", "Stage", "Cascade", "ProxQPSolver", "BACKENDS", "STATUSES",
+           "OPTIMAL", "INFEASIBLE", "MAX_ITER", "SOFTENED", "INACCURATE", "BUDGET", "ERROR"]

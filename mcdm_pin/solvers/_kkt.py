@@ -24,15 +24,55 @@ REASONS = {SINGULAR: "singular KKT system", NO_CONVERGENCE: "Newton steps on the
            CYCLE: "the active set cycles", PIVOT_LIMIT: "no verified point within the pivot limit"}
 
 
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _lu_solve(K, rhs):
+    """``K x = rhs`` by LU with partial pivoting, in place on copies (LAPACK's ``dgesv`` without the
+    copies to Fortran order that ``np.linalg.solve`` makes: 3x faster at these sizes). Returns
+    ``(x, ok)``; ``ok`` false when a pivot is exactly zero or not finite."""
+    n = K.shape[0]
+    M = K.copy()
+    x = rhs.copy()
+    for k in range(n):
+        p = k
+        big = abs(M[k, k])
+        for i in range(k + 1, n):
+            v = abs(M[i, k])
+            if v > big:
+                big, p = v, i
+        if not (big > 0.0) or not np.isfinite(big):
+            return x, False
+        if p != k:
+            for j in range(n):
+                M[k, j], M[p, j] = M[p, j], M[k, j]
+            x[k], x[p] = x[p], x[k]
+        Mk = M[k]
+        inv = 1.0 / Mk[k]
+        for i in range(k + 1, n):
+            Mi = M[i]
+            l = Mi[k] * inv
+            if l != 0.0:
+                for j in range(k + 1, n):
+                    Mi[j] -= l * Mk[j]
+                x[i] -= l * x[k]
+    for i in range(n - 1, -1, -1):
+        Mi = M[i]
+        acc = x[i]
+        for j in range(i + 1, n):
+            acc -= Mi[j] * x[j]
+        x[i] = acc / Mi[i]
+    return x, True
+
+
 @njit(cache=True, nogil=True)
 def _kkt_solve(K, rhs, square):
     """``K x = rhs`` by LU; least squares when ``K`` is not square-solvable (then the residual must be
     at rounding level, else NaNs: a singular, inconsistent system)."""
     if square:
-        try:
-            return np.linalg.solve(K, rhs)
-        except Exception:  # noqa: BLE001 (numba: LinAlgError on an exactly singular system)
-            pass
+        sol, ok = _lu_solve(K, rhs)
+        if ok:
+            ok = np.all(np.isfinite(sol))
+        if ok:
+            return sol
     sol = np.linalg.lstsq(K, rhs)[0]
     scale = 1.0
     for i in range(rhs.shape[0]):
@@ -43,6 +83,93 @@ def _kkt_solve(K, rhs, square):
             sol[:] = np.nan
             break
     return sol
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _determined_solve(K, rhs, nf):
+    """``K = [[Hxx, R^T], [R, 0]]`` with fewer unknowns ``nf`` than rows of ``R`` (at a vertex whose
+    equations are dependent: the neck at its optimum has 16 free cables for 24 equations). When
+    ``R`` has full column rank, ``x`` is fixed by the (consistent) rows alone, ``x = (R^T R)^-1 R^T
+    r_c``, and the multipliers are the least-norm solution of ``R^T l = r_x - Hxx x``: what least
+    squares on the whole system gives, from one Cholesky of ``R^T R`` instead of an SVD of ``K``
+    (10x faster). Falls back to :func:`_kkt_solve` otherwise."""
+    N = K.shape[0]
+    m = N - nf
+    Nm = np.zeros((nf, nf))
+    for i in range(m):
+        Ri = K[nf + i]
+        for a in range(nf):
+            ra = Ri[a]
+            if ra != 0.0:
+                for b in range(a + 1):
+                    Nm[a, b] += ra * Ri[b]
+    scale = 1e-300
+    for a in range(nf):
+        scale = max(scale, Nm[a, a])
+    for j in range(nf):
+        acc = Nm[j, j]
+        for k in range(j):
+            acc -= Nm[j, k] * Nm[j, k]
+        if not acc > 1e-12 * scale:
+            return _kkt_solve(K, rhs, False)
+        d = np.sqrt(acc)
+        Nm[j, j] = d
+        for i in range(j + 1, nf):
+            t = Nm[i, j]
+            for k in range(j):
+                t -= Nm[i, k] * Nm[j, k]
+            Nm[i, j] = t / d
+    # x = N^-1 R^T r_c
+    v = np.zeros(nf)
+    for i in range(m):
+        ri = rhs[nf + i]
+        for a in range(nf):
+            v[a] += K[nf + i, a] * ri
+    x = _chol_apply(Nm, v)
+    # the rows must be consistent (else the instant's active set is wrong: lstsq decides)
+    rscale = 1.0
+    for i in range(m):
+        rscale = max(rscale, abs(rhs[nf + i]))
+    for i in range(m):
+        acc = -rhs[nf + i]
+        for a in range(nf):
+            acc += K[nf + i, a] * x[a]
+        if not abs(acc) <= 1e-10 * rscale:
+            return _kkt_solve(K, rhs, False)
+    # l = R N^-1 (r_x - Hxx x)
+    w = np.empty(nf)
+    for a in range(nf):
+        acc = rhs[a]
+        for b in range(nf):
+            acc -= K[a, b] * x[b]
+        w[a] = acc
+    u = _chol_apply(Nm, w)
+    sol = np.empty(N)
+    sol[:nf] = x
+    for i in range(m):
+        acc = 0.0
+        for a in range(nf):
+            acc += K[nf + i, a] * u[a]
+        sol[nf + i] = acc
+    return sol
+
+
+@njit(cache=True, nogil=True)
+def _chol_apply(L, r):
+    """``(L L^T)^-1 r``."""
+    n = L.shape[0]
+    y = r.copy()
+    for i in range(n):
+        t = y[i]
+        for k in range(i):
+            t -= L[i, k] * y[k]
+        y[i] = t / L[i, i]
+    for i in range(n - 1, -1, -1):
+        t = y[i]
+        for k in range(i + 1, n):
+            t -= L[k, i] * y[k]
+        y[i] = t / L[i, i]
+    return y
 
 
 @njit(cache=True, nogil=True)
@@ -178,7 +305,7 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
                 K[p, nf + neq + s] = row[free[p]]
                 K[nf + neq + s, p] = row[free[p]]
             rhs[nf + neq + s] = rr
-        sol = _kkt_solve(K, rhs, square)
+        sol = _kkt_solve(K, rhs, square) if square else _determined_solve(K, rhs, nf)
         for i in range(N):
             if not np.isfinite(sol[i]):
                 return SINGULAR, f, y, mus, dirs
@@ -338,9 +465,9 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
 
     ``reg_rel``: the Tikhonov term of :func:`eq_solve` relative to the objective's scale.
 
-    Returns ``(code, f, mus, grad, state, cact, dirs, next_state)``: ``code`` :data:`FOUND` or a key
-    of :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers, ``grad`` the bounds'
-    multipliers, ``(state, cact, dirs)`` the optimum's active set and ``next_state`` the guess for
+    Returns ``(code, f, mus, grad, state, cact, dirs, next_state, y)``: ``code`` :data:`FOUND` or a
+    key of :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers, ``grad`` the bounds'
+    multipliers (> 0 at a lower bound), ``y`` the equations' multipliers, ``(state, cact, dirs)`` the optimum's active set and ``next_state`` the guess for
     the next instant (the bounds whose multiplier is not negligible, 1e-12 of the largest).
     """
     n = H.shape[0]
@@ -363,6 +490,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
     hist_s = np.zeros((max_pivots, n), dtype=np.int8)
     hist_c = np.zeros((max_pivots, nc), dtype=np.bool_)
     f = np.zeros(n)
+    y = np.zeros(neq)
     mus = np.zeros(nc)
     grad = np.zeros(n)
     # the last verified-but-not-optimal point, to step back to when a block pivot fails
@@ -392,7 +520,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
                         same = False
                         break
             if same:
-                return CYCLE, f, mus, grad, state, cact, cdir, state
+                return CYCLE, f, mus, grad, state, cact, cdir, state, y
         hist_s[it] = state
         hist_c[it] = cact
         code, f, y, mus, dirs = eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir,
@@ -411,7 +539,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
             blocks_ok = False  # from now on one change at a time (finite for strictly convex QPs)
             continue
         if code != OK and code != NO_CONVERGENCE:
-            return code, f, mus, grad, state, cact, cdir, state
+            return code, f, mus, grad, state, cact, cdir, state, y
         # Newton steps that did not settle still say which cables and cones to exchange; the point
         # itself is accepted only if it passes the full KKT check like any other
         (vcode, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind,
@@ -426,9 +554,9 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
             for i in range(n):
                 if (state[i] == 1 and not grad[i] > thr) or (state[i] == 2 and not grad[i] < -thr):
                     nxt[i] = 0
-            return FOUND, f, mus, grad, state, cact, dirs, nxt
+            return FOUND, f, mus, grad, state, cact, dirs, nxt, y
         if vcode != KKT_PIVOT:
-            return 20 + vcode, f, mus, grad, state, cact, cdir, state
+            return 20 + vcode, f, mus, grad, state, cact, cdir, state, y
         have_prev = True
         prev_state[:] = state
         prev_cact[:] = cact
@@ -484,7 +612,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
                                             neq, nc, n)
             last_was_block = False
         cdir = _next_dirs(cone_in, cone_dir, dirs, nc)
-    return PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state
+    return PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state, y
 
 
 @njit(cache=True, nogil=True)

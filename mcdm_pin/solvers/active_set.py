@@ -1,21 +1,25 @@
-r"""Active-set warm start: try the previous instant's active set first, accept only a verified KKT point.
+r"""Active-set stages: try a guessed active set, accept only a verified KKT point.
 
-Along a trajectory the set of cables at a bound and of cones that bind changes rarely. Given such a
-guess — cables fixed at ``f_min`` (``lower``) or ``f_max`` (``upper``), cones held on their surface —
+Along a trajectory the set of variables at a bound and of cones that bind changes rarely. Given such a
+guess — variables fixed at their lower (``1``) or upper (``2``) bound, cones held on their surface —
 the optimum for that active set solves an equality-constrained problem: one linear KKT system for the
 bounds, a few Newton (SQP) steps for the cones (each cone's surface
-:math:`c_k(f) = \|F_\perp\| - \tan\rho^*_k\, a^T F = 0` linearised, its curvature weighted by its
+:math:`c_k(x) = \|F_\perp\| - \tan\rho^*_k\, a^T F = 0` linearised, its curvature weighted by its
 multiplier). The point is returned only if it satisfies *all* the KKT conditions of the full convex
-problem to tight tolerances:
+problem to tight tolerances (:mod:`mcdm_pin.tolerances`, ``ACTIVE_SET_*``):
 
 - primal: equation of motion, every bound, every inactive cone (within its angle), active cones on
   the right nappe (``a . F > 0``);
 - dual: multipliers of the fixed bounds and active cones have the right sign;
-- stationarity on the free cables (by construction, checked).
+- stationarity on the free variables (by construction, checked).
 
-For a convex problem these conditions are sufficient: a verified point is a global optimum. When any
-check fails (the active set changed, a singular system, ...) the caller falls back to the full
-solver, whose answer gives the next guess.
+For a convex problem these conditions are sufficient: a verified point is a global optimum. When a
+check fails, block principal pivoting corrects the guess (compiled: :func:`._kkt.active_set_solve`);
+when it cannot, the stage has nothing to say and the next stage answers.
+
+Two stages use it: :class:`WarmActiveSet` (the previous instant's active set) and :class:`Polish` (the
+active set of another stage's answer: its exact KKT point, to rounding instead of to that stage's
+tolerance).
 """
 
 from __future__ import annotations
@@ -24,27 +28,26 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import jit
+from .. import tolerances as tol
 from ..problem import QPData
 from . import _kkt as K
+from .base import OPTIMAL, Solution, Stage
 
-# tolerances of the verification, relative to the problem's scale
-_PRIMAL_TOL = 1e-12  # bounds: |violation| <= tol * (1 + |bound|)
-_DUAL_TOL = 1e-9  # multipliers: >= -tol * gradient scale
-_EOM_TOL = 1e-11  # equation of motion, relative
-_REG = 1e-12  # Tikhonov term on the free cables, relative to the objective's scale (see _kkt.eq_solve)
-_STEP_TOL = 1e-10  # Newton step for cones, relative (the KKT solve's rounding floor is ~1e-11)
+_AS_TOLS = np.array([tol.ACTIVE_SET_STEP, tol.ACTIVE_SET_PRIMAL, tol.ACTIVE_SET_DUAL, tol.ACTIVE_SET_EOM,
+                     tol.ACTIVE_SET_REG])
 
 
 @dataclass
 class ActiveSet:
-    """A guess: index arrays of cables at their lower/upper bound, and per cone joint its surface
-    direction (unit vector of F_perp) and multiplier when it binds. ``state``, when given (the
-    compiled solver's own output), takes the place of ``lower`` and ``upper``."""
+    """A guess: index arrays of variables at their lower/upper bound, and per cone joint its surface
+    direction (unit vector of F_perp) and multiplier when it binds. ``state``, when given (int8
+    codes per variable: 0 free, 1 lower, 2 upper), takes the place of ``lower`` and ``upper``."""
 
     lower: np.ndarray
     upper: np.ndarray
     cones: dict = field(default_factory=dict)  # joint -> (direction (3,), multiplier)
-    state: np.ndarray | None = None  # the same as int8 codes per cable (0 free, 1 lower, 2 upper)
+    state: np.ndarray | None = None
 
     def cable_state(self, n: int) -> np.ndarray:
         if self.state is not None and self.state.shape == (n,):
@@ -55,73 +58,98 @@ class ActiveSet:
         return state
 
     @classmethod
-    def from_solution(cls, qp: QPData, f: np.ndarray, cone_mult: dict, bound_mult=None,
-                      tol: float = 1e-8):
-        """The active set of a solution: cables within ``tol`` (relative) of a bound whose
+    def from_solution(cls, qp: QPData, x: np.ndarray, cone_mult: dict, bound_mult=None,
+                      rel: float = tol.ACTIVE_SET_FROM_SOLUTION):
+        """The active set of a point: variables within ``rel`` (relative) of a bound whose
         multiplier pushes them onto it (``bound_mult``: > 0 at a lower bound, < 0 at an upper bound;
-        None: position only), and cones with a positive multiplier."""
-        near_l = f - qp.lb <= tol * (1.0 + np.abs(qp.lb))
-        near_u = qp.ub - f <= tol * (1.0 + np.abs(qp.ub))
+        None: position only), and cones with a positive multiplier whose force is on the surface."""
+        near_l = x - qp.lb <= rel * (1.0 + np.abs(qp.lb))
+        near_u = qp.ub - x <= rel * (1.0 + np.abs(qp.ub))
         if bound_mult is not None:
             thr = 1e-12 * max(np.abs(bound_mult).max(initial=0.0), 1e-300)
             near_l &= bound_mult > thr
             near_u &= bound_mult < -thr
         cones = {}
         if qp.cones:
-            G, gc, ax, _, _ = qp.cone_arrays()
-            F = gc + G @ f
-            perp = F - np.einsum("ka,ka->k", ax, F)[:, None] * ax
-            norm = np.sqrt(np.einsum("ka,ka->k", perp, perp))
+            G, gc, ax, tan, _ = qp.cone_arrays()
+            F = gc + G @ x
             along = np.einsum("ka,ka->k", ax, F)
-            tan = qp.cone_arrays()[3]
+            perp = F - along[:, None] * ax
+            norm = np.sqrt(np.einsum("ka,ka->k", perp, perp))
             for k, cone in enumerate(qp.cones):
                 mult = cone_mult.get(cone.joint, 0.0)
                 # binding: a positive multiplier and the force on the cone's surface (a cutting-plane
                 # solver reports tiny positive multipliers on cuts of cones that do not bind)
-                if mult > 0 and norm[k] > 0 and norm[k] >= tan[k] * along[k] * (1.0 - tol):
+                if mult > 0 and norm[k] > 0 and norm[k] >= tan[k] * along[k] * (1.0 - rel):
                     cones[cone.joint] = (perp[k] / norm[k], mult)
         return cls(np.flatnonzero(near_l), np.flatnonzero(near_u), cones)
 
+    @classmethod
+    def from_duals(cls, qp: QPData, sol: Solution) -> "ActiveSet":
+        """The active set of an answer with duals (:mod:`.base` convention); position only when it
+        has none."""
+        mult = {}
+        if qp.cones and sol.z_cone is not None:
+            cosr = np.cos(np.radians([c.angle_deg for c in qp.cones]))
+            mult = {c.joint: float(sol.z_cone[k, 0] * cosr[k]) for k, c in enumerate(qp.cones)}
+        elif qp.cones:
+            mult = {c.joint: 1.0 for c in qp.cones}
+        return cls.from_solution(qp, sol.x, mult, None if sol.z is None else -sol.z)
+
+
+def cone_duals(qp: QPData, mus: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+    r"""The second-order-cone duals (:meth:`QPData.cone_rows` form) of surface multipliers ``mus``
+    with surface directions ``dirs``: :math:`\mu_k/\cos\rho_k\,(1, -d_k\cdot e_1, -d_k\cdot e_2)`."""
+    K_ = len(qp.cones)
+    out = np.zeros((K_, 3))
+    for k, c in enumerate(qp.cones):
+        if mus[k] != 0.0:
+            s = mus[k] / np.cos(np.radians(c.angle_deg))
+            out[k] = s * np.array([1.0, -dirs[k] @ c.basis[0], -dirs[k] @ c.basis[1]])
+    return out
+
 
 def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newton: int = 10):
-    """The verified optimum, as ``(f, cone_multipliers, bound_multipliers, next_guess)``, or
-    ``None``; ``next_guess`` is the optimum's active set (for the next instant).
+    """The verified optimum reached from ``guess`` (a :class:`~.base.Solution` whose ``active`` is
+    the guess for the next instant), or ``None``.
 
-    Starting from ``guess``, the active set is corrected by block principal pivoting (free cables
-    that leave their bounds are fixed there, fixed cables whose multiplier has the wrong sign are
+    Starting from ``guess``, the active set is corrected by block principal pivoting (free variables
+    that leave their bounds are fixed there, fixed ones whose multiplier has the wrong sign are
     freed, broken cones join, cones with a negative multiplier leave) for at most ``max_pivots``
-    equality-constrained solves; a repeated active set stops it. The loop runs compiled
-    (:func:`._kkt.active_set_solve`).
-    """
+    equality-constrained solves; a repeated active set stops it."""
     G, gc, ax, tn, basis0 = qp.cone_arrays()
     state = guess.cable_state(qp.n)
+    # a variable can only be held at a finite bound (the least-norm stage frees some bounds)
+    bad = ((state == 1) & ~np.isfinite(qp.lb)) | ((state == 2) & ~np.isfinite(qp.ub))
+    if bad.any():
+        state = np.where(bad, 0, state).astype(np.int8)
     if qp.cones:
         names = [c.joint for c in qp.cones]
         cact = np.array([nm in guess.cones for nm in names], dtype=np.bool_)
-        cdir = np.array([guess.cones[nm][0] if nm in guess.cones else (0.0, 0.0, 0.0) for nm in names],
-                        dtype=float)
+        cdir = np.array([guess.cones[nm][0] if nm in guess.cones else basis0[k] for k, nm in enumerate(names)],
+                        dtype=float).reshape(len(names), 3)
     else:
         names, cact, cdir = [], _NO_CONES, _NO_DIRS
     # C-ordered float arrays and Python scalars: one compiled specialisation serves every call
-    # (each array layout would cost numba another ~20 s of compilation)
     c_ = np.ascontiguousarray
-    code, f, mus, grad, state, cact, dirs, nxt_state = K.active_set_solve(
-        c_(qp.H, dtype=float), c_(qp.c, dtype=float), c_(qp.A, dtype=float), c_(qp.b, dtype=float),
+    code, x, mus, grad, state, cact, dirs, nxt_state, y = K.active_set_solve(
+        c_(qp.P, dtype=float), c_(qp.c, dtype=float), c_(qp.A, dtype=float), c_(qp.b, dtype=float),
         c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), state, c_(G, dtype=float), c_(gc, dtype=float),
         c_(ax, dtype=float), c_(tn, dtype=float), c_(basis0, dtype=float), cact, c_(cdir, dtype=float),
-        int(max_pivots), int(max_newton), _STEP_TOL, _PRIMAL_TOL, _DUAL_TOL, _EOM_TOL, _REG)
+        int(max_pivots), int(max_newton), *_AS_TOLS)
     if code != K.FOUND:
-        return _miss(K.REASONS[code])
-    if names:
-        active = np.flatnonzero(cact)
-        mult = {names[k]: float(mus[k]) for k in active}
-        nxt_cones = {names[k]: (dirs[k], float(mus[k])) for k in active if mus[k] > 0}
-    else:
-        mult, nxt_cones = {}, {}
-    # the next instant's guess (as ActiveSet.from_solution would find it: bounds whose multiplier is
-    # not negligible, cones with a positive multiplier)
-    nxt = ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt_state)
-    return f, mult, grad, nxt
+        _miss(K.REASONS[code])
+        return None
+    return active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state)
+
+
+def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state) -> Solution:
+    """A verified active-set point as a :class:`~.base.Solution` (duals converted)."""
+    z = np.where(state != 0, -grad, 0.0)
+    nxt_cones = {c.joint: (dirs[k], float(mus[k])) for k, c in enumerate(qp.cones) if cact[k] and mus[k] > 0}
+    return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z,
+                    z_cone=cone_duals(qp, np.where(cact, mus, 0.0), dirs) if qp.cones else np.zeros((0, 3)),
+                    active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt_state), verified=True)
 
 
 _NO_CONES = np.zeros(0, dtype=np.bool_)
@@ -130,6 +158,57 @@ _EMPTY = np.zeros(0, dtype=int)
 MISSES: dict[str, int] = {}  # why guesses were rejected (counts, for profiling)
 
 
-def _miss(reason: str):
+def _miss(reason: str) -> None:
     MISSES[reason] = MISSES.get(reason, 0) + 1
-    return None
+
+
+class WarmActiveSet(Stage):
+    """Answering stage: the previous answer's active set (see the module docstring).
+
+    Args:
+        max_pivots: pivot limit (block principal pivoting) per instant.
+    """
+
+    name = "warm_active_set"
+
+    def __init__(self, max_pivots: int = 30):
+        self.max_pivots = max_pivots
+        self.guess: ActiveSet | None = None
+
+    def run(self, qp, sol, deadline):
+        if self.guess is None or not jit.ready():
+            return None
+        hit = try_active_set(qp, self.guess, self.max_pivots)
+        if hit is None:
+            return None
+        return hit.but(stage=self.name)
+
+    def learn(self, qp, sol):
+        self.guess = sol.active if sol.active is not None else ActiveSet.from_duals(qp, sol)
+
+    def seed(self, hint):
+        self.guess = hint.active
+
+    def reset(self):
+        self.guess = None
+
+
+class Polish(Stage):
+    """Refining stage: the exact KKT point of the active set of another stage's answer (bounds and
+    the equation of motion then hold to rounding instead of to that stage's tolerance), if it
+    verifies; the answer unchanged otherwise."""
+
+    name = "polish"
+    refines = True
+
+    def __init__(self, max_pivots: int = 30):
+        self.max_pivots = max_pivots
+
+    def run(self, qp, sol, deadline):
+        if sol.active is not None or not jit.ready():  # an active-set stage's answer is exact already
+            return sol
+        hit = try_active_set(qp, ActiveSet.from_duals(qp, sol), max_pivots=self.max_pivots)
+        if hit is None:
+            return sol
+        return hit.but(stage=f"{sol.stage}>{self.name}", iterations=sol.iterations, rounds=sol.rounds,
+                       message=sol.message)

@@ -1,67 +1,130 @@
-r"""Exact reference back-end: Clarabel's interior-point method on the second-order-cone program.
+r"""Clarabel's interior-point method on the exact second-order-cone program (stage ``clarabel``): the
+reference back-end, and the last resort of the default chain.
 
 Each cone :math:`\|F_\perp\| \le \tan\rho^*\, a^T F` is the cone
-:math:`(\tan\rho^*\,a^T F,\; e_1^T F,\; e_2^T F) \in \mathcal{Q}^3`.
-Clarabel is a dependency: besides serving as the exact reference, it answers the rare instants on
-which ProxQP stalls (:meth:`~mcdm_pin.solvers.proxqp_.ProxQPSolver._solve_fallback`).
+:math:`(\sin\rho^*\,a^T F,\; \cos\rho^*\,e_1^T F,\; \cos\rho^*\,e_2^T F) \in \mathcal{Q}^3`
+(:meth:`~mcdm_pin.problem.QPData.cone_rows`: rows of norm at most one for any half-angle; with
+``tan`` in the first row a cone of 89.99 degrees had rows 5730 times larger than the others).
+Clarabel's duals are returned in :mod:`.base`'s convention.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from .. import tolerances as tol
 from ..exceptions import SolverError
 from ..problem import QPData
-from .base import INACCURATE, INFEASIBLE, MAX_ITER, OPTIMAL, Solution, Solver, failure
+from .base import BUDGET, INACCURATE, INFEASIBLE, MAX_ITER, OPTIMAL, Solution, Stage, failure, now
 
 
 def cone_rows(qp: QPData) -> tuple[np.ndarray, np.ndarray]:
-    """Per cone, ``T (3, m)`` and ``t (3,)`` with ``s = T f + t = [tan a.F, e1.F, e2.F]``: the cone
-    is ``|s[1:]| <= s[0]``. Stacked: (K, 3, m), (K, 3)."""
-    if not qp.cones:
-        return np.zeros((0, 3, qp.n)), np.zeros((0, 3))
-    W = np.array([np.vstack([c.tan * c.axis, c.basis]) for c in qp.cones])  # (K, 3, 3)
-    G, g = qp.cone_arrays()[:2]
-    return W @ G, np.einsum("kab,kb->ka", W, g)
+    """:meth:`QPData.cone_rows` (kept for the benchmark's peers)."""
+    return qp.cone_rows()
 
 
 def conic_form(qp: QPData):
-    """``(P, c, A, b, cones)`` of Clarabel's ``min 1/2 x^T P x + c^T x, b - A x in cones``: the
-    equation of motion (zero cone), the finite bounds (non-negative cone), one second-order cone of
-    dimension 3 per stability cone (:func:`cone_rows`). ``P`` is the upper triangle, sparse."""
+    """``(P, c, A, b, cones, layout)`` of Clarabel's ``min 1/2 x^T P x + c^T x, b - A x in cones``:
+    the equations (zero cone), the finite bounds (non-negative cone: upper rows then lower rows),
+    one second-order cone of dimension 3 per stability cone. ``P`` is the upper triangle, sparse;
+    ``layout`` = (k_eq, upper indices, lower indices) to read the duals back."""
     import clarabel
     from scipy import sparse
 
     n = qp.n
     blocks, rhs, cones = [], [], []
-    if len(qp.b):
-        blocks.append(qp.A)
-        rhs.append(qp.b)
-        cones.append(clarabel.ZeroConeT(len(qp.b)))
-    hi, lo = np.isfinite(qp.ub), np.isfinite(qp.lb)
-    if hi.any() or lo.any():
+    rows = independent_rows(qp.A, qp.b)
+    if len(rows):
+        blocks.append(qp.A[rows])
+        rhs.append(qp.b[rows])
+        cones.append(clarabel.ZeroConeT(len(rows)))
+    hi, lo = np.flatnonzero(np.isfinite(qp.ub)), np.flatnonzero(np.isfinite(qp.lb))
+    if len(hi) or len(lo):
         eye = np.eye(n)
         blocks += [eye[hi], -eye[lo]]
         rhs += [qp.ub[hi], -qp.lb[lo]]
-        cones.append(clarabel.NonnegativeConeT(int(hi.sum() + lo.sum())))
+        cones.append(clarabel.NonnegativeConeT(int(len(hi) + len(lo))))
     if qp.cones:
-        T, t = cone_rows(qp)
+        T, t = qp.cone_rows()
         blocks.append(-T.reshape(-1, n))
         rhs.append(t.reshape(-1))
         cones += [clarabel.SecondOrderConeT(3)] * len(qp.cones)
     A = sparse.csc_matrix(np.vstack(blocks)) if blocks else sparse.csc_matrix((0, n))
     b = np.concatenate(rhs) if rhs else np.zeros(0)
-    return sparse.csc_matrix(np.triu(2.0 * qp.P)), qp.c, A, b, cones
+    return sparse.csc_matrix(np.triu(qp.P)), qp.c, A, b, cones, (rows, hi, lo)
 
 
-class ClarabelSolver(Solver):
-    """Args:
-        tol: Clarabel's gap and feasibility tolerances.
-        max_iter: iteration limit."""
+def independent_rows(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Indices of a maximal set of independent, consistent equations of ``A x = b`` (all of them when
+    ``A`` has full row rank, or when the dependent ones contradict the others: then the problem is
+    infeasible and Clarabel shall say so). Where the equation of motion loses rank (the 2-link arm at
+    rest at q = 0: rank 3 of 4) the dependent row made Clarabel stop with ``InsufficientProgress``."""
+    m = A.shape[0]
+    if m == 0:
+        return np.arange(0)
+    from scipy.linalg import qr
+
+    _, R, piv = qr(A.T, mode="economic", pivoting=True)
+    d = np.abs(np.diag(R))
+    rank = int((d > 1e-12 * max(float(d.max(initial=0.0)), 1e-300)).sum())
+    if rank == m:
+        return np.arange(m)
+    keep = np.sort(piv[:rank])
+    x = np.linalg.lstsq(A[keep], b[keep], rcond=None)[0]
+    scale = max(float(np.abs(b).max(initial=0.0)), float((np.abs(A) @ np.abs(x)).max(initial=0.0)), 1e-300)
+    if np.abs(A @ x - b).max(initial=0.0) > 1e-9 * scale:
+        return np.arange(m)
+    return keep
+
+
+def clarabel_solve(qp: QPData, tol_: float = tol.CLARABEL_TOL, max_iter: int = 200,
+                   time_limit: float | None = None) -> Solution:
+    """Solve ``qp`` with Clarabel; the answer with its duals."""
+    import clarabel
+
+    n = qp.n
+    P, c, A, b, cones, (rows, hi, lo) = conic_form(qp)
+    neq = len(rows)
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    settings.max_iter = max_iter
+    settings.tol_gap_abs = settings.tol_gap_rel = tol_
+    settings.tol_feas = tol_
+    settings.tol_ktratio = tol.CLARABEL_KTRATIO
+    if time_limit is not None and np.isfinite(time_limit):
+        settings.time_limit = max(float(time_limit), 1e-3)
+    sol = clarabel.DefaultSolver(P, c, A, b, cones, settings).solve()
+    status = str(sol.status)
+    it = int(sol.iterations)
+    if status in ("Solved", "AlmostSolved"):
+        x = np.array(sol.x)
+        zz = np.array(sol.z)
+        y = np.zeros(len(qp.b))  # a dropped (dependent) equation's multiplier is zero
+        y[rows] = zz[:neq]
+        z = np.zeros(n)
+        z[hi] += zz[neq:neq + len(hi)]
+        z[lo] -= zz[neq + len(hi):neq + len(hi) + len(lo)]
+        z_cone = zz[neq + len(hi) + len(lo):].reshape(len(qp.cones), 3)
+        # reduced accuracy is returned as a candidate: the check stage flags it if it fails the KKT test
+        note = "" if status == "Solved" else "Clarabel: solved to reduced accuracy (AlmostSolved)"
+        return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z, z_cone=z_cone, iterations=it, message=note,
+                        stage="clarabel")
+    if status in ("PrimalInfeasible", "AlmostPrimalInfeasible"):
+        return failure(n, INFEASIBLE, f"no point satisfies the constraints (Clarabel: {status})", it,
+                       stage="clarabel")
+    if status == "MaxIterations":
+        return failure(n, MAX_ITER, "Clarabel reached its iteration limit", it, stage="clarabel")
+    if status == "MaxTime":
+        return failure(n, BUDGET, "Clarabel: budget exhausted", it, stage="clarabel")
+    return failure(n, INACCURATE, f"Clarabel: {status}", it, stage="clarabel")
+
+
+class ClarabelStage(Stage):
+    """Answering stage: :func:`clarabel_solve` (``tol``, ``max_iter`` as there)."""
 
     name = "clarabel"
 
-    def __init__(self, tol: float = 1e-11, max_iter: int = 200):
+    def __init__(self, tol: float = tol.CLARABEL_TOL, max_iter: int = 200):
         try:
             import clarabel  # noqa: F401
         except ImportError:
@@ -69,35 +132,17 @@ class ClarabelSolver(Solver):
                               "mcdm-pin): pip install clarabel") from None
         self.tol, self.max_iter = tol, max_iter
 
-    def fresh(self) -> "ClarabelSolver":
-        return ClarabelSolver(self.tol, self.max_iter)
+    def run(self, qp, sol, deadline):
+        out = clarabel_solve(qp, self.tol, self.max_iter, deadline - now())
+        if sol is not None and not out.final and sol.message:
+            out = out.but(message=f"{sol.message}; {out.message}")
+        elif sol is not None and out.status == OPTIMAL and sol.stage and sol.stage != self.name:
+            out = out.but(message=f"{sol.stage} failed ({sol.message}); answered by Clarabel")
+        return out
 
-    def solve(self, qp: QPData) -> Solution:
-        import clarabel
 
-        n = qp.n
-        P, c, A, b, cones = conic_form(qp)
-        settings = clarabel.DefaultSettings()
-        settings.verbose = False
-        settings.max_iter = self.max_iter
-        settings.tol_gap_abs = settings.tol_gap_rel = self.tol
-        settings.tol_feas = self.tol
-        settings.tol_ktratio = 1e-8
-        solver = clarabel.DefaultSolver(P, c, A, b, cones, settings)
-        sol = solver.solve()
-        status = str(sol.status)
-        if status == "Solved":
-            f = np.array(sol.x)
-            return Solution(f, OPTIMAL, qp.objective(f), int(sol.iterations))
-        if status in ("PrimalInfeasible", "AlmostPrimalInfeasible"):
-            return failure(n, INFEASIBLE, "no cable forces satisfy the constraints (Clarabel: "
-                                          f"{status})", int(sol.iterations))
-        if status == "MaxIterations":
-            return failure(n, MAX_ITER, "Clarabel reached its iteration limit", int(sol.iterations))
-        if status == "AlmostSolved":
-            # reduced accuracy: returned as a candidate; the runner checks every constraint and
-            # downgrades it to "inaccurate" if one is broken beyond tolerance
-            f = np.array(sol.x)
-            return Solution(f, OPTIMAL, qp.objective(f), int(sol.iterations),
-                            message="Clarabel: solved to reduced accuracy (AlmostSolved)")
-        return failure(n, INACCURATE, f"Clarabel: {status}", int(sol.iterations))
+def ClarabelSolver(tol: float = tol.CLARABEL_TOL, max_iter: int = 200):
+    """The Clarabel-only chain (:func:`~.cascade.make_solver` ``("clarabel")``)."""
+    from .cascade import make_solver
+
+    return make_solver("clarabel", tol=tol, max_iter=max_iter)

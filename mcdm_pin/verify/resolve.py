@@ -39,15 +39,24 @@ def resolved_forces(ident, plan) -> Callable[[float], np.ndarray]:
 
 
 def problem_from_run(robot, result):
-    """Rebuild the paper-case problem of a run written by ``mcdm-pin solve`` (its ``problem`` string
-    ``case N: minimise ... subject to ...`` and its ``cone_deg``), for :func:`resolved_forces`.
+    """Rebuild the problem of a run written by ``mcdm-pin solve``, for :func:`resolved_forces`: from
+    its ``problem_json`` (:meth:`~mcdm_pin.problem.Problem.from_spec`: any objective and constraints,
+    smoothing and cable weights included), or, for files written before that column existed, from
+    its ``problem`` string ``case N: minimise ... subject to ...`` and its ``cone_deg`` (the paper's
+    cases only).
 
-    Raises :class:`ResultsError` for problems it cannot rebuild exactly (smoothing, cable weights,
-    problems built in code)."""
+    Raises :class:`ResultsError` for problems it cannot rebuild exactly."""
     import ast
     import re
 
-    from ..problem import case_problem
+    from ..exceptions import ProblemError
+    from ..problem import Problem, case_problem
+
+    if str(getattr(result, "problem_json", "") or ""):
+        try:
+            return Problem.from_spec(robot, str(result.problem_json))
+        except ProblemError as exc:
+            raise ResultsError(f"cannot rebuild the problem of this run from its problem_json: {exc}") from None
 
     text = str(result.problem)
     m = re.match(r"^(?:case [123]: )?minimise (.*) subject to (.*)$", text)

@@ -40,7 +40,7 @@ class Setup:
         cones: ``{joint: degrees}`` (case 3; default: the sidecar's ``cone_deg``).
         alpha, beta: ``{joint: weight}`` overriding the sidecar's (cases 2 and 3).
         frame: the cones' frame, ``socket`` or ``child``.
-        solver: back-end name (``proxqp``, ``clarabel``).
+        solver: back-end name (``default``, ``compiled``, ``proxqp``, ``clarabel``).
         qd, qdd: constant coordinate rates (nv numbers each) at every pose; ``None``: zero (static).
         margins: compute ``needed_f_max`` and (case 3) ``needed_cone_deg`` at every pose.
     """
@@ -50,7 +50,7 @@ class Setup:
     alpha: dict | None = None
     beta: dict | None = None
     frame: str = "socket"
-    solver: str = "proxqp"
+    solver: str = "default"
     qd: list | None = None
     qdd: list | None = None
     margins: bool = True
@@ -112,10 +112,6 @@ class PoseSolver:
         self.cones = bool(self.ident.problem.cone_constraints)
         self.context = Context(robot)
 
-    def forget(self) -> None:
-        """Drop every warm start (``InverseDynamics.reset()`` once the solver stream has it)."""
-        self.ident.solver.reset()
-
     def solve(self, q: np.ndarray) -> dict[str, np.ndarray]:
         """Results of poses ``q`` (n, nv): the store's per-pose variables."""
         robot = self.robot
@@ -126,7 +122,7 @@ class PoseSolver:
                    interaction_angle_deg=np.full((n, J), np.nan),
                    needed_f_max=np.full(n, np.nan), needed_cone_deg=np.full(n, np.nan))
         for k in range(n):
-            self.forget()
+            self.ident.reset()
             res = self.ident.solve(out["q"][k], self.qd, self.qdd)
             out["status"][k] = res.status
             out["objective"][k] = res.objective

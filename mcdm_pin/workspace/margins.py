@@ -1,54 +1,42 @@
 """The two margins of a pose, in one place (the only module of the workspace that knows how they are
-computed).
+computed): thin adapters over the solver's margins (:mod:`mcdm_pin.solvers.margins`).
 
 ``needed_f_max(qp)``
     The smallest common upper bound ``t`` on the cable forces with which the equation of motion can
-    be met: ``min t`` s.t. ``A f = b``, ``f_min <= f <= t`` (an LP). The cones are not part of it. A
-    pose is wrench-feasible when ``needed_f_max <= f_max`` (for equal bounds on every cable); ``inf``
+    be met: ``min t`` s.t. ``A f = b``, ``f_min <= f <= t`` (one LP). The cones are not part of it: a
+    pose is *wrench-feasible* when ``needed_f_max <= f_max`` (for equal bounds on every cable); ``inf``
     when no bound suffices (some cable would have to push). Newtons.
 
-``needed_cone_deg(qp, solver)`` (case 3)
-    The smallest cone half-angle with which the pose is feasible, the cones of all joints moved by one
-    common angle (equal cones, e.g. ``--cone all=15``: the smallest common half-angle), reported as the
-    largest cone after the move. Below the problem's cone the pose is feasible with margin; above it,
-    that is how far the cones must open. ``inf`` when no cone below 90 deg will do. Degrees, to
-    ``CONE_TOL_DEG``, and resolved down to ``CONE_FLOOR_DEG``: a pose that the smallest cone holds at
-    that angle reports about ``CONE_FLOOR_DEG`` (read: that angle or less). Below it the cone solves
-    of today's solver stall (2-link arm: 0.3 deg 30 iterations, 0.1 deg 9582, 0.003 deg 308892 and
-    1 s) and answer wrongly (0.001 deg: "infeasible" at a pose feasible at 0.003 deg).
-
-Both are for now thin adapters over the solver's own diagnosis (``inverse_dynamics``:
-``_smallest_common_fmax`` and ``_smallest_angle``, a bisection of ~17 cold solves); the solver
-stream's fast ``mcdm_pin.solvers.margins`` replaces them here, and nowhere else.
+``needed_cone_deg(qp)`` (case 3)
+    The smallest common cone half-angle (every cone of the problem at that one angle) with which the
+    pose is feasible, the bounds kept: a generalized fractional program solved by a Dinkelbach-type
+    method in 3-6 cone programs (:func:`mcdm_pin.solvers.margins.needed_cone_deg`). At or below the
+    problem's cone the pose is feasible with that margin; above it, that is how far the cones must open.
+    ``90`` when only a half-space would do, ``inf`` when not even that. Degrees, to ``CONE_TOL_DEG``.
+    For the usual equal cones (``--cone all=15``) it is the margin of each; with unequal cones it is
+    the one angle that would serve them all.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..constraints import ConeData
-from ..inverse_dynamics import _smallest_angle, _smallest_common_fmax
+from ..solvers import margins as _margins
 
-CONE_TOL_DEG = 1e-3  # bisection tolerance of needed_cone_deg, degrees
-CONE_FLOOR_DEG = 0.5  # the smallest cone angle the bisection tries, degrees (module docstring)
+CONE_TOL_DEG = 1e-3  # accuracy of needed_cone_deg, degrees (its iteration stops far below: MARGIN_REL)
 
 
 def needed_f_max(qp) -> float:
     """The smallest common f_max that makes the pose wrench-feasible, N (see the module docstring)."""
-    return float(_smallest_common_fmax(qp))
+    return float(_margins.needed_f_max(qp.with_cones([]) if qp.cones else qp))
 
 
-def needed_cone_deg(qp, solver) -> float:
-    """The smallest cone half-angle that makes the pose feasible, degrees (module docstring); NaN
-    without cones."""
+def needed_cone_deg(qp, solver=None) -> float:
+    """The smallest common cone half-angle that makes the pose feasible, degrees (module docstring);
+    NaN without cones. ``solver`` is not used (kept for callers of the earlier bisection)."""
     if not qp.cones:
         return float("nan")
-    # the bisection widens every cone by a common angle from where it starts: start it with the
-    # smallest cone at the floor, so that it finds the smallest feasible angle on either side of the
-    # problem's own cone
-    low = min(c.angle_deg for c in qp.cones) - CONE_FLOOR_DEG
-    closed = [ConeData(c.joint, c.G, c.g, c.axis, c.angle_deg - low, c.basis) for c in qp.cones]
-    return float(_smallest_angle(qp.with_cones(closed), solver, tol_deg=CONE_TOL_DEG))
+    return float(_margins.needed_cone_deg(qp))
 
 
 def pose_margins(qp, solver, cones: bool) -> tuple[float, float]:
@@ -59,4 +47,4 @@ def pose_margins(qp, solver, cones: bool) -> tuple[float, float]:
         return f_need, float("nan")
     if not np.isfinite(f_need) or f_need > float(np.max(qp.ub)):
         return f_need, float("inf")
-    return f_need, needed_cone_deg(qp, solver)
+    return f_need, needed_cone_deg(qp)

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..limits import MAX_WORKSPACE_POSES
 from .errors import WorkspaceError
 
 _NO_LIMIT = 1e6  # |limit| at or above this (Pinocchio's stand-in for "none"): no joint limit
@@ -135,6 +136,10 @@ class Grid(PoseSet):
                 raise WorkspaceError(f"grid {name}: expected a positive whole number of points, got {n!r}")
             if n > 1 and not lo < hi:
                 raise WorkspaceError(f"grid {name}: expected LO < HI, got {lo!r}:{hi!r}")
+            total = int(n) * int(np.prod([len(v) for _, v in built], dtype=float))
+            if total > MAX_WORKSPACE_POSES:
+                raise WorkspaceError(f"grid {name}: the grid would have {total} poses; at most "
+                                     f"{MAX_WORKSPACE_POSES} (docs/limits.md)")
             built.append((name, np.linspace(lo, hi, int(n))))
             idx.append(i)
         self.axes = tuple(built)
@@ -168,6 +173,8 @@ class RandomPoses(PoseSet):
         super().__init__(robot)
         if int(n) != n or n < 1:
             raise WorkspaceError(f"random: expected a positive number of poses, got {n!r}")
+        if n > MAX_WORKSPACE_POSES:
+            raise WorkspaceError(f"random: expected at most {MAX_WORKSPACE_POSES} poses (docs/limits.md), got {n!r}")
         if int(seed) != seed or seed < 0:
             raise WorkspaceError(f"seed: expected a whole number >= 0, got {seed!r}")
         self.n, self.seed = int(n), int(seed)

@@ -70,7 +70,7 @@ def settings(robot, poses, setup: Setup, chunk: int) -> dict:
                poses=poses.describe(), chunk=int(chunk),
                start="cold: every pose solved alone, without warm start",
                margins=("needed_f_max: LP min t s.t. A f = b, f_min <= f <= t; needed_cone_deg: "
-                        "bisection on a common cone angle (mcdm_pin/workspace/margins.py)")
+                        "smallest common cone angle, a generalized fractional program (mcdm_pin/solvers/margins.py)")
                if setup.margins else "not computed")
     return json.loads(json.dumps(out))  # as the store gives it back (lists, not tuples)
 

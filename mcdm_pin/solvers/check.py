@@ -1,0 +1,138 @@
+r"""The answer check every back-end's answer passes before it is called optimal, and the projection
+onto the bounds.
+
+:func:`kkt_residuals` measures, at a :class:`~.base.Solution`, the Karush-Kuhn-Tucker conditions of the
+convex problem (:class:`~mcdm_pin.problem.QPData`; duals as in :mod:`.base`):
+
+- primal: equation of motion (relative), bounds (absolute), cones (degrees);
+- stationarity: ``|P x + c + A^T y + z - sum_k T_k^T z_k|_inf`` relative to the largest of its terms;
+- dual feasibility and complementarity: ``sum_i z_i^+ (u_i - x_i) + z_i^- (x_i - l_i) + sum_k
+  z_k . s_k`` (the duality gap of the Lagrangian), relative to the multipliers' size times the
+  variables' size, and every cone dual in the second-order cone.
+
+For a convex problem these conditions are sufficient: an answer that meets them is optimal to the
+stated tolerances (:mod:`mcdm_pin.tolerances`), whatever produced it. An answer without duals is
+checked for feasibility only.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import tolerances as tol
+from .base import INACCURATE, OPTIMAL, Solution, Stage, cone_violation_deg
+
+
+def eom_residual(qp, x) -> float:
+    """``|A x - b|_inf / max(|b|_inf, max_i sum_j |A_ij x_j|)``."""
+    if not len(qp.b):
+        return 0.0
+    r = qp.A @ x - qp.b
+    scale = max(np.abs(qp.b).max(initial=0.0), (np.abs(qp.A) @ np.abs(x)).max(initial=0.0), 1e-300)
+    return float(np.abs(r).max(initial=0.0) / scale)
+
+
+def kkt_residuals(qp, sol: Solution) -> dict:
+    """The residuals described in the module docstring (``stationarity`` and ``complementarity`` are
+    NaN when the solution has no duals)."""
+    x = sol.x
+    out = dict(eom=eom_residual(qp, x),
+               bound=float(max((qp.lb - x).max(initial=0.0), (x - qp.ub).max(initial=0.0))),
+               cone_deg=float(cone_violation_deg(qp, x).max(initial=0.0)),
+               stationarity=float("nan"), complementarity=float("nan"))
+    if sol.y is None or sol.z is None or (qp.cones and sol.z_cone is None):
+        return out
+    grad = qp.gradient(x)
+    Aty = qp.A.T @ sol.y if len(qp.b) else np.zeros(qp.n)
+    terms = [np.abs(grad - qp.c).max(initial=0.0), np.abs(qp.c).max(initial=0.0),
+             np.abs(Aty).max(initial=0.0), np.abs(sol.z).max(initial=0.0)]
+    g = grad + Aty + sol.z
+    comp = 0.0
+    if qp.cones:
+        T, t = qp.cone_rows()
+        lam = sol.z_cone
+        Tl = np.einsum("kan,ka->n", T, lam)
+        terms.append(np.abs(Tl).max(initial=0.0))
+        g = g - Tl
+        s = np.einsum("kan,n->ka", T, x) + t
+        comp += float(np.abs(np.einsum("ka,ka->k", lam, s)).sum())
+        # every dual in the cone (to rounding)
+        lam_out = np.maximum(np.linalg.norm(lam[:, 1:], axis=1) - lam[:, 0], 0.0)
+        comp += float(lam_out.sum() * (1.0 + np.abs(s).max(initial=0.0)))
+    gscale = max(max(terms), 1e-300)
+    out["stationarity"] = float(np.abs(g).max(initial=0.0) / gscale)
+    z = sol.z
+    up, lo = np.maximum(z, 0.0), np.maximum(-z, 0.0)
+    with np.errstate(invalid="ignore"):
+        comp += float(np.where(up > 0, up * (qp.ub - x), 0.0).sum())
+        comp += float(np.where(lo > 0, lo * (x - qp.lb), 0.0).sum())
+    # the variables' size (not the bounds': at forces of 0.02 N under limits of 2000 N a gap relative
+    # to the limits let a point 2e-5 N off its bounds pass)
+    bounds = np.concatenate([np.abs(qp.lb[np.isfinite(qp.lb)]), np.abs(qp.ub[np.isfinite(qp.ub)])])
+    xscale = max(np.abs(x).max(initial=0.0), 1e-12 * bounds.max(initial=0.0), 1e-300)
+    out["complementarity"] = float(abs(comp) / (gscale * xscale)) if np.isfinite(comp) else float("inf")
+    return out
+
+
+def kkt_problems(qp, sol: Solution) -> list[str]:
+    """What the answer breaks, as messages (empty: it passes)."""
+    r = kkt_residuals(qp, sol)
+    problems = []
+    if not r["eom"] <= tol.EOM_REL:
+        problems.append(f"equation-of-motion residual {r['eom']:.2e} > {tol.EOM_REL:g}")
+    if not r["bound"] <= tol.BOUND_ABS:
+        problems.append(f"bounds broken by {r['bound']:.2e}")
+    if not r["cone_deg"] <= tol.CONE_DEG:
+        problems.append(f"a cone broken by {r['cone_deg']:.2e} deg")
+    if np.isfinite(r["stationarity"]) or np.isfinite(r["complementarity"]):
+        if not r["stationarity"] <= tol.KKT_DUAL_REL:
+            problems.append(f"not stationary (relative residual {r['stationarity']:.1e})")
+        if not r["complementarity"] <= tol.KKT_GAP_REL:
+            problems.append(f"multipliers inconsistent with the active set (relative gap "
+                            f"{r['complementarity']:.1e})")
+    return problems
+
+
+def project_to_bounds(qp, sol: Solution) -> Solution:
+    """``x`` projected onto the bounds when it misses them by at most ``BOUND_SNAP_REL`` (relative):
+    iterative back-ends meet bounds to their tolerance, which at forces of 1e6 N is beyond the
+    check's absolute 1e-9 N. A larger miss is left for the check to flag."""
+    x = sol.x
+    if not (np.any(x < qp.lb) or np.any(x > qp.ub)):
+        return sol
+    slack = tol.BOUND_SNAP_REL * (1.0 + np.maximum(np.abs(qp.lb), np.abs(qp.ub)))
+    if np.all(x >= qp.lb - slack) and np.all(x <= qp.ub + slack):
+        x = np.clip(x, qp.lb, qp.ub)
+        return sol.but(x=x, objective=qp.objective(x))
+    return sol
+
+
+class Project(Stage):
+    """Refining stage: :func:`project_to_bounds`."""
+
+    name = "project"
+    refines = True
+
+    def run(self, qp, sol, deadline):
+        return project_to_bounds(qp, sol)
+
+
+class Check(Stage):
+    """Refining stage, last of every chain: an optimal answer that fails :func:`kkt_problems` is
+    downgraded to ``inaccurate`` with the reasons in its message."""
+
+    name = "check"
+    refines = True
+
+    def run(self, qp, sol, deadline):
+        if sol.verified:  # checked by the compiled active-set solver, to tighter tolerances
+            return sol
+        problems = kkt_problems(qp, sol)
+        if not problems:
+            return sol
+        note = f"{sol.stage or 'the solver'}'s answer fails the KKT check: " + "; ".join(problems)
+        return sol.but(status=INACCURATE, message=f"{sol.message}; {note}" if sol.message else note)
+
+
+__all__ = ["eom_residual", "kkt_residuals", "kkt_problems", "project_to_bounds", "Project", "Check",
+           "OPTIMAL"]

@@ -1,0 +1,93 @@
+r"""Answering stage: the compiled interior-point method with crossover (:mod:`._ipm`), the answer of
+every instant without a warm neighbour.
+
+It needs no starting point: Mehrotra's predictor-corrector method reaches a relative duality gap of
+``IPM_CROSSOVER_GAP`` in about a dozen iterations on the neck, from where the active set read off the
+iterate is handed to the compiled active-set solver, whose answer is verified against the full KKT
+conditions (an exact optimum, to rounding). A certificate of primal infeasibility ends the solve
+with ``infeasible``; an iteration limit or a numerical breakdown leaves the instant to the next stage.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import jit
+from .. import tolerances as tol
+from . import _ipm, _kkt
+from .active_set import _AS_TOLS, active_solution
+from .base import INACCURATE, INFEASIBLE, OPTIMAL, Solution, Stage, failure
+
+REASONS = {_ipm.MAX_ITER: "iteration limit", _ipm.NUMERICAL: "numerical breakdown (the step vanished)"}
+
+
+def ipm_arguments(qp, max_iter: int = tol.IPM_MAX_ITER, eps: float = tol.IPM_EPS,
+                  crossover_gap: float = tol.IPM_CROSSOVER_GAP, max_pivots: int = 30) -> tuple:
+    """The arguments of :func:`._ipm.ipm_solve` for ``qp`` (C-ordered float arrays and Python scalars:
+    one compiled specialisation serves every call)."""
+    c_ = np.ascontiguousarray
+    T, t = qp.cone_rows()
+    G, gc, ax, tn, basis0 = qp.cone_arrays()
+    return (c_(qp.P, dtype=float), c_(qp.c, dtype=float), c_(qp.A, dtype=float), c_(qp.b, dtype=float),
+            c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), c_(T, dtype=float), c_(t, dtype=float),
+            int(max_iter), float(eps), float(crossover_gap), c_(G, dtype=float), c_(gc, dtype=float),
+            c_(ax, dtype=float), c_(tn, dtype=float), c_(basis0, dtype=float), int(max_pivots), _AS_TOLS)
+
+
+def ipm_solve(qp, **options) -> Solution:
+    """Solve ``qp`` with the compiled interior-point method (``options``: :func:`ipm_arguments`)."""
+    code, x, y, z, zc, it, state, cact, mus, dirs = _ipm.ipm_solve(*ipm_arguments(qp, **options))
+    n = qp.n
+    if code == _ipm.CROSSOVER:
+        grad = -z
+        thr = 1e-12 * max(np.abs(grad).max(initial=0.0), 1e-300)
+        nxt = state.copy()
+        nxt[((state == 1) & ~(grad > thr)) | ((state == 2) & ~(grad < -thr))] = 0
+        sol = active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt)
+        return sol.but(iterations=int(it), stage="ipm")
+    if code == _ipm.SOLVED:
+        return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z, z_cone=zc, iterations=int(it), stage="ipm",
+                        verified=False)
+    if code == _ipm.INFEASIBLE_CERT:
+        what = "the bounds and the cones" if qp.cones else "the bounds"
+        return failure(n, INFEASIBLE, f"no point meets the equation of motion and {what} (an "
+                                      f"infeasibility certificate of the interior-point method)", int(it),
+                       stage="ipm")
+    return failure(n, INACCURATE, f"interior-point method: {REASONS.get(code, code)}", int(it), stage="ipm")
+
+
+class IPMStage(Stage):
+    """Answering stage: :func:`ipm_solve` (skipped while the kernels are not compiled)."""
+
+    name = "ipm"
+
+    def __init__(self, **options):
+        self.options = options
+
+    def run(self, qp, sol, deadline):
+        if not jit.ready():
+            return None
+        out = ipm_solve(qp, **self.options)
+        if not out.final and sol is not None:
+            return None  # leave the earlier stage's note
+        return out
+
+
+def warm_calls():
+    """The solvers' kernels with example arguments of the types the library passes (registered
+    with :mod:`mcdm_pin.jit`)."""
+    from ..problem import QPData
+    from ..constraints import ConeData, perpendicular_basis
+
+    n = 2
+    axis = np.array([0.0, 0.0, 1.0])
+    cone = ConeData("j", np.ones((3, n)), np.zeros(3), axis, 30.0, perpendicular_basis(axis))
+    qp = QPData(np.eye(n), np.zeros(n), 0.0, np.ones((1, n)), np.ones(1), np.zeros(n), np.ones(n), [cone])
+    args = ipm_arguments(qp)
+    G, gc, ax, tn, basis0 = args[11:16]
+    as_args = (args[0], args[1], args[2], args[3], args[4], args[5], np.zeros(n, dtype=np.int8), G, gc, ax,
+               tn, basis0, np.zeros(1, dtype=np.bool_), np.zeros((1, 3)), 2, 2, *(float(v) for v in _AS_TOLS))
+    return [(_ipm.ipm_solve, args), (_kkt.active_set_solve, as_args)]
+
+
+jit.register("mcdm_pin.solvers", warm_calls)

@@ -1,0 +1,184 @@
+r"""One answer: among equally optimal points, the one of least ``|x|^2`` (refining stage ``least_norm``).
+
+The interaction objective is only positive semidefinite: where a joint has ``alpha = 0``, or the
+cables outnumber what the weighted wrench rows see, a whole face of optimal forces exists, and which
+point a back-end returns depends on its path (on the human arm's ``abduct``, case 3, the elbow's force
+peaked at 1297 N with one back-end and 76 N with another). This stage makes the answer unique:
+
+**Stage 2 (lexicographic).** For a convex quadratic objective every optimal point has the same
+``P x`` and ``c^T x`` (if ``x_1, x_2`` are optimal, convexity along the segment forces
+``(x_1 - x_2)^T P (x_1 - x_2) = 0``, hence ``P x_1 = P x_2``, and then equal objectives give equal
+``c^T x``). So the optimal set is the feasible set cut by ``P x = P x*, c^T x = c^T x*``, and
+
+.. math:: \min_x\ \tfrac12 \sum_i w_i x_i^2 \quad \text{s.t. the original constraints},\
+          E (x - x^*) = 0,
+
+with ``E`` an orthonormal basis of the part of ``span(rows of P, c^T)`` not already in the equations'
+row space (rank-revealed by an SVD; for ``P = diag(d) + F^T F`` the rows of ``F`` and the ``e_i`` with
+``d_i != 0``), picks the least-norm optimum: a strictly convex problem with one answer, solved by
+the same back-end's chain (``w``: ``QPData.norm_weight``, ones unless the problem was scaled).
+
+**Skipped when unique.** The first-stage optimum is unique when the Hessian (plus the active cones'
+curvature) is positive definite on the null space of the strongly active constraints (the equations,
+the bounds and cones whose multiplier exceeds ``UNIQUE_REL`` of the gradient's scale): the
+second-order sufficient condition, which for a convex problem means a unique minimiser. At a vertex
+(as many free variables as active equations) the null space is empty. :func:`is_unique` decides it;
+the answer records it (``Solution.unique``, the results' ``unique`` column).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import tolerances as tol
+from .base import OPTIMAL, Solution, Stage
+
+
+def _strongly_active(qp, sol: Solution):
+    """(free mask, rows of the active cones' gradients, their curvature) at ``sol``."""
+    x, z = sol.x, sol.z
+    grad = qp.gradient(x)
+    gscale = max(np.abs(grad).max(initial=0.0), np.abs(qp.c).max(initial=0.0), 1e-300)
+    thr = tol.UNIQUE_REL * gscale
+    near = tol.ACTIVE_SET_FROM_SOLUTION
+    at_l = (x - qp.lb <= near * (1.0 + np.abs(qp.lb))) & (z < -thr)
+    at_u = (qp.ub - x <= near * (1.0 + np.abs(qp.ub))) & (z > thr)
+    free = ~(at_l | at_u)
+    rows, curv = [], np.zeros((qp.n, qp.n))
+    for k, cone in enumerate(qp.cones):
+        lam = sol.z_cone[k]
+        mu = lam[0] * np.cos(np.radians(cone.angle_deg))
+        if not mu > thr:
+            continue
+        F = cone.force(x)
+        perp_vec = F - float(cone.axis @ F) * cone.axis
+        perp = float(np.linalg.norm(perp_vec))
+        if perp <= 1e-12 * max(float(np.linalg.norm(F)), 1e-300):  # held at the apex: F = 0
+            rows += [(k, r) for r in cone.G]
+            continue
+        nhat = perp_vec / perp
+        # on the surface with this direction for every optimum: the surface row and the
+        # perpendicular direction normal to it
+        rows.append((k, (nhat - cone.tan * cone.axis) @ cone.G))
+        rows.append((k, np.cross(cone.axis, nhat) @ cone.G))
+        Pp = np.eye(3) - np.outer(cone.axis, cone.axis) - np.outer(nhat, nhat)
+        curv += mu * cone.G.T @ Pp @ cone.G / perp
+    return free, rows, curv
+
+
+def is_unique(qp, sol: Solution) -> bool:
+    """Whether the optimum ``sol`` is provably unique (module docstring). Needs its duals; ``False``
+    without them (not proven)."""
+    if qp.P_diag is not None and qp.P_diag.size and bool(np.all(qp.P_diag > 0.0)):
+        return True  # P = diag(d) + F^T F with d > 0 is positive definite: strictly convex (case 1)
+    if sol.z is None or (qp.cones and sol.z_cone is None):
+        return False
+    free, rows, curv = _strongly_active(qp, sol)
+    nf = int(free.sum())
+    if nf == 0:
+        return True
+    J = np.vstack([qp.A[:, free]] + [np.asarray(r)[free][None, :] for _, r in rows]) if (len(qp.b) or rows) \
+        else np.zeros((0, nf))
+    if J.shape[0] >= nf:
+        # the usual case (a vertex): J has full column rank, the null space is empty
+        try:
+            JtJ = J.T @ J
+            Lc = np.linalg.cholesky(JtJ)
+            if np.diag(Lc).min() ** 2 > 1e-10 * max(np.abs(JtJ).max(), 1e-300):
+                return True
+        except np.linalg.LinAlgError:
+            pass
+    if J.shape[0]:
+        _, s, Vt = np.linalg.svd(J, full_matrices=True)
+        rank = int((s > 1e-10 * max(s.max(initial=0.0), 1e-300)).sum())
+        Z = Vt[rank:].T
+    else:
+        Z = np.eye(nf)
+    if Z.shape[1] == 0:
+        return True
+    H = (qp.P + curv)[np.ix_(free, free)]
+    Hr = Z.T @ H @ Z
+    hscale = max(np.abs(qp.P).max(initial=0.0), 1e-300)
+    return bool(np.linalg.eigvalsh(0.5 * (Hr + Hr.T)).min() > tol.UNIQUE_REL * hscale)
+
+
+def optimal_face_rows(qp, sol: Solution | None = None) -> np.ndarray:
+    """An orthonormal basis of the rows that are constant on the optimal face: the equations, the rows
+    of ``P``, ``c^T``, and, from the duals of ``sol`` (the same for every optimal point), the bounds
+    and cone surfaces whose multiplier is not zero (complementarity holds them for every optimum).
+    Rank-revealed by an SVD (module docstring)."""
+    n = qp.n
+    if qp.P_factor is not None and qp.P_diag is not None:
+        rows = [qp.P_factor, np.eye(n)[np.flatnonzero(qp.P_diag != 0.0)]]
+    else:
+        w, V = np.linalg.eigh(qp.P)
+        rows = [V[:, w > 1e-12 * max(np.abs(w).max(initial=0.0), 1e-300)].T]
+    rows += [qp.A, qp.c[None, :]]
+    if sol is not None and sol.z is not None:
+        free, cone_rows, _ = _strongly_active(qp, sol)
+        rows.append(np.eye(n)[~free])
+        for k, r in cone_rows:
+            rows.append(r)
+    N = np.vstack(rows)
+    norms = np.linalg.norm(N, axis=1)
+    N = N[norms > 0] / norms[norms > 0, None]
+    _, sv, Vt = np.linalg.svd(N, full_matrices=False)
+    return Vt[sv > 1e-10 * max(sv.max(initial=0.0), 1e-300)]
+
+
+def stage2_problem(qp, sol: Solution):
+    """The least-norm problem over the optimal face of ``qp`` through ``sol.x`` (module docstring):
+    every row constant on the face is an equation; the strongly active bounds and cones are among
+    them (their inequalities are dropped: on the face they hold with equality, and an inequality
+    without interior would stall an interior-point method)."""
+    n = qp.n
+    E = optimal_face_rows(qp, sol)
+    lb, ub, cones = qp.lb, qp.ub, qp.cones
+    if sol.z is not None:
+        free, _, _ = _strongly_active(qp, sol)
+        lb, ub = np.where(free, qp.lb, -np.inf), np.where(free, qp.ub, np.inf)
+        held = {k for k, _ in _strongly_active(qp, sol)[1]}
+        cones = [c for k, c in enumerate(qp.cones) if k not in held]
+    w = np.ones(n) if qp.norm_weight is None else qp.norm_weight
+    return qp.replace(P=None, P_diag=w.astype(float), P_factor=np.zeros((0, n)), c=np.zeros(n), r=0.0,
+                      A=E, b=E @ sol.x, lb=lb, ub=ub, cones=cones)
+
+
+class LeastNorm(Stage):
+    """Refining stage: the least-norm optimum (module docstring).
+
+    Args:
+        inner: the chain that solves stage 2 (a :class:`~.cascade.Cascade` of the same back-end, without
+            this stage), seeded with the first stage's answer.
+    """
+
+    name = "least_norm"
+    refines = True
+
+    def __init__(self, inner):
+        self.inner = inner
+
+    def reset(self):
+        self.inner.reset()
+
+    def run(self, qp, sol, deadline):
+        if sol.unique is not None:
+            return sol
+        if is_unique(qp, sol):
+            return sol.but(unique=True)
+        stage2 = stage2_problem(qp, sol)
+        if sol.active is None:
+            from .active_set import ActiveSet
+            sol = sol.but(active=ActiveSet.from_duals(qp, sol))
+        out = self.inner.solve(stage2, hint=sol)
+        if out.status != OPTIMAL:
+            note = (f"least-norm stage failed ({out.status}: {out.message}); the answer is optimal but "
+                    f"may not be the least-norm one")
+            return sol.but(unique=False, message=f"{sol.message}; {note}" if sol.message else note)
+        from .check import project_to_bounds
+
+        x = project_to_bounds(qp, out).x
+        # stage 2's multipliers of the original rows are not those of the original problem: the
+        # first stage's duals stay (they certify x too: x lies on the same optimal face)
+        return sol.but(x=x, objective=qp.objective(x), unique=False, stage=f"{sol.stage}>{self.name}",
+                       iterations=sol.iterations + out.iterations, active=None, verified=False)
