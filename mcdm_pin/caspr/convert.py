@@ -127,6 +127,9 @@ def import_caspr(bodies_xml, cables_xml, out_dir, trajectories_xml=None, cable_s
     urdf_name = _check_name(urdf_name or name, "urdf_name")
     out_dir = Path(out_dir)
     urdf_dir = out_dir if urdf_dir is None else Path(urdf_dir)
+    for key, folder in (("out_dir", out_dir), ("urdf_dir", urdf_dir)):
+        if folder.exists() and not folder.is_dir():
+            raise CasprError(None, key, f"{folder} is a file; expected a folder (existing or to be made)")
     source = (f"{Path(bodies_xml).name} + {Path(cables_xml).name} (cable set {cset.id!r})"
               + (f" + {Path(trajectories_xml).name}" if trajectories_xml is not None else ""))
     chs = chains(bodies)
@@ -146,6 +149,9 @@ def import_caspr(bodies_xml, cables_xml, out_dir, trajectories_xml=None, cable_s
         if tfile is not None:
             result.refused.update(tfile.refused)
             _trajectories(result, tfile, data, tmp, name, urdf_name, robot)
+            asked = [tid for tid in (trajectory_ids or ()) if tid in result.refused]
+            if asked:  # a trajectory asked for by name is not refused quietly: the import fails
+                raise CasprError(Path(trajectories_xml), f"trajectory {asked[0]!r}", result.refused[asked[0]])
         data["description"] = _description(result, source, cset)
         data["urdf"] = os.path.relpath(urdf_dir / f"{urdf_name}.urdf", out_dir).replace(os.sep, "/")
         (tmp / f"{name}.yaml").write_text(sidecar_text(data, source), encoding="utf-8")

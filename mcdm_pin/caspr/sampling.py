@@ -184,6 +184,12 @@ def sample(bodies, traj: CasprTrajectory) -> Samples:
     dt = traj.time_step
     parts_t, parts = [], []
     notes = []
+    from ..limits import MAX_SAMPLES
+
+    span = traj.points[-1].time - traj.points[0].time
+    if not (dt > 0 and span / dt <= MAX_SAMPLES):  # counted before any array is made
+        raise SamplingError(f"time_step = {dt:g} s over {span:g} s gives {span / dt:.3g} samples; at most "
+                            f"{MAX_SAMPLES:,} per trajectory (docs/limits.md)")
     for p in range(len(traj.points) - 1):
         a, b = traj.points[p], traj.points[p + 1]
         grid = matlab_colon(a.time, dt, b.time)
