@@ -1,5 +1,6 @@
 """What the benchmark scripts share: the machine description and the CASPR neck with the paper's
-settings (imported in place from ../shared/reference/caspr into a temporary folder)."""
+settings (the robot converted from CASPR and committed under robots/caspr; ``--caspr DIR`` with CASPR's
+XML files converts it afresh into a temporary folder)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import subprocess
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
-DEFAULT_CASPR = REPO.parent / "shared" / "reference" / "caspr"
+DEFAULT_CASPR = REPO / "robots" / "caspr"  # the committed conversions; or a folder of CASPR's XML files
 
 
 def cpu_model() -> str:
@@ -47,9 +48,15 @@ def machine_line() -> str:
 
 
 def import_neck(caspr: Path, out: Path, trajectory_ids=None):
-    """Import CASPR's 8S neck from ``caspr/8S_neck`` into ``out``; returns the import (``.sidecar``)."""
+    """CASPR's 8S neck: the committed conversion when ``caspr`` holds one (``caspr/8S_neck/8S_neck.yaml``),
+    else imported from CASPR's XML in ``caspr/8S_neck`` into ``out``; returns an object with ``.sidecar``."""
+    from types import SimpleNamespace
+
     from mcdm_pin.caspr import import_caspr
 
+    committed = Path(caspr) / "8S_neck" / "8S_neck.yaml"
+    if committed.is_file():
+        return SimpleNamespace(sidecar=committed)
     d = Path(caspr) / "8S_neck"
     if not (d / "8S_neck_bodies.xml").is_file():
         raise SystemExit(f"CASPR neck model not found in {d} (give the CASPR folder, e.g. --caspr DIR)")

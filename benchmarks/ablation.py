@@ -4,7 +4,7 @@ back-end's accelerations switched off one at a time.
     python benchmarks/ablation.py [--robot PATH.yaml] [--trajectory roll] [--alpha 0.125]
                                   [--cone 15] [--repeat 3]
 
-Without --robot the 8S neck is imported from ../shared/reference/caspr (read in place). Rows:
+Without --robot: the 8S neck converted from CASPR and committed (robots/caspr/8S_neck). Rows:
 - all on: compiled cable terms, active-set warm start (previous instant's active set, KKT-verified,
   pivoting compiled), cuts kept from the previous instant, ProxQP warm start;
 - numpy cable terms: the cable terms by the numpy formulation (``TermsEvaluator(compiled=False)``);

@@ -2,7 +2,7 @@
 
     python benchmarks/batch.py [--instants 5000] [--workers 2] [--case 1 2 3] [--repeat 3]
 
-The neck (CASPR's 8S model, the paper's settings, imported in place from ../shared/reference/caspr)
+The neck (CASPR's 8S model, the paper's settings, committed under robots/caspr)
 follows its roll trajectory's motion, from its first to its last pose, as a rest-to-rest quintic with
 CASPR's one-axis interpolation of each ball joint, sampled at ``--instants`` instants over the same
 duration. Each case is solved sequentially (one process, every instant warm-started from the

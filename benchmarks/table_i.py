@@ -2,7 +2,7 @@
 solver iterations, for the 2-link arm (trajectories 1 and 2) and the neck (roll), cases 1-3, with
 ProxQP (default back-end) and Clarabel (exact conic reference).
 
-The models are imported from CASPR's files in shared/reference/caspr (read in place) into a temporary
+The models are the conversions committed under robots/caspr (or, with --caspr DIR, CASPR's XML files imported into a temporary
 folder. Case 2 and 3 settings are the paper's: 2-link, alpha = 1 on the shoulder, 30 deg cone; neck,
 alpha = 1/8, beta = 0 on every joint, 15 deg cones.
 
@@ -32,8 +32,11 @@ def examples(caspr: Path, out: Path):
     from mcdm_pin.caspr import import_caspr
 
     sr_dir = caspr / "SR_model"
-    sr = Robot.load(import_caspr(sr_dir / "SR_model_bodies.xml", sr_dir / "SR_model_cables.xml", out / "sr",
-                                 trajectories_xml=sr_dir / "SR_model_trajectories.xml", name="sr").sidecar)
+    if (sr_dir / "SR_model.yaml").is_file():  # the committed conversion
+        sr = Robot.load(sr_dir / "SR_model.yaml")
+    else:
+        sr = Robot.load(import_caspr(sr_dir / "SR_model_bodies.xml", sr_dir / "SR_model_cables.xml", out / "sr",
+                                     trajectories_xml=sr_dir / "SR_model_trajectories.xml", name="sr").sidecar)
     neck = Robot.load(import_neck(caspr, out / "neck", ["roll"]).sidecar)
     neck_kw = neck_case_options(neck.joint_names)[3]
     return [("2-link, trajectory 1", sr, load_trajectory(sr, "SR_trajectory"), {"cones": {"Link_1": 30.0}}),
@@ -88,7 +91,7 @@ def main(argv=None) -> int:
     p.add_argument("--solver", action="append", help="only this back-end (repeatable)")
     args = p.parse_args(argv)
     caspr = Path(args.caspr)
-    if not (caspr / "8S_neck" / "8S_neck_bodies.xml").is_file():
+    if not ((caspr / "8S_neck" / "8S_neck_bodies.xml").is_file() or (caspr / "8S_neck" / "8S_neck.yaml").is_file()):
         print(f"table_i: CASPR reference models not found in {caspr}", file=sys.stderr)
         return 2
     rows = run(caspr, args.repeat, tuple(args.solver or ("proxqp", "clarabel")))

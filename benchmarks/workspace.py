@@ -21,7 +21,7 @@ Usage::
         [--clarabel-poses N] [--caspr DIR] [--json FILE] [--markdown FILE]
 
 The neck is ``robots/8S_neck.yaml`` when the repository has it, else it is imported from CASPR's files
-(``--caspr``, default ../shared/reference/caspr) into a temporary folder.
+(``--caspr``: the committed conversion under robots/caspr by default, or CASPR's XML files).
 """
 
 from __future__ import annotations
@@ -45,11 +45,7 @@ def load_neck(tmp: Path, caspr: Path):
     """The neck robot and the coordinate ranges its roll, pitch and yaw trajectories span."""
     from mcdm_pin import Robot, load_trajectory
 
-    committed = REPO / "robots" / "8S_neck.yaml"
-    if committed.is_file():
-        robot = Robot.load(committed)
-    else:
-        robot = Robot.load(import_neck(caspr, tmp / "neck", ["roll", "pitch", "yaw"]).sidecar)
+    robot = Robot.load(import_neck(caspr, tmp / "neck", ["roll", "pitch", "yaw"]).sidecar)
     q = np.vstack([load_trajectory(robot, name).q for name in ("roll", "pitch", "yaw")])
     lo, hi = q.min(axis=0), q.max(axis=0)
     ranges = {c: (float(a), float(b)) for c, a, b in zip(robot.coordinate_names, lo, hi) if b > a}

@@ -14,7 +14,6 @@ os.environ.setdefault("MCDM_PIN_JIT", "wait")
 REPO = Path(__file__).resolve().parents[1]
 TWO_LINK = REPO / "robots" / "two_link_sr.yaml"
 TWO_LINK_URDF = REPO / "urdf" / "two_link_sr.urdf"
-SHARED = REPO.parent / "shared"
 
 
 @pytest.fixture(scope="session")

@@ -8,9 +8,8 @@ alarm per example).
 
 Inputs tried per run (fixed seed, no example database; ``MCDM_HYPOTHESIS_SEED=<n>`` explores others):
 :data:`N_SIDECAR_TREE` structural mutations of the 2-link sidecar, :data:`N_SIDECAR_TEXT` mutations
-of its YAML text, :data:`N_CASPR` mutations of CASPR's SR_model XML (read in place from
-``shared/reference/caspr``; skipped with a message if that folder or :mod:`mcdm_pin.caspr` is
-missing).
+of its YAML text, :data:`N_CASPR` mutations of CASPR's SR_model XML (the committed fixtures in
+``tests/data/caspr/SR_model``).
 """
 
 from __future__ import annotations
@@ -33,7 +32,7 @@ from hypothesis import strategies as st
 from mcdm_pin import McdmError, Robot
 from mcdm_pin.exceptions import CasprError, SidecarError
 
-from .conftest import SHARED, TWO_LINK, TWO_LINK_URDF
+from .conftest import TWO_LINK, TWO_LINK_URDF
 
 N_SIDECAR_TREE = 400
 N_SIDECAR_TEXT = 200
@@ -43,7 +42,7 @@ SEED = int(os.environ.get("MCDM_HYPOTHESIS_SEED", "20141121"))
 SETTINGS = dict(deadline=None, database=None, print_blob=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
                                        HealthCheck.large_base_example, HealthCheck.filter_too_much])
-SR = SHARED / "reference" / "caspr" / "SR_model"
+SR = Path(__file__).resolve().parent / "data" / "caspr" / "SR_model"  # committed fixtures (README there)
 
 COUNTS: dict[str, dict[str, int]] = {"sidecar": {}, "text": {}, "caspr": {}}
 
@@ -244,16 +243,6 @@ def test_invalid_utf8_sidecar(tmp_path):
 
 
 # ----------------------------------------------------------------------------------------- CASPR
-def _caspr_available() -> str:
-    try:
-        import mcdm_pin.caspr  # noqa: F401
-    except ImportError:
-        return "mcdm_pin.caspr is not there yet: the CASPR fuzzing is skipped"
-    if not (SR / "SR_model_bodies.xml").is_file():
-        return f"CASPR's SR_model is not at {SR}: the CASPR fuzzing is skipped"
-    return ""
-
-
 XML_VALUES = st.one_of(
     st.sampled_from(["", " ", "nan", "inf", "-inf", "1e400", "1e-400", "-1", "0", "1e308", "abc", "1 2",
                      "1 2 3 4", "0 0 0", "99", "-5", "2.5", "S_EULER_XYZ", "R_X", "U_XY", "SPHERICAL",
@@ -300,7 +289,6 @@ def mutated_caspr(draw):
     return {k: ET.tostring(t.getroot(), encoding="unicode") for k, t in trees.items()}
 
 
-@pytest.mark.skipif(bool(_caspr_available()), reason=_caspr_available() or "available")
 @seed(SEED)
 @settings(max_examples=N_CASPR, **SETTINGS)
 @given(mutated_caspr())
@@ -320,7 +308,6 @@ def test_mutated_caspr_xml_imports_or_raises_mcdm_error(files):
         outcome("caspr", load)
 
 
-@pytest.mark.skipif(bool(_caspr_available()), reason=_caspr_available() or "available")
 @pytest.mark.parametrize("text", ["", "<bodies_system>", "<?xml version='1.0'?><!DOCTYPE x [<!ENTITY a "
                                   "'aaaaaaaaaa'><!ENTITY b '&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;'>]><x>&b;</x>",
                                   "\x00\x01", "<bodies_system>" + "<x>" * 5000 + "</x>" * 5000 + "</bodies_system>"])
@@ -338,8 +325,7 @@ def test_fuzz_counts_are_reported():
     if not any(COUNTS.values()):  # run alone: run the fuzzers here (they fill COUNTS)
         test_mutated_sidecar_loads_or_raises_mcdm_error()
         test_mutated_sidecar_text_loads_or_raises_mcdm_error()
-        if not _caspr_available():
-            test_mutated_caspr_xml_imports_or_raises_mcdm_error()
+        test_mutated_caspr_xml_imports_or_raises_mcdm_error()
     ran = {k: v for k, v in COUNTS.items() if v}
     print(ran)
     for kind, counts in ran.items():

@@ -131,5 +131,5 @@ def test_hostile_input(case: Case, tmp_path):
 
 def test_corpus_is_large_and_covers_every_input():
     classes = Counter(c.klass for c in CASES)
-    assert sum(classes.values()) >= 130
-    assert set(classes) >= {"sidecar", "urdf", "csv", "cli", "results"}
+    assert sum(classes.values()) >= 150
+    assert set(classes) >= {"sidecar", "urdf", "csv", "cli", "results", "caspr"}

@@ -3,18 +3,16 @@ stay in sync with the code. Each runs in a temporary folder (its outputs go to .
 
 from __future__ import annotations
 
-import importlib.util
 import os
 
 import pytest
 
-from .conftest import REPO, SHARED
+from .conftest import REPO
 
 nbformat = pytest.importorskip("nbformat", reason="pip install -e '.[test]' (nbformat)")
 nbclient = pytest.importorskip("nbclient", reason="pip install -e '.[test]' (nbclient)")
 pytest.importorskip("ipykernel", reason="pip install -e '.[test]' (ipykernel)")
 
-NECK = SHARED / "reference" / "caspr" / "8S_neck"
 
 
 def _run(name, tmp_path):
@@ -57,9 +55,6 @@ def test_two_link_paper(tmp_path):
         assert (tmp_path / "out" / f"two_link_{name}_summary.png").is_file()
 
 
-@pytest.mark.skipif(importlib.util.find_spec("mcdm_pin.caspr") is None,
-                    reason="mcdm_pin.caspr (the CASPR importer) is not available")
-@pytest.mark.skipif(not NECK.is_dir(), reason=f"CASPR's 8S neck model is not at {NECK}")
 def test_neck_paper(tmp_path):
     nb = _run("neck_paper", tmp_path)
     text = _text(nb)

@@ -1,4 +1,4 @@
-"""The source paper's examples (Lau, Oetomo & Halgamuge), on models imported from CASPR's own files.
+"""The source paper's examples (Lau, Oetomo & Halgamuge), on CASPR's models as our importer converts them (committed under robots/caspr).
 
 Every number asserted here is OUR computed value; where it differs from the paper's text, the
 comment says so and docs/paper.md explains why. Tolerances: the solvers stop at 1e-8 relative (ProxQP
@@ -7,7 +7,7 @@ eps 1e-11/1e-12, Clarabel defaults), ProxQP and Clarabel agree to 2e-4 N on the 
 noise and far below any physical difference (printed numbers keep 3 decimals).
 
 Interaction angles are measured in the socket (parent) frame: CASPR's force frame (README of
-shared/reference/caspr: "Its force is expressed in the parent link's frame").
+CASPR's reference files: "Its force is expressed in the parent link's frame").
 """
 
 from __future__ import annotations
@@ -17,40 +17,27 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-CASPR = Path(__file__).resolve().parents[2] / "shared/reference/caspr"
-SR = CASPR / "SR_model"
-NECK = CASPR / "8S_neck"
+REPO = Path(__file__).resolve().parents[1]
+# the paper's robots as converted from CASPR by mcdm-pin import-caspr and committed (robots/caspr/README.md:
+# provenance, CASPR's BSD-3 notice; python tools/caspr_library.py convert --check regenerates them)
+SR_SIDECAR = REPO / "robots" / "caspr" / "SR_model" / "SR_model.yaml"
+NECK_SIDECAR = REPO / "robots" / "caspr" / "8S_neck" / "8S_neck.yaml"
 F_MIN = 0.001
 TOL_N, TOL_DEG = 1e-3, 1e-3
 
 
-def _need(path):
-    if not path.is_file():
-        pytest.skip(f"CASPR reference models not found in {CASPR} (shared/reference/caspr is missing); "
-                    f"the paper's examples read CASPR's XML files in place")
+@pytest.fixture(scope="module")
+def sr():
+    from mcdm_pin import Robot
+
+    return Robot.load(SR_SIDECAR)
 
 
 @pytest.fixture(scope="module")
-def sr(tmp_path_factory):
+def neck():
     from mcdm_pin import Robot
-    from mcdm_pin.caspr import import_caspr
 
-    _need(SR / "SR_model_bodies.xml")
-    res = import_caspr(SR / "SR_model_bodies.xml", SR / "SR_model_cables.xml", tmp_path_factory.mktemp("sr"),
-                       trajectories_xml=SR / "SR_model_trajectories.xml", name="sr")
-    return Robot.load(res.sidecar)
-
-
-@pytest.fixture(scope="module")
-def neck(tmp_path_factory):
-    from mcdm_pin import Robot
-    from mcdm_pin.caspr import import_caspr
-
-    _need(NECK / "8S_neck_bodies.xml")
-    res = import_caspr(NECK / "8S_neck_bodies.xml", NECK / "8S_neck_cables.xml",
-                       tmp_path_factory.mktemp("neck"), trajectories_xml=NECK / "8S_neck_trajectories.xml",
-                       trajectory_ids=["roll"])
-    return Robot.load(res.sidecar)
+    return Robot.load(NECK_SIDECAR)
 
 
 def _solve(robot, traj, case, solver="proxqp", **kw):

@@ -11,7 +11,7 @@ from mcdm_pin.cli import main
 from mcdm_pin.trajectory import quintic_trajectory
 from mcdm_pin.verify import convergence, judge, planned_state, replay, resolved_forces
 
-from .conftest import REPO, SHARED, TWO_LINK, TWO_LINK_URDF
+from .conftest import REPO, TWO_LINK, TWO_LINK_URDF
 
 RUNS = {}
 
@@ -185,18 +185,14 @@ def test_quaternion_ball_joint_replay_keeps_rk4_order():
     assert judge(ball, res, table).status == "converged"
 
 
-NECK = SHARED / "reference" / "caspr" / "8S_neck"
+NECK = REPO / "robots" / "caspr" / "8S_neck" / "8S_neck.yaml"  # converted from CASPR, committed
 
 
-@pytest.mark.skipif(not (NECK / "8S_neck_bodies.xml").is_file(), reason="CASPR neck not available")
 def test_neck_replay_in_windows(tmp_path):
     """The neck is open-loop unstable under force control (errors grow like exp(350 t)), so the replay
     restarts from the plan at every instant; RK4 then shows its order (measured 3.6, 3.8 from 4
     substeps) on the roll trajectory, case 1."""
-    caspr = pytest.importorskip("mcdm_pin.caspr")
-    imp = caspr.import_caspr(NECK / "8S_neck_bodies.xml", NECK / "8S_neck_cables.xml", tmp_path,
-                             trajectories_xml=NECK / "8S_neck_trajectories.xml", trajectory_ids=["roll"])
-    robot = Robot.load(imp.sidecar)
+    robot = Robot.load(NECK)
     res = InverseDynamics.for_case(robot, 1).solve_trajectory(load_trajectory(robot, "roll"), progress=False)
     whole = replay(robot, res)  # diverges (the state stops being finite), and says when
     assert whole.diverged_at is not None and whole.max_error == np.inf and whole.growth_rate > 100

@@ -11,13 +11,18 @@ def add(sub):
                                             "into a URDF + sidecar")
     p.add_argument("bodies", help="CASPR *_bodies.xml")
     p.add_argument("cables", help="CASPR *_cables.xml")
-    p.add_argument("--trajectories", help="CASPR *_trajectories.xml (quintic trajectories)")
+    p.add_argument("--trajectories", help="CASPR *_trajectories.xml (every joint trajectory that can be "
+                                          "converted is; the others are listed with the reason)")
     p.add_argument("--trajectory", action="append", dest="trajectory_ids", metavar="ID",
                    help="convert only this trajectory id (repeatable)")
     p.add_argument("--cable-set", help="cable set id (default: the file's default_cable_set)")
-    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--out", required=True, help="output folder (sidecar and trajectory CSV files)")
+    p.add_argument("--urdf-dir", help="folder of the URDF (default: --out)")
     p.add_argument("--name", help="robot name and file stem (default: from the bodies file name)")
     p.add_argument("--cone-deg", type=float, help="write this stability cone on every spherical joint")
+    p.add_argument("--actuator-limit", type=float, metavar="N",
+                   help="bound |tau| <= N (N m or N) on actuated joints' motors: CASPR leaves them unbounded, "
+                        "the sidecar needs a finite bound (required for models with actuated joints)")
     p.set_defaults(func=run)
     return p
 
@@ -25,22 +30,24 @@ def add(sub):
 def run(args) -> int:
     res = import_caspr(args.bodies, args.cables, args.out, trajectories_xml=args.trajectories,
                        cable_set=args.cable_set, name=args.name, trajectory_ids=args.trajectory_ids,
-                       cone_deg=args.cone_deg)
+                       cone_deg=args.cone_deg, actuator_limit=args.actuator_limit, urdf_dir=args.urdf_dir)
     from ..robot import Robot
 
     robot = Robot.load(res.sidecar)
-    print(f"wrote {res.urdf}")
-    print(f"wrote {res.sidecar}")
-    for path in res.csv_files.values():
+    for path in (res.urdf, res.sidecar, *res.csv_files.values()):
         print(f"wrote {path}")
     print(f"{robot!r}; cable set {res.cable_set!r}")
     for k, (a, b) in res.renamed_cables.items():
         print(f"note: cable {k} repeats the name {a!r}; renamed {b!r} (sidecar names must be unique)")
+    for note in res.notes:
+        print(f"note: {note}")
     if res.q_is_caspr_order:
-        print("q lines up with CASPR's q")
+        print("the coordinates are CASPR's q, in CASPR's order")
     else:
-        print(f"q order differs from CASPR's: q[q_index[i]] = q_caspr[i], q_index = {res.q_index.tolist()}")
+        print(f"the coordinates differ from CASPR's q: {', '.join(res.coordinate_names)}")
     if res.trajectories:
         kinds = [f"{tid} ({'csv' if tid in res.csv_files else 'quintic'})" for tid in res.trajectories]
         print("trajectories: " + ", ".join(kinds))
+    for tid, reason in res.refused.items():
+        print(f"refused trajectory {tid!r}: {reason}")
     return 0

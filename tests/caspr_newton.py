@@ -1,0 +1,448 @@
+r"""CASPR's model semantics written out a second time, sharing no code with mcdm_pin: the reference
+the imported robots are checked against (``tests/test_caspr_library.py``, ``tools/caspr_library.py``).
+
+It reads CASPR's XML itself, applies CASPR's kinematics (``src/Model/Bodies/Joints`` at ``a6971ee``:
+:math:`R_{0k} = R_{0p} R_{pe}(q)`, :math:`P_k = P_p + R_{0p}(\text{location} + r_{rel}(q))`), samples
+CASPR's trajectories (``JointTrajectory``, ``Spline``, ``Quaternion``) and computes the equation of
+motion by Newton's and Euler's laws for each body, in world coordinates:
+
+.. math:: M(q)\ddot q + h(q, \dot q) = -L^T f + A\tau, \qquad
+   M = \sum_k J_{G,k}^T m_k J_{G,k} + J_{\omega,k}^T I_k J_{\omega,k},
+
+:math:`h` the same sum applied to the bias accelerations and gravity (:math:`g = 9.81` m/s^2 along -z),
+:math:`L = \partial \dot l / \partial \dot q` from the attachment points' velocities. The interaction
+wrench of joint k is the force and moment that link k's subtree needs from its parent (Newton and
+Euler for the subtree, the cables pulling): force in the parent's frame, moment about the joint point
+in the child's frame, CASPR's convention (``SystemModel.interactionWrench``).
+
+Coordinates are CASPR's (``q``, ``q_dot``, ``q_ddot`` of every joint in link order).
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+G = 9.81
+EX, EY, EZ = np.eye(3)
+
+# type -> (translation [(axis, coordinate)], rotation factors [(axis, coordinate)], number of coordinates)
+JOINTS = {
+    "R_X": ([], [(EX, 0)], 1), "R_Y": ([], [(EY, 0)], 1), "R_Z": ([], [(EZ, 0)], 1),
+    "R_AXIS": ([], [(None, 0)], 1), "P_X": ([(EX, 0)], [], 1), "P_AXIS": ([(None, 0)], [], 1),
+    "P_XY": ([(EX, 0), (EY, 1)], [], 2), "P_XZ": ([(EX, 0), (EZ, 1)], [], 2),
+    "T_XYZ": ([(EX, 0), (EY, 1), (EZ, 2)], [], 3),
+    "PLANAR_XY": ([(EX, 0), (EY, 1)], [(EZ, 2)], 3), "PLANAR_XZ": ([(EX, 0), (EZ, 1)], [(EY, 2)], 3),
+    "PLANAR_YZ": ([(EY, 0), (EZ, 1)], [(EX, 2)], 3),
+    "U_XY": ([], [(EX, 0), (EY, 1)], 2), "U_XZ": ([], [(EX, 0), (EZ, 1)], 2), "U_YZ": ([], [(EY, 0), (EZ, 1)], 2),
+    "S_EULER_XYZ": ([], [(EX, 0), (EY, 1), (EZ, 2)], 3), "S_FIXED_XYZ": ([], [(EZ, 2), (EY, 1), (EX, 0)], 3),
+    "SPATIAL_EULER_XYZ": ([(EX, 0), (EY, 1), (EZ, 2)], [(EX, 3), (EY, 4), (EZ, 5)], 6),
+}
+# the joints CASPR interpolates on SO(3): (first angle, order of the factors) (S_FIXED: R = Rz Ry Rx)
+SPHERICAL = {"S_EULER_XYZ": (0, "xyz"), "S_FIXED_XYZ": (0, "zyx"), "SPATIAL_EULER_XYZ": (3, "xyz")}
+
+
+def rot(axis, angle) -> np.ndarray:
+    """Rodrigues' formula."""
+    k = np.asarray(axis, dtype=float)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
+def _vec(text) -> np.ndarray:
+    return np.array([float(x) for x in text.split()])
+
+
+@dataclass
+class Link:
+    type: str
+    parent: int
+    loc: np.ndarray
+    mass: float
+    com: np.ndarray
+    inertia: np.ndarray  # about the COM, link axes
+    axis: np.ndarray | None
+    actuated: bool
+    q_initial: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return JOINTS[self.type][2]
+
+
+@dataclass
+class Model:
+    links: list
+    cables: list  # per cable: [(link, point from the joint point in the link frame, or base point)]
+    offsets: list = field(default_factory=list)
+
+    def __post_init__(self):
+        k = 0
+        for link in self.links:
+            self.offsets.append(k)
+            k += link.n
+        self.n = k
+
+    @classmethod
+    def from_xml(cls, bodies_xml, cables_xml, cable_set=None) -> "Model":
+        links = []
+        for el in ET.parse(bodies_xml).getroot().iter("link_rigid"):
+            j, ph = el.find("joint"), el.find("physical")
+            m, com = float(ph.find("mass").text), _vec(ph.find("com_location").text)
+            it = ph.find("inertia")
+            v = {k: float(it.find(k).text) for k in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")}
+            I = np.array([[v["Ixx"], v["Ixy"], v["Ixz"]], [v["Ixy"], v["Iyy"], v["Iyz"]], [v["Ixz"], v["Iyz"], v["Izz"]]])
+            if it.get("ref") == "joint":  # parallel axis theorem, back to the COM
+                I = I - m * (com @ com * np.eye(3) - np.outer(com, com))
+            axis = _vec(j.get("axis")) if j.get("axis") else None
+            links.append(Link(type=j.get("type"), parent=int(el.find("parent/num").text),
+                              loc=_vec(el.find("parent/location").text), mass=m, com=com, inertia=I,
+                              axis=None if axis is None else axis / np.linalg.norm(axis),
+                              actuated=j.get("actuated") == "true", q_initial=_vec(j.get("q_initial"))))
+        root = ET.parse(cables_xml).getroot()
+        wanted = cable_set or root.get("default_cable_set")
+        cset = next(s for s in root.iter("cable_set") if s.get("id") == wanted)
+        cables = []
+        for c in cset:
+            pts = []
+            for a in c.iter("attachment"):
+                k, loc = int(a.find("link").text), _vec(a.find("location").text)
+                if k and c.get("attachment_reference") == "com":
+                    loc = loc + links[k - 1].com
+                pts.append((k, loc))
+            cables.append(pts)
+        return cls(links, cables)
+
+    # --------------------------------------------------------------------------------- kinematics
+    def joint(self, k, q, qd, qdd):
+        """Relative motion of joint k: R_pe, translation d (parent frame, from the parent's joint point)
+        with its first and second derivatives, angular velocity and acceleration (child frame)."""
+        link = self.links[k]
+        trans, rots, n = JOINTS[link.type]
+        s = self.offsets[k]
+        x, xd, xdd = q[s:s + n], qd[s:s + n], qdd[s:s + n]
+        d, dd, ddd = link.loc.copy(), np.zeros(3), np.zeros(3)
+        for axis, c in trans:
+            a = link.axis if axis is None else axis
+            d, dd, ddd = d + a * x[c], dd + a * xd[c], ddd + a * xdd[c]
+        R, w, wd = np.eye(3), np.zeros(3), np.zeros(3)
+        for axis, c in rots:  # a serial chain of rotations about the moving axes
+            a = link.axis if axis is None else axis
+            Ri = rot(a, x[c])
+            w_in = Ri.T @ w
+            w = w_in + a * xd[c]
+            wd = Ri.T @ wd + np.cross(w_in, a) * xd[c] + a * xdd[c]
+            R = R @ Ri
+        return R, d, dd, ddd, w, wd
+
+    def kinematics(self, q, qd, qdd):
+        """Per link (world frame): R_0k, joint point P, angular velocity and acceleration, and the
+        joint point's velocity and acceleration. Index 0 is the base."""
+        p = len(self.links)
+        R, P = [np.eye(3)] + [None] * p, [np.zeros(3)] + [None] * p
+        w, wd, v, a = ([np.zeros(3)] + [None] * p for _ in range(4))
+        for k, link in enumerate(self.links, start=1):
+            j = link.parent
+            Rpe, d, dd, ddd, wr, wrd = self.joint(k - 1, q, qd, qdd)
+            r = R[j] @ d
+            R[k] = R[j] @ Rpe
+            P[k] = P[j] + r
+            w[k] = w[j] + R[k] @ wr
+            wd[k] = wd[j] + np.cross(w[j], R[k] @ wr) + R[k] @ wrd
+            v[k] = v[j] + np.cross(w[j], r) + R[j] @ dd
+            a[k] = (a[j] + np.cross(wd[j], r) + np.cross(w[j], np.cross(w[j], r))
+                    + 2 * np.cross(w[j], R[j] @ dd) + R[j] @ ddd)
+        return R, P, w, wd, v, a
+
+    def point_motion(self, kin, k, point):
+        """World position, velocity, acceleration of a point fixed in link k (link frame, from P_k)."""
+        R, P, w, wd, v, a = kin
+        r = R[k] @ point
+        return P[k] + r, v[k] + np.cross(w[k], r), a[k] + np.cross(wd[k], r) + np.cross(w[k], np.cross(w[k], r))
+
+    # ---------------------------------------------------------------------------------- dynamics
+    def body_forces(self, kin):
+        """Per link: the force and the moment about the COM needed for its motion (m a_G - m g,
+        I w_dot + w x I w), world frame."""
+        R, P, w, wd, v, a = kin
+        out = []
+        for k, link in enumerate(self.links, start=1):
+            _, _, aG = self.point_motion(kin, k, link.com)
+            I = R[k] @ link.inertia @ R[k].T
+            out.append((link.mass * (aG - np.array([0, 0, -G])), I @ wd[k] + np.cross(w[k], I @ w[k])))
+        return out
+
+    def generalized(self, q, qd, qdd):
+        """Generalized force needed, sum over bodies of J^T (force, moment): M qdd + h."""
+        kin = self.kinematics(q, qd, qdd)
+        forces = self.body_forces(kin)
+        tau = np.zeros(self.n)
+        for i in range(self.n):
+            e = np.zeros(self.n)
+            e[i] = 1.0
+            kin_i = self.kinematics(q, e, np.zeros(self.n))
+            for k, link in enumerate(self.links, start=1):
+                _, vG, _ = self.point_motion(kin_i, k, link.com)
+                tau[i] += vG @ forces[k - 1][0] + kin_i[2][k] @ forces[k - 1][1]
+        return tau
+
+    def terms(self, q, qd, qdd):
+        """``(M, h)`` with ``M qdd + h`` the generalized force the motion needs (CASPR's M and C + G)."""
+        z = np.zeros(self.n)
+        h = self.generalized(q, qd, z)
+        M = np.column_stack([self.generalized(q, z, np.eye(self.n)[i]) - self.generalized(q, z, z)
+                             for i in range(self.n)])
+        return M, h
+
+    def cable_points(self, kin):
+        """World position of every attachment point, per cable."""
+        return [[(k, self.point_motion(kin, k, pt)[0] if k else pt) for k, pt in c] for c in self.cables]
+
+    def lengths(self, q):
+        kin = self.kinematics(q, np.zeros(self.n), np.zeros(self.n))
+        return np.array([sum(np.linalg.norm(b - a) for (_, a), (_, b) in zip(c[:-1], c[1:]))
+                         for c in self.cable_points(kin)])
+
+    def cable_jacobian(self, q):
+        """L = d(lengths)/dq: each segment's unit vector times its ends' relative velocity."""
+        zero = np.zeros(self.n)
+        pts = self.cable_points(self.kinematics(q, zero, zero))
+        L = np.zeros((len(self.cables), self.n))
+        for i in range(self.n):
+            e = np.zeros(self.n)
+            e[i] = 1.0
+            kin_i = self.kinematics(q, e, zero)
+            for c, (route, world) in enumerate(zip(self.cables, pts)):
+                vel = [self.point_motion(kin_i, k, pt)[1] if k else np.zeros(3) for k, pt in route]
+                for s in range(len(route) - 1):
+                    u = world[s + 1][1] - world[s][1]
+                    L[c, i] += u @ (vel[s + 1] - vel[s]) / np.linalg.norm(u)
+        return L
+
+    def twists(self, q, qd):
+        """Per link, in its own frame: velocity of the joint point and angular velocity (6p,)."""
+        R, P, w, wd, v, a = self.kinematics(q, qd, np.zeros(self.n))
+        return np.concatenate([np.concatenate([R[k].T @ v[k], R[k].T @ w[k]]) for k in range(1, len(R))])
+
+    def twist_jacobian(self, q):
+        return np.column_stack([self.twists(q, np.eye(self.n)[i]) for i in range(self.n)])
+
+    def actuation(self):
+        """CASPR's A: one column per actuated coordinate (link order)."""
+        cols = [self.offsets[k] + i for k, link in enumerate(self.links) if link.actuated for i in range(link.n)]
+        A = np.zeros((self.n, len(cols)))
+        A[cols, np.arange(len(cols))] = 1.0
+        return A
+
+    def interaction(self, q, qd, qdd, f):
+        """Per joint (6p,): the force of the parent on link k's subtree (parent frame) and the moment
+        about the joint point (child frame), with cable forces ``f``."""
+        kin = self.kinematics(q, qd, qdd)
+        R, P = kin[0], kin[1]
+        forces = self.body_forces(kin)
+        on = [[] for _ in range(len(self.links) + 1)]  # (point, force) the cables apply on each body
+        for fc, world in zip(f, self.cable_points(kin)):
+            for (ka, pa), (kb, pb) in zip(world[:-1], world[1:]):
+                u = (pb - pa) / np.linalg.norm(pb - pa)
+                on[ka].append((pa, fc * u))
+                on[kb].append((pb, -fc * u))
+        out = []
+        for k, link in enumerate(self.links, start=1):
+            sub = self.subtree(k)
+            F, M = np.zeros(3), np.zeros(3)
+            for j in sub:
+                xG = self.point_motion(kin, j, self.links[j - 1].com)[0]
+                Fj, Mj = forces[j - 1]
+                F += Fj
+                M += Mj + np.cross(xG - P[k], Fj)
+                for pt, fv in on[j]:
+                    F -= fv
+                    M -= np.cross(pt - P[k], fv)
+            out.append(np.concatenate([R[link.parent].T @ F, R[k].T @ M]))
+        return np.concatenate(out)
+
+    def subtree(self, k):
+        sub = [k]
+        for j in range(k + 1, len(self.links) + 1):
+            if self.links[j - 1].parent in sub:
+                sub.append(j)
+        return sub
+
+    def interaction_map(self, q, qd, qdd):
+        """``(a, RT)``: interaction = a + RT f (the map is affine in f)."""
+        m = len(self.cables)
+        a = self.interaction(q, qd, qdd, np.zeros(m))
+        RT = np.column_stack([self.interaction(q, qd, qdd, np.eye(m)[i]) - a for i in range(m)])
+        return a, RT
+
+
+# ------------------------------------------------------------------------------------- trajectories
+def colon(a, d, b):
+    """MATLAB's a:d:b (d > 0)."""
+    n = math.floor((b - a) / d + 1e-10)
+    return np.array([a + i * d for i in range(n + 1)])
+
+
+def _hermite(kind, T, x0, v0, a0, x1, v1, a1, tau):
+    """Value, rate, acceleration at tau in [0, T] of CASPR's polynomial spline, from Hermite bases."""
+    s = tau / T
+    if kind == "linear":
+        return x0 + (x1 - x0) * s, (x1 - x0) / T + 0 * s, 0 * s
+    if kind == "cubic":
+        h = [(1 - 3 * s**2 + 2 * s**3, -6 * s + 6 * s**2, -6 + 12 * s),
+             (s - 2 * s**2 + s**3, 1 - 4 * s + 3 * s**2, -4 + 6 * s),
+             (3 * s**2 - 2 * s**3, 6 * s - 6 * s**2, 6 - 12 * s),
+             (-s**2 + s**3, -2 * s + 3 * s**2, -2 + 6 * s)]
+        c = [x0, v0 * T, x1, v1 * T]
+    else:
+        h = [(1 - 10 * s**3 + 15 * s**4 - 6 * s**5, -30 * s**2 + 60 * s**3 - 30 * s**4, -60 * s + 180 * s**2 - 120 * s**3),
+             (s - 6 * s**3 + 8 * s**4 - 3 * s**5, 1 - 18 * s**2 + 32 * s**3 - 15 * s**4, -36 * s + 96 * s**2 - 60 * s**3),
+             (s**2 / 2 - 1.5 * s**3 + 1.5 * s**4 - s**5 / 2, s - 4.5 * s**2 + 6 * s**3 - 2.5 * s**4,
+              1 - 9 * s + 18 * s**2 - 10 * s**3),
+             (10 * s**3 - 15 * s**4 + 6 * s**5, 30 * s**2 - 60 * s**3 + 30 * s**4, 60 * s - 180 * s**2 + 120 * s**3),
+             (-4 * s**3 + 7 * s**4 - 3 * s**5, -12 * s**2 + 28 * s**3 - 15 * s**4, -24 * s + 84 * s**2 - 60 * s**3),
+             (s**3 / 2 - s**4 + s**5 / 2, 1.5 * s**2 - 4 * s**3 + 2.5 * s**4, 3 * s - 12 * s**2 + 10 * s**3)]
+        c = [x0, v0 * T, a0 * T**2, x1, v1 * T, a1 * T**2]
+    x = sum(ci * hi[0] for ci, hi in zip(c, h))
+    xd = sum(ci * hi[1] for ci, hi in zip(c, h)) / T
+    xdd = sum(ci * hi[2] for ci, hi in zip(c, h)) / T**2
+    return x, xd, xdd
+
+
+def _blend(t, ts, te, x0, x1, tb):
+    """Spline.ParabolicBlend, written from its description: accelerate for tb, cruise, decelerate."""
+    T = te - ts
+    acc = (x1 - x0) / (tb * (T - tb))  # reaches the cruise speed acc*tb after tb
+    if t < ts + tb:
+        return x0 + acc * (t - ts) ** 2 / 2, acc * (t - ts), acc
+    if t < te - tb:
+        return x0 + acc * tb**2 / 2 + acc * tb * (t - ts - tb), acc * tb, 0.0
+    return x1 - acc * (te - t) ** 2 / 2, acc * (te - t), -acc
+
+
+@dataclass
+class Trajectory:
+    kind: str
+    dt: float
+    times: list
+    q: list
+    qd: list
+    qdd: list
+    blend: list
+
+
+def read_trajectory(path, traj_id, n) -> Trajectory:
+    root = ET.parse(path).getroot()
+    el = next(e for e in root.find("joint_trajectories") if e.get("id") == traj_id)
+    kind = {"quintic_spline_trajectory": "quintic", "cubic_spline_trajectory": "cubic",
+            "linear_spline_trajectory": "linear", "cubic_spline_average_velocity_trajectory": "average",
+            "parabolic_blend_trajectory": "blend"}[el.tag]
+    times, q, qd, qdd, blend = [], [], [], [], []
+    for i, pt in enumerate(el.find("points")):
+        t = 0.0 if i == 0 else float(pt.get("time"))
+        times.append(t if i == 0 or el.get("time_definition") == "absolute" else times[-1] + t)
+        q.append(_vec(pt.find("q").text))
+        qd.append(_vec(pt.find("q_dot").text) if pt.find("q_dot") is not None else np.zeros(n))
+        qdd.append(_vec(pt.find("q_ddot").text) if pt.find("q_ddot") is not None else np.zeros(n))
+        if i and kind == "blend":
+            blend.append(float(pt.get("blend_time", el.get("blend_time_default"))))
+    if kind in ("linear", "blend"):
+        qd = [np.zeros(n) for _ in q]
+    if kind == "average":
+        for i in range(1, len(q) - 1):
+            qd[i] = ((q[i] - q[i - 1]) / (times[i] - times[i - 1]) + (q[i + 1] - q[i]) / (times[i + 1] - times[i])) / 2
+        kind = "cubic"
+    if kind != "quintic":
+        qdd = [np.zeros(n) for _ in q]
+    return Trajectory(kind, float(el.get("time_step")), times, q, qd, qdd, blend)
+
+
+def _euler(order, R):
+    """Angles (a, b, g) of R = Rx(a) Ry(b) Rz(g) (``xyz``) or Rz(g) Ry(b) Rx(a) (``zyx``)."""
+    if order == "xyz":
+        return np.array([math.atan2(-R[1, 2], R[2, 2]), math.asin(R[0, 2]), math.atan2(-R[0, 1], R[0, 0])])
+    return np.array([math.atan2(R[2, 1], R[2, 2]), -math.asin(R[2, 0]), math.atan2(R[1, 0], R[0, 0])])
+
+
+def _rotation_factors(order):
+    return [(EX, 0), (EY, 1), (EZ, 2)] if order == "xyz" else [(EZ, 2), (EY, 1), (EX, 0)]
+
+
+def _euler_R(order, ang):
+    R = np.eye(3)
+    for axis, c in _rotation_factors(order):
+        R = R @ rot(axis, ang[c])
+    return R
+
+
+def _omega_map(order, ang):
+    """Child-frame angular velocity per angle rate (columns)."""
+    def w_of(xd):
+        w = np.zeros(3)
+        for axis, c in _rotation_factors(order):
+            w = rot(axis, ang[c]).T @ w + axis * xd[c]
+        return w
+    return np.column_stack([w_of(np.eye(3)[i]) for i in range(3)])
+
+
+def sample(model: Model, traj: Trajectory):
+    """CASPR's samples ``(t, q, q_dot, q_ddot)``: MATLAB grids per segment (first sample dropped after the
+    first segment), splines from the segment's first to last sample, spherical joints turned about one
+    axis, R_s exp(theta k), their Euler angles and exact rates."""
+    ts, Q, QD, QDD = [], [], [], []
+    for p in range(len(traj.times) - 1):
+        grid = colon(traj.times[p], traj.dt, traj.times[p + 1])
+        T = grid[-1] - grid[0]
+        for i, t in enumerate(grid):
+            if p and i == 0:
+                continue
+            x, xd, xdd = (np.zeros(model.n) for _ in range(3))
+            for c in range(model.n):
+                if traj.kind == "blend":
+                    x[c], xd[c], xdd[c] = _blend(t, grid[0], grid[-1], traj.q[p][c], traj.q[p + 1][c], traj.blend[p])
+                else:
+                    x[c], xd[c], xdd[c] = _hermite(traj.kind, T, traj.q[p][c], traj.qd[p][c], traj.qdd[p][c],
+                                                   traj.q[p + 1][c], traj.qd[p + 1][c], traj.qdd[p + 1][c], t - grid[0])
+            for k, link in enumerate(model.links):
+                if link.type in SPHERICAL:
+                    first, order = SPHERICAL[link.type]
+                    s = slice(model.offsets[k] + first, model.offsets[k] + first + 3)
+                    x[s], xd[s], xdd[s] = _spherical(traj, p, s, order, grid, t)
+            ts.append(t), Q.append(x), QD.append(xd), QDD.append(xdd)
+    return np.array(ts), np.array(Q), np.array(QD), np.array(QDD)
+
+
+def _spherical(traj, p, s, order, grid, t):
+    Rs, Re = _euler_R(order, traj.q[p][s]), _euler_R(order, traj.q[p + 1][s])
+    Rse = Rs.T @ Re
+    c = max(-1.0, min(1.0, (np.trace(Rse) - 1) / 2))
+    th = math.acos(c)
+    axis = (np.array([Rse[2, 1] - Rse[1, 2], Rse[0, 2] - Rse[2, 0], Rse[1, 0] - Rse[0, 1]]) / (2 * math.sin(th))
+            if th > 1e-12 else np.zeros(3))
+    if traj.kind == "blend":
+        a, ad, add = _blend(t, grid[0], grid[-1], 0.0, th, traj.blend[p])
+    else:
+        a, ad, add = _hermite(traj.kind, grid[-1] - grid[0], 0.0, 0.0, 0.0, th, 0.0, 0.0, t - grid[0])
+    R = Rs @ rot(axis, a) if th > 1e-12 else Rs
+    ang = _euler(order, R)
+    S = _omega_map(order, ang)
+    rates = np.linalg.solve(S, ad * axis)
+    # d/dt (S rates) = S accs + (dS/dt) rates, the second term being the angular acceleration of the
+    # Euler chain at zero angle accelerations
+    accs = np.linalg.solve(S, add * axis - _dS_rates(order, ang, rates))
+    return ang, rates, accs
+
+
+def _dS_rates(order, ang, rates):
+    """Angular acceleration (child frame) of the Euler chain at zero angle accelerations."""
+    w, wd = np.zeros(3), np.zeros(3)
+    for axis, c in _rotation_factors(order):
+        Ri = rot(axis, ang[c])
+        w_in = Ri.T @ w
+        wd = Ri.T @ wd + np.cross(w_in, axis) * rates[c]
+        w = w_in + axis * rates[c]
+    return wd
