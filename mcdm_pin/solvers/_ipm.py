@@ -63,23 +63,6 @@ def _dot(a, b):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _chol_solve(L, r):
-    p = L.shape[0]
-    y = r.copy()
-    for i in range(p):
-        t = y[i]
-        for k in range(i):
-            t -= L[i, k] * y[k]
-        y[i] = t / L[i, i]
-    for i in range(p - 1, -1, -1):
-        t = y[i]
-        for k in range(i + 1, p):
-            t -= L[k, i] * y[k]
-        y[i] = t / L[i, i]
-    return y
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
 def _soc_scaling(s, z, W, Winv):
     """Nesterov-Todd scaling of one 3-dimensional second-order cone: ``W`` and ``W^-1`` (3x3,
     symmetric) with ``W z = W^-1 s``; returns ``lambda = W z``."""
@@ -230,24 +213,7 @@ def _factor(H0, diag, T, Vc, A, iu, il, su, zu, sl, zl):
                 floored = True
             L[i, 0] = np.sqrt(max(L[i, 0], floor))
     else:
-        for j in range(n):
-            Lj = L[j]
-            acc = 0.0
-            for k in range(j):
-                acc += Lj[k] * Lj[k]
-            d = Lj[j] - acc
-            if not d > floor:
-                d = floor
-                floored = True
-            d = np.sqrt(d)
-            Lj[j] = d
-            inv = 1.0 / d
-            for i in range(j + 1, n):
-                Li = L[i]
-                acc = 0.0
-                for k in range(j):
-                    acc += Li[k] * Lj[k]
-                Li[j] = (Li[j] - acc) * inv
+        floored = _chol_rows(L, floor, floor)
     # Y = L^-1 A^T, row by row (each row a combination of the previous rows: contiguous axpys)
     Y = np.empty((n, neq))
     for i in range(n):
@@ -279,25 +245,37 @@ def _factor(H0, diag, T, Vc, A, iu, il, su, zu, sl, zl):
     sscale = 1e-300
     for a in range(neq):
         sscale = max(sscale, Ls[a, a])
-    for j in range(neq):
-        Lj = Ls[j]
+    if _chol_rows(Ls, 1e-13 * sscale, 1e300):
+        floored = True
+    return L, Y, Ls, floored
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def _chol_rows(L, tiny, replace):
+    """Cholesky of the lower triangle of ``L`` in place, row-oriented (the inner products run over
+    contiguous rows); a pivot not above ``tiny`` becomes ``replace`` (``tiny`` itself: a singular ``H``
+    kept barely definite; a huge value: a dependent equation dropped). Returns whether one did."""
+    n = L.shape[0]
+    replaced = False
+    for j in range(n):
+        Lj = L[j]
         acc = 0.0
         for k in range(j):
             acc += Lj[k] * Lj[k]
         d = Lj[j] - acc
-        if not d > 1e-13 * sscale:
-            d = 1e300
-            floored = True
+        if not d > tiny:
+            d = replace
+            replaced = True
         d = np.sqrt(d)
         Lj[j] = d
         inv = 1.0 / d
-        for i in range(j + 1, neq):
-            Li = Ls[i]
+        for i in range(j + 1, n):
+            Li = L[i]
             acc = 0.0
             for k in range(j):
                 acc += Li[k] * Lj[k]
             Li[j] = (Li[j] - acc) * inv
-    return L, Y, Ls, floored
+    return replaced
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
@@ -349,7 +327,7 @@ def _dense_solve(L, Y, Ls, r1, r2, diag):
         Yi = Y[i]
         for a in range(neq):
             rhs[a] += Yi[a] * ui
-    dy = _chol_solve(Ls, rhs)
+    dy = _kkt._chol_apply(Ls, rhs)
     for i in range(n):
         Yi = Y[i]
         acc = 0.0
