@@ -672,11 +672,25 @@ def main(argv=None) -> int:
     p.add_argument("--check-only", action="store_true", help="run the correctness check only, no timing")
     p.add_argument("--cold", action="store_true",
                    help="every instant alone, shuffled, fresh solver state (InverseDynamics.reset())")
+    p.add_argument("--warm-and-cold", action="store_true",
+                   help="both tables in one run: warm along the trajectory, then cold")
     p.add_argument("--caspr", default=str(DEFAULT_CASPR), help="CASPR reference folder (for the neck)")
     p.add_argument("--json", help="write the table (and the check details) as JSON")
     p.add_argument("--markdown", help="write the table as Markdown")
     args = p.parse_args(argv)
-    result = run(args)
+    if args.warm_and_cold:
+        codes = []
+        for cold in (False, True):
+            one = argparse.Namespace(**{**vars(args), "cold": cold, "warm_and_cold": False,
+                                        "json": None, "markdown": None})
+            codes.append(_report(run(one), one))
+            print()
+        return max(codes)
+    return _report(run(args), args)
+
+
+def _report(result: dict, args) -> int:
+    """Print one run's notes, check and table (and write the files asked for); the exit code."""
     for note in result["notes"]:
         print(f"note: {note}")
     if result["check_failures"]:
