@@ -151,6 +151,11 @@ def summary(result) -> str:
                      f"{np.max(result.softened_deg):.4g} deg)")
     tm, ts = result.time_model_s * 1e3, result.time_solve_s * 1e3
     lines.append(f"time per instant: model {np.median(tm):.3f} ms, solve {np.median(ts):.3f} ms "
-                 f"(median; mean {np.mean(tm + ts):.3f} ms total), "
-                 f"{np.median(result.iterations):.0f} solver iterations (median)")
+                 f"(median; mean {np.mean(tm + ts):.3f} ms total)")
+    # which stage of the solver chain answered (its first stage: 'ipm>polish' counts as ipm)
+    first = [str(s).split(">")[0] for s in result.stage if str(s)]
+    if first:
+        names, counts = np.unique(first, return_counts=True)
+        order = np.argsort(-counts, kind="stable")
+        lines.append("answered by: " + ", ".join(f"{names[i]} {counts[i]}" for i in order))
     return "\n".join(lines)
