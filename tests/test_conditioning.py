@@ -170,7 +170,9 @@ def test_badly_scaled_robots_meet_the_tolerances(g, sd, case):
                 # ~1e-9 |f|^2: known gap, docs/trust.md
                 big = max(1.0, np.abs(f).max(), np.abs(ref.f).max())
                 scale = max(abs(ref.objective), 1e-9 * big ** 2)
-                assert abs(prox.objective - ref.objective) <= 1e-6 * scale
+                # one-sided: ours may be lower (both points are feasible, checked above; on
+                # badly scaled robots Clarabel's own answer was seen 2.2e-6 above ours), never higher
+                assert prox.objective - ref.objective <= 1e-6 * scale
             masses = [link.mass for link in g.links]
             lengths = [link.length for link in g.links]
             for name, wide in (("masses 1e3 apart", max(masses) / min(masses) > 1e3),
@@ -184,7 +186,7 @@ def test_badly_scaled_robots_meet_the_tolerances(g, sd, case):
 @given(*badly_scaled(1e4))
 def test_issue_range_objective_matches_clarabel_strictly(g, sd, case):
     """The issue's range, forces of 1e-3 N next to 1e4 N (masses 1 g .. 1 t, lengths 1 mm .. 0.95 m):
-    besides the runner's tolerances, the objective equals Clarabel's to 1e-6 relative, without the
+    besides the runner's tolerances, the objective is not above Clarabel's by more than 1e-6 relative, without the
     size-relative allowance the 1e6 N test needs on long flat ridges (docs/trust.md, "Known gap";
     the same strict check also passed with MCDM_HYPOTHESIS_SEED=1, 2, 3 and 4)."""
     with tempfile.TemporaryDirectory() as d:
@@ -196,7 +198,8 @@ def test_issue_range_objective_matches_clarabel_strictly(g, sd, case):
             assert prox.eom_residual <= 1e-8
             assert np.all(prox.f >= robot.f_min - 1e-9) and np.all(prox.f <= robot.f_max + 1e-9)
             if ref.status == "optimal" and "AlmostSolved" not in ref.message and not by_clarabel:
-                assert abs(prox.objective - ref.objective) <= 1e-6 * max(abs(ref.objective), 1e-12)
+                # not worse than Clarabel (a lower objective at a feasible point is closer to the optimum)
+                assert prox.objective - ref.objective <= 1e-6 * max(abs(ref.objective), 1e-12)
 
 
 def test_scaled_examples_are_really_badly_scaled():
