@@ -19,6 +19,7 @@ from mcdm_pin import TermsEvaluator
 from mcdm_pin.exceptions import StateError
 from mcdm_pin.model.kernels import spread
 
+from .conftest import REPO
 from .robotgen import robots
 from .test_properties import SEED, SETTINGS, load, seeds, state
 
@@ -122,3 +123,44 @@ def test_background_compiler_sees_every_kernel():
     out = subprocess.run([sys.executable, "-m", "mcdm_pin.jit", "--list"], capture_output=True, text=True,
                          timeout=120, check=True).stdout
     assert expected >= 4 and out.startswith(f"{expected} kernel specialisations registered"), out
+
+
+def test_compiled_scaling_check_agrees_with_scaling_factors(tmp_path):
+    """``needs_scaling`` (one compiled pass) says "no scaling" only where ``scaling_factors``' numpy path
+    returns None: on the neck (cases 1-3) and on the 2-link arm with masses and bounds scaled by 1e6,
+    1e-6 and 1e3 (where it must scale)."""
+    from mcdm_pin import InverseDynamics, Robot, jit, load_trajectory
+    from mcdm_pin import scaling as S
+    from mcdm_pin.model.kernels import needs_scaling
+    from mcdm_pin.problem import Context
+
+    from .test_reference import _scaled_arm
+
+    jit.prepare(policy="wait")
+    arm = Robot.load(REPO / "robots" / "two_link_sr.yaml")
+    traj = load_trajectory(arm, "traj1").subsample(6)
+    robots = [Robot.load(REPO / "robots" / "caspr" / "8S_neck" / "8S_neck.yaml"), arm]
+    for i, k in enumerate((1e6, 1e-6, 1e3)):
+        folder = tmp_path / f"k{i}"
+        folder.mkdir()
+        robots.append(_scaled_arm(folder, k))
+    seen = {True: 0, False: 0}
+    for robot in robots:
+        tr = load_trajectory(robot, "roll").subsample(6) if robot.name == "8S_neck" else traj
+        for case in (1, 2, 3):
+            kw = {"cones": {j.name: 15.0 for j in robot.joints if j.type == "spherical"}} if case == 3 else {}
+            ident = InverseDynamics.for_case(robot, case, **kw)
+            for k in range(len(tr)):
+                qp = ident.problem.assemble(ident.evaluate(tr.q[k], tr.qd[k], tr.qdd[k]), Context(robot))
+                G, g = qp.cone_arrays()[:2]
+                fast = needs_scaling(qp.A.copy(), qp.b.copy(), qp.lb.copy(), qp.ub.copy(), qp.P_diag.copy(),
+                                     qp.P_factor.copy(), qp.c.copy(), G.copy(), g.copy(), float(S.SPREAD))
+                ready = jit._READY
+                try:
+                    jit._READY = False  # the numpy path
+                    slow = S.scaling_factors(qp)
+                finally:
+                    jit._READY = ready
+                assert fast or slow is None, (robot.name, case, k)
+                seen[bool(fast)] += 1
+    assert seen[True] >= 10 and seen[False] >= 10, seen  # both outcomes occur

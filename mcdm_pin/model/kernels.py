@@ -169,12 +169,66 @@ def csr(lists, n):
     return ptr, idx
 
 
+@njit(cache=True, nogil=True)
+def _outside(v, limit):
+    return not (1.0 / limit <= v <= limit)
+
+
+@njit(cache=True, nogil=True)
+def needs_scaling(A, b, lb, ub, P_diag, P_factor, c, G, g, limit):
+    """Whether :func:`mcdm_pin.scaling.scaling_factors` would scale this structured problem
+    (``P = diag(P_diag) + P_factor^T P_factor``) at all: the same tests in one pass, for the usual
+    well-scaled instant (then no copy is made). ``False`` means: every factor would be one."""
+    m, n = A.shape
+    if m and spread(A, np.zeros(0)) > limit:
+        return True
+    unit = 0.0
+    ub_min = np.inf
+    for i in range(n):
+        if np.isfinite(lb[i]):
+            unit = max(unit, abs(lb[i]))
+        if np.isfinite(ub[i]) and abs(ub[i]) > 0.0:
+            ub_min = min(ub_min, abs(ub[i]))
+    if unit > 0.0 and np.isfinite(ub_min) and ub_min > unit:
+        unit = np.sqrt(unit * ub_min)
+    for r in range(m):
+        row = 0.0
+        for j in range(n):
+            row = max(row, abs(A[r, j]))
+        if row > 0.0:
+            if _outside(row, limit):
+                return True
+            unit = max(unit, abs(b[r]) / row)
+    if unit > 0.0 and _outside(unit, limit):
+        return True
+    # |P|'s largest entry: P = diag(P_diag) + P_factor^T P_factor (P_diag >= 0) is positive
+    # semidefinite, so it is its largest diagonal entry
+    size = 0.0
+    for j in range(n):
+        col = abs(P_diag[j])
+        for r in range(P_factor.shape[0]):
+            col += P_factor[r, j] * P_factor[r, j]
+        size = max(size, col, abs(c[j]))
+    if _outside(max(size, 1e-300), limit):
+        return True
+    for k in range(G.shape[0]):
+        sz = 1e-300
+        for e in range(3):
+            sz = max(sz, abs(g[k, e]))
+            for j in range(n):
+                sz = max(sz, abs(G[k, e, j]))
+        if _outside(sz, limit):
+            return True
+    return False
+
+
 def warm_calls():
     """This module's kernels with example arguments of the types the library passes (registered
     with :mod:`mcdm_pin.jit`, which loads them from numba's cache or compiles them)."""
     z = np.zeros
     i64 = np.int64
     return [(spread, (z((1, 2)), z(1))),
+            (needs_scaling, (z((1, 2)), z(1), z(2), z(2), z(2), z((1, 2)), z(2), z((1, 3, 2)), z((1, 3)), 1e3)),
             (cable_terms, (np.tile(np.eye(4), (1, 1, 1)), z((1, 6)), z((2, 3)), z(2, dtype=i64),
                            np.array([0], dtype=i64), np.array([1], dtype=i64), np.array([0], dtype=i64),
                            np.array([False]), z(2, dtype=i64), z(0, dtype=i64), z(2, dtype=i64),

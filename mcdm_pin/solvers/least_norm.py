@@ -34,8 +34,9 @@ from .. import tolerances as tol
 from .base import OPTIMAL, Solution, Stage
 
 
-def _strongly_active(qp, sol: Solution):
-    """(free mask, rows of the active cones' gradients, their curvature) at ``sol``."""
+def _strongly_active(qp, sol: Solution, curvature: bool = True):
+    """(free mask, rows of the active cones' gradients, their curvature) at ``sol`` (``curvature``
+    false: the curvature is not formed, ``None``)."""
     x, z = sol.x, sol.z
     grad = qp.gradient(x)
     gscale = max(np.abs(grad).max(initial=0.0), np.abs(qp.c).max(initial=0.0), 1e-300)
@@ -44,7 +45,7 @@ def _strongly_active(qp, sol: Solution):
     at_l = (x - qp.lb <= near * (1.0 + np.abs(qp.lb))) & (z < -thr)
     at_u = (qp.ub - x <= near * (1.0 + np.abs(qp.ub))) & (z > thr)
     free = ~(at_l | at_u)
-    rows, curv = [], np.zeros((qp.n, qp.n))
+    rows, curv = [], (np.zeros((qp.n, qp.n)) if curvature else None)
     for k, cone in enumerate(qp.cones):
         lam = sol.z_cone[k]
         mu = lam[0] * np.cos(np.radians(cone.angle_deg))
@@ -61,8 +62,9 @@ def _strongly_active(qp, sol: Solution):
         # perpendicular direction normal to it
         rows.append((k, (nhat - cone.tan * cone.axis) @ cone.G))
         rows.append((k, np.cross(cone.axis, nhat) @ cone.G))
-        Pp = np.eye(3) - np.outer(cone.axis, cone.axis) - np.outer(nhat, nhat)
-        curv += mu * cone.G.T @ Pp @ cone.G / perp
+        if curvature:
+            Pp = np.eye(3) - np.outer(cone.axis, cone.axis) - np.outer(nhat, nhat)
+            curv += mu * cone.G.T @ Pp @ cone.G / perp
     return free, rows, curv
 
 
@@ -73,7 +75,7 @@ def is_unique(qp, sol: Solution) -> bool:
         return True  # P = diag(d) + F^T F with d > 0 is positive definite: strictly convex (case 1)
     if sol.z is None or (qp.cones and sol.z_cone is None):
         return False
-    free, rows, curv = _strongly_active(qp, sol)
+    free, rows, _ = _strongly_active(qp, sol, curvature=False)  # the curvature only if needed below
     nf = int(free.sum())
     if nf == 0:
         return True
@@ -96,6 +98,7 @@ def is_unique(qp, sol: Solution) -> bool:
         Z = np.eye(nf)
     if Z.shape[1] == 0:
         return True
+    curv = _strongly_active(qp, sol)[2]
     H = (qp.P + curv)[np.ix_(free, free)]
     Hr = Z.T @ H @ Z
     hscale = max(np.abs(qp.P).max(initial=0.0), 1e-300)
@@ -115,7 +118,7 @@ def optimal_face_rows(qp, sol: Solution | None = None) -> np.ndarray:
         rows = [V[:, w > 1e-12 * max(np.abs(w).max(initial=0.0), 1e-300)].T]
     rows += [qp.A, qp.c[None, :]]
     if sol is not None and sol.z is not None:
-        free, cone_rows, _ = _strongly_active(qp, sol)
+        free, cone_rows, _ = _strongly_active(qp, sol, curvature=False)
         rows.append(np.eye(n)[~free])
         for k, r in cone_rows:
             rows.append(r)
@@ -135,9 +138,9 @@ def stage2_problem(qp, sol: Solution):
     E = optimal_face_rows(qp, sol)
     lb, ub, cones = qp.lb, qp.ub, qp.cones
     if sol.z is not None:
-        free, _, _ = _strongly_active(qp, sol)
+        free, cone_rows, _ = _strongly_active(qp, sol, curvature=False)
         lb, ub = np.where(free, qp.lb, -np.inf), np.where(free, qp.ub, np.inf)
-        held = {k for k, _ in _strongly_active(qp, sol)[1]}
+        held = {k for k, _ in cone_rows}
         cones = [c for k, c in enumerate(qp.cones) if k not in held]
     w = np.ones(n) if qp.norm_weight is None else qp.norm_weight
     return qp.replace(P=None, P_diag=w.astype(float), P_factor=np.zeros((0, n)), c=np.zeros(n), r=0.0,
