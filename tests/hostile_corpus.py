@@ -14,6 +14,8 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from mcdm_pin.limits import MAX_XML_BYTES
+
 REPO = Path(__file__).resolve().parents[1]
 URDF = (REPO / "urdf" / "two_link_sr.urdf").read_text()
 SIDECAR = (REPO / "robots" / "two_link_sr.yaml").read_text().replace("../urdf/two_link_sr.urdf", "arm.urdf")
@@ -31,6 +33,15 @@ def _csv_rows(n: int = 12) -> str:
 CSV = _csv_rows()
 
 
+@dataclass(frozen=True)
+class Sparse:
+    """A file of ``size`` bytes that starts with ``head`` (the rest zeros), written sparse: a size limit
+    is tested without holding the bytes in memory."""
+
+    head: bytes
+    size: int
+
+
 @dataclass
 class Case:
     """One hostile input: files written into an empty folder, the command line run there, and what the
@@ -38,7 +49,7 @@ class Case:
 
     klass: str
     name: str
-    files: dict[str, bytes | str]
+    files: dict[str, bytes | str | Sparse]
     argv: list[str]
     field: str
     file: str | None = None
@@ -377,7 +388,43 @@ def caspr_cases() -> list[Case]:
     add("time step 1e-9", r"time_step|samples", "t.xml", t=_sub(trajs, 'time_step="0.01"', 'time_step="1e-9"'),
         args=argv + ["--trajectory", "SR_trajectory"])
     add("out is a file", r"--out|out", "out", args=argv[:-1] + ["c.xml"])
+    _more_caspr_cases(add, bodies, cables, trajs, argv)
     return cases
+
+
+def _more_caspr_cases(add, bodies, cables, trajs, argv):
+    """Files that are not CASPR's at all, the bodies' numbering and physics, trajectory timing and the
+    cables' numbers; a trajectory is asked for by name (``--trajectory``), else it is refused alone and
+    the import goes on."""
+    by_name = argv + ["--trajectory", "SR_trajectory"]
+    laughs = "".join(f'<!ENTITY {chr(98 + i)} "{("&" + chr(97 + i) + ";") * 10}">' for i in range(8))
+    add("billion laughs", r"malformed XML", "b.xml",
+        b=f'<?xml version="1.0"?><!DOCTYPE l [<!ENTITY a "aaaaaaaaaa">{laughs}]><bodies_system>&i;</bodies_system>')
+    add("huge file", r"bytes.*at most", "b.xml", b=Sparse(b"<bodies_system>", MAX_XML_BYTES + 1))
+    add("empty file", r"malformed XML", "b.xml", b="")
+    add("cables given as bodies", r"root element <bodies_system>", "b.xml", b=cables)
+    add("link numbered twice", r"@num: expected num=2", "b.xml", b=_sub(bodies, 'num="2"', 'num="1"'))
+    add("inertia not positive", r"inertia.*positive semidefinite", "b.xml", b=_sub(bodies, "<Ixy>0</Ixy>", "<Ixy>5</Ixy>"))
+    add("q_min above q_max", r"joint@q_max", "b.xml",
+        b=_sub(bodies, 'q_min="-3.1416" q_max="3.1416"/>', 'q_min="3.1416" q_max="-3.1416"/>'))
+    add("time step zero", r"time_step: expected a positive", "t.xml", t=_sub(trajs, 'time_step="0.01"', 'time_step="0"'),
+        args=by_name)
+    add("point time backwards", r"point\[2\]@time", "t.xml", t=_sub(trajs, '<point time="1">', '<point time="-1">'),
+        args=by_name)
+    add("q_dot wrong count", r"q_dot: expected 4 numbers", "t.xml",
+        t=_sub(trajs, "<q_dot>0 0 0 0</q_dot>", "<q_dot>0 0</q_dot>"), args=by_name)
+    add("unknown trajectory type", r"unknown trajectory type <foo_trajectory>", "t.xml",
+        t=_sub(trajs, 'quintic_spline_trajectory id="SR_trajectory"', 'foo_trajectory id="SR_trajectory"').replace(
+            "</quintic_spline_trajectory>", "</foo_trajectory>", 1), args=by_name)
+    add("force_min negative", r"force_min", "c.xml",
+        c=re.sub(r"<force_min>[^<]*</force_min>", "<force_min>-5</force_min>", cables, count=1))
+    add("force_max infinite", r"force_max: expected finite", "c.xml",
+        c=re.sub(r"<force_max>[^<]*</force_max>", "<force_max>inf</force_max>", cables, count=1))
+    add("one attachment", r"expected at least two <attachment>", "c.xml",
+        c=re.sub(r"(<attachments>\s*<attachment>.*?</attachment>).*?(</attachments>)", r"\1\2", cables, count=1,
+                 flags=re.S))
+    add("attachment link 1.5", r"link: expected an integer", "c.xml",
+        c=re.sub(r"<link>1</link>", "<link>1.5</link>", cables, count=1))
 
 
 def all_cases() -> list[Case]:

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from .hostile_corpus import Case, all_cases
+from .hostile_corpus import Case, Sparse, all_cases
 
 TIMEOUT_S = 60
 EXTRA_ADDRESS_SPACE = 2 * 2**30
@@ -102,7 +102,10 @@ def test_hostile_input(case: Case, tmp_path):
     for name, content in case.files.items():
         path = folder / name
         path.parent.mkdir(parents=True, exist_ok=True)
-        if isinstance(content, bytes):
+        if isinstance(content, Sparse):
+            path.write_bytes(content.head)
+            os.truncate(path, content.size)
+        elif isinstance(content, bytes):
             path.write_bytes(content)
         else:
             path.write_text(content)
