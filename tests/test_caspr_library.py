@@ -11,9 +11,9 @@ import pytest
 
 from mcdm_pin import load_trajectory
 
-from .caspr_library_check import (OBJ_TOL, TOL, X_TOL, agrees, case1_states, clarabel_alone, compare, load_library,
-                                  load_reference, objective_agreement, reference_states, robot_of, solve_case1,
-                                  state_of, worst)
+from .caspr_library_check import (OBJ_TOL, REPO, TOL, X_TOL, agrees, case1_states, clarabel_alone, compare,
+                                  load_library, load_reference, objective_agreement, reference_states, robot_of,
+                                  solve_case1, state_of, worst)
 
 LIBRARY = load_library()
 IMPORTED = [m for m in LIBRARY["models"] if m["status"] == "imported"]
@@ -92,6 +92,23 @@ def test_case1_agrees_with_clarabel_alone(entry, reference):
     assert not alone["mismatch"], (entry["model"], "one found an optimum, the other not, at t =", alone["mismatch"])
     assert alone["objective"] <= OBJ_TOL and alone["x"] <= X_TOL, (entry["model"], alone)
     assert agrees(alone)
+
+
+def test_carex_singular_mass_matrix_is_a_warning_of_info(capsys):
+    """CAREX's links have no inertia about their own axes: ``info`` warns that the mass matrix is
+    singular and exits 0 (inverse dynamics never inverts it)."""
+    import numpy as np
+
+    from mcdm_pin import compute_terms
+    from mcdm_pin.cli import main
+
+    entry = next(m for m in IMPORTED if m["model"] == "CAREX")
+    robot = robot_of(entry)
+    M = compute_terms(robot, np.zeros(robot.nq), np.zeros(robot.nv), np.zeros(robot.nv)).M
+    assert np.linalg.eigvalsh(M).min() < 1e-12 * np.abs(M).max()
+    assert main(["info", str(REPO / entry["sidecar"])]) == 0
+    out = capsys.readouterr()
+    assert "[warn] mass matrix singular" in out.out + out.err
 
 
 @pytest.mark.xfail(strict=True, reason="solver stream (mcdm_pin/scaling.py): the arm starts straight (q = 0), "
