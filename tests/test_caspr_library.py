@@ -91,7 +91,6 @@ def test_case1_agrees_with_clarabel_alone(entry, reference):
     assert alone["instants"] > 0, entry["model"]
     assert not alone["mismatch"], (entry["model"], "one found an optimum, the other not, at t =", alone["mismatch"])
     assert alone["objective"] <= OBJ_TOL and alone["x"] <= X_TOL, (entry["model"], alone)
-    assert agrees(alone)
 
 
 def test_carex_singular_mass_matrix_is_a_warning_of_info(capsys):

@@ -7,7 +7,6 @@ import json
 import time
 from pathlib import Path
 
-
 REPO = Path(__file__).resolve().parents[1]
 DOC = REPO / "docs" / "caspr.md"
 START, END = "<!-- library-table:start -->", "<!-- library-table:end -->"
@@ -92,8 +91,8 @@ def rows(lib, ref) -> tuple[list[str], dict]:
         a = m["alone"]
         clar = f"{a['objective']:.1e}; {a['x']:.1e} on {a['optimal']} of {a['instants']} instant(s)"
         if a["mismatch"]:
-            clar += (f"; **{len(a['mismatch'])} instant(s) where only one found an optimum** (t = "
-                     + ", ".join(f"{t:g}" for t in a["mismatch"][:4]) + (", ..." if len(a["mismatch"]) > 4 else "") + " s)")
+            times = ", ".join(f"{t:g}" for t in a["mismatch"][:4]) + (", ..." if len(a["mismatch"]) > 4 else "")
+            clar += f"; **{len(a['mismatch'])} instant(s) where only one found an optimum** (t = {times} s)"
         joints = ", ".join(entry["joint_types"])
         lines.append(f"| {entry['model']} | {entry['family']} | {joints} | {imp} | {traj} | {m['terms']:.1e} | {clar} |")
     return lines, counts
@@ -109,8 +108,8 @@ def write_table() -> int:
                f"the imported models, the terms of **{c['terms']}** agree with the independent Newton-Euler "
                f"implementation to 1e-9 (relative); case 1 is solved at every instant of the model's trajectory "
                f"(or at rest at `q_initial`) for **{c['solved_all']}** and at some instants for "
-               f"{c['solved_some']}; case 1 agrees with Clarabel alone (no stage of our solver chain shared) for **{c['clarabel']}**: an "
-               f"optimum at the same instants, objectives to 1e-6 and forces to 1e-5 relative (`X_TOL` "
+               f"{c['solved_some']}; case 1 agrees with Clarabel alone (no stage of our solver chain shared) "
+               f"for **{c['clarabel']}**: an optimum at the same instants, objectives to 1e-6 and forces to 1e-5 relative (`X_TOL` "
                f"in `tests/caspr_library_check.py`), on "
                f"{CLARABEL_INSTANTS} instants of each trajectory. The SR arm (the "
                f"paper's, not in CASPR's model list) is the last row.")
