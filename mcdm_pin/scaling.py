@@ -39,7 +39,7 @@ import numpy as np
 
 from .constraints import ConeData
 from .problem import QPData
-from .solvers.base import Solution, Solver
+from .solvers.base import INACCURATE, OPTIMAL, Solution, Solver
 
 SPREAD = 1e3
 """Scale only when some factor would exceed this (either way)."""
@@ -227,7 +227,18 @@ class ScaledSolver(Solver):
     def solve(self, qp: QPData) -> Solution:
         scaled, scaling = scale_problem(qp)
         sol = self.inner.solve(scaled)
-        return sol if scaling is None else scaling.unscale(qp, sol)
+        if scaling is None:
+            return sol
+        sol = scaling.unscale(qp, sol)
+        if sol.status == INACCURATE:
+            # the scaling can hurt: equilibrating a column 1e7 smaller than the others (a hybrid arm
+            # held straight, PlanarSnakeArm at q = 0) spread the scaled Hessian over 14 decades and
+            # every back-end's answer failed the KKT check, where the problem as given solves. Then
+            # the problem as given is tried, and its answer kept if it passes
+            plain = self.inner.solve(qp)
+            if plain.status == OPTIMAL:
+                return plain
+        return sol
 
     def __getattr__(self, name):  # expose the inner back-end's settings and helpers
         if name == "inner":

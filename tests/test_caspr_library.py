@@ -110,14 +110,11 @@ def test_carex_singular_mass_matrix_is_a_warning_of_info(capsys):
     assert "[warn] mass matrix singular" in out.out + out.err
 
 
-@pytest.mark.xfail(strict=True, reason="solver stream (mcdm_pin/scaling.py): the arm starts straight (q = 0), "
-                   "the cable's column of the equation of motion is 2e-7 to 6e-4 of the motors', the scaling "
-                   "(Ruiz equilibration of A) makes the cable's unit 2^11 to 2^22 times the motors', the scaled "
-                   "Hessian's diagonal then spans 1 to 6e-14..2e-7, and every back-end's answer fails the KKT "
-                   "check ('inaccurate'); unscaled, every back-end finds Clarabel's optimum (f = f_min = 1 N)")
 def test_planar_snake_arm_first_instants_are_solved():
-    """PlanarSnakeArm's ``test_short`` at t = 0.005-0.075 s (15 samples): Clarabel alone finds the
-    optimum, the default chain reports 'inaccurate' (docs/caspr.md)."""
+    """PlanarSnakeArm's ``test_short`` at t = 0.005-0.075 s (15 samples), the arm held straight: the
+    scaling (Ruiz equilibration of a cable column 2e-7..6e-4 of the motors') spread the scaled Hessian
+    over 14 decades and every back-end answered 'inaccurate'; the scaled solver now retries the problem
+    as given when the scaled answer fails its check, and every instant is Clarabel's optimum."""
     entry = next(m for m in IMPORTED if m["model"] == "PlanarSnakeArm")
     robot = robot_of(entry)
     traj = load_trajectory(robot, entry["table_trajectory"])
