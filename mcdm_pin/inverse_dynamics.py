@@ -26,6 +26,7 @@ from .results import InstantResult, TrajectoryResult, concat_columns, instant_co
 from .scaling import ScaledSolver
 from .solvers import INACCURATE, INFEASIBLE, OPTIMAL, SOFTENED, Solution, get_solver
 from .solvers.base import cone_violation_deg
+from .model.actuators import actuator_names
 from .model.terms import TermsEvaluator, interaction_angles
 
 EOM_TOL = tol.EOM_REL
@@ -428,7 +429,3 @@ def _variable_names(robot) -> list[str]:
     """The unknowns' names: the cables, then the actuator components (hybrid robots)."""
     return list(robot.cable_names) + actuator_names(robot)
 
-
-def actuator_names(robot) -> list[str]:
-    """One name per actuator component (``JOINT`` or ``JOINT[i]``), in the order of ``tau_act``."""
-    return [n for a in getattr(robot, "actuators", ()) for n in a.names]

@@ -58,6 +58,7 @@ from pathlib import Path
 import numpy as np
 
 from .exceptions import ResultsError
+from .model.actuators import actuator_names
 
 
 @dataclass
@@ -215,8 +216,7 @@ class TrajectoryResult:
                    cable_names=np.array(rob.cable_names, dtype=str),
                    coordinate_names=np.array(rob.coordinate_names, dtype=str),
                    joint_types=np.array([j.type for j in rob.joints], dtype=str),
-                   actuator_names=np.array([n for a in getattr(rob, "actuators", ()) for n in a.names],
-                                           dtype=str),
+                   actuator_names=np.array(actuator_names(rob), dtype=str),
                    cone_deg=np.asarray(cone_deg, dtype=float), **meta)
 
     def __len__(self) -> int:

@@ -63,6 +63,12 @@ class Actuator:
                    np.atleast_1d(np.asarray(tau_max, dtype=float)), float(weight))
 
 
+def actuator_names(robot) -> list[str]:
+    """One name per actuator component (``JOINT`` or ``JOINT[i]``), in the order of ``tau_act``; empty
+    for a robot without actuators."""
+    return [n for a in getattr(robot, "actuators", ()) for n in a.names]
+
+
 def actuation_matrix(nv: int, actuators) -> np.ndarray:
     """(nv, n_act) ``S``: column k is 1 at the velocity entry actuator component k drives."""
     cols = [int(i) for a in actuators for i in a.idx_v]
