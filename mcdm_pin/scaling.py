@@ -113,7 +113,11 @@ def _outside(v: float) -> bool:
 def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool = False) -> Scaling | None:
     """The factors of the module docstring, or ``None`` when all lie within ``SPREAD`` of one (and
     ``force`` is false): computed from maxima only, without copying the problem (a uniform variable
-    scale, the usual case, is handled as a scalar)."""
+    scale, the usual case, is handled as a scalar). When the kernels are compiled, the usual answer
+    (``None``: nothing to scale) is decided by one compiled pass
+    (:func:`mcdm_pin.solvers._fast.scaling_trivial`); any other answer by the code below."""
+    if f_scale is None and not force and _trivial(qp):
+        return None
     m, n = qp.A.shape
     absA = np.abs(qp.A) if m else None
     ruiz = m and (spread(qp.A) > SPREAD or f_scale is not None)
@@ -160,6 +164,30 @@ def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool =
             and np.all(cone_s == 1.0):
         return None
     return Scaling(np.full(n, d) if scalar else d, r, obj, cone_s)
+
+
+def _trivial(qp: QPData) -> bool:
+    """Every factor of :func:`scaling_factors` is one (compiled; ``False`` while the kernels are not)."""
+    from . import jit
+
+    if not jit.ready():
+        return False
+    from .solvers._fast import scaling_trivial
+
+    c_ = np.ascontiguousarray
+    structured = qp._P is None
+    G, g = qp.cone_arrays()[:2] if qp.cones else (_NO_G, _NO_g)
+    return scaling_trivial(c_(qp.A, dtype=float), c_(qp.b, dtype=float), c_(qp.lb, dtype=float), structured,
+                           _NO_P if structured else c_(qp.P, dtype=float),
+                           c_(qp.P_diag, dtype=float) if structured else _NO_d,
+                           c_(qp.P_factor, dtype=float) if structured else _NO_P, c_(qp.c, dtype=float),
+                           c_(G, dtype=float).reshape(len(g), 3, qp.n), c_(g, dtype=float), float(SPREAD))
+
+
+_NO_P = np.zeros((0, 0))
+_NO_d = np.zeros(0)
+_NO_G = np.zeros((0, 3, 0))
+_NO_g = np.zeros((0, 3))
 
 
 def apply_scaling(qp: QPData, s: Scaling) -> QPData:

@@ -198,8 +198,9 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
     the ridge nearest the origin. The KKT check of the original problem decides whether the point is
     accepted (its stationarity residual ``reg |f|`` is ~1e-12 of the gradient's scale).
 
-    Returns ``(code, f, y, mus, dirs)``: ``mus`` (nc,) the active cones' multipliers (0 elsewhere),
-    ``dirs`` (nc, 3) their surface directions at ``f``.
+    Returns ``(code, f, y, mus, dirs, solves)``: ``mus`` (nc,) the active cones' multipliers (0
+    elsewhere), ``dirs`` (nc, 3) their surface directions at ``f``, ``solves`` the linear KKT systems
+    solved (1 without active cones; one per Newton step with them).
     """
     n = H.shape[0]
     neq = A.shape[0]
@@ -245,6 +246,7 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
     y = np.zeros(neq)
     iters = max_newton if na > 0 else 1
     converged = False
+    solves = 0
     for _ in range(iters):
         K = np.zeros((N, N))
         rhs = np.empty(N)
@@ -268,7 +270,7 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
                 p0, p1, p2 = F[0] - al * ax[k, 0], F[1] - al * ax[k, 1], F[2] - al * ax[k, 2]
                 nrm = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
                 if nrm <= 1e-300:
-                    return VANISHED, f, y, mus, dirs
+                    return VANISHED, f, y, mus, dirs, solves
                 d0, d1, d2 = p0 / nrm, p1 / nrm, p2 / nrm
                 dirs[k, 0], dirs[k, 1], dirs[k, 2] = d0, d1, d2
                 mu = mus[k]
@@ -306,9 +308,10 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
                 K[nf + neq + s, p] = row[free[p]]
             rhs[nf + neq + s] = rr
         sol = _kkt_solve(K, rhs, square) if square else _determined_solve(K, rhs, nf)
+        solves += 1
         for i in range(N):
             if not np.isfinite(sol[i]):
-                return SINGULAR, f, y, mus, dirs
+                return SINGULAR, f, y, mus, dirs, solves
         for p in range(nf):
             f[free[p]] = sol[p]
         y = sol[nf:nf + neq].copy()
@@ -320,7 +323,7 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
         if have_cur:
             for s in range(na):
                 if mus[act[s]] < 0.0:
-                    return DROP, f, y, mus, dirs
+                    return DROP, f, y, mus, dirs, solves
         if have_prev:
             dx = 0.0
             xx = 0.0
@@ -340,8 +343,8 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
         f_cur[:] = f
         have_cur = True
     if not converged:
-        return NO_CONVERGENCE, f, y, mus, dirs
-    return OK, f, y, mus, dirs
+        return NO_CONVERGENCE, f, y, mus, dirs, solves
+    return OK, f, y, mus, dirs, solves
 
 
 @njit(cache=True, nogil=True)
@@ -454,6 +457,16 @@ def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, pr
 @njit(cache=True, nogil=True)
 def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
                      max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel):
+    """:func:`active_set_run` without its counts: ``(code, f, mus, grad, state, cact, dirs,
+    next_state, y)`` (the signature the interior-point method's crossover uses)."""
+    out = active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
+                         max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel)
+    return out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8]
+
+
+@njit(cache=True, nogil=True)
+def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
+                   max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel):
     """Block principal pivoting from the guess ``(state0, cact0, cdir0)`` until a verified KKT point
     (see :func:`mcdm_pin.solvers.active_set.try_active_set`).
 
@@ -465,10 +478,12 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
 
     ``reg_rel``: the Tikhonov term of :func:`eq_solve` relative to the objective's scale.
 
-    Returns ``(code, f, mus, grad, state, cact, dirs, next_state, y)``: ``code`` :data:`FOUND` or a
+    Returns ``(code, f, mus, grad, state, cact, dirs, next_state, y, sets, solves)``: ``code`` :data:`FOUND` or a
     key of :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers, ``grad`` the bounds'
     multipliers (> 0 at a lower bound), ``y`` the equations' multipliers, ``(state, cact, dirs)`` the optimum's active set and ``next_state`` the guess for
-    the next instant (the bounds whose multiplier is not negligible, 1e-12 of the largest).
+    the next instant (the bounds whose multiplier is not negligible, 1e-12 of the largest);
+    ``sets`` the active sets tried (pivots + 1), ``solves`` the linear KKT systems solved for them
+    (one per active set without cones, one per Newton step with them).
     """
     n = H.shape[0]
     hmax = 0.0
@@ -507,6 +522,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
     last_was_block = False
     best_ninf = n + nc + 1
     blocks_ok = True
+    solves = 0
     for it in range(max_pivots):
         for h in range(it):
             same = True
@@ -520,11 +536,12 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
                         same = False
                         break
             if same:
-                return CYCLE, f, mus, grad, state, cact, cdir, state, y
+                return CYCLE, f, mus, grad, state, cact, cdir, state, y, it, solves
         hist_s[it] = state
         hist_c[it] = cact
-        code, f, y, mus, dirs = eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir,
-                                         max_newton, step_tol, reg)
+        code, f, y, mus, dirs, ns = eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir,
+                                             max_newton, step_tol, reg)
+        solves += ns
         if code == DROP:  # a cone pulls the force inwards: it is not active
             for k in range(nc):
                 if cact[k] and mus[k] < 0.0:
@@ -539,7 +556,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
             blocks_ok = False  # from now on one change at a time (finite for strictly convex QPs)
             continue
         if code != OK and code != NO_CONVERGENCE:
-            return code, f, mus, grad, state, cact, cdir, state, y
+            return code, f, mus, grad, state, cact, cdir, state, y, it + 1, solves
         # Newton steps that did not settle still say which cables and cones to exchange; the point
         # itself is accepted only if it passes the full KKT check like any other
         (vcode, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind,
@@ -554,9 +571,9 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
             for i in range(n):
                 if (state[i] == 1 and not grad[i] > thr) or (state[i] == 2 and not grad[i] < -thr):
                     nxt[i] = 0
-            return FOUND, f, mus, grad, state, cact, dirs, nxt, y
+            return FOUND, f, mus, grad, state, cact, dirs, nxt, y, it + 1, solves
         if vcode != KKT_PIVOT:
-            return 20 + vcode, f, mus, grad, state, cact, cdir, state, y
+            return 20 + vcode, f, mus, grad, state, cact, cdir, state, y, it + 1, solves
         have_prev = True
         prev_state[:] = state
         prev_cact[:] = cact
@@ -612,7 +629,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
                                             neq, nc, n)
             last_was_block = False
         cdir = _next_dirs(cone_in, cone_dir, dirs, nc)
-    return PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state, y
+    return PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state, y, max_pivots, solves
 
 
 @njit(cache=True, nogil=True)

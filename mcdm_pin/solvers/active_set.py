@@ -102,16 +102,17 @@ def cone_duals(qp: QPData, mus: np.ndarray, dirs: np.ndarray) -> np.ndarray:
     with surface directions ``dirs``: :math:`\mu_k/\cos\rho_k\,(1, -d_k\cdot e_1, -d_k\cdot e_2)`."""
     K_ = len(qp.cones)
     out = np.zeros((K_, 3))
-    for k, c in enumerate(qp.cones):
-        if mus[k] != 0.0:
-            s = mus[k] / np.cos(np.radians(c.angle_deg))
-            out[k] = s * np.array([1.0, -dirs[k] @ c.basis[0], -dirs[k] @ c.basis[1]])
+    for k in np.flatnonzero(mus):
+        c = qp.cones[k]
+        out[k, 0] = mus[k] / np.cos(np.radians(c.angle_deg))
+        out[k, 1:] = -out[k, 0] * (c.basis @ dirs[k])
     return out
 
 
 def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newton: int = 10):
     """The verified optimum reached from ``guess`` (a :class:`~.base.Solution` whose ``active`` is
-    the guess for the next instant), or ``None``.
+    the guess for the next instant, and whose ``iterations`` count the linear KKT systems solved: one
+    per active set tried, one per Newton step when cones are held), or ``None``.
 
     Starting from ``guess``, the active set is corrected by block principal pivoting (free variables
     that leave their bounds are fixed there, fixed ones whose multiplier has the wrong sign are
@@ -132,7 +133,7 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
         names, cact, cdir = [], _NO_CONES, _NO_DIRS
     # C-ordered float arrays and Python scalars: one compiled specialisation serves every call
     c_ = np.ascontiguousarray
-    code, x, mus, grad, state, cact, dirs, nxt_state, y = K.active_set_solve(
+    code, x, mus, grad, state, cact, dirs, nxt_state, y, _, solves = K.active_set_run(
         c_(qp.P, dtype=float), c_(qp.c, dtype=float), c_(qp.A, dtype=float), c_(qp.b, dtype=float),
         c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), state, c_(G, dtype=float), c_(gc, dtype=float),
         c_(ax, dtype=float), c_(tn, dtype=float), c_(basis0, dtype=float), cact, c_(cdir, dtype=float),
@@ -140,7 +141,7 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     if code != K.FOUND:
         _miss(K.REASONS[code])
         return None
-    return active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state)
+    return active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state).but(iterations=int(solves))
 
 
 def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state) -> Solution:
@@ -212,3 +213,14 @@ class Polish(Stage):
             return sol
         return hit.but(stage=f"{sol.stage}>{self.name}", iterations=sol.iterations, rounds=sol.rounds,
                        message=sol.message)
+
+
+def _register() -> None:
+    from . import _fast
+
+    # the warm path's compiled decisions (scaling, uniqueness) load and compile with the solvers'
+    # kernels (this module is imported by mcdm_pin.solvers.ipm, one of jit.MODULES)
+    jit.register("mcdm_pin.solvers._fast", _fast.warm_calls)
+
+
+_register()

@@ -73,6 +73,8 @@ def is_unique(qp, sol: Solution) -> bool:
         return True  # P = diag(d) + F^T F with d > 0 is positive definite: strictly convex (case 1)
     if sol.z is None or (qp.cones and sol.z_cone is None):
         return False
+    if _vertex_unique(qp, sol):
+        return True  # the usual case, decided by one compiled pass (the first test below)
     free, rows, curv = _strongly_active(qp, sol)
     nf = int(free.sum())
     if nf == 0:
@@ -100,6 +102,36 @@ def is_unique(qp, sol: Solution) -> bool:
     Hr = Z.T @ H @ Z
     hscale = max(np.abs(qp.P).max(initial=0.0), 1e-300)
     return bool(np.linalg.eigvalsh(0.5 * (Hr + Hr.T)).min() > tol.UNIQUE_REL * hscale)
+
+
+def _vertex_unique(qp, sol: Solution) -> bool:
+    """The vertex test of :func:`is_unique` compiled (:func:`._fast.vertex_unique`): ``True`` when it
+    proves the optimum unique, ``False`` when it cannot say (or the kernels are not compiled)."""
+    from .. import jit
+
+    if not jit.ready():
+        return False
+    from ._fast import vertex_unique
+
+    c_ = np.ascontiguousarray
+    if qp.cones:
+        G, gc, ax, tn, _ = qp.cone_arrays()
+        cosr = np.cos(np.radians([c.angle_deg for c in qp.cones]))
+        zc = sol.z_cone
+    else:
+        G, gc, ax, tn, cosr, zc = _NO_G, _NO_3, _NO_3, _NO_1, _NO_1, _NO_3
+    n = qp.n
+    return vertex_unique(c_(sol.x, dtype=float), c_(sol.z, dtype=float), c_(qp.gradient(sol.x), dtype=float),
+                         c_(qp.c, dtype=float), c_(qp.lb, dtype=float), c_(qp.ub, dtype=float),
+                         c_(qp.A, dtype=float).reshape(len(qp.b), n), c_(G, dtype=float).reshape(len(gc), 3, n),
+                         c_(gc, dtype=float), c_(ax, dtype=float), c_(tn, dtype=float), c_(cosr, dtype=float),
+                         c_(zc, dtype=float).reshape(len(gc), 3), float(tol.ACTIVE_SET_FROM_SOLUTION),
+                         float(tol.UNIQUE_REL))
+
+
+_NO_G = np.zeros((0, 3, 0))
+_NO_3 = np.zeros((0, 3))
+_NO_1 = np.zeros(0)
 
 
 def optimal_face_rows(qp, sol: Solution | None = None) -> np.ndarray:

@@ -1,0 +1,224 @@
+r"""Compiled fast paths of two per-instant decisions that were ~40 small numpy calls each (on the warm
+path of a trajectory, where one instant's solve is a fraction of a millisecond, their Python
+overhead cost as much as the solve):
+
+- :func:`scaling_trivial`: whether :func:`mcdm_pin.scaling.scaling_factors` returns ``None`` (every
+  factor within ``SPREAD`` of one: the problem is solved as it is). It mirrors the unit-scaling
+  branch of that function (no Ruiz equilibration, no ``f_scale``); ``False`` means "not decided
+  here" and the numpy code decides.
+- :func:`vertex_unique`: the first test of :func:`mcdm_pin.solvers.least_norm.is_unique` (the
+  strongly active constraints' rows have full column rank on the free variables, so the optimum is
+  a vertex of the optimal face and unique). ``False`` means "not decided here": the numpy code runs
+  the whole test (null space, reduced Hessian).
+
+Both only ever *shortcut* a decision the numpy code would take the same way (same thresholds, same
+formulas); a ``False`` hands the instant to it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True, nogil=True)
+def _outside(v, spread):
+    return not (1.0 / spread <= v <= spread)
+
+
+@njit(cache=True, nogil=True)
+def scaling_trivial(A, b, lb, structured, P, P_diag, P_factor, c, G, g, spread):
+    """Whether every scaling factor of :func:`mcdm_pin.scaling.scaling_factors` (without ``f_scale``)
+    is one: the equations' spread (rows and columns of ``|A|``) within ``spread``, the variables' unit
+    (``|b_i| / max_j |A_ij|``, the finite ``|lb|``), every non-zero row maximum, the objective's size
+    (``max |P|``, or ``max(|P_diag|, column sums of P_factor^2)`` when ``structured``, and ``max |c|``)
+    and every cone's size (``max |G_k|``, ``max |g_k|``) within ``[1/spread, spread]``."""
+    m, n = A.shape
+    rows = np.zeros(m)
+    cols = np.zeros(n)
+    for r in range(m):
+        mx = 0.0
+        for j in range(n):
+            v = abs(A[r, j])
+            if v > mx:
+                mx = v
+            if v > cols[j]:
+                cols[j] = v
+        rows[r] = mx
+    if m > 0:
+        rmin, rmax, cmin, cmax = np.inf, 0.0, np.inf, 0.0
+        for r in range(m):
+            if rows[r] > 0.0:
+                rmin = min(rmin, rows[r])
+                rmax = max(rmax, rows[r])
+        for j in range(n):
+            if cols[j] > 0.0:
+                cmin = min(cmin, cols[j])
+                cmax = max(cmax, cols[j])
+        if rmax > 0.0 and cmax > 0.0 and not max(rmax / rmin, cmax / cmin) <= spread:
+            return False  # Ruiz equilibration
+    unit = 0.0
+    for i in range(n):
+        v = abs(lb[i])
+        if np.isfinite(v) and v > unit:
+            unit = v
+    for r in range(m):
+        if rows[r] > 0.0:
+            v = abs(b[r]) / rows[r]
+            if v > unit:
+                unit = v
+            if _outside(rows[r], spread):
+                return False
+        elif not rows[r] == 0.0:
+            return False  # NaN
+    if unit > 0.0 and _outside(unit, spread):
+        return False
+    if not np.isfinite(unit):
+        return False
+    size = 0.0
+    if structured:
+        for i in range(P_diag.shape[0]):
+            v = abs(P_diag[i])
+            if v != v:
+                return False
+            if v > size:
+                size = v
+        for j in range(n):
+            acc = 0.0
+            for r in range(P_factor.shape[0]):
+                acc += P_factor[r, j] * P_factor[r, j]
+            if acc != acc:
+                return False
+            if acc > size:
+                size = acc
+    else:
+        for i in range(n):
+            for j in range(n):
+                v = abs(P[i, j])
+                if v != v:
+                    return False
+                if v > size:
+                    size = v
+    for i in range(n):
+        v = abs(c[i])
+        if v != v:
+            return False
+        if v > size:
+            size = v
+    size = max(size, 1e-300)
+    if _outside(size, spread):
+        return False
+    for k in range(G.shape[0]):
+        s = 0.0
+        for a in range(3):
+            for j in range(n):
+                v = abs(G[k, a, j])
+                if v != v:
+                    return False
+                if v > s:
+                    s = v
+            v = abs(g[k, a])
+            if v != v:
+                return False
+            if v > s:
+                s = v
+        if not np.isfinite(s):
+            return False
+        s = max(s, 1e-300)
+        if _outside(s, spread):
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def vertex_unique(x, z, grad, c, lb, ub, A, G, gc, ax, tn, cosr, zc, near, unique_rel):
+    """The vertex test of :func:`mcdm_pin.solvers.least_norm.is_unique` (its ``_strongly_active``
+    and the Cholesky of ``J^T J``): ``True`` when the rows of the equations and of the strongly
+    active cones, on the variables that are not strongly active at a bound, have full column rank
+    (or no variable is free); ``False``: not decided here."""
+    n = x.shape[0]
+    gscale = 1e-300
+    for i in range(n):
+        gscale = max(gscale, abs(grad[i]), abs(c[i]))
+    thr = unique_rel * gscale
+    free = np.empty(n, dtype=np.int64)
+    nf = 0
+    for i in range(n):
+        at_l = (x[i] - lb[i] <= near * (1.0 + abs(lb[i]))) and (z[i] < -thr)
+        at_u = (ub[i] - x[i] <= near * (1.0 + abs(ub[i]))) and (z[i] > thr)
+        if not (at_l or at_u):
+            free[nf] = i
+            nf += 1
+    if nf == 0:
+        return True
+    K = G.shape[0]
+    crow = np.zeros((3 * K, n))
+    nr = 0
+    for k in range(K):
+        mu = zc[k, 0] * cosr[k]
+        if not mu > thr:
+            continue
+        F = gc[k] + G[k] @ x
+        al = ax[k, 0] * F[0] + ax[k, 1] * F[1] + ax[k, 2] * F[2]
+        p = F - al * ax[k]
+        perp = np.sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2])
+        nF = np.sqrt(F[0] * F[0] + F[1] * F[1] + F[2] * F[2])
+        if perp <= 1e-12 * max(nF, 1e-300):  # held at the apex: every row of G
+            for a in range(3):
+                crow[nr] = G[k, a]
+                nr += 1
+            continue
+        h = p / perp
+        w = h - tn[k] * ax[k]
+        e0 = ax[k, 1] * h[2] - ax[k, 2] * h[1]
+        e1 = ax[k, 2] * h[0] - ax[k, 0] * h[2]
+        e2 = ax[k, 0] * h[1] - ax[k, 1] * h[0]
+        crow[nr] = w[0] * G[k, 0] + w[1] * G[k, 1] + w[2] * G[k, 2]
+        crow[nr + 1] = e0 * G[k, 0] + e1 * G[k, 1] + e2 * G[k, 2]
+        nr += 2
+    m = A.shape[0]
+    if m + nr < nf:
+        return False
+    # J^T J on the free variables, J = [A; cone rows] restricted to them
+    JtJ = np.zeros((nf, nf))
+    for r in range(m + nr):
+        for a in range(nf):
+            va = A[r, free[a]] if r < m else crow[r - m, free[a]]
+            if va != 0.0:
+                for bb in range(a + 1):
+                    vb = A[r, free[bb]] if r < m else crow[r - m, free[bb]]
+                    JtJ[a, bb] += va * vb
+    big = 1e-300
+    for a in range(nf):
+        for bb in range(a + 1):
+            JtJ[bb, a] = JtJ[a, bb]
+            big = max(big, abs(JtJ[a, bb]))
+    # Cholesky; the smallest pivot squared against the largest entry
+    L = np.zeros((nf, nf))
+    dmin = np.inf
+    for j in range(nf):
+        acc = JtJ[j, j]
+        for k in range(j):
+            acc -= L[j, k] * L[j, k]
+        if not acc > 0.0:
+            return False
+        d = np.sqrt(acc)
+        L[j, j] = d
+        dmin = min(dmin, d)
+        for i in range(j + 1, nf):
+            t = JtJ[i, j]
+            for k in range(j):
+                t -= L[i, k] * L[j, k]
+            L[i, j] = t / d
+    return dmin * dmin > 1e-10 * big
+
+
+def warm_calls():
+    """The kernels with example arguments of the types the library passes (registered with
+    :mod:`mcdm_pin.jit` by :mod:`.active_set`)."""
+    z = np.zeros
+    n = 2
+    return [(scaling_trivial, (z((1, n)), z(1), z(n), True, z((0, 0)), z(n), z((1, n)), z(n), z((1, 3, n)),
+                               z((1, 3)), 1e3)),
+            (vertex_unique, (z(n), z(n), z(n), z(n), z(n), z(n), z((1, n)), z((1, 3, n)), z((1, 3)),
+                             z((1, 3)), z(1), z(1), z((1, 3)), 1e-8, 1e-9))]
