@@ -13,6 +13,11 @@ overhead cost as much as the solve):
 
 Both only ever *shortcut* a decision the numpy code would take the same way (same thresholds, same
 formulas); a ``False`` hands the instant to it.
+
+Two more fuse the runner's per-instant numpy steps after the solve into one pass each, with the
+same formulas: :func:`answer_check` (equation-of-motion residual, bounds, cones: the runner's check
+of every answer on the original problem) and :func:`instant_outputs` (interaction wrenches, socket
+forces and angles).
 """
 
 from __future__ import annotations
@@ -213,6 +218,90 @@ def vertex_unique(x, z, grad, c, lb, ub, A, G, gc, ax, tn, cosr, zc, near, uniqu
     return dmin * dmin > 1e-10 * big
 
 
+@njit(cache=True, nogil=True)
+def answer_check(L, tau, extra, x, lb, ub, G, g, ax, angle_deg):
+    """The runner's check of an answer on the original problem, in one pass
+    (:func:`mcdm_pin.inverse_dynamics._check`): ``(eom, broken, viol, k)`` with ``eom`` the relative
+    equation-of-motion residual (:meth:`mcdm_pin.model.terms.Terms.eom_residual`: ``|tau + L^T f +
+    extra|_inf`` over ``max(|tau|_inf, max_v sum_c |L_cv f_c|, |extra|_inf)``, ``f`` the first
+    ``L.shape[0]`` entries of ``x``), ``broken`` the largest bound violation (0 inside), ``viol``
+    the largest cone violation in degrees (:func:`mcdm_pin.solvers.base.cone_violation_deg`) and
+    ``k`` its cone (-1: none)."""
+    m, nv = L.shape
+    n = x.shape[0]
+    scale = 1e-300
+    extra_scale = 0.0
+    for v in range(extra.shape[0]):
+        extra_scale = max(extra_scale, abs(extra[v]))
+    rmax = 0.0
+    tmax = 0.0
+    smax = 0.0
+    for v in range(nv):
+        r = tau[v]
+        s = 0.0
+        for c in range(m):
+            r += L[c, v] * x[c]
+            s += abs(L[c, v]) * abs(x[c])
+        if extra.shape[0]:
+            r += extra[v]
+        if not abs(r) <= rmax:
+            rmax = abs(r)
+            if r != r:
+                return np.nan, np.nan, np.nan, -1
+        tmax = max(tmax, abs(tau[v]))
+        smax = max(smax, s)
+    scale = max(tmax, smax, extra_scale, 1e-300)
+    eom = rmax / scale
+    broken = 0.0
+    for i in range(n):
+        if x[i] != x[i]:
+            return eom, np.nan, np.nan, -1
+        if not lb[i] - x[i] <= broken:
+            broken = lb[i] - x[i]
+        if not x[i] - ub[i] <= broken:
+            broken = x[i] - ub[i]
+    viol = 0.0
+    worst = -1
+    for k in range(G.shape[0]):
+        F = g[k].copy()
+        for a in range(3):
+            acc = 0.0
+            for i in range(n):
+                acc += G[k, a, i] * x[i]
+            F[a] += acc
+        al = ax[k, 0] * F[0] + ax[k, 1] * F[1] + ax[k, 2] * F[2]
+        p0, p1, p2 = F[0] - al * ax[k, 0], F[1] - al * ax[k, 1], F[2] - al * ax[k, 2]
+        ang = np.degrees(np.arctan2(np.sqrt(p0 * p0 + p1 * p1 + p2 * p2), al)) - angle_deg[k]
+        if not ang <= viol:
+            viol = ang
+            worst = k
+    return eom, broken, viol, worst
+
+
+@njit(cache=True, nogil=True)
+def instant_outputs(u, RT, R_socket, axes, f):
+    """Per physical joint: the interaction wrench ``u + R^T f`` (J, 6, child frame), its force in the
+    socket frame (J, 3) and that force's angle from the socket axis, degrees (J,)
+    (:meth:`mcdm_pin.model.terms.Terms.wrenches`, :func:`mcdm_pin.model.terms.interaction_angles`)."""
+    J = u.shape[0]
+    m = f.shape[0]
+    W = np.empty((J, 6))
+    Fs = np.empty((J, 3))
+    ang = np.empty(J)
+    for j in range(J):
+        for a in range(6):
+            acc = 0.0
+            for c in range(m):
+                acc += RT[j, a, c] * f[c]
+            W[j, a] = u[j, a] + acc
+        for a in range(3):
+            Fs[j, a] = R_socket[j, a, 0] * W[j, 0] + R_socket[j, a, 1] * W[j, 1] + R_socket[j, a, 2] * W[j, 2]
+        al = Fs[j, 0] * axes[j, 0] + Fs[j, 1] * axes[j, 1] + Fs[j, 2] * axes[j, 2]
+        p0, p1, p2 = Fs[j, 0] - al * axes[j, 0], Fs[j, 1] - al * axes[j, 1], Fs[j, 2] - al * axes[j, 2]
+        ang[j] = np.degrees(np.arctan2(np.sqrt(p0 * p0 + p1 * p1 + p2 * p2), al))
+    return W, Fs, ang
+
+
 def warm_calls():
     """The kernels with example arguments of the types the library passes (registered with
     :mod:`mcdm_pin.jit` by :mod:`.active_set`)."""
@@ -221,4 +310,6 @@ def warm_calls():
     return [(scaling_trivial, (z((1, n)), z(1), z(n), True, z((0, 0)), z(n), z((1, n)), z(n), z((1, 3, n)),
                                z((1, 3)), 1e3)),
             (vertex_unique, (z(n), z(n), z(n), z(n), z(n), z(n), z((1, n)), z((1, 3, n)), z((1, 3)),
-                             z((1, 3)), z(1), z(1), z((1, 3)), 1e-8, 1e-9))]
+                             z((1, 3)), z(1), z(1), z((1, 3)), 1e-8, 1e-9)),
+            (answer_check, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1))),
+            (instant_outputs, (z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)), z(n)))]

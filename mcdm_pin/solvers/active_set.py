@@ -109,7 +109,7 @@ def cone_duals(qp: QPData, mus: np.ndarray, dirs: np.ndarray) -> np.ndarray:
     return out
 
 
-def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newton: int = 10):
+def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newton: int = 10, stage: str = ""):
     """The verified optimum reached from ``guess`` (a :class:`~.base.Solution` whose ``active`` is
     the guess for the next instant, and whose ``iterations`` count the linear KKT systems solved: one
     per active set tried, one per Newton step when cones are held), or ``None``.
@@ -127,8 +127,9 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     if qp.cones:
         names = [c.joint for c in qp.cones]
         cact = np.array([nm in guess.cones for nm in names], dtype=np.bool_)
-        cdir = np.array([guess.cones[nm][0] if nm in guess.cones else basis0[k] for k, nm in enumerate(names)],
-                        dtype=float).reshape(len(names), 3)
+        cdir = basis0.copy()
+        for k in np.flatnonzero(cact):
+            cdir[k] = guess.cones[names[k]][0]
     else:
         names, cact, cdir = [], _NO_CONES, _NO_DIRS
     # C-ordered float arrays and Python scalars: one compiled specialisation serves every call
@@ -141,16 +142,19 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     if code != K.FOUND:
         _miss(K.REASONS[code])
         return None
-    return active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state).but(iterations=int(solves))
+    return active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state, iterations=int(solves),
+                           stage=stage)
 
 
-def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state) -> Solution:
-    """A verified active-set point as a :class:`~.base.Solution` (duals converted)."""
+def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state, **fields) -> Solution:
+    """A verified active-set point as a :class:`~.base.Solution` (duals converted; ``fields``: more
+    of its fields, e.g. ``stage``)."""
     z = np.where(state != 0, -grad, 0.0)
-    nxt_cones = {c.joint: (dirs[k], float(mus[k])) for k, c in enumerate(qp.cones) if cact[k] and mus[k] > 0}
+    held = np.flatnonzero(cact & (mus > 0))
+    nxt_cones = {qp.cones[k].joint: (dirs[k], float(mus[k])) for k in held}
     return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z,
                     z_cone=cone_duals(qp, np.where(cact, mus, 0.0), dirs) if qp.cones else np.zeros((0, 3)),
-                    active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt_state), verified=True)
+                    active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt_state), verified=True, **fields)
 
 
 _NO_CONES = np.zeros(0, dtype=np.bool_)
@@ -179,10 +183,7 @@ class WarmActiveSet(Stage):
     def run(self, qp, sol, deadline):
         if self.guess is None or not jit.ready():
             return None
-        hit = try_active_set(qp, self.guess, self.max_pivots)
-        if hit is None:
-            return None
-        return hit.but(stage=self.name)
+        return try_active_set(qp, self.guess, self.max_pivots, stage=self.name)
 
     def learn(self, qp, sol):
         self.guess = sol.active if sol.active is not None else ActiveSet.from_duals(qp, sol)

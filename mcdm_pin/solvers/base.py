@@ -20,7 +20,7 @@ while there is no final answer yet, a stage that *refines* runs only on an optim
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -84,8 +84,18 @@ class Solution:
         return self.status in FINAL
 
     def but(self, **changes) -> "Solution":
-        """A copy with some fields changed."""
-        return replace(self, **changes)
+        """A copy with some fields changed (``dataclasses.replace`` without its per-field checks: a
+        few microseconds less on every stage of every instant)."""
+        for name in changes:
+            if name not in _FIELDS:
+                raise TypeError(f"Solution has no field {name!r}")
+        new = object.__new__(Solution)
+        new.__dict__.update(self.__dict__)
+        new.__dict__.update(changes)
+        return new
+
+
+_FIELDS = frozenset(f.name for f in fields(Solution))
 
 
 def failure(n: int, status: str, message: str, iterations: int = 0, rounds: int = 1,
