@@ -6,13 +6,12 @@ overhead cost as much as the solve):
   factor within ``SPREAD`` of one: the problem is solved as it is). It mirrors the unit-scaling
   branch of that function (no Ruiz equilibration, no ``f_scale``); ``False`` means "not decided
   here" and the numpy code decides.
-- :func:`vertex_unique`: the first test of :func:`mcdm_pin.solvers.least_norm.is_unique` (the
-  strongly active constraints' rows have full column rank on the free variables, so the optimum is
-  a vertex of the optimal face and unique). ``False`` means "not decided here": the numpy code runs
-  the whole test (null space, reduced Hessian).
+- :func:`unique_test`: :func:`mcdm_pin.solvers.least_norm.is_unique` (strongly active constraints,
+  their rows' rank on the free variables, the reduced Hessian), the same steps and thresholds; the
+  numpy code stays the reference (and the path while the kernels are not compiled).
 
-Both only ever *shortcut* a decision the numpy code would take the same way (same thresholds, same
-formulas); a ``False`` hands the instant to it.
+:func:`scaling_trivial` only ever *shortcuts* a decision the numpy code would take the same way
+(same thresholds, same formulas); a ``False`` hands the instant to it.
 
 Two more fuse the runner's per-instant numpy steps after the solve into one pass each, with the
 same formulas: :func:`answer_check` (equation-of-motion residual, bounds, cones: the runner's check
@@ -136,11 +135,10 @@ def scaling_trivial(A, b, lb, structured, P, P_diag, P_factor, c, G, g, spread):
 
 
 @njit(cache=True, nogil=True)
-def vertex_unique(x, z, grad, c, lb, ub, A, G, gc, ax, tn, cosr, zc, near, unique_rel):
-    """The vertex test of :func:`mcdm_pin.solvers.least_norm.is_unique` (its ``_strongly_active``
-    and the Cholesky of ``J^T J``): ``True`` when the rows of the equations and of the strongly
-    active cones, on the variables that are not strongly active at a bound, have full column rank
-    (or no variable is free); ``False``: not decided here."""
+def unique_test(x, z, grad, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel):
+    """:func:`mcdm_pin.solvers.least_norm.is_unique` after its first two tests (its
+    ``_strongly_active``, the Cholesky of ``J^T J``, then the null space of ``J`` by an SVD and the
+    reduced Hessian's smallest eigenvalue): 1 unique, 0 not proven unique."""
     n = x.shape[0]
     gscale = 1e-300
     for i in range(n):
@@ -155,15 +153,19 @@ def vertex_unique(x, z, grad, c, lb, ub, A, G, gc, ax, tn, cosr, zc, near, uniqu
             free[nf] = i
             nf += 1
     if nf == 0:
-        return True
+        return 1
     K = G.shape[0]
     crow = np.zeros((3 * K, n))
+    curv = np.zeros((n, n))
     nr = 0
     for k in range(K):
         mu = zc[k, 0] * cosr[k]
         if not mu > thr:
             continue
-        F = gc[k] + G[k] @ x
+        F = gc[k].copy()
+        for a in range(3):
+            for i in range(n):
+                F[a] += G[k, a, i] * x[i]
         al = ax[k, 0] * F[0] + ax[k, 1] * F[1] + ax[k, 2] * F[2]
         p = F - al * ax[k]
         perp = np.sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2])
@@ -181,41 +183,71 @@ def vertex_unique(x, z, grad, c, lb, ub, A, G, gc, ax, tn, cosr, zc, near, uniqu
         crow[nr] = w[0] * G[k, 0] + w[1] * G[k, 1] + w[2] * G[k, 2]
         crow[nr + 1] = e0 * G[k, 0] + e1 * G[k, 1] + e2 * G[k, 2]
         nr += 2
+        # curvature mu G^T (I - a a^T - h h^T) G / |F_perp| = mu/|F_perp| v v^T, v = G^T (a x h)
+        v = crow[nr - 1]
+        sc = mu / perp
+        for i in range(n):
+            if v[i] != 0.0:
+                for j in range(n):
+                    curv[i, j] += sc * v[i] * v[j]
     m = A.shape[0]
-    if m + nr < nf:
-        return False
-    # J^T J on the free variables, J = [A; cone rows] restricted to them
-    JtJ = np.zeros((nf, nf))
-    for r in range(m + nr):
+    rows = m + nr
+    J = np.empty((rows, nf))
+    for r in range(rows):
         for a in range(nf):
-            va = A[r, free[a]] if r < m else crow[r - m, free[a]]
-            if va != 0.0:
-                for bb in range(a + 1):
-                    vb = A[r, free[bb]] if r < m else crow[r - m, free[bb]]
-                    JtJ[a, bb] += va * vb
-    big = 1e-300
-    for a in range(nf):
-        for bb in range(a + 1):
-            JtJ[bb, a] = JtJ[a, bb]
-            big = max(big, abs(JtJ[a, bb]))
-    # Cholesky; the smallest pivot squared against the largest entry
-    L = np.zeros((nf, nf))
-    dmin = np.inf
-    for j in range(nf):
-        acc = JtJ[j, j]
-        for k in range(j):
-            acc -= L[j, k] * L[j, k]
-        if not acc > 0.0:
-            return False
-        d = np.sqrt(acc)
-        L[j, j] = d
-        dmin = min(dmin, d)
-        for i in range(j + 1, nf):
-            t = JtJ[i, j]
+            J[r, a] = A[r, free[a]] if r < m else crow[r - m, free[a]]
+    if rows >= nf:
+        # the usual case (a vertex): J has full column rank, the null space is empty
+        JtJ = J.T @ J
+        big = 1e-300
+        for a in range(nf):
+            for bb in range(nf):
+                big = max(big, abs(JtJ[a, bb]))
+        L = np.zeros((nf, nf))
+        dmin = np.inf
+        ok = True
+        for j in range(nf):
+            acc = JtJ[j, j]
             for k in range(j):
-                t -= L[i, k] * L[j, k]
-            L[i, j] = t / d
-    return dmin * dmin > 1e-10 * big
+                acc -= L[j, k] * L[j, k]
+            if not acc > 0.0:
+                ok = False
+                break
+            d = np.sqrt(acc)
+            L[j, j] = d
+            dmin = min(dmin, d)
+            for i in range(j + 1, nf):
+                t = JtJ[i, j]
+                for k in range(j):
+                    t -= L[i, k] * L[j, k]
+                L[i, j] = t / d
+        if ok and dmin * dmin > 1e-10 * big:
+            return 1
+    if rows > 0:
+        _, sv, Vt = np.linalg.svd(J, full_matrices=True)
+        smax = 0.0
+        for i in range(sv.shape[0]):
+            smax = max(smax, sv[i])
+        rank = 0
+        for i in range(sv.shape[0]):
+            if sv[i] > 1e-10 * max(smax, 1e-300):
+                rank += 1
+        Z = np.ascontiguousarray(Vt[rank:].T)
+    else:
+        Z = np.eye(nf)
+    if Z.shape[1] == 0:
+        return 1
+    H = np.empty((nf, nf))
+    hscale = 1e-300
+    for i in range(n):
+        for j in range(n):
+            hscale = max(hscale, abs(P[i, j]))
+    for a in range(nf):
+        for bb in range(nf):
+            H[a, bb] = P[free[a], free[bb]] + curv[free[a], free[bb]]
+    Hr = Z.T @ H @ Z
+    lam = np.linalg.eigvalsh(0.5 * (Hr + Hr.T))
+    return 1 if lam.min() > unique_rel * hscale else 0
 
 
 @njit(cache=True, nogil=True)
@@ -309,7 +341,7 @@ def warm_calls():
     n = 2
     return [(scaling_trivial, (z((1, n)), z(1), z(n), True, z((0, 0)), z(n), z((1, n)), z(n), z((1, 3, n)),
                                z((1, 3)), 1e3)),
-            (vertex_unique, (z(n), z(n), z(n), z(n), z(n), z(n), z((1, n)), z((1, 3, n)), z((1, 3)),
-                             z((1, 3)), z(1), z(1), z((1, 3)), 1e-8, 1e-9)),
+            (unique_test, (z(n), z(n), z(n), z(n), z(n), z(n), z((1, n)), z((n, n)), z((1, 3, n)), z((1, 3)),
+                           z((1, 3)), z(1), z(1), z((1, 3)), 1e-8, 1e-9)),
             (answer_check, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1))),
             (instant_outputs, (z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)), z(n)))]

@@ -73,8 +73,9 @@ def is_unique(qp, sol: Solution) -> bool:
         return True  # P = diag(d) + F^T F with d > 0 is positive definite: strictly convex (case 1)
     if sol.z is None or (qp.cones and sol.z_cone is None):
         return False
-    if _vertex_unique(qp, sol):
-        return True  # the usual case, decided by one compiled pass (the first test below)
+    decided = _compiled_unique(qp, sol)
+    if decided is not None:
+        return decided
     free, rows, curv = _strongly_active(qp, sol)
     nf = int(free.sum())
     if nf == 0:
@@ -104,14 +105,14 @@ def is_unique(qp, sol: Solution) -> bool:
     return bool(np.linalg.eigvalsh(0.5 * (Hr + Hr.T)).min() > tol.UNIQUE_REL * hscale)
 
 
-def _vertex_unique(qp, sol: Solution) -> bool:
-    """The vertex test of :func:`is_unique` compiled (:func:`._fast.vertex_unique`): ``True`` when it
-    proves the optimum unique, ``False`` when it cannot say (or the kernels are not compiled)."""
+def _compiled_unique(qp, sol: Solution) -> bool | None:
+    """The rest of :func:`is_unique` compiled (:func:`._fast.unique_test`, the same steps and
+    thresholds); ``None`` while the kernels are not compiled."""
     from .. import jit
 
     if not jit.ready():
-        return False
-    from ._fast import vertex_unique
+        return None
+    from ._fast import unique_test
 
     c_ = np.ascontiguousarray
     if qp.cones:
@@ -121,12 +122,12 @@ def _vertex_unique(qp, sol: Solution) -> bool:
     else:
         G, gc, ax, tn, cosr, zc = _NO_G, _NO_3, _NO_3, _NO_1, _NO_1, _NO_3
     n = qp.n
-    return vertex_unique(c_(sol.x, dtype=float), c_(sol.z, dtype=float), c_(qp.gradient(sol.x), dtype=float),
-                         c_(qp.c, dtype=float), c_(qp.lb, dtype=float), c_(qp.ub, dtype=float),
-                         c_(qp.A, dtype=float).reshape(len(qp.b), n), c_(G, dtype=float).reshape(len(gc), 3, n),
-                         c_(gc, dtype=float), c_(ax, dtype=float), c_(tn, dtype=float), c_(cosr, dtype=float),
-                         c_(zc, dtype=float).reshape(len(gc), 3), float(tol.ACTIVE_SET_FROM_SOLUTION),
-                         float(tol.UNIQUE_REL))
+    return bool(unique_test(
+        c_(sol.x, dtype=float), c_(sol.z, dtype=float), c_(qp.gradient(sol.x), dtype=float), c_(qp.c, dtype=float),
+        c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), c_(qp.A, dtype=float).reshape(len(qp.b), n),
+        c_(qp.P, dtype=float), c_(G, dtype=float).reshape(len(gc), 3, n), c_(gc, dtype=float), c_(ax, dtype=float),
+        c_(tn, dtype=float), c_(cosr, dtype=float), c_(zc, dtype=float).reshape(len(gc), 3),
+        float(tol.ACTIVE_SET_FROM_SOLUTION), float(tol.UNIQUE_REL)))
 
 
 _NO_G = np.zeros((0, 3, 0))
