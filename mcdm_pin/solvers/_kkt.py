@@ -454,7 +454,7 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
     return OK, f, y, mus, dirs, solves
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, primal_tol, dual_tol,
            eom_tol):
     """KKT conditions of the full problem at ``f`` (multipliers ``y`` of ``A f = b``, ``mus`` of the
@@ -478,27 +478,45 @@ def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, pr
             to_lower[i] = True
         if f[i] > ub[i] + primal_tol * (1.0 + abs(ub[i])) and state[i] != 2:
             to_upper[i] = True
-    res = A @ f - b
-    absf = np.abs(f)
+    # plain loops: at these sizes BLAS calls and temporaries cost more than the arithmetic
+    neq = A.shape[0]
+    res = np.empty(neq)
     scale = 1e-300
-    for r in range(A.shape[0]):
+    for r in range(neq):
         scale = max(scale, abs(b[r]))
         acc = 0.0
+        sacc = 0.0
         for i in range(n):
-            acc += abs(A[r, i]) * absf[i]
-        scale = max(scale, acc)
-    for r in range(A.shape[0]):
+            acc += A[r, i] * f[i]
+            sacc += abs(A[r, i]) * abs(f[i])
+        res[r] = acc - b[r]
+        scale = max(scale, sacc)
+    for r in range(neq):
         if abs(res[r]) > eom_tol * scale:
             return KKT_EOM, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, -1, -1
-    obj_grad = H @ f + g
-    Aty = A.T @ y
+    obj_grad = g.copy()
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += H[i, j] * f[j]
+        obj_grad[i] += acc
+    Aty = np.zeros(n)
+    for r in range(neq):
+        yr = y[r]
+        for i in range(n):
+            Aty[i] += A[r, i] * yr
     gscale = 1e-300
     for i in range(n):
         gscale = max(gscale, abs(obj_grad[i]), abs(Aty[i]))
         grad[i] = obj_grad[i] + Aty[i]
     off_surface = False
     for k in range(nc):
-        F = gc[k] + G[k] @ f
+        F = gc[k].copy()
+        for a in range(3):
+            acc = 0.0
+            for i in range(n):
+                acc += G[k, a, i] * f[i]
+            F[a] += acc
         al = ax[k, 0] * F[0] + ax[k, 1] * F[1] + ax[k, 2] * F[2]
         p0, p1, p2 = F[0] - al * ax[k, 0], F[1] - al * ax[k, 1], F[2] - al * ax[k, 2]
         perp = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)

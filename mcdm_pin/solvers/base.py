@@ -45,7 +45,9 @@ class Solution:
         objective: ``1/2 x^T P x + c^T x + r`` at ``x`` (NaN when not solved).
         y: (k,) multipliers of ``A x = b``; z: (n,) of the bounds; z_cone: (K, 3) of the cones
             (``None`` when the stage has none).
-        iterations: inner iterations, summed over the stages that ran.
+        iterations: inner iterations, summed over the stages that ran: the active-set stages count
+            linear KKT solves (one per active set tried and per Newton step on held cones), the
+            others their method's iterations (interior-point, ProxQP, Clarabel).
         rounds: QP solves (cone cut rounds + 1) for cutting planes, 1 otherwise.
         message: what cannot be met, for infeasible or failed instants; notes otherwise.
         stage: the stage that produced ``x`` (``first>refiner`` when a refining stage moved it).
