@@ -155,8 +155,10 @@ def unique_test(x, z, grad, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, uniq
     if nf == 0:
         return 1
     K = G.shape[0]
-    crow = np.zeros((3 * K, n))
-    curv = np.zeros((n, n))
+    crow = np.empty((3 * K, n))
+    cv = np.empty((K, n))  # the held cones' curvature: sum_k cs[k] cv[k] cv[k]^T
+    cs = np.empty(K)
+    ncv = 0
     nr = 0
     for k in range(K):
         mu = zc[k, 0] * cosr[k]
@@ -184,12 +186,9 @@ def unique_test(x, z, grad, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, uniq
         crow[nr + 1] = e0 * G[k, 0] + e1 * G[k, 1] + e2 * G[k, 2]
         nr += 2
         # curvature mu G^T (I - a a^T - h h^T) G / |F_perp| = mu/|F_perp| v v^T, v = G^T (a x h)
-        v = crow[nr - 1]
-        sc = mu / perp
-        for i in range(n):
-            if v[i] != 0.0:
-                for j in range(n):
-                    curv[i, j] += sc * v[i] * v[j]
+        cv[ncv] = crow[nr - 1]
+        cs[ncv] = mu / perp
+        ncv += 1
     m = A.shape[0]
     rows = m + nr
     J = np.empty((rows, nf))
@@ -198,10 +197,17 @@ def unique_test(x, z, grad, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, uniq
             J[r, a] = A[r, free[a]] if r < m else crow[r - m, free[a]]
     if rows >= nf:
         # the usual case (a vertex): J has full column rank, the null space is empty
-        JtJ = J.T @ J
+        JtJ = np.zeros((nf, nf))
+        for r in range(rows):
+            for a in range(nf):
+                va = J[r, a]
+                if va != 0.0:
+                    for bb in range(a + 1):
+                        JtJ[a, bb] += va * J[r, bb]
         big = 1e-300
         for a in range(nf):
-            for bb in range(nf):
+            for bb in range(a + 1):
+                JtJ[bb, a] = JtJ[a, bb]
                 big = max(big, abs(JtJ[a, bb]))
         L = np.zeros((nf, nf))
         dmin = np.inf
@@ -244,7 +250,10 @@ def unique_test(x, z, grad, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, uniq
             hscale = max(hscale, abs(P[i, j]))
     for a in range(nf):
         for bb in range(nf):
-            H[a, bb] = P[free[a], free[bb]] + curv[free[a], free[bb]]
+            hab = P[free[a], free[bb]]
+            for k in range(ncv):
+                hab += cs[k] * cv[k, free[a]] * cv[k, free[bb]]
+            H[a, bb] = hab
     Hr = Z.T @ H @ Z
     lam = np.linalg.eigvalsh(0.5 * (Hr + Hr.T))
     return 1 if lam.min() > unique_rel * hscale else 0
