@@ -625,6 +625,10 @@ def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdi
     neq = A.shape[0]
     nc = G.shape[0]
     state = state0.copy()
+    for i in range(n):
+        # a variable can only be held at a finite bound (the least-norm stage frees some bounds)
+        if (state[i] == 1 and not np.isfinite(lb[i])) or (state[i] == 2 and not np.isfinite(ub[i])):
+            state[i] = 0
     cact = cact0.copy()
     cdir = cdir0.copy()
     hist_s = np.zeros((max_pivots, n), dtype=np.int8)

@@ -119,11 +119,7 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     freed, broken cones join, cones with a negative multiplier leave) for at most ``max_pivots``
     equality-constrained solves; a repeated active set stops it."""
     G, gc, ax, tn, basis0 = qp.cone_arrays()
-    state = guess.cable_state(qp.n)
-    # a variable can only be held at a finite bound (the least-norm stage frees some bounds)
-    bad = ((state == 1) & ~np.isfinite(qp.lb)) | ((state == 2) & ~np.isfinite(qp.ub))
-    if bad.any():
-        state = np.where(bad, 0, state).astype(np.int8)
+    state = guess.cable_state(qp.n)  # (the kernel frees variables guessed at an infinite bound)
     if qp.cones:
         names = [c.joint for c in qp.cones]
         cact = np.array([nm in guess.cones for nm in names], dtype=np.bool_)
@@ -136,7 +132,7 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     c_ = np.ascontiguousarray
     code, x, mus, grad, state, cact, dirs, nxt_state, y, _, solves = K.active_set_run(
         c_(qp.P, dtype=float), c_(qp.c, dtype=float), c_(qp.A, dtype=float), c_(qp.b, dtype=float),
-        c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), state, c_(G, dtype=float), c_(gc, dtype=float),
+        c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), c_(state, dtype=np.int8), c_(G, dtype=float), c_(gc, dtype=float),
         c_(ax, dtype=float), c_(tn, dtype=float), c_(basis0, dtype=float), cact, c_(cdir, dtype=float),
         int(max_pivots), int(max_newton), *_AS_TOLS)
     if code != K.FOUND:
@@ -224,12 +220,21 @@ class Polish(Stage):
                        message=sol.message)
 
 
-def _register() -> None:
+def warm_calls():
+    """This module's kernels with example arguments of the types :func:`try_active_set` passes, and
+    the warm path's compiled decisions (:mod:`._fast`)."""
     from . import _fast
 
-    # the warm path's compiled decisions (scaling, uniqueness) load and compile with the solvers'
-    # kernels (this module is imported by mcdm_pin.solvers.ipm, one of jit.MODULES)
-    jit.register("mcdm_pin.solvers._fast", _fast.warm_calls)
+    n, z = 2, np.zeros
+    args = (z((n, n)), z(n), z((1, n)), z(1), z(n), z(n), z(n, dtype=np.int8), z((1, 3, n)), z((1, 3)), z((1, 3)),
+            z(1), z((1, 3)), z(1, dtype=np.bool_), z((1, 3)), 2, 2, *(float(v) for v in _AS_TOLS))
+    return [(K.active_set_run, args)] + _fast.warm_calls()
+
+
+def _register() -> None:
+    # loaded and compiled with the solvers' kernels (this module is imported by
+    # mcdm_pin.solvers.ipm, one of jit.MODULES)
+    jit.register("mcdm_pin.solvers.active_set", warm_calls)
 
 
 _register()
