@@ -24,6 +24,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..model.kernels import spread as _spread
+from ._kkt import cone_force
+
 
 @njit(cache=True, nogil=True)
 def _outside(v, spread):
@@ -38,29 +41,12 @@ def scaling_trivial(A, b, lb, structured, P, P_diag, P_factor, c, G, g, spread):
     (``max |P|``, or ``max(|P_diag|, column sums of P_factor^2)`` when ``structured``, and ``max |c|``)
     and every cone's size (``max |G_k|``, ``max |g_k|``) within ``[1/spread, spread]``."""
     m, n = A.shape
+    if m > 0 and not _spread(A, np.zeros(0)) <= spread:
+        return False  # Ruiz equilibration
     rows = np.zeros(m)
-    cols = np.zeros(n)
     for r in range(m):
-        mx = 0.0
         for j in range(n):
-            v = abs(A[r, j])
-            if v > mx:
-                mx = v
-            if v > cols[j]:
-                cols[j] = v
-        rows[r] = mx
-    if m > 0:
-        rmin, rmax, cmin, cmax = np.inf, 0.0, np.inf, 0.0
-        for r in range(m):
-            if rows[r] > 0.0:
-                rmin = min(rmin, rows[r])
-                rmax = max(rmax, rows[r])
-        for j in range(n):
-            if cols[j] > 0.0:
-                cmin = min(cmin, cols[j])
-                cmax = max(cmax, cols[j])
-        if rmax > 0.0 and cmax > 0.0 and not max(rmax / rmin, cmax / cmin) <= spread:
-            return False  # Ruiz equilibration
+            rows[r] = max(rows[r], abs(A[r, j]))
     unit = 0.0
     for i in range(n):
         v = abs(lb[i])
@@ -164,14 +150,10 @@ def unique_test(x, z, grad, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, uniq
         mu = zc[k, 0] * cosr[k]
         if not mu > thr:
             continue
-        F = gc[k].copy()
-        for a in range(3):
-            for i in range(n):
-                F[a] += G[k, a, i] * x[i]
-        al = ax[k, 0] * F[0] + ax[k, 1] * F[1] + ax[k, 2] * F[2]
-        p = F - al * ax[k]
-        perp = np.sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2])
-        nF = np.sqrt(F[0] * F[0] + F[1] * F[1] + F[2] * F[2])
+        F0, F1, F2, al, p0, p1, p2 = cone_force(G, gc, ax, k, x)
+        p = np.array([p0, p1, p2])
+        perp = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+        nF = np.sqrt(F0 * F0 + F1 * F1 + F2 * F2)
         if perp <= 1e-12 * max(nF, 1e-300):  # held at the apex: every row of G
             for a in range(3):
                 crow[nr] = G[k, a]
@@ -304,14 +286,7 @@ def answer_check(L, tau, extra, x, lb, ub, G, g, ax, angle_deg):
     viol = 0.0
     worst = -1
     for k in range(G.shape[0]):
-        F = g[k].copy()
-        for a in range(3):
-            acc = 0.0
-            for i in range(n):
-                acc += G[k, a, i] * x[i]
-            F[a] += acc
-        al = ax[k, 0] * F[0] + ax[k, 1] * F[1] + ax[k, 2] * F[2]
-        p0, p1, p2 = F[0] - al * ax[k, 0], F[1] - al * ax[k, 1], F[2] - al * ax[k, 2]
+        _, _, _, al, p0, p1, p2 = cone_force(G, g, ax, k, x)
         ang = np.degrees(np.arctan2(np.sqrt(p0 * p0 + p1 * p1 + p2 * p2), al)) - angle_deg[k]
         if not ang <= viol:
             viol = ang

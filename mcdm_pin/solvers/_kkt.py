@@ -276,6 +276,20 @@ def _chol_apply(L, r):
     return y
 
 
+@njit(cache=True, nogil=True, inline="always")
+def cone_force(G, gc, ax, k, x):
+    """Cone ``k``'s force ``F = g_k + G_k x`` at ``x``, its component along the axis and the part
+    perpendicular to it: ``(F0, F1, F2, along, p0, p1, p2)``."""
+    F0, F1, F2 = gc[k, 0], gc[k, 1], gc[k, 2]
+    for i in range(x.shape[0]):
+        xi = x[i]
+        F0 += G[k, 0, i] * xi
+        F1 += G[k, 1, i] * xi
+        F2 += G[k, 2, i] * xi
+    al = ax[k, 0] * F0 + ax[k, 1] * F1 + ax[k, 2] * F2
+    return F0, F1, F2, al, F0 - al * ax[k, 0], F1 - al * ax[k, 1], F2 - al * ax[k, 2]
+
+
 @njit(cache=True, nogil=True)
 def _on_surfaces(f, G, gc, ax, tn, act, tol):
     """Every cone of ``act`` has ``| |F_perp| - tan a.F | <= tol |F|`` at ``f``."""
@@ -511,20 +525,13 @@ def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, pr
         grad[i] = obj_grad[i] + Aty[i]
     off_surface = False
     for k in range(nc):
-        F = gc[k].copy()
-        for a in range(3):
-            acc = 0.0
-            for i in range(n):
-                acc += G[k, a, i] * f[i]
-            F[a] += acc
-        al = ax[k, 0] * F[0] + ax[k, 1] * F[1] + ax[k, 2] * F[2]
-        p0, p1, p2 = F[0] - al * ax[k, 0], F[1] - al * ax[k, 1], F[2] - al * ax[k, 2]
+        F0, F1, F2, al, p0, p1, p2 = cone_force(G, gc, ax, k, f)
         perp = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
         if cact[k]:
             if al <= 0.0:  # held on the wrong nappe (F pulls the ball out): let the cone go
                 cone_out[k] = True
                 continue
-            if not abs(perp - tn[k] * al) <= 1e-10 * np.sqrt(F[0] * F[0] + F[1] * F[1] + F[2] * F[2]):
+            if not abs(perp - tn[k] * al) <= 1e-10 * np.sqrt(F0 * F0 + F1 * F1 + F2 * F2):
                 off_surface = True  # Newton did not settle: exchanges still apply, no acceptance
             if mus[k] < 0.0:
                 cone_out[k] = True
