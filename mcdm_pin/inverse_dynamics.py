@@ -150,14 +150,11 @@ class InverseDynamics:
             message = sol.message or message
         f, tau_act = sol.x[:m], sol.x[m:]
         if sol.found:
-            wrench = terms.wrenches(f)
             objective = (sol.objective if not self.problem.has_smoothing and np.isfinite(sol.objective)
                          else self.problem.value(terms, sol.x, context, qp))
         else:
-            wrench = np.full((len(self.robot.joints), 6), np.nan)
             objective = float("nan")
-        F_socket = np.einsum("jab,jb->ja", terms.R_socket, wrench[:, :3])
-        angles = interaction_angles(F_socket, terms.socket_axes)
+        wrench, F_socket, angles = _outputs(terms, f if sol.found else None, len(self.robot.joints))
         return InstantResult(
             f=f, status=sol.status, objective=objective, eom_residual=eom,
             interaction_wrench=wrench, interaction_force_socket=F_socket,
@@ -286,26 +283,64 @@ def _terms_of(objective):
     return objective.terms if isinstance(objective, Sum) else [objective]
 
 
+def _outputs(terms, f, n_joints: int):
+    """Interaction wrenches (child frame), socket-frame forces and their angles at forces ``f``
+    (``None``: no answer, NaN wrenches)."""
+    if f is not None and jit.ready():  # one compiled pass, the same formulas
+        from .solvers._fast import instant_outputs
+
+        c_ = np.ascontiguousarray
+        return instant_outputs(c_(terms.u, dtype=float), c_(terms.RT, dtype=float),
+                               c_(terms.R_socket, dtype=float), c_(terms.socket_axes, dtype=float),
+                               c_(f, dtype=float))
+    wrench = terms.wrenches(f) if f is not None else np.full((n_joints, 6), np.nan)
+    F_socket = np.einsum("jab,jb->ja", terms.R_socket, wrench[:, :3])
+    return wrench, F_socket, interaction_angles(F_socket, terms.socket_axes)
+
+
 def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None) -> tuple[Solution, float]:
     """Downgrade a solution that breaks a constraint beyond tolerance to ``inaccurate``. Returns the
     solution and its relative equation-of-motion residual (``m`` cables; ``actuation``: the problem's
     actuated joints, whose torques follow the cable forces in ``sol.x``)."""
     f = sol.x
     problems = []
-    eom = terms.eom_residual(f[:m], None if actuation is None else -actuation.S @ f[m:])
+    extra = None if actuation is None else -actuation.S @ f[m:]
+    if jit.ready():  # one compiled pass, the same formulas
+        from .solvers._fast import answer_check
+
+        G, g, axis = qp.cone_arrays()[:3] if qp.cones else (_NO_G, _NO_3, _NO_3)
+        c_ = np.ascontiguousarray
+        eom, broken, worst, k = answer_check(
+            c_(terms.L, dtype=float), c_(terms.tau, dtype=float), _NO_1 if extra is None else c_(extra, dtype=float),
+            c_(f, dtype=float), c_(qp.lb, dtype=float), c_(qp.ub, dtype=float),
+            c_(G, dtype=float).reshape(len(g), 3, len(f)), c_(g, dtype=float), c_(axis, dtype=float),
+            _cone_angles(qp))
+    else:
+        eom = terms.eom_residual(f[:m], extra)
+        broken = max(float((qp.lb - f).max(initial=0.0)), float((f - qp.ub).max(initial=0.0)))
+        worst, k = 0.0, -1
+        if qp.cones:
+            viol = cone_violation_deg(qp, f)
+            k = int(np.argmax(viol))
+            worst = viol[k]
     if not eom <= tol.EOM_REL:
         problems.append(f"equation-of-motion residual {eom:.2e} > {tol.EOM_REL:g}")
-    broken = max(float((qp.lb - f).max(initial=0.0)), float((f - qp.ub).max(initial=0.0)))
     if not broken <= tol.BOUND_ABS:
         problems.append(f"cable (or actuator) bounds broken by {broken:.2e}")
-    if qp.cones and sol.status == OPTIMAL:
-        viol = cone_violation_deg(qp, f)
-        if not viol.max() <= tol.CONE_DEG:
-            k = int(np.argmax(viol))
-            problems.append(f"cone of {qp.cones[k].joint!r} broken by {viol[k]:.2e} deg")
+    if qp.cones and sol.status == OPTIMAL and not worst <= tol.CONE_DEG:
+        problems.append(f"cone of {qp.cones[k].joint!r} broken by {worst:.2e} deg")
     if not problems:
         return sol, eom
     return sol.but(status=INACCURATE, message="; ".join(problems)), eom
+
+
+def _cone_angles(qp: QPData) -> np.ndarray:
+    return np.array([c.angle_deg for c in qp.cones], dtype=float)
+
+
+_NO_G = np.zeros((0, 3, 0))
+_NO_3 = np.zeros((0, 3))
+_NO_1 = np.zeros(0)
 
 
 def diagnose_infeasible(qp: QPData, cable_names=None):

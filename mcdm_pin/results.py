@@ -26,7 +26,10 @@ interaction_force_socket    (N, J, 3)     F in the socket (parent-side) frame
 interaction_angle_deg       (N, J)        angle of F from the socket axis, degrees
 cone_deg                    (J,)          cone half-angle used (NaN: no cone)
 time_model_s, time_solve_s  (N,)          wall time of model evaluation and of solving, s
-iterations                  (N,)          solver iterations (summed over cone rounds)
+iterations                  (N,)          work of the stages that answered, summed: the
+                                          active set's linear KKT solves (one per active
+                                          set tried and Newton step), the interior-point,
+                                          ProxQP (over cone rounds) or Clarabel iterations
 rounds                      (N,)          QP solves (cone cut rounds + 1)
 softened_deg                (N,)          cone widening applied in soften mode (0 otherwise)
 needed_f_max                (N,)          infeasible by the bounds: smallest common f_max that

@@ -153,9 +153,27 @@ def summary(result) -> str:
     lines.append(f"time per instant: model {np.median(tm):.3f} ms, solve {np.median(ts):.3f} ms "
                  f"(median; mean {np.mean(tm + ts):.3f} ms total)")
     # which stage of the solver chain answered (its first stage: 'ipm>polish' counts as ipm)
-    first = [str(s).split(">")[0] for s in result.stage if str(s)]
-    if first:
-        names, counts = np.unique(first, return_counts=True)
-        order = np.argsort(-counts, kind="stable")
-        lines.append("answered by: " + ", ".join(f"{names[i]} {counts[i]}" for i in order))
+    if any(str(s) for s in result.stage):
+        lines.append(stage_counts(result))
     return "\n".join(lines)
+
+
+# what each answering stage's ``iterations`` count (summed with the least-norm stage's, if it ran)
+ITERATION_UNITS = {"warm_active_set": "KKT solves", "ipm": "interior-point iterations",
+                   "proxqp": "ProxQP iterations", "sqp_polish": "SQP and ProxQP iterations",
+                   "clarabel": "Clarabel iterations"}
+
+
+def stage_counts(result) -> str:
+    """Which stage answered how many instants, with the median of what its iterations count:
+    ``answered by warm_active_set at 99 instants (median 2 KKT solves), ipm at 2 (median 14
+    interior-point iterations)``."""
+    first = np.array([str(s).split(">")[0] or "-" for s in result.stage])
+    its = np.asarray(result.iterations)
+    parts = []
+    names, counts = np.unique(first, return_counts=True)
+    for k, (name, count) in enumerate(sorted(zip(names, counts), key=lambda nc: (-nc[1], nc[0]))):
+        unit = ITERATION_UNITS.get(name, "iterations")
+        where = f"{count} instants" if k == 0 else f"{count}"
+        parts.append(f"{name} at {where} (median {np.median(its[first == name]):.0f} {unit})")
+    return "answered by " + ", ".join(parts) if parts else "no instant"

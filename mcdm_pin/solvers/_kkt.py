@@ -86,6 +86,110 @@ def _kkt_solve(K, rhs, square):
 
 
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _vertex_solve(K, rhs, nf, square):
+    """``K = [[Hxx, R^T], [R, 0]]`` with a square ``R`` (nf x nf: at a vertex, as many free variables
+    as equations and held cone surfaces, the usual warm instant): ``x`` is fixed by the rows alone,
+    ``R x = r_c``, and the multipliers by ``R^T l = r_x - Hxx x``: one LU of ``R`` (nf unknowns)
+    instead of one of ``K`` (2 nf: 8x the arithmetic). Falls back to :func:`_kkt_solve` when ``R``
+    is singular (then so is ``K``)."""
+    N = K.shape[0]
+    R = np.empty((nf, nf))
+    for i in range(nf):
+        for j in range(nf):
+            R[i, j] = K[nf + i, j]
+    LU, perm, ok = _lu_factor(R)
+    if not ok:
+        return _kkt_solve(K, rhs, square)
+    x = _lu_apply(LU, perm, rhs[nf:])
+    w = np.empty(nf)
+    for a in range(nf):
+        acc = rhs[a]
+        for b in range(nf):
+            acc -= K[a, b] * x[b]
+        w[a] = acc
+    lam = _lu_apply_t(LU, perm, w)
+    sol = np.empty(N)
+    for i in range(nf):
+        sol[i] = x[i]
+        sol[nf + i] = lam[i]
+    for i in range(N):
+        if not np.isfinite(sol[i]):
+            return _kkt_solve(K, rhs, square)
+    return sol
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _lu_factor(R):
+    """``R[perm] = L U`` by partial pivoting (L unit lower, both in one array). Returns
+    ``(LU, perm, ok)``; ``ok`` false when a pivot is exactly zero or not finite."""
+    n = R.shape[0]
+    M = R.copy()
+    perm = np.arange(n)
+    for k in range(n):
+        p = k
+        big = abs(M[k, k])
+        for i in range(k + 1, n):
+            v = abs(M[i, k])
+            if v > big:
+                big, p = v, i
+        if not (big > 0.0) or not np.isfinite(big):
+            return M, perm, False
+        if p != k:
+            for j in range(n):
+                M[k, j], M[p, j] = M[p, j], M[k, j]
+            perm[k], perm[p] = perm[p], perm[k]
+        Mk = M[k]
+        inv = 1.0 / Mk[k]
+        for i in range(k + 1, n):
+            Mi = M[i]
+            l = Mi[k] * inv
+            Mi[k] = l
+            if l != 0.0:
+                for j in range(k + 1, n):
+                    Mi[j] -= l * Mk[j]
+    return M, perm, True
+
+
+@njit(cache=True, nogil=True)
+def _lu_apply(LU, perm, b):
+    """``R^-1 b`` from :func:`_lu_factor`."""
+    n = LU.shape[0]
+    y = np.empty(n)
+    for i in range(n):
+        acc = b[perm[i]]
+        for k in range(i):
+            acc -= LU[i, k] * y[k]
+        y[i] = acc
+    for i in range(n - 1, -1, -1):
+        acc = y[i]
+        for k in range(i + 1, n):
+            acc -= LU[i, k] * y[k]
+        y[i] = acc / LU[i, i]
+    return y
+
+
+@njit(cache=True, nogil=True)
+def _lu_apply_t(LU, perm, c):
+    """``R^-T c`` from :func:`_lu_factor` (``R^T = U^T L^T P``)."""
+    n = LU.shape[0]
+    z = np.empty(n)
+    for i in range(n):
+        acc = c[i]
+        for k in range(i):
+            acc -= LU[k, i] * z[k]
+        z[i] = acc / LU[i, i]
+    for i in range(n - 1, -1, -1):
+        acc = z[i]
+        for k in range(i + 1, n):
+            acc -= LU[k, i] * z[k]
+        z[i] = acc
+    out = np.empty(n)
+    for i in range(n):
+        out[perm[i]] = z[i]
+    return out
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def _determined_solve(K, rhs, nf):
     """``K = [[Hxx, R^T], [R, 0]]`` with fewer unknowns ``nf`` than rows of ``R`` (at a vertex whose
     equations are dependent: the neck at its optimum has 16 free cables for 24 equations). When
@@ -172,6 +276,20 @@ def _chol_apply(L, r):
     return y
 
 
+@njit(cache=True, nogil=True, inline="always")
+def cone_force(G, gc, ax, k, x):
+    """Cone ``k``'s force ``F = g_k + G_k x`` at ``x``, its component along the axis and the part
+    perpendicular to it: ``(F0, F1, F2, along, p0, p1, p2)``."""
+    F0, F1, F2 = gc[k, 0], gc[k, 1], gc[k, 2]
+    for i in range(x.shape[0]):
+        xi = x[i]
+        F0 += G[k, 0, i] * xi
+        F1 += G[k, 1, i] * xi
+        F2 += G[k, 2, i] * xi
+    al = ax[k, 0] * F0 + ax[k, 1] * F1 + ax[k, 2] * F2
+    return F0, F1, F2, al, F0 - al * ax[k, 0], F1 - al * ax[k, 1], F2 - al * ax[k, 2]
+
+
 @njit(cache=True, nogil=True)
 def _on_surfaces(f, G, gc, ax, tn, act, tol):
     """Every cone of ``act`` has ``| |F_perp| - tan a.F | <= tol |F|`` at ``f``."""
@@ -198,8 +316,9 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
     the ridge nearest the origin. The KKT check of the original problem decides whether the point is
     accepted (its stationarity residual ``reg |f|`` is ~1e-12 of the gradient's scale).
 
-    Returns ``(code, f, y, mus, dirs)``: ``mus`` (nc,) the active cones' multipliers (0 elsewhere),
-    ``dirs`` (nc, 3) their surface directions at ``f``.
+    Returns ``(code, f, y, mus, dirs, solves)``: ``mus`` (nc,) the active cones' multipliers (0
+    elsewhere), ``dirs`` (nc, 3) their surface directions at ``f``, ``solves`` the linear KKT systems
+    solved (1 without active cones; one per Newton step with them).
     """
     n = H.shape[0]
     neq = A.shape[0]
@@ -245,6 +364,7 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
     y = np.zeros(neq)
     iters = max_newton if na > 0 else 1
     converged = False
+    solves = 0
     for _ in range(iters):
         K = np.zeros((N, N))
         rhs = np.empty(N)
@@ -268,7 +388,7 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
                 p0, p1, p2 = F[0] - al * ax[k, 0], F[1] - al * ax[k, 1], F[2] - al * ax[k, 2]
                 nrm = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
                 if nrm <= 1e-300:
-                    return VANISHED, f, y, mus, dirs
+                    return VANISHED, f, y, mus, dirs, solves
                 d0, d1, d2 = p0 / nrm, p1 / nrm, p2 / nrm
                 dirs[k, 0], dirs[k, 1], dirs[k, 2] = d0, d1, d2
                 mu = mus[k]
@@ -305,10 +425,14 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
                 K[p, nf + neq + s] = row[free[p]]
                 K[nf + neq + s, p] = row[free[p]]
             rhs[nf + neq + s] = rr
-        sol = _kkt_solve(K, rhs, square) if square else _determined_solve(K, rhs, nf)
+        if nf == neq + na:
+            sol = _vertex_solve(K, rhs, nf, square)
+        else:
+            sol = _kkt_solve(K, rhs, square) if square else _determined_solve(K, rhs, nf)
+        solves += 1
         for i in range(N):
             if not np.isfinite(sol[i]):
-                return SINGULAR, f, y, mus, dirs
+                return SINGULAR, f, y, mus, dirs, solves
         for p in range(nf):
             f[free[p]] = sol[p]
         y = sol[nf:nf + neq].copy()
@@ -320,7 +444,7 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
         if have_cur:
             for s in range(na):
                 if mus[act[s]] < 0.0:
-                    return DROP, f, y, mus, dirs
+                    return DROP, f, y, mus, dirs, solves
         if have_prev:
             dx = 0.0
             xx = 0.0
@@ -340,11 +464,11 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
         f_cur[:] = f
         have_cur = True
     if not converged:
-        return NO_CONVERGENCE, f, y, mus, dirs
-    return OK, f, y, mus, dirs
+        return NO_CONVERGENCE, f, y, mus, dirs, solves
+    return OK, f, y, mus, dirs, solves
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, primal_tol, dual_tol,
            eom_tol):
     """KKT conditions of the full problem at ``f`` (multipliers ``y`` of ``A f = b``, ``mus`` of the
@@ -368,35 +492,46 @@ def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, pr
             to_lower[i] = True
         if f[i] > ub[i] + primal_tol * (1.0 + abs(ub[i])) and state[i] != 2:
             to_upper[i] = True
-    res = A @ f - b
-    absf = np.abs(f)
+    # plain loops: at these sizes BLAS calls and temporaries cost more than the arithmetic
+    neq = A.shape[0]
+    res = np.empty(neq)
     scale = 1e-300
-    for r in range(A.shape[0]):
+    for r in range(neq):
         scale = max(scale, abs(b[r]))
         acc = 0.0
+        sacc = 0.0
         for i in range(n):
-            acc += abs(A[r, i]) * absf[i]
-        scale = max(scale, acc)
-    for r in range(A.shape[0]):
+            acc += A[r, i] * f[i]
+            sacc += abs(A[r, i]) * abs(f[i])
+        res[r] = acc - b[r]
+        scale = max(scale, sacc)
+    for r in range(neq):
         if abs(res[r]) > eom_tol * scale:
             return KKT_EOM, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, -1, -1
-    obj_grad = H @ f + g
-    Aty = A.T @ y
+    obj_grad = g.copy()
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += H[i, j] * f[j]
+        obj_grad[i] += acc
+    Aty = np.zeros(n)
+    for r in range(neq):
+        yr = y[r]
+        for i in range(n):
+            Aty[i] += A[r, i] * yr
     gscale = 1e-300
     for i in range(n):
         gscale = max(gscale, abs(obj_grad[i]), abs(Aty[i]))
         grad[i] = obj_grad[i] + Aty[i]
     off_surface = False
     for k in range(nc):
-        F = gc[k] + G[k] @ f
-        al = ax[k, 0] * F[0] + ax[k, 1] * F[1] + ax[k, 2] * F[2]
-        p0, p1, p2 = F[0] - al * ax[k, 0], F[1] - al * ax[k, 1], F[2] - al * ax[k, 2]
+        F0, F1, F2, al, p0, p1, p2 = cone_force(G, gc, ax, k, f)
         perp = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
         if cact[k]:
             if al <= 0.0:  # held on the wrong nappe (F pulls the ball out): let the cone go
                 cone_out[k] = True
                 continue
-            if not abs(perp - tn[k] * al) <= 1e-10 * np.sqrt(F[0] * F[0] + F[1] * F[1] + F[2] * F[2]):
+            if not abs(perp - tn[k] * al) <= 1e-10 * np.sqrt(F0 * F0 + F1 * F1 + F2 * F2):
                 off_surface = True  # Newton did not settle: exchanges still apply, no acceptance
             if mus[k] < 0.0:
                 cone_out[k] = True
@@ -454,6 +589,16 @@ def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, pr
 @njit(cache=True, nogil=True)
 def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
                      max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel):
+    """:func:`active_set_run` without its counts: ``(code, f, mus, grad, state, cact, dirs,
+    next_state, y)`` (the signature the interior-point method's crossover uses)."""
+    out = active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
+                         max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel)
+    return out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8]
+
+
+@njit(cache=True, nogil=True)
+def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
+                   max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel):
     """Block principal pivoting from the guess ``(state0, cact0, cdir0)`` until a verified KKT point
     (see :func:`mcdm_pin.solvers.active_set.try_active_set`).
 
@@ -465,10 +610,12 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
 
     ``reg_rel``: the Tikhonov term of :func:`eq_solve` relative to the objective's scale.
 
-    Returns ``(code, f, mus, grad, state, cact, dirs, next_state, y)``: ``code`` :data:`FOUND` or a
+    Returns ``(code, f, mus, grad, state, cact, dirs, next_state, y, sets, solves)``: ``code`` :data:`FOUND` or a
     key of :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers, ``grad`` the bounds'
     multipliers (> 0 at a lower bound), ``y`` the equations' multipliers, ``(state, cact, dirs)`` the optimum's active set and ``next_state`` the guess for
-    the next instant (the bounds whose multiplier is not negligible, 1e-12 of the largest).
+    the next instant (the bounds whose multiplier is not negligible, 1e-12 of the largest);
+    ``sets`` the active sets tried (pivots + 1), ``solves`` the linear KKT systems solved for them
+    (one per active set without cones, one per Newton step with them).
     """
     n = H.shape[0]
     hmax = 0.0
@@ -485,6 +632,10 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
     neq = A.shape[0]
     nc = G.shape[0]
     state = state0.copy()
+    for i in range(n):
+        # a variable can only be held at a finite bound (the least-norm stage frees some bounds)
+        if (state[i] == 1 and not np.isfinite(lb[i])) or (state[i] == 2 and not np.isfinite(ub[i])):
+            state[i] = 0
     cact = cact0.copy()
     cdir = cdir0.copy()
     hist_s = np.zeros((max_pivots, n), dtype=np.int8)
@@ -507,6 +658,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
     last_was_block = False
     best_ninf = n + nc + 1
     blocks_ok = True
+    solves = 0
     for it in range(max_pivots):
         for h in range(it):
             same = True
@@ -520,11 +672,12 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
                         same = False
                         break
             if same:
-                return CYCLE, f, mus, grad, state, cact, cdir, state, y
+                return CYCLE, f, mus, grad, state, cact, cdir, state, y, it, solves
         hist_s[it] = state
         hist_c[it] = cact
-        code, f, y, mus, dirs = eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir,
-                                         max_newton, step_tol, reg)
+        code, f, y, mus, dirs, ns = eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir,
+                                             max_newton, step_tol, reg)
+        solves += ns
         if code == DROP:  # a cone pulls the force inwards: it is not active
             for k in range(nc):
                 if cact[k] and mus[k] < 0.0:
@@ -539,7 +692,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
             blocks_ok = False  # from now on one change at a time (finite for strictly convex QPs)
             continue
         if code != OK and code != NO_CONVERGENCE:
-            return code, f, mus, grad, state, cact, cdir, state, y
+            return code, f, mus, grad, state, cact, cdir, state, y, it + 1, solves
         # Newton steps that did not settle still say which cables and cones to exchange; the point
         # itself is accepted only if it passes the full KKT check like any other
         (vcode, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind,
@@ -554,9 +707,9 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
             for i in range(n):
                 if (state[i] == 1 and not grad[i] > thr) or (state[i] == 2 and not grad[i] < -thr):
                     nxt[i] = 0
-            return FOUND, f, mus, grad, state, cact, dirs, nxt, y
+            return FOUND, f, mus, grad, state, cact, dirs, nxt, y, it + 1, solves
         if vcode != KKT_PIVOT:
-            return 20 + vcode, f, mus, grad, state, cact, cdir, state, y
+            return 20 + vcode, f, mus, grad, state, cact, cdir, state, y, it + 1, solves
         have_prev = True
         prev_state[:] = state
         prev_cact[:] = cact
@@ -612,7 +765,7 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
                                             neq, nc, n)
             last_was_block = False
         cdir = _next_dirs(cone_in, cone_dir, dirs, nc)
-    return PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state, y
+    return PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state, y, max_pivots, solves
 
 
 @njit(cache=True, nogil=True)

@@ -102,54 +102,55 @@ def cone_duals(qp: QPData, mus: np.ndarray, dirs: np.ndarray) -> np.ndarray:
     with surface directions ``dirs``: :math:`\mu_k/\cos\rho_k\,(1, -d_k\cdot e_1, -d_k\cdot e_2)`."""
     K_ = len(qp.cones)
     out = np.zeros((K_, 3))
-    for k, c in enumerate(qp.cones):
-        if mus[k] != 0.0:
-            s = mus[k] / np.cos(np.radians(c.angle_deg))
-            out[k] = s * np.array([1.0, -dirs[k] @ c.basis[0], -dirs[k] @ c.basis[1]])
+    for k in np.flatnonzero(mus):
+        c = qp.cones[k]
+        out[k, 0] = mus[k] / np.cos(np.radians(c.angle_deg))
+        out[k, 1:] = -out[k, 0] * (c.basis @ dirs[k])
     return out
 
 
-def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newton: int = 10):
+def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newton: int = 10, stage: str = ""):
     """The verified optimum reached from ``guess`` (a :class:`~.base.Solution` whose ``active`` is
-    the guess for the next instant), or ``None``.
+    the guess for the next instant, and whose ``iterations`` count the linear KKT systems solved: one
+    per active set tried, one per Newton step when cones are held), or ``None``.
 
     Starting from ``guess``, the active set is corrected by block principal pivoting (free variables
     that leave their bounds are fixed there, fixed ones whose multiplier has the wrong sign are
     freed, broken cones join, cones with a negative multiplier leave) for at most ``max_pivots``
     equality-constrained solves; a repeated active set stops it."""
     G, gc, ax, tn, basis0 = qp.cone_arrays()
-    state = guess.cable_state(qp.n)
-    # a variable can only be held at a finite bound (the least-norm stage frees some bounds)
-    bad = ((state == 1) & ~np.isfinite(qp.lb)) | ((state == 2) & ~np.isfinite(qp.ub))
-    if bad.any():
-        state = np.where(bad, 0, state).astype(np.int8)
+    state = guess.cable_state(qp.n)  # (the kernel frees variables guessed at an infinite bound)
     if qp.cones:
         names = [c.joint for c in qp.cones]
         cact = np.array([nm in guess.cones for nm in names], dtype=np.bool_)
-        cdir = np.array([guess.cones[nm][0] if nm in guess.cones else basis0[k] for k, nm in enumerate(names)],
-                        dtype=float).reshape(len(names), 3)
+        cdir = basis0.copy()
+        for k in np.flatnonzero(cact):
+            cdir[k] = guess.cones[names[k]][0]
     else:
         names, cact, cdir = [], _NO_CONES, _NO_DIRS
     # C-ordered float arrays and Python scalars: one compiled specialisation serves every call
     c_ = np.ascontiguousarray
-    code, x, mus, grad, state, cact, dirs, nxt_state, y = K.active_set_solve(
+    code, x, mus, grad, state, cact, dirs, nxt_state, y, _, solves = K.active_set_run(
         c_(qp.P, dtype=float), c_(qp.c, dtype=float), c_(qp.A, dtype=float), c_(qp.b, dtype=float),
-        c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), state, c_(G, dtype=float), c_(gc, dtype=float),
+        c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), c_(state, dtype=np.int8), c_(G, dtype=float), c_(gc, dtype=float),
         c_(ax, dtype=float), c_(tn, dtype=float), c_(basis0, dtype=float), cact, c_(cdir, dtype=float),
         int(max_pivots), int(max_newton), *_AS_TOLS)
     if code != K.FOUND:
         _miss(K.REASONS[code])
         return None
-    return active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state)
+    return active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state, iterations=int(solves),
+                           stage=stage)
 
 
-def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state) -> Solution:
-    """A verified active-set point as a :class:`~.base.Solution` (duals converted)."""
+def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state, **fields) -> Solution:
+    """A verified active-set point as a :class:`~.base.Solution` (duals converted; ``fields``: more
+    of its fields, e.g. ``stage``)."""
     z = np.where(state != 0, -grad, 0.0)
-    nxt_cones = {c.joint: (dirs[k], float(mus[k])) for k, c in enumerate(qp.cones) if cact[k] and mus[k] > 0}
+    held = np.flatnonzero(cact & (mus > 0))
+    nxt_cones = {qp.cones[k].joint: (dirs[k], float(mus[k])) for k in held}
     return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z,
                     z_cone=cone_duals(qp, np.where(cact, mus, 0.0), dirs) if qp.cones else np.zeros((0, 3)),
-                    active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt_state), verified=True)
+                    active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt_state), verified=True, **fields)
 
 
 _NO_CONES = np.zeros(0, dtype=np.bool_)
@@ -162,6 +163,14 @@ def _miss(reason: str) -> None:
     MISSES[reason] = MISSES.get(reason, 0) + 1
 
 
+WARM_MAX_PIVOTS = 50
+"""Pivot limit of the warm stage. A pivot (one active set's KKT solve and check) costs ~10-25 us on the
+neck, a cold solve by the interior-point method a few ms: at the turning point of the neck's
+``roll`` (cases 2 and 3) the active set needs 33 pivots (~0.7 ms), and with a limit of 30 that
+instant cost the pivots *and* the cold solve (~4 ms, the trajectory's 99th percentile). 50 pivots
+keep a warm start that fails under ~1 ms of pivoting."""
+
+
 class WarmActiveSet(Stage):
     """Answering stage: the previous answer's active set (see the module docstring).
 
@@ -171,17 +180,14 @@ class WarmActiveSet(Stage):
 
     name = "warm_active_set"
 
-    def __init__(self, max_pivots: int = 30):
+    def __init__(self, max_pivots: int = WARM_MAX_PIVOTS):
         self.max_pivots = max_pivots
         self.guess: ActiveSet | None = None
 
     def run(self, qp, sol, deadline):
         if self.guess is None or not jit.ready():
             return None
-        hit = try_active_set(qp, self.guess, self.max_pivots)
-        if hit is None:
-            return None
-        return hit.but(stage=self.name)
+        return try_active_set(qp, self.guess, self.max_pivots, stage=self.name)
 
     def learn(self, qp, sol):
         self.guess = sol.active if sol.active is not None else ActiveSet.from_duals(qp, sol)
@@ -257,3 +263,23 @@ def numpy_polish(qp: QPData, sol: Solution) -> Solution | None:
     x = np.clip(x, qp.lb, qp.ub)
     zc = None if not qp.cones else np.zeros((len(qp.cones), 3))
     return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z, z_cone=zc, verified=False)
+
+
+def warm_calls():
+    """This module's kernels with example arguments of the types :func:`try_active_set` passes, and
+    the warm path's compiled decisions (:mod:`._fast`)."""
+    from . import _fast
+
+    n, z = 2, np.zeros
+    args = (z((n, n)), z(n), z((1, n)), z(1), z(n), z(n), z(n, dtype=np.int8), z((1, 3, n)), z((1, 3)), z((1, 3)),
+            z(1), z((1, 3)), z(1, dtype=np.bool_), z((1, 3)), 2, 2, *(float(v) for v in _AS_TOLS))
+    return [(K.active_set_run, args)] + _fast.warm_calls()
+
+
+def _register() -> None:
+    # loaded and compiled with the solvers' kernels (this module is imported by
+    # mcdm_pin.solvers.ipm, one of jit.MODULES)
+    jit.register("mcdm_pin.solvers.active_set", warm_calls)
+
+
+_register()

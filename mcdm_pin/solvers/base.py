@@ -20,7 +20,7 @@ while there is no final answer yet, a stage that *refines* runs only on an optim
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -45,7 +45,9 @@ class Solution:
         objective: ``1/2 x^T P x + c^T x + r`` at ``x`` (NaN when not solved).
         y: (k,) multipliers of ``A x = b``; z: (n,) of the bounds; z_cone: (K, 3) of the cones
             (``None`` when the stage has none).
-        iterations: inner iterations, summed over the stages that ran.
+        iterations: inner iterations, summed over the stages that ran: the active-set stages count
+            linear KKT solves (one per active set tried and per Newton step on held cones), the
+            others their method's iterations (interior-point, ProxQP, Clarabel).
         rounds: QP solves (cone cut rounds + 1) for cutting planes, 1 otherwise.
         message: what cannot be met, for infeasible or failed instants; notes otherwise.
         stage: the stage that produced ``x`` (``first>refiner`` when a refining stage moved it).
@@ -84,8 +86,18 @@ class Solution:
         return self.status in FINAL
 
     def but(self, **changes) -> "Solution":
-        """A copy with some fields changed."""
-        return replace(self, **changes)
+        """A copy with some fields changed (``dataclasses.replace`` without its per-field checks: a
+        few microseconds less on every stage of every instant)."""
+        for name in changes:
+            if name not in _FIELDS:
+                raise TypeError(f"Solution has no field {name!r}")
+        new = object.__new__(Solution)
+        new.__dict__.update(self.__dict__)
+        new.__dict__.update(changes)
+        return new
+
+
+_FIELDS = frozenset(f.name for f in fields(Solution))
 
 
 def failure(n: int, status: str, message: str, iterations: int = 0, rounds: int = 1,

@@ -75,6 +75,9 @@ def is_unique(qp, sol: Solution) -> bool:
         return True  # P = diag(d) + F^T F with d > 0 is positive definite: strictly convex (case 1)
     if sol.z is None or (qp.cones and sol.z_cone is None):
         return False
+    decided = _compiled_unique(qp, sol)
+    if decided is not None:
+        return decided
     free, rows, _ = _strongly_active(qp, sol, curvature=False)  # the curvature only if needed below
     nf = int(free.sum())
     if nf == 0:
@@ -103,6 +106,36 @@ def is_unique(qp, sol: Solution) -> bool:
     Hr = Z.T @ H @ Z
     hscale = max(np.abs(qp.P).max(initial=0.0), 1e-300)
     return bool(np.linalg.eigvalsh(0.5 * (Hr + Hr.T)).min() > tol.UNIQUE_REL * hscale)
+
+
+def _compiled_unique(qp, sol: Solution) -> bool | None:
+    """The rest of :func:`is_unique` compiled (:func:`._fast.unique_test`, the same steps and
+    thresholds); ``None`` while the kernels are not compiled."""
+    from .. import jit
+
+    if not jit.ready():
+        return None
+    from ._fast import unique_test
+
+    c_ = np.ascontiguousarray
+    if qp.cones:
+        G, gc, ax, tn, _ = qp.cone_arrays()
+        cosr = np.cos(np.radians([c.angle_deg for c in qp.cones]))
+        zc = sol.z_cone
+    else:
+        G, gc, ax, tn, cosr, zc = _NO_G, _NO_3, _NO_3, _NO_1, _NO_1, _NO_3
+    n = qp.n
+    return bool(unique_test(
+        c_(sol.x, dtype=float), c_(sol.z, dtype=float), c_(qp.gradient(sol.x), dtype=float), c_(qp.c, dtype=float),
+        c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), c_(qp.A, dtype=float).reshape(len(qp.b), n),
+        c_(qp.P, dtype=float), c_(G, dtype=float).reshape(len(gc), 3, n), c_(gc, dtype=float), c_(ax, dtype=float),
+        c_(tn, dtype=float), c_(cosr, dtype=float), c_(zc, dtype=float).reshape(len(gc), 3),
+        float(tol.ACTIVE_SET_FROM_SOLUTION), float(tol.UNIQUE_REL)))
+
+
+_NO_G = np.zeros((0, 3, 0))
+_NO_3 = np.zeros((0, 3))
+_NO_1 = np.zeros(0)
 
 
 def optimal_face_rows(qp, sol: Solution | None = None) -> np.ndarray:

@@ -1,0 +1,230 @@
+r"""Compiled fast paths of per-instant steps that were ~40 small numpy calls each (on the warm
+path of a trajectory, where one instant's solve is a fraction of a millisecond, their Python
+overhead cost as much as the solve). The scaling decision has its own compiled pass
+(:func:`mcdm_pin.model.kernels.needs_scaling`).
+
+- :func:`unique_test`: :func:`mcdm_pin.solvers.least_norm.is_unique` (strongly active constraints,
+  their rows' rank on the free variables, the reduced Hessian), the same steps and thresholds; the
+  numpy code stays the reference (and the path while the kernels are not compiled).
+
+Two more fuse the runner's per-instant numpy steps after the solve into one pass each, with the
+same formulas: :func:`answer_check` (equation-of-motion residual, bounds, cones: the runner's check
+of every answer on the original problem) and :func:`instant_outputs` (interaction wrenches, socket
+forces and angles).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ._kkt import cone_force
+
+
+@njit(cache=True, nogil=True)
+def unique_test(x, z, grad, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel):
+    """:func:`mcdm_pin.solvers.least_norm.is_unique` after its first two tests (its
+    ``_strongly_active``, the Cholesky of ``J^T J``, then the null space of ``J`` by an SVD and the
+    reduced Hessian's smallest eigenvalue): 1 unique, 0 not proven unique."""
+    n = x.shape[0]
+    gscale = 1e-300
+    for i in range(n):
+        gscale = max(gscale, abs(grad[i]), abs(c[i]))
+    thr = unique_rel * gscale
+    free = np.empty(n, dtype=np.int64)
+    nf = 0
+    for i in range(n):
+        at_l = (x[i] - lb[i] <= near * (1.0 + abs(lb[i]))) and (z[i] < -thr)
+        at_u = (ub[i] - x[i] <= near * (1.0 + abs(ub[i]))) and (z[i] > thr)
+        if not (at_l or at_u):
+            free[nf] = i
+            nf += 1
+    if nf == 0:
+        return 1
+    K = G.shape[0]
+    crow = np.empty((3 * K, n))
+    cv = np.empty((K, n))  # the held cones' curvature: sum_k cs[k] cv[k] cv[k]^T
+    cs = np.empty(K)
+    ncv = 0
+    nr = 0
+    for k in range(K):
+        mu = zc[k, 0] * cosr[k]
+        if not mu > thr:
+            continue
+        F0, F1, F2, al, p0, p1, p2 = cone_force(G, gc, ax, k, x)
+        p = np.array([p0, p1, p2])
+        perp = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+        nF = np.sqrt(F0 * F0 + F1 * F1 + F2 * F2)
+        if perp <= 1e-12 * max(nF, 1e-300):  # held at the apex: every row of G
+            for a in range(3):
+                crow[nr] = G[k, a]
+                nr += 1
+            continue
+        h = p / perp
+        w = h - tn[k] * ax[k]
+        e0 = ax[k, 1] * h[2] - ax[k, 2] * h[1]
+        e1 = ax[k, 2] * h[0] - ax[k, 0] * h[2]
+        e2 = ax[k, 0] * h[1] - ax[k, 1] * h[0]
+        crow[nr] = w[0] * G[k, 0] + w[1] * G[k, 1] + w[2] * G[k, 2]
+        crow[nr + 1] = e0 * G[k, 0] + e1 * G[k, 1] + e2 * G[k, 2]
+        nr += 2
+        # curvature mu G^T (I - a a^T - h h^T) G / |F_perp| = mu/|F_perp| v v^T, v = G^T (a x h)
+        cv[ncv] = crow[nr - 1]
+        cs[ncv] = mu / perp
+        ncv += 1
+    m = A.shape[0]
+    rows = m + nr
+    J = np.empty((rows, nf))
+    for r in range(rows):
+        for a in range(nf):
+            J[r, a] = A[r, free[a]] if r < m else crow[r - m, free[a]]
+    if rows >= nf:
+        # the usual case (a vertex): J has full column rank, the null space is empty
+        JtJ = np.zeros((nf, nf))
+        for r in range(rows):
+            for a in range(nf):
+                va = J[r, a]
+                if va != 0.0:
+                    for bb in range(a + 1):
+                        JtJ[a, bb] += va * J[r, bb]
+        big = 1e-300
+        for a in range(nf):
+            for bb in range(a + 1):
+                JtJ[bb, a] = JtJ[a, bb]
+                big = max(big, abs(JtJ[a, bb]))
+        L = np.zeros((nf, nf))
+        dmin = np.inf
+        ok = True
+        for j in range(nf):
+            acc = JtJ[j, j]
+            for k in range(j):
+                acc -= L[j, k] * L[j, k]
+            if not acc > 0.0:
+                ok = False
+                break
+            d = np.sqrt(acc)
+            L[j, j] = d
+            dmin = min(dmin, d)
+            for i in range(j + 1, nf):
+                t = JtJ[i, j]
+                for k in range(j):
+                    t -= L[i, k] * L[j, k]
+                L[i, j] = t / d
+        if ok and dmin * dmin > 1e-10 * big:
+            return 1
+    if rows > 0:
+        _, sv, Vt = np.linalg.svd(J, full_matrices=True)
+        smax = 0.0
+        for i in range(sv.shape[0]):
+            smax = max(smax, sv[i])
+        rank = 0
+        for i in range(sv.shape[0]):
+            if sv[i] > 1e-10 * max(smax, 1e-300):
+                rank += 1
+        Z = np.ascontiguousarray(Vt[rank:].T)
+    else:
+        Z = np.eye(nf)
+    if Z.shape[1] == 0:
+        return 1
+    H = np.empty((nf, nf))
+    hscale = 1e-300
+    for i in range(n):
+        for j in range(n):
+            hscale = max(hscale, abs(P[i, j]))
+    for a in range(nf):
+        for bb in range(nf):
+            hab = P[free[a], free[bb]]
+            for k in range(ncv):
+                hab += cs[k] * cv[k, free[a]] * cv[k, free[bb]]
+            H[a, bb] = hab
+    Hr = Z.T @ H @ Z
+    lam = np.linalg.eigvalsh(0.5 * (Hr + Hr.T))
+    return 1 if lam.min() > unique_rel * hscale else 0
+
+
+@njit(cache=True, nogil=True)
+def answer_check(L, tau, extra, x, lb, ub, G, g, ax, angle_deg):
+    """The runner's check of an answer on the original problem, in one pass
+    (:func:`mcdm_pin.inverse_dynamics._check`): ``(eom, broken, viol, k)`` with ``eom`` the relative
+    equation-of-motion residual (:meth:`mcdm_pin.model.terms.Terms.eom_residual`: ``|tau + L^T f +
+    extra|_inf`` over ``max(|tau|_inf, max_v sum_c |L_cv f_c|, |extra|_inf)``, ``f`` the first
+    ``L.shape[0]`` entries of ``x``), ``broken`` the largest bound violation (0 inside), ``viol``
+    the largest cone violation in degrees (:func:`mcdm_pin.solvers.base.cone_violation_deg`) and
+    ``k`` its cone (-1: none)."""
+    m, nv = L.shape
+    n = x.shape[0]
+    scale = 1e-300
+    extra_scale = 0.0
+    for v in range(extra.shape[0]):
+        extra_scale = max(extra_scale, abs(extra[v]))
+    rmax = 0.0
+    tmax = 0.0
+    smax = 0.0
+    for v in range(nv):
+        r = tau[v]
+        s = 0.0
+        for c in range(m):
+            r += L[c, v] * x[c]
+            s += abs(L[c, v]) * abs(x[c])
+        if extra.shape[0]:
+            r += extra[v]
+        if not abs(r) <= rmax:
+            rmax = abs(r)
+            if r != r:
+                return np.nan, np.nan, np.nan, -1
+        tmax = max(tmax, abs(tau[v]))
+        smax = max(smax, s)
+    scale = max(tmax, smax, extra_scale, 1e-300)
+    eom = rmax / scale
+    broken = 0.0
+    for i in range(n):
+        if x[i] != x[i]:
+            return eom, np.nan, np.nan, -1
+        if not lb[i] - x[i] <= broken:
+            broken = lb[i] - x[i]
+        if not x[i] - ub[i] <= broken:
+            broken = x[i] - ub[i]
+    viol = 0.0
+    worst = -1
+    for k in range(G.shape[0]):
+        _, _, _, al, p0, p1, p2 = cone_force(G, g, ax, k, x)
+        ang = np.degrees(np.arctan2(np.sqrt(p0 * p0 + p1 * p1 + p2 * p2), al)) - angle_deg[k]
+        if not ang <= viol:
+            viol = ang
+            worst = k
+    return eom, broken, viol, worst
+
+
+@njit(cache=True, nogil=True)
+def instant_outputs(u, RT, R_socket, axes, f):
+    """Per physical joint: the interaction wrench ``u + R^T f`` (J, 6, child frame), its force in the
+    socket frame (J, 3) and that force's angle from the socket axis, degrees (J,)
+    (:meth:`mcdm_pin.model.terms.Terms.wrenches`, :func:`mcdm_pin.model.terms.interaction_angles`)."""
+    J = u.shape[0]
+    m = f.shape[0]
+    W = np.empty((J, 6))
+    Fs = np.empty((J, 3))
+    ang = np.empty(J)
+    for j in range(J):
+        for a in range(6):
+            acc = 0.0
+            for c in range(m):
+                acc += RT[j, a, c] * f[c]
+            W[j, a] = u[j, a] + acc
+        for a in range(3):
+            Fs[j, a] = R_socket[j, a, 0] * W[j, 0] + R_socket[j, a, 1] * W[j, 1] + R_socket[j, a, 2] * W[j, 2]
+        al = Fs[j, 0] * axes[j, 0] + Fs[j, 1] * axes[j, 1] + Fs[j, 2] * axes[j, 2]
+        p0, p1, p2 = Fs[j, 0] - al * axes[j, 0], Fs[j, 1] - al * axes[j, 1], Fs[j, 2] - al * axes[j, 2]
+        ang[j] = np.degrees(np.arctan2(np.sqrt(p0 * p0 + p1 * p1 + p2 * p2), al))
+    return W, Fs, ang
+
+
+def warm_calls():
+    """The kernels with example arguments of the types the library passes (registered with
+    :mod:`mcdm_pin.jit` by :mod:`.active_set`)."""
+    z = np.zeros
+    n = 2
+    return [(unique_test, (z(n), z(n), z(n), z(n), z(n), z(n), z((1, n)), z((n, n)), z((1, 3, n)), z((1, 3)),
+                           z((1, 3)), z(1), z(1), z((1, 3)), 1e-8, 1e-9)),
+            (answer_check, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1))),
+            (instant_outputs, (z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)), z(n)))]

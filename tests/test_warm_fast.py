@@ -1,0 +1,122 @@
+"""The warm path's compiled shortcuts decide exactly what the numpy reference decides.
+
+Every instant of a trajectory runs the scaling decision, the uniqueness test, the runner's answer
+check and the wrench outputs; compiled (mcdm_pin/solvers/_fast.py), they must give the numpy code's
+decisions (exactly: same thresholds) and values (to rounding: 1e-12 relative). Also: the active
+set's KKT solve at a vertex equals the full KKT system's solution, and the iterations the warm
+stage reports are its KKT solves (at least one per answer).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mcdm_pin import InverseDynamics, Robot, jit
+from mcdm_pin import inverse_dynamics as ID
+from mcdm_pin import scaling as SC
+from mcdm_pin.problem import Context
+from mcdm_pin.solvers import _kkt
+from mcdm_pin.solvers import least_norm as LN
+from mcdm_pin.trajectory import load_trajectory
+
+from .conftest import REPO
+
+
+@pytest.fixture(scope="module")
+def instants():
+    """(qp, terms, solution) of every instant of the 2-link arm (cases 1-3, traj1) and of the human
+    arm's abduct (case 3: a flat optimal face, non-unique first-stage optima)."""
+    jit.prepare(policy="wait")
+    out = []
+    for robot_file, traj, cases in (("two_link_sr.yaml", "traj1", (1, 2, 3)), ("human_arm.yaml", "abduct", (2, 3))):
+        robot = Robot.load(REPO / "robots" / robot_file)
+        tr = load_trajectory(robot, traj)
+        for case in cases:
+            idp = InverseDynamics.for_case(robot, case)
+            for k in range(0, len(tr.t), 7):
+                terms = idp.evaluate(tr.q[k], tr.qd[k], tr.qdd[k])
+                qp = idp.problem.assemble(terms, Context(robot, None))
+                out.append((qp, terms, idp.solver.solve(qp), idp))
+    return out
+
+
+def _numpy(fn, *args):
+    """``fn(*args)`` with the compiled kernels reported unavailable (the numpy reference path)."""
+    saved = jit._READY
+    jit._READY = False
+    try:
+        return fn(*args)
+    finally:
+        jit._READY = saved
+
+
+def test_scaling_decision_is_the_numpy_ones(instants):
+    for qp, _, _, _ in instants:
+        for p in (qp, qp.replace(A=qp.A * 1e5, b=qp.b * 1e5), qp.replace(lb=qp.lb + 1e4, ub=qp.ub + 1e5)):
+            compiled = SC.scaling_factors(p)
+            reference = _numpy(SC.scaling_factors, p)
+            assert (compiled is None) == (reference is None)
+            if compiled is not None:
+                for a, b in zip((compiled.d, compiled.r, compiled.obj, compiled.cone),
+                                (reference.d, reference.r, reference.obj, reference.cone)):
+                    np.testing.assert_array_equal(a, b)
+
+
+def test_uniqueness_decision_is_the_numpy_ones(instants):
+    seen = set()
+    for qp, _, sol, _ in instants:
+        assert sol.status == "optimal"
+        decided = LN.is_unique(qp, sol)
+        assert decided == _numpy(LN.is_unique, qp, sol)
+        seen.add(decided)
+    assert seen == {True, False}  # both answers occur (the human arm's case 2/3 optimum is a face)
+
+
+def test_answer_check_and_outputs_equal_the_numpy_ones(instants):
+    for qp, terms, sol, idp in instants:
+        m = idp.robot.m
+        (s1, eom1), (s2, eom2) = ID._check(qp, terms, sol, m), _numpy(ID._check, qp, terms, sol, m)
+        assert s1.status == s2.status and s1.message == s2.message
+        # the residual of an exact answer is itself rounding (~1e-16): the order of the sums decides
+        # its digits; anything that matters (the check's 1e-8) is far above 1e-14
+        assert eom1 == pytest.approx(eom2, rel=1e-9, abs=1e-14)
+        for a, b in zip(ID._outputs(terms, sol.x[:m], len(idp.robot.joints)),
+                        _numpy(ID._outputs, terms, sol.x[:m], len(idp.robot.joints))):
+            np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * max(1.0, np.abs(b).max()))
+    # a broken answer is reported by both paths with the same message
+    qp, terms, sol, idp = instants[0]
+    bad = sol.but(x=sol.x + 1.0)
+    assert ID._check(qp, terms, bad, idp.robot.m)[0].message == \
+        _numpy(ID._check, qp, terms, bad, idp.robot.m)[0].message != ""
+
+
+def test_vertex_solve_is_the_kkt_systems_solution():
+    rng = np.random.default_rng(3)
+    for nf in (1, 4, 25):
+        R = rng.standard_normal((nf, nf))
+        H = rng.standard_normal((nf, nf))
+        H = H @ H.T
+        K = np.block([[H, R.T], [R, np.zeros((nf, nf))]])
+        rhs = rng.standard_normal(2 * nf)
+        want = np.linalg.solve(K, rhs)
+        got = _kkt._vertex_solve(K, rhs, nf, True)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-9 * np.abs(want).max())
+    # a singular R: the fallback (least squares) gives NaN for an inconsistent system, as before
+    K = np.zeros((4, 4))
+    K[:2, :2] = np.eye(2)
+    got = _kkt._vertex_solve(K, np.ones(4), 2, True)
+    assert not np.all(np.isfinite(got))
+
+
+def test_warm_stage_counts_its_kkt_solves(instants):
+    robot = Robot.load(REPO / "robots" / "two_link_sr.yaml")
+    run = InverseDynamics.for_case(robot, 3).solve_trajectory(load_trajectory(robot, "traj1"), progress=False)
+    warm = run.stage == "warm_active_set"
+    assert warm.sum() > 90
+    assert run.iterations[warm].min() >= 1  # every answer solved at least one KKT system
+    from mcdm_pin.cli.solve import stage_counts
+
+    line = stage_counts(run)
+    assert line.startswith(f"answered by warm_active_set at {warm.sum()} instants (median ")
+    assert "KKT solves" in line
