@@ -1,0 +1,282 @@
+r"""The linear algebra of the compiled interior-point method (:mod:`._ipm`): its Newton system solved
+through the problem's structure.
+
+Each Newton step solves
+
+.. math:: H\,dx + A^T dy = r_1, \qquad A\,dx = r_2, \qquad
+          H = D + F^T F + \sum_k T_k^T V_k T_k,
+
+with ``D`` diagonal (the objective's diagonal ``d0`` plus the bounds' barrier terms ``z/s``), ``F``
+the objective's factor (``P = diag(d0) + F^T F``: the interaction objective's weighted wrench rows),
+``T_k`` the three rows of cone ``k`` and ``V_k`` its 3x3 Nesterov-Todd term ``W_k^{-2}``.
+
+**Compression, once per solve** (:func:`structure`). The rows ``U = [F; T_1; ...; T_K]`` span few
+directions: on the neck every cone's rows are a rotation of the same joint's force rows, so 48 rows
+span 24. Modified Gram-Schmidt with pivoting gives an orthonormal basis ``Q`` (``ru`` rows) and the
+coefficients ``C`` with ``U = C Q`` (a row whose residual is below ``rank_tol`` of its norm counts as
+dependent). Then ``H = D + Q^T M Q`` with ``M = C_F^T C_F + sum_k C_k^T V_k C_k`` (``ru x ru``).
+
+**Per iteration** (:func:`factor`, :func:`solve`). With ``w = M Q dx`` the system is, exactly
+(Woodbury),
+
+.. math::
+
+    \begin{bmatrix} M^{-1} + Q D^{-1} Q^T & Q D^{-1} A^T \\ A D^{-1} Q^T & A D^{-1} A^T \end{bmatrix}
+    \begin{bmatrix} w \\ dy \end{bmatrix} =
+    \begin{bmatrix} Q D^{-1} r_1 \\ A D^{-1} r_1 - r_2 \end{bmatrix}, \qquad
+    dx = D^{-1} (r_1 - Q^T w - A^T dy),
+
+one symmetric positive definite system of size ``ru + k_eq`` (neck: 24 in case 1, 48 in cases 2 and
+3) instead of a Cholesky factor of the 76 x 76 ``H`` and a Schur complement on ``A``. ``M^{-1}`` is
+bounded (``M >= C_F^T C_F``), the ``D^{-1}`` of a variable between its bounds grows like ``1/mu``: the
+matrix's condition number grows like ``1/mu``, which the crossover (at a relative gap of 1e-5) and
+one step of iterative refinement against the exact operators (:func:`refine`) absorb. A dependent
+equation (``A`` losing rank: the 2-link arm at q = 0) shows as a pivot at rounding level and is
+dropped (its multiplier set to zero).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+_FM = {"reassoc", "contract"}  # reassociation lets numba vectorise the dot products; no NaN/inf flags
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def dot(a, b):
+    s = 0.0
+    for i in range(a.shape[0]):
+        s += a[i] * b[i]
+    return s
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def axpy(a, x, y):
+    """``y += a x`` in place."""
+    for i in range(y.shape[0]):
+        y[i] += a * x[i]
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def chol_inplace(L, drop_rel):
+    """Cholesky factor of the lower triangle of ``L`` in place (row-oriented: contiguous inner
+    products). A pivot at or below ``drop_rel`` times the largest diagonal entry becomes 1e300 (its
+    unknown is dropped: the solves set it to zero). Returns whether one was dropped."""
+    p = L.shape[0]
+    scale = 1e-300
+    for i in range(p):
+        scale = max(scale, L[i, i])
+    floor = drop_rel * scale
+    dropped = False
+    for j in range(p):
+        Lj = L[j]
+        d = Lj[j] - dot(Lj[:j], Lj[:j])
+        if not d > floor:
+            d = 1e300
+            dropped = True
+        d = np.sqrt(d)
+        Lj[j] = d
+        inv = 1.0 / d
+        for i in range(j + 1, p):
+            Li = L[i]
+            Li[j] = (Li[j] - dot(Li[:j], Lj[:j])) * inv
+    return dropped
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def chol_solve(L, r):
+    """``(L L^T)^{-1} r`` (both passes along rows of ``L``)."""
+    p = L.shape[0]
+    y = r.copy()
+    for i in range(p):
+        Li = L[i]
+        y[i] = (y[i] - dot(Li[:i], y[:i])) / Li[i]
+    for i in range(p - 1, -1, -1):
+        Li = L[i]
+        xi = y[i] / Li[i]
+        y[i] = xi
+        for k in range(i):
+            y[k] -= Li[k] * xi
+    return y
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def add_inverse(L, out):
+    """``out += (L L^T)^{-1}`` on the lower triangle (``L^{-1}`` formed row by row)."""
+    p = L.shape[0]
+    Li_ = np.zeros((p, p))
+    for i in range(p):
+        Li = L[i]
+        inv = 1.0 / Li[i]
+        row = Li_[i]
+        row[i] = inv
+        for k in range(i):
+            lk = Li[k] * inv
+            if lk != 0.0:
+                Rk = Li_[k]
+                for j in range(k + 1):
+                    row[j] -= lk * Rk[j]
+    # (L L^T)^-1 = L^-T L^-1: entry (a, b) = sum_i Li_[i, a] Li_[i, b]
+    for i in range(p):
+        row = Li_[i]
+        for a in range(i + 1):
+            ra = row[a]
+            if ra != 0.0:
+                Oa = out[a]
+                for b in range(a + 1):
+                    Oa[b] += ra * row[b]
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def structure(Fm, T, A, rank_tol):
+    """The rows of the reduced system (module docstring): ``(B, rf, M0inv)`` with ``B = [Q; T_1; ...;
+    T_K; A]`` and ``M0inv = (C^T C)^{-1}`` (full, ``rf x rf``) for ``F = C Q``."""
+    r = Fm.shape[0]
+    K = T.shape[0]
+    n = A.shape[1]
+    neq = A.shape[0]
+    W = Fm.copy()
+    norm0 = np.empty(r)
+    res = np.empty(r)
+    for i in range(r):
+        norm0[i] = dot(W[i], W[i])
+        res[i] = norm0[i]
+    C = np.zeros((r, r))
+    used = np.zeros(r, dtype=np.bool_)
+    Q = np.empty((r, n))
+    rf = 0
+    for _ in range(r):
+        best, piv = 0.0, -1
+        for i in range(r):
+            if not used[i] and res[i] > rank_tol * rank_tol * norm0[i] and res[i] > best:
+                best, piv = res[i], i
+        if piv < 0:
+            break
+        used[piv] = True
+        nrm = np.sqrt(dot(W[piv], W[piv]))
+        q = W[piv] / nrm
+        Q[rf] = q
+        C[piv, rf] = nrm
+        for i in range(r):
+            if not used[i] and res[i] > 0.0:
+                cc = dot(W[i], q)
+                C[i, rf] = cc
+                axpy(-cc, q, W[i])
+                res[i] = dot(W[i], W[i])
+        rf += 1
+    B = np.empty((rf + 3 * K + neq, n))
+    for i in range(rf):
+        B[i] = Q[i]
+    for k in range(K):
+        for e in range(3):
+            B[rf + 3 * k + e] = T[k, e]
+    for a in range(neq):
+        B[rf + 3 * K + a] = A[a]
+    M0 = np.zeros((rf, rf))
+    for i in range(r):
+        for a in range(rf):
+            ca = C[i, a]
+            if ca != 0.0:
+                for b in range(a + 1):
+                    M0[a, b] += ca * C[i, b]
+    chol_inplace(M0, 1e-300)
+    M0inv = np.zeros((rf, rf))
+    add_inverse(M0, M0inv)
+    for a in range(rf):
+        for b in range(a):
+            M0inv[b, a] = M0inv[a, b]
+    return B, rf, M0inv
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def factor(B, rf, M0inv, W2, dinv, drop_rel):
+    """The Cholesky factor (lower) of the reduced matrix of the module docstring, and whether an
+    equation was dropped."""
+    rb, n = B.shape
+    K = W2.shape[0]
+    Km = np.empty((rb, rb))
+    row = np.empty(n)
+    for i in range(rb):
+        Bi = B[i]
+        for t in range(n):
+            row[t] = Bi[t] * dinv[t]
+        for j in range(i + 1):
+            Km[i, j] = dot(row, B[j])
+    for a in range(rf):
+        for b in range(a + 1):
+            Km[a, b] += M0inv[a, b]
+    for k in range(K):
+        o = rf + 3 * k
+        for a in range(3):
+            for b in range(a + 1):
+                Km[o + a, o + b] += W2[k, a, b]
+    dropped = chol_inplace(Km, drop_rel)
+    return Km, dropped
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def solve(B, rf, nw, LK, dinv, r1, r3, r2):
+    """``(dx, dy, dzc)`` of ``(D + F^T F) dx + A^T dy - T^T dzc = r1``, ``A dx = r2``,
+    ``-T dx - W^2 dzc = r3`` (``r3`` (K, 3)) from :func:`factor`'s factor."""
+    rb, n = B.shape
+    K = (nw - rf) // 3
+    u = dinv * r1
+    rhs = np.empty(rb)
+    for i in range(rb):
+        rhs[i] = dot(B[i], u)
+    for k in range(K):
+        for e in range(3):
+            rhs[rf + 3 * k + e] += r3[k, e]
+    for a in range(rb - nw):
+        rhs[nw + a] -= r2[a]
+    sol = chol_solve(LK, rhs)
+    dx = r1.copy()
+    for i in range(rb):
+        if sol[i] != 0.0:
+            axpy(-sol[i], B[i], dx)
+    for t in range(n):
+        dx[t] *= dinv[t]
+    dzc = np.empty((K, 3))
+    for k in range(K):
+        for e in range(3):
+            dzc[k, e] = -sol[rf + 3 * k + e]
+    return dx, sol[nw:].copy(), dzc
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def apply_P(x, d0, Fm):
+    """``P x = d0 x + F^T F x``."""
+    out = d0 * x
+    for i in range(Fm.shape[0]):
+        s = dot(Fm[i], x)
+        if s != 0.0:
+            axpy(s, Fm[i], out)
+    return out
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def refine(B, rf, nw, LK, dinv, dbar, Fm, T, W2, A, r1, r3, r2, dx, dy, dzc, steps):
+    """``steps`` rounds of iterative refinement of ``(dx, dy, dzc)`` against the exact operators of
+    :func:`solve`'s system (``dbar``: ``d0`` plus the barrier diagonal, without the floor)."""
+    K = T.shape[0]
+    for _ in range(steps):
+        e1 = r1 - apply_P(dx, dbar, Fm)
+        for a in range(A.shape[0]):
+            if dy[a] != 0.0:
+                axpy(-dy[a], A[a], e1)
+        e3 = r3.copy()
+        for k in range(K):
+            for e in range(3):
+                axpy(dzc[k, e], T[k, e], e1)
+                e3[k, e] += dot(T[k, e], dx) + W2[k, e, 0] * dzc[k, 0] + W2[k, e, 1] * dzc[k, 1] + \
+                    W2[k, e, 2] * dzc[k, 2]
+        e2 = r2.copy()
+        for a in range(A.shape[0]):
+            e2[a] -= dot(A[a], dx)
+        cx, cy, cz = solve(B, rf, nw, LK, dinv, e1, e3, e2)
+        axpy(1.0, cx, dx)
+        axpy(1.0, cy, dy)
+        for k in range(K):
+            for e in range(3):
+                dzc[k, e] += cz[k, e]
