@@ -531,7 +531,7 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
             Wc2[k] = Wk @ Wk
         dbar, dinv = _barrier(d0, iu, il, su, zu, sl, zl, floor)
         LK, dropped = la.factor(B, rf, M0inv, Wc2, dinv, 1e-14)
-        refine = 1 if dropped else 0
+        refine = 1 if dropped or gap_rel < 1e-5 else 0
         dx, dy, dzu, dzl, dzc, dsu, dsl, dsc, a = _direction(
             rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, nw, LK, dinv, dbar, Fm, T, A, Wc2, Wm, Winv,
             lamc, iu, il, refine, ncorr)
