@@ -63,7 +63,7 @@ IPM_CROSSOVER_GAP = 1e-5
 tried (verified KKT point) before more iterations."""
 IPM_MAX_ITER = 60
 """Interior-point method: iteration limit."""
-IPM_CORRECTORS = 2
+IPM_CORRECTORS = 1
 """Interior-point method: at most this many centrality correctors (Gondzio) per iteration."""
 IPM_RANK_TOL = 1e-9
 """Interior-point method: a row of the objective's factor or of a cone whose part outside the span of

@@ -64,6 +64,15 @@ def _dot(a, b):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def _mv3(M, v):
+    """``M v`` for a 3x3 ``M`` (no BLAS call: its overhead exceeds the work)."""
+    out = np.empty(3)
+    for a in range(3):
+        out[a] = M[a, 0] * v[0] + M[a, 1] * v[1] + M[a, 2] * v[2]
+    return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def _soc_scaling(s, z, W, Winv):
     """Nesterov-Todd scaling of one 3-dimensional second-order cone: ``W`` and ``W^-1`` (3x3,
     symmetric) with ``W z = W^-1 s``; returns ``lambda = W z``."""
@@ -208,7 +217,9 @@ def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T,
     equations' ``A x - b``, the slacks' ``G x + s - h`` and the objective."""
     n = x.shape[0]
     Px = la.apply_P(x, d0, Fm)
-    rx = Px + c + A.T @ y
+    rx = Px + c
+    for a in range(A.shape[0]):
+        la.axpy(y[a], A[a], rx)
     for q in range(iu.shape[0]):
         rx[iu[q]] += zu[q]
     for q in range(il.shape[0]):
@@ -219,7 +230,9 @@ def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T,
         for e in range(3):
             la.axpy(-zc[k, e], T[k, e], rx)
             rzc[k, e] = -_dot(T[k, e], x) + sc[k, e] - t[k, e]
-    ry = A @ x - b
+    ry = np.empty(A.shape[0])
+    for a in range(A.shape[0]):
+        ry[a] = la.dot(A[a], x) - b[a]
     rzu = np.empty(iu.shape[0])
     for q in range(iu.shape[0]):
         rzu[q] = x[iu[q]] + su[q] - ub[iu[q]]
@@ -246,7 +259,7 @@ def _barrier(d0, iu, il, su, zu, sl, zl, floor):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _newton(bx, by, bzu, bzl, bzc, B, rf, nw, LK, dinv, dbar, Fm, T, A, W2, iu, il, su, zu, sl, zl, refine):
+def _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, LK, dinv, dbar, Fm, T, A, W2, iu, il, su, zu, sl, zl, refine):
     """The scaled Newton system's ``(dx, dy, dzu, dzl, dzc)`` for the right-hand sides
     ``P dx + A^T dy + G^T dz = bx, A dx = by, G dx - W^2 dz = bz``: the bounds' ``dz`` eliminated
     (``dz = (z/s) (G dx - bz)``), the cones' kept (:func:`._ipm_linalg.solve`: no ``W^-2`` is ever
@@ -256,9 +269,9 @@ def _newton(bx, by, bzu, bzl, bzc, B, rf, nw, LK, dinv, dbar, Fm, T, A, W2, iu, 
         r1[iu[q]] += zu[q] / su[q] * bzu[q]
     for q in range(il.shape[0]):
         r1[il[q]] -= zl[q] / sl[q] * bzl[q]
-    dx, dy, dzc = la.solve(B, rf, nw, LK, dinv, r1, bzc, by)
+    dx, dy, dzc = la.solve(B, rf, Ct, LK, dinv, r1, bzc, by)
     if refine:
-        la.refine(B, rf, nw, LK, dinv, dbar, Fm, T, W2, A, r1, bzc, by, dx, dy, dzc, refine)
+        la.refine(B, rf, Ct, LK, dinv, dbar, Fm, T, W2, A, r1, bzc, by, dx, dy, dzc, refine)
     dzu = np.empty(iu.shape[0])
     for q in range(iu.shape[0]):
         dzu[q] = zu[q] / su[q] * (dx[iu[q]] - bzu[q])
@@ -269,7 +282,7 @@ def _newton(bx, by, bzu, bzl, bzc, B, rf, nw, LK, dinv, dbar, Fm, T, A, W2, iu, 
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, floor):
+def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, floor):
     """CVXOPT's initial point: ``x, y`` of the Newton system with the identity scaling (the least
     squares point of the slacks on the equations, with the objective), ``s = h - G x``, ``z = -s``,
     each shifted into its cone's interior when it is not (:func:`_shift_into_cones`). Starting from
@@ -282,15 +295,14 @@ def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, floor):
         for e in range(3):
             Vc[k, e, e] = 1.0
     dbar, dinv = _barrier(d0, iu, il, one_u, one_u, one_l, one_l, floor)
-    LK, dropped = la.factor(B, rf, M0inv, Vc, dinv, 1e-14)
-    nw = rf + 3 * K
+    LK, dropped = la.factor(B, rf, M0inv, Ct, Vc, dinv, 1e-14)
     hu = np.empty(nu)
     for q in range(nu):
         hu[q] = ub[iu[q]]
     hl = np.empty(nl)
     for q in range(nl):
         hl[q] = -lb[il[q]]
-    x, y, zu, zl, zc = _newton(-c, b, hu, hl, t.copy(), B, rf, nw, LK, dinv, dbar, Fm, T, A, Vc, iu, il, one_u,
+    x, y, zu, zl, zc = _newton(-c, b, hu, hl, t.copy(), B, rf, Ct, LK, dinv, dbar, Fm, T, A, Vc, iu, il, one_u,
                                one_u, one_l, one_l, 1)
     su, sl, sc = -zu, -zl, -zc
     _shift_into_cones(su, sl, sc)
@@ -324,7 +336,7 @@ def _centring(s, ds, z, dz, a, lo, hi, rs):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, nw, LK, dinv, dbar, Fm, T, A, W2,
+def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, LK, dinv, dbar, Fm, T, A, W2,
                Wm, Winv, lamc, iu, il, refine, ncorr):
     """Mehrotra's predictor-corrector direction with Gondzio's centrality correctors on the bounds
     (at most ``ncorr``, each kept only when it lengthens the step); returns the direction and its
@@ -334,7 +346,7 @@ def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, nw, LK,
     lu = np.sqrt(su * zu)
     ll = np.sqrt(sl * zl)
     # predictor (affine scaling): bz = -rz + s
-    dx, dy, dzu, dzl, dzc = _newton(-rx, -ry, -rzu + su, -rzl + sl, -rzc + sc, B, rf, nw, LK, dinv, dbar, Fm,
+    dx, dy, dzu, dzl, dzc = _newton(-rx, -ry, -rzu + su, -rzl + sl, -rzc + sc, B, rf, Ct, LK, dinv, dbar, Fm,
                                     T, A, W2, iu, il, su, zu, sl, zl, refine)
     dsu, dsl, dsc = _slack_step(dx, rzu, rzl, rzc, iu, il, T)
     a_p = min(1.0, _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc))
@@ -348,13 +360,13 @@ def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, nw, LK,
     rsl = -ll * ll - dsl * dzl + smu
     bzc = np.empty((K, 3))
     for k in range(K):
-        rs = -_soc_prod(lamc[k], lamc[k]) - _soc_prod(Winv[k] @ dsc[k], Wm[k] @ dzc[k])
+        rs = -_soc_prod(lamc[k], lamc[k]) - _soc_prod(_mv3(Winv[k], dsc[k]), _mv3(Wm[k], dzc[k]))
         rs[0] += smu
-        bzc[k] = -rzc[k] - Wm[k] @ _soc_div(lamc[k], rs)
+        bzc[k] = -rzc[k] - _mv3(Wm[k], _soc_div(lamc[k], rs))
     best = (dx, dy, dzu, dzl, dzc, dsu, dsl, dsc, 0.0)
     for j in range(ncorr + 1):
         # W (lam \ rs) = rs / z on the bounds
-        dx, dy, dzu, dzl, dzc = _newton(-rx, -ry, -rzu - rsu / zu, -rzl - rsl / zl, bzc, B, rf, nw, LK, dinv,
+        dx, dy, dzu, dzl, dzc = _newton(-rx, -ry, -rzu - rsu / zu, -rzl - rsl / zl, bzc, B, rf, Ct, LK, dinv,
                                         dbar, Fm, T, A, W2, iu, il, su, zu, sl, zl, refine)
         dsu, dsl, dsc = _slack_step(dx, rzu, rzl, rzc, iu, il, T)
         a = _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc)
@@ -481,9 +493,8 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
     for i in range(n):
         hmax = max(hmax, H[i, i])
     floor = 1e-12 * max(hmax, 1e-300) if hmax > 0.0 else 1e-12
-    B, rf, M0inv = la.structure(Fm, T, A, rank_tol)
-    nw = rf + 3 * K
-    x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, floor)
+    B, rf, M0inv, Ct = la.structure(Fm, T, A, rank_tol)
+    x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, floor)
     Wc2 = np.zeros((K, 3, 3))
     Wk = np.empty((3, 3))
     Wik = np.empty((3, 3))
@@ -528,12 +539,13 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
             lamc[k] = _soc_scaling(sc[k], zc[k], Wk, Wik)
             Wm[k] = Wk
             Winv[k] = Wik
-            Wc2[k] = Wk @ Wk
+            for e in range(3):
+                Wc2[k, e] = _mv3(Wk, Wk[e])  # W symmetric: row e of W W
         dbar, dinv = _barrier(d0, iu, il, su, zu, sl, zl, floor)
-        LK, dropped = la.factor(B, rf, M0inv, Wc2, dinv, 1e-14)
+        LK, dropped = la.factor(B, rf, M0inv, Ct, Wc2, dinv, 1e-14)
         refine = 1 if dropped or gap_rel < 1e-5 else 0
         dx, dy, dzu, dzl, dzc, dsu, dsl, dsc, a = _direction(
-            rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, nw, LK, dinv, dbar, Fm, T, A, Wc2, Wm, Winv,
+            rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, LK, dinv, dbar, Fm, T, A, Wc2, Wm, Winv,
             lamc, iu, il, refine, ncorr)
         a = min(1.0, 0.99 * a)
         if not (a > 1e-14) or not np.isfinite(a):

@@ -130,8 +130,9 @@ def add_inverse(L, out):
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
 def structure(Fm, T, A, rank_tol):
-    """The rows of the reduced system (module docstring): ``(B, rf, M0inv)`` with ``B = [Q; T_1; ...;
-    T_K; A]`` and ``M0inv = (C^T C)^{-1}`` (full, ``rf x rf``) for ``F = C Q``."""
+    """The rows of the reduced system (module docstring): ``(B, rf, M0inv, Ct)`` with ``B = [Q; T_1;
+    ...; T_K; A]``, ``M0inv = (C^T C)^{-1}`` (full, ``rf x rf``) for ``F = C Q``; when every cone row
+    lies in the span of ``Q``, ``T = Ct Q`` and ``B = [Q; A]`` (else ``Ct`` is empty)."""
     r = Fm.shape[0]
     K = T.shape[0]
     n = A.shape[1]
@@ -165,14 +166,32 @@ def structure(Fm, T, A, rank_tol):
                 axpy(-cc, q, W[i])
                 res[i] = dot(W[i], W[i])
         rf += 1
-    B = np.empty((rf + 3 * K + neq, n))
-    for i in range(rf):
-        B[i] = Q[i]
+    # the cones' rows in the basis Q, when they lie in its span (the neck: each cone's rows are a
+    # rotation of its joint's force rows): then only [Q; A] enters the products with D^-1
+    Ct = np.empty((3 * K, rf))
+    inside = K > 0
     for k in range(K):
         for e in range(3):
-            B[rf + 3 * k + e] = T[k, e]
+            rrow = T[k, e].copy()
+            for a in range(rf):
+                Ct[3 * k + e, a] = dot(T[k, e], Q[a])
+                axpy(-Ct[3 * k + e, a], Q[a], rrow)
+            if dot(rrow, rrow) > rank_tol * rank_tol * max(dot(T[k, e], T[k, e]), 1e-300):
+                inside = False
+    if not inside:
+        Ct = np.empty((0, rf))
+    nB = rf + neq if inside else rf + 3 * K + neq
+    B = np.empty((nB, n))
+    for i in range(rf):
+        B[i] = Q[i]
+    o = rf
+    if not inside:
+        for k in range(K):
+            for e in range(3):
+                B[rf + 3 * k + e] = T[k, e]
+        o = rf + 3 * K
     for a in range(neq):
-        B[rf + 3 * K + a] = A[a]
+        B[o + a] = A[a]
     M0 = np.zeros((rf, rf))
     for i in range(r):
         for a in range(rf):
@@ -186,16 +205,14 @@ def structure(Fm, T, A, rank_tol):
     for a in range(rf):
         for b in range(a):
             M0inv[b, a] = M0inv[a, b]
-    return B, rf, M0inv
+    return B, rf, M0inv, Ct
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def factor(B, rf, M0inv, W2, dinv, drop_rel):
-    """The Cholesky factor (lower) of the reduced matrix of the module docstring, and whether an
-    equation was dropped."""
+def _gram(B, dinv):
+    """``B diag(dinv) B^T`` (lower triangle)."""
     rb, n = B.shape
-    K = W2.shape[0]
-    Km = np.empty((rb, rb))
+    Km = np.zeros((rb, rb))
     row = np.empty(n)
     for i in range(rb):
         Bi = B[i]
@@ -203,6 +220,50 @@ def factor(B, rf, M0inv, W2, dinv, drop_rel):
             row[t] = Bi[t] * dinv[t]
         for j in range(i + 1):
             Km[i, j] = dot(row, B[j])
+    return Km
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def _expand(Kb, rf, Ct):
+    """The reduced matrix's products for ``B = [Q; T; A]`` from those of ``[Q; A]`` (``T = Ct Q``):
+    ``T D^-1 Q^T = Ct (Q D^-1 Q^T)`` etc."""
+    m = Ct.shape[0]
+    neq = Kb.shape[0] - rf
+    p = rf + m + neq
+    Km = np.zeros((p, p))
+    KFF = np.empty((rf, rf))
+    for a in range(rf):
+        for b in range(a + 1):
+            KFF[a, b] = Kb[a, b]
+            KFF[b, a] = Kb[a, b]
+            Km[a, b] = Kb[a, b]
+    G1 = np.empty((m, rf))  # Ct KFF
+    for i in range(m):
+        for b in range(rf):
+            G1[i, b] = dot(Ct[i], KFF[b])
+        for b in range(rf):
+            Km[rf + i, b] = G1[i, b]
+        for j in range(i + 1):
+            Km[rf + i, rf + j] = dot(G1[i], Ct[j])
+    for a in range(neq):
+        KA = Kb[rf + a, :rf]
+        for b in range(rf):
+            Km[rf + m + a, b] = KA[b]
+        for j in range(m):
+            Km[rf + m + a, rf + j] = dot(KA, Ct[j])
+        for b in range(a + 1):
+            Km[rf + m + a, rf + m + b] = Kb[rf + a, rf + b]
+    return Km
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def factor(B, rf, M0inv, Ct, W2, dinv, drop_rel):
+    """The Cholesky factor (lower) of the reduced matrix of the module docstring, and whether an
+    equation was dropped."""
+    K = W2.shape[0]
+    Km = _gram(B, dinv)
+    if Ct.shape[0]:
+        Km = _expand(Km, rf, Ct)
     for a in range(rf):
         for b in range(a + 1):
             Km[a, b] += M0inv[a, b]
@@ -216,25 +277,46 @@ def factor(B, rf, M0inv, W2, dinv, drop_rel):
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def solve(B, rf, nw, LK, dinv, r1, r3, r2):
+def solve(B, rf, Ct, LK, dinv, r1, r3, r2):
     """``(dx, dy, dzc)`` of ``(D + F^T F) dx + A^T dy - T^T dzc = r1``, ``A dx = r2``,
     ``-T dx - W^2 dzc = r3`` (``r3`` (K, 3)) from :func:`factor`'s factor."""
-    rb, n = B.shape
-    K = (nw - rf) // 3
+    n = B.shape[1]
+    K = r3.shape[0]
+    m = 3 * K
+    p = LK.shape[0]
+    nw = rf + m
     u = dinv * r1
-    rhs = np.empty(rb)
-    for i in range(rb):
+    rhs = np.empty(p)
+    inside = Ct.shape[0] > 0
+    for i in range(rf):
         rhs[i] = dot(B[i], u)
+    ob = rf if inside else rf + m  # first row of A in B
+    for i in range(rf, ob):
+        rhs[i] = dot(B[i], u)
+    for a in range(p - nw):
+        rhs[nw + a] = dot(B[ob + a], u) - r2[a]
+    if inside:
+        for i in range(m):
+            rhs[rf + i] = dot(Ct[i], rhs[:rf])
     for k in range(K):
         for e in range(3):
             rhs[rf + 3 * k + e] += r3[k, e]
-    for a in range(rb - nw):
-        rhs[nw + a] -= r2[a]
     sol = chol_solve(LK, rhs)
     dx = r1.copy()
-    for i in range(rb):
-        if sol[i] != 0.0:
-            axpy(-sol[i], B[i], dx)
+    wq = sol[:rf].copy()
+    if inside:
+        for i in range(m):
+            axpy(sol[rf + i], Ct[i], wq)
+    else:
+        for i in range(m):
+            if sol[rf + i] != 0.0:
+                axpy(-sol[rf + i], B[rf + i], dx)
+    for i in range(rf):
+        if wq[i] != 0.0:
+            axpy(-wq[i], B[i], dx)
+    for a in range(p - nw):
+        if sol[nw + a] != 0.0:
+            axpy(-sol[nw + a], B[ob + a], dx)
     for t in range(n):
         dx[t] *= dinv[t]
     dzc = np.empty((K, 3))
@@ -256,7 +338,7 @@ def apply_P(x, d0, Fm):
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def refine(B, rf, nw, LK, dinv, dbar, Fm, T, W2, A, r1, r3, r2, dx, dy, dzc, steps):
+def refine(B, rf, Ct, LK, dinv, dbar, Fm, T, W2, A, r1, r3, r2, dx, dy, dzc, steps):
     """``steps`` rounds of iterative refinement of ``(dx, dy, dzc)`` against the exact operators of
     :func:`solve`'s system (``dbar``: ``d0`` plus the barrier diagonal, without the floor)."""
     K = T.shape[0]
@@ -274,7 +356,7 @@ def refine(B, rf, nw, LK, dinv, dbar, Fm, T, W2, A, r1, r3, r2, dx, dy, dzc, ste
         e2 = r2.copy()
         for a in range(A.shape[0]):
             e2[a] -= dot(A[a], dx)
-        cx, cy, cz = solve(B, rf, nw, LK, dinv, e1, e3, e2)
+        cx, cy, cz = solve(B, rf, Ct, LK, dinv, e1, e3, e2)
         axpy(1.0, cx, dx)
         axpy(1.0, cy, dy)
         for k in range(K):
