@@ -58,7 +58,7 @@ off another back-end's answer."""
 
 IPM_EPS = 1e-10
 """Interior-point method: relative primal and dual residuals and relative duality gap at the end."""
-IPM_CROSSOVER_GAP = 1e-5
+IPM_CROSSOVER_GAP = 1e-4
 """Interior-point method: from this relative duality gap on, the active set read off the iterate is
 tried (verified KKT point) before more iterations."""
 IPM_MAX_ITER = 60

@@ -102,27 +102,6 @@ def _soc_scaling(s, z, W, Winv):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _soc_prod(u, v):
-    """The Jordan product of the second-order cone: ``(u.v, u0 v1 + v0 u1, u0 v2 + v0 u2)``."""
-    out = np.empty(3)
-    out[0] = u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
-    out[1] = u[0] * v[1] + v[0] * u[1]
-    out[2] = u[0] * v[2] + v[0] * u[2]
-    return out
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _soc_div(lam, r):
-    """``x`` with ``lam o x = r`` (``lam`` in the cone's interior)."""
-    det = lam[0] * lam[0] - lam[1] * lam[1] - lam[2] * lam[2]
-    x = np.empty(3)
-    x[0] = (lam[0] * r[0] - lam[1] * r[1] - lam[2] * r[2]) / det
-    x[1] = (r[1] - x[0] * lam[1]) / lam[0]
-    x[2] = (r[2] - x[0] * lam[2]) / lam[0]
-    return x
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
 def _soc_step(u, d):
     """Largest ``alpha`` (capped at 1e300) with ``u + alpha d`` in the cone (``u`` inside)."""
     a = d[0] * d[0] - d[1] * d[1] - d[2] * d[2]
@@ -335,6 +314,44 @@ def _centring(s, ds, z, dz, a, lo, hi, rs):
             rs[q] += max(hi - v, -hi)
 
 
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def _gap_at(s, ds, z, dz, a):
+    """``(s + a ds)^T (z + a dz)`` without temporaries."""
+    g = 0.0
+    for i in range(s.shape[0]):
+        g += (s[i] + a * ds[i]) * (z[i] + a * dz[i])
+    return g
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _cone_corrector(lamc, Winv, Wm, dsc, dzc, rzc, smu):
+    """The cones' corrector right-hand side ``bz = -r_z - W (lam \\ rs)`` with
+    ``rs = -lam o lam - (W^-1 ds_a) o (W dz_a) + sigma mu e`` (scalar code: no small arrays)."""
+    K = lamc.shape[0]
+    bzc = np.empty((K, 3))
+    for k in range(K):
+        Wi, Wk, ds, dz, lam = Winv[k], Wm[k], dsc[k], dzc[k], lamc[k]
+        u0 = Wi[0, 0] * ds[0] + Wi[0, 1] * ds[1] + Wi[0, 2] * ds[2]
+        u1 = Wi[1, 0] * ds[0] + Wi[1, 1] * ds[1] + Wi[1, 2] * ds[2]
+        u2 = Wi[2, 0] * ds[0] + Wi[2, 1] * ds[1] + Wi[2, 2] * ds[2]
+        v0 = Wk[0, 0] * dz[0] + Wk[0, 1] * dz[1] + Wk[0, 2] * dz[2]
+        v1 = Wk[1, 0] * dz[0] + Wk[1, 1] * dz[1] + Wk[1, 2] * dz[2]
+        v2 = Wk[2, 0] * dz[0] + Wk[2, 1] * dz[1] + Wk[2, 2] * dz[2]
+        l0, l1, l2 = lam[0], lam[1], lam[2]
+        # rs = -(lam o lam) - (u o v) + smu e
+        r0 = -(l0 * l0 + l1 * l1 + l2 * l2) - (u0 * v0 + u1 * v1 + u2 * v2) + smu
+        r1 = -2.0 * l0 * l1 - (u0 * v1 + v0 * u1)
+        r2 = -2.0 * l0 * l2 - (u0 * v2 + v0 * u2)
+        # x = lam \ rs
+        det = l0 * l0 - l1 * l1 - l2 * l2
+        x0 = (l0 * r0 - l1 * r1 - l2 * r2) / det
+        x1 = (r1 - x0 * l1) / l0
+        x2 = (r2 - x0 * l2) / l0
+        for e in range(3):
+            bzc[k, e] = -rzc[k, e] - (Wk[e, 0] * x0 + Wk[e, 1] * x1 + Wk[e, 2] * x2)
+    return bzc
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, LK, dinv, dbar, Fm, T, A, W2,
                Wm, Winv, lamc, iu, il, refine, ncorr):
@@ -350,19 +367,16 @@ def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, LK,
                                     T, A, W2, iu, il, su, zu, sl, zl, refine)
     dsu, dsl, dsc = _slack_step(dx, rzu, rzl, rzc, iu, il, T)
     a_p = min(1.0, _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc))
-    gap_aff = _dot(su + a_p * dsu, zu + a_p * dzu) + _dot(sl + a_p * dsl, zl + a_p * dzl)
+    gap_aff = _gap_at(su, dsu, zu, dzu, a_p) + _gap_at(sl, dsl, zl, dzl, a_p)
     for k in range(K):
-        gap_aff += _dot(sc[k] + a_p * dsc[k], zc[k] + a_p * dzc[k])
+        for e in range(3):
+            gap_aff += (sc[k, e] + a_p * dsc[k, e]) * (zc[k, e] + a_p * dzc[k, e])
     sigma = min(1.0, max(0.0, gap_aff / max(gap, 1e-300))) ** 3
     smu = sigma * mu
     # corrector: rs = -lam o lam - (W^-1 ds_a) o (W dz_a) + sigma mu e
     rsu = -lu * lu - dsu * dzu + smu
     rsl = -ll * ll - dsl * dzl + smu
-    bzc = np.empty((K, 3))
-    for k in range(K):
-        rs = -_soc_prod(lamc[k], lamc[k]) - _soc_prod(_mv3(Winv[k], dsc[k]), _mv3(Wm[k], dzc[k]))
-        rs[0] += smu
-        bzc[k] = -rzc[k] - _mv3(Wm[k], _soc_div(lamc[k], rs))
+    bzc = _cone_corrector(lamc, Winv, Wm, dsc, dzc, rzc, smu)
     best = (dx, dy, dzu, dzl, dzc, dsu, dsl, dsc, 0.0)
     for j in range(ncorr + 1):
         # W (lam \ rs) = rs / z on the bounds
