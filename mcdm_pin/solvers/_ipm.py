@@ -10,23 +10,22 @@ with ``P = diag(d) + F^T F`` (``F`` of few rows: the interaction objective's wei
 Mehrotra's predictor-corrector with Nesterov-Todd scaling (Vandenberghe, "The CVXOPT linear and
 quadratic cone program solvers", 2010, sections 3-4; the same steps as CVXOPT's ``coneqp``).
 
-**The structure.** Each Newton step solves ``H dx + A^T dy = r1, A dx = r2`` with
-``H = D + U^T S U``: ``D`` diagonal (``d`` plus the bounds' barrier terms ``z/s``), ``U = [F; T_1;
-...; T_K]`` (``r + 3K`` rows) and ``S = blockdiag(I, V_1, ..., V_K)`` (``V_k`` the cones' 3x3 scaling
-terms). Eliminating ``dx`` (Woodbury) leaves one symmetric positive definite system of size
-``r + 3K + k_eq`` instead of the ``n + k_eq`` KKT system:
+**The Newton system** is solved through the problem's structure (:mod:`._ipm_linalg`): with the
+bounds' multipliers eliminated and the cones' kept, one symmetric positive definite system of size
+``rank(F) + 3K + k_eq`` (the neck: 24 in case 1, 48 in case 2, 72 in case 3) instead of a Cholesky
+factor of the ``n x n`` Hessian and a Schur complement on ``A``; the cones enter through ``W_k^2``,
+never through ``W_k^{-2}`` (whose entries grow like ``1/mu`` on an active cone: the dense form's
+breakdowns, "the step vanished", on 2 % of the neck's case-3 instants).
 
-.. math::
+**The start** is CVXOPT's: ``x`` from the Newton system with the identity scaling (the least-squares
+point of the slacks, with the objective: the middle of the box), ``s = h - G x``, ``z = -s``, each
+shifted into its cone. The steps from there are long from the first iteration on (on the neck 11
+iterations to the crossover in all three cases); a start at the least-squares forces on the
+equations (~1 N, where the optimum reaches 20 N) took 25-45 short steps in cases 2 and 3.
 
-    \begin{bmatrix} S^{-1} + U D^{-1} U^T & U D^{-1} A^T \\ A D^{-1} U^T & A D^{-1} A^T + \delta I
-    \end{bmatrix} \begin{bmatrix} w \\ dy \end{bmatrix} =
-    \begin{bmatrix} U D^{-1} r_1 \\ A D^{-1} r_1 - r_2 \end{bmatrix}, \qquad
-    dx = D^{-1} (r_1 - U^T w - A^T dy),
-
-with ``S^{-1} = blockdiag(I, W_1^2, ..., W_K^2)`` (no inverse needed). On the neck (76 cables, 24
-equations) that is 24 (case 1), 48 (case 2) or 72 (case 3) unknowns instead of 100. ``delta`` (1e-13
-of the matrix's scale) keeps it definite when ``A`` loses rank (the 2-link arm at q = 0); one step of
-iterative refinement on the unregularised system removes its effect.
+**Centrality correctors** (Gondzio): after Mehrotra's corrector, while the step is below 0.9, at most
+``ncorr`` corrections of the bounds' complementarity targets towards ``[0.1, 10] sigma mu`` at a
+longer trial step, each kept only when it lengthens the step.
 
 **Crossover.** Once the relative duality gap is below ``crossover_gap``, the active set read off the
 iterate (bounds whose slack is below their multiplier, cones whose slack is nearer the cone's
@@ -194,7 +193,6 @@ def _inf_norm(v):
 def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t):
     """``(rx, ry, rzu, rzl, rzc, pobj)``: the dual residual ``P x + c + A^T y + G^T z``, the
     equations' ``A x - b``, the slacks' ``G x + s - h`` and the objective."""
-    n = x.shape[0]
     Px = la.apply_P(x, d0, Fm)
     rx = Px + c
     for a in range(A.shape[0]):
@@ -389,7 +387,7 @@ def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, LK,
         if j > 0 and not a > 1.01 * best[8]:
             break
         best = (dx, dy, dzu, dzl, dzc, dsu, dsl, dsc, a)
-        if a >= 1.0:
+        if a >= 0.9:  # long enough: a corrector would cost more than it gains
             break
         at = min(1.0, a + 0.5)
         _centring(su, dsu, zu, dzu, at, 0.1 * smu, 10.0 * smu, rsu)
@@ -474,6 +472,33 @@ def _primal_res(ry, rzu, rzl, rzc, bscale, hscale):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
+def _cone_scalings(sc, zc, Wm, Winv, Wc2, lamc):
+    """Every cone's Nesterov-Todd ``W``, ``W^-1``, ``W^2`` and ``lambda = W z``, in place."""
+    Wk = np.empty((3, 3))
+    Wik = np.empty((3, 3))
+    for k in range(sc.shape[0]):
+        lamc[k] = _soc_scaling(sc[k], zc[k], Wk, Wik)
+        Wm[k] = Wk
+        Winv[k] = Wik
+        for e in range(3):
+            Wc2[k, e] = _mv3(Wk, Wk[e])  # W symmetric: row e of W W
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _crossover(x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots,
+               as_tols, last_state, last_cact):
+    """The active set the iterate points at, verified by the compiled active-set solver when it
+    differs from the last one tried: ``(tried, code, x, mus, grad, state, cact, dirs, y)``."""
+    state, cact, cdir = _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, G, gc, ax, basis0)
+    if not _new_guess(state, cact, last_state, last_cact):
+        return (0, -1, x, np.zeros(0), np.zeros(0), state, cact, np.zeros((0, 3)), np.zeros(0))
+    code, f, mus, grad, st, ca, dirs, nxt, yy = _kkt.active_set_solve(
+        H, c, A, b, lb, ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, 10,
+        as_tols[0], as_tols[1], as_tols[2], as_tols[3], as_tols[4])
+    return (1, code, f, mus, grad, st, ca, dirs, yy)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
 def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax, tn, basis0,
               max_pivots, as_tols, ncorr, rank_tol):
     """The interior-point method with crossover (module docstring).
@@ -510,8 +535,6 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
     B, rf, M0inv, Ct = la.structure(Fm, T, A, rank_tol)
     x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, floor)
     Wc2 = np.zeros((K, 3, 3))
-    Wk = np.empty((3, 3))
-    Wik = np.empty((3, 3))
     Winv = np.zeros((K, 3, 3))
     Wm = np.zeros((K, 3, 3))
     lamc = np.zeros((K, 3))
@@ -534,14 +557,12 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
                     and attempts < 8):
             # the active set the iterate points at, verified by the active-set solver
             if crossover_gap > 0.0:
-                state, cact, cdir = _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, G, gc, ax, basis0)
-                if _new_guess(state, cact, last_state, last_cact):
-                    attempts += 1
-                    code, f, mus, grad, st, ca, dirs, nxt, yy = _kkt.active_set_solve(
-                        H, c, A, b, lb, ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, 10,
-                        as_tols[0], as_tols[1], as_tols[2], as_tols[3], as_tols[4])
-                    if code == _kkt.FOUND:
-                        return (CROSSOVER, f, yy, -grad, zc, it, st, ca, mus, dirs)
+                tried, code, f, mus, grad, st, ca, dirs, yy = _crossover(
+                    x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots,
+                    as_tols, last_state, last_cact)
+                attempts += tried
+                if code == _kkt.FOUND:
+                    return (CROSSOVER, f, yy, -grad, zc, it, st, ca, mus, dirs)
             if done:
                 return (SOLVED, x, y, _zbox(zu, zl, iu, il, n), zc, it, np.zeros(0, dtype=np.int8),
                         np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
@@ -549,12 +570,7 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
             return (INFEASIBLE_CERT, x, y, _zbox(zu, zl, iu, il, n), zc, it, np.zeros(0, dtype=np.int8),
                     np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
         # ---- scaling and the factor of the Newton system
-        for k in range(K):
-            lamc[k] = _soc_scaling(sc[k], zc[k], Wk, Wik)
-            Wm[k] = Wk
-            Winv[k] = Wik
-            for e in range(3):
-                Wc2[k, e] = _mv3(Wk, Wk[e])  # W symmetric: row e of W W
+        _cone_scalings(sc, zc, Wm, Winv, Wc2, lamc)
         dbar, dinv = _barrier(d0, iu, il, su, zu, sl, zl, floor)
         LK, dropped = la.factor(B, rf, M0inv, Ct, Wc2, dinv, 1e-14)
         refine = 1 if dropped or gap_rel < 1e-5 else 0
@@ -576,13 +592,11 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
         zc += a * dzc
     # no convergence: one last crossover from where the iterations stopped
     if crossover_gap > 0.0:
-        state, cact, cdir = _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, G, gc, ax, basis0)
-        if _new_guess(state, cact, last_state, last_cact):
-            code, f, mus, grad, st, ca, dirs, nxt, yy = _kkt.active_set_solve(
-                H, c, A, b, lb, ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, 10,
-                as_tols[0], as_tols[1], as_tols[2], as_tols[3], as_tols[4])
-            if code == _kkt.FOUND:
-                return (CROSSOVER, f, yy, -grad, zc, it + 1, st, ca, mus, dirs)
+        tried, code, f, mus, grad, st, ca, dirs, yy = _crossover(
+            x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots, as_tols,
+            last_state, last_cact)
+        if code == _kkt.FOUND:
+            return (CROSSOVER, f, yy, -grad, zc, it + 1, st, ca, mus, dirs)
     return (end, x, y, _zbox(zu, zl, iu, il, n), zc, it + 1, np.zeros(0, dtype=np.int8),
             np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
 

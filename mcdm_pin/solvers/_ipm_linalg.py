@@ -1,38 +1,41 @@
 r"""The linear algebra of the compiled interior-point method (:mod:`._ipm`): its Newton system solved
 through the problem's structure.
 
-Each Newton step solves
+Each Newton step solves, with the bounds' multipliers eliminated and the cones' ``dz_c`` kept,
 
-.. math:: H\,dx + A^T dy = r_1, \qquad A\,dx = r_2, \qquad
-          H = D + F^T F + \sum_k T_k^T V_k T_k,
+.. math:: (D + F^T F)\,dx + A^T dy - T^T dz_c = r_1, \qquad A\,dx = r_2, \qquad
+          -T\,dx - W^2 dz_c = r_3,
 
-with ``D`` diagonal (the objective's diagonal ``d0`` plus the bounds' barrier terms ``z/s``), ``F``
-the objective's factor (``P = diag(d0) + F^T F``: the interaction objective's weighted wrench rows),
-``T_k`` the three rows of cone ``k`` and ``V_k`` its 3x3 Nesterov-Todd term ``W_k^{-2}``.
+``D`` diagonal (the objective's diagonal ``d0`` plus the bounds' barrier terms ``z/s``), ``F`` the
+objective's factor (``P = diag(d0) + F^T F``: the interaction objective's weighted wrench rows), ``T``
+the cones' rows and ``W^2 = blockdiag(W_k^2)`` their Nesterov-Todd scaling.
 
-**Compression, once per solve** (:func:`structure`). The rows ``U = [F; T_1; ...; T_K]`` span few
-directions: on the neck every cone's rows are a rotation of the same joint's force rows, so 48 rows
-span 24. Modified Gram-Schmidt with pivoting gives an orthonormal basis ``Q`` (``ru`` rows) and the
-coefficients ``C`` with ``U = C Q`` (a row whose residual is below ``rank_tol`` of its norm counts as
-dependent). Then ``H = D + Q^T M Q`` with ``M = C_F^T C_F + sum_k C_k^T V_k C_k`` (``ru x ru``).
+**Once per solve** (:func:`structure`): modified Gram-Schmidt with pivoting turns the rows of ``F``
+into an orthonormal basis ``Q`` (``rf`` rows; a row whose part outside the span of the rows before it
+is below ``rank_tol`` counts as dependent) with ``F = C Q``, and ``M_0 = C^T C``.
 
-**Per iteration** (:func:`factor`, :func:`solve`). With ``w = M Q dx`` the system is, exactly
-(Woodbury),
+**Per iteration** (:func:`factor`, :func:`solve`): with ``w_F = M_0 Q dx`` and ``w_T = -dz_c``,
+eliminating ``dx = D^{-1} (r_1 - Q^T w_F - T^T w_T - A^T dy)`` leaves
 
 .. math::
 
-    \begin{bmatrix} M^{-1} + Q D^{-1} Q^T & Q D^{-1} A^T \\ A D^{-1} Q^T & A D^{-1} A^T \end{bmatrix}
-    \begin{bmatrix} w \\ dy \end{bmatrix} =
-    \begin{bmatrix} Q D^{-1} r_1 \\ A D^{-1} r_1 - r_2 \end{bmatrix}, \qquad
-    dx = D^{-1} (r_1 - Q^T w - A^T dy),
+    \left( \begin{bmatrix} M_0^{-1} & & \\ & W^2 & \\ & & 0 \end{bmatrix} + B D^{-1} B^T \right)
+    \begin{bmatrix} w_F \\ w_T \\ dy \end{bmatrix} =
+    B D^{-1} r_1 + \begin{bmatrix} 0 \\ r_3 \\ -r_2 \end{bmatrix}, \qquad B = [Q; T; A],
 
-one symmetric positive definite system of size ``ru + k_eq`` (neck: 24 in case 1, 48 in cases 2 and
-3) instead of a Cholesky factor of the 76 x 76 ``H`` and a Schur complement on ``A``. ``M^{-1}`` is
-bounded (``M >= C_F^T C_F``), the ``D^{-1}`` of a variable between its bounds grows like ``1/mu``: the
-matrix's condition number grows like ``1/mu``, which the crossover (at a relative gap of 1e-5) and
-one step of iterative refinement against the exact operators (:func:`refine`) absorb. A dependent
-equation (``A`` losing rank: the 2-link arm at q = 0) shows as a pivot at rounding level and is
-dropped (its multiplier set to zero).
+symmetric positive definite, of size ``rf + 3K + k_eq`` (the neck: 24, 48, 72 in cases 1, 2, 3). Its
+condition number grows like ``1/mu`` only: ``W_k^2`` is small on an active cone but every direction
+that ``B^T`` annihilates has its ``Q`` part weighted by ``M_0^{-1}`` (bounded). A form with
+``M = M_0 + T^T W^{-2} T`` folded into one ``rf``-sized block (48 unknowns in case 3) needs
+``M^{-1}``, whose error grows with ``cond(M) ~ 1/mu^2`` (2e-4 absolute at a relative gap of 1e-5 on
+the neck: the iteration then breaks down).
+
+When every cone row lies in the span of ``Q`` (the neck: each cone's rows are a rotation of its
+joint's force rows), ``T = C_t Q`` and only ``[Q; A]`` meets ``D^{-1}``: the products of the ``T`` rows
+follow from those of ``Q`` (:func:`_expand`), 24 x 24 work instead of 24 x 76.
+
+A dependent equation (``A`` losing rank: the 2-link arm at q = 0) shows as a pivot at rounding level
+and is dropped (its multiplier set to zero); :func:`refine` then corrects against the exact operators.
 """
 
 from __future__ import annotations
