@@ -52,14 +52,7 @@ from . import _kkt
 SOLVED, CROSSOVER, INFEASIBLE_CERT, MAX_ITER, NUMERICAL = 0, 1, 2, 3, 4
 
 _FM = {"reassoc", "contract"}  # reassociation lets numba vectorise the dot products; no NaN/inf flags
-
-
-@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def _dot(a, b):
-    s = 0.0
-    for i in range(a.shape[0]):
-        s += a[i] * b[i]
-    return s
+_dot = la.dot
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
