@@ -58,11 +58,16 @@ off another back-end's answer."""
 
 IPM_EPS = 1e-10
 """Interior-point method: relative primal and dual residuals and relative duality gap at the end."""
-IPM_CROSSOVER_GAP = 1e-5
+IPM_CROSSOVER_GAP = 1e-4
 """Interior-point method: from this relative duality gap on, the active set read off the iterate is
 tried (verified KKT point) before more iterations."""
 IPM_MAX_ITER = 60
 """Interior-point method: iteration limit."""
+IPM_CORRECTORS = 1
+"""Interior-point method: at most this many centrality correctors (Gondzio) per iteration."""
+IPM_RANK_TOL = 1e-9
+"""Interior-point method: a row of the objective's factor or of a cone whose part outside the span of
+the rows before it is below this (relative) counts as dependent."""
 
 # -------------------------------------------------------------------------------- ProxQP
 PROXQP_EPS_ABS = 1e-11

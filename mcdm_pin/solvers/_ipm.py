@@ -10,23 +10,22 @@ with ``P = diag(d) + F^T F`` (``F`` of few rows: the interaction objective's wei
 Mehrotra's predictor-corrector with Nesterov-Todd scaling (Vandenberghe, "The CVXOPT linear and
 quadratic cone program solvers", 2010, sections 3-4; the same steps as CVXOPT's ``coneqp``).
 
-**The structure.** Each Newton step solves ``H dx + A^T dy = r1, A dx = r2`` with
-``H = D + U^T S U``: ``D`` diagonal (``d`` plus the bounds' barrier terms ``z/s``), ``U = [F; T_1;
-...; T_K]`` (``r + 3K`` rows) and ``S = blockdiag(I, V_1, ..., V_K)`` (``V_k`` the cones' 3x3 scaling
-terms). Eliminating ``dx`` (Woodbury) leaves one symmetric positive definite system of size
-``r + 3K + k_eq`` instead of the ``n + k_eq`` KKT system:
+**The Newton system** is solved through the problem's structure (:mod:`._ipm_linalg`): with the
+bounds' multipliers eliminated and the cones' kept, one symmetric positive definite system of size
+``rank(F) + 3K + k_eq`` (the neck: 24 in case 1, 48 in case 2, 72 in case 3) instead of a Cholesky
+factor of the ``n x n`` Hessian and a Schur complement on ``A``; the cones enter through ``W_k^2``,
+never through ``W_k^{-2}`` (whose entries grow like ``1/mu`` on an active cone: the dense form's
+breakdowns, "the step vanished", on 2 % of the neck's case-3 instants).
 
-.. math::
+**The start** is CVXOPT's: ``x`` from the Newton system with the identity scaling (the least-squares
+point of the slacks, with the objective: the middle of the box), ``s = h - G x``, ``z = -s``, each
+shifted into its cone. The steps from there are long from the first iteration on (on the neck 11
+iterations to the crossover in all three cases); a start at the least-squares forces on the
+equations (~1 N, where the optimum reaches 20 N) took 25-45 short steps in cases 2 and 3.
 
-    \begin{bmatrix} S^{-1} + U D^{-1} U^T & U D^{-1} A^T \\ A D^{-1} U^T & A D^{-1} A^T + \delta I
-    \end{bmatrix} \begin{bmatrix} w \\ dy \end{bmatrix} =
-    \begin{bmatrix} U D^{-1} r_1 \\ A D^{-1} r_1 - r_2 \end{bmatrix}, \qquad
-    dx = D^{-1} (r_1 - U^T w - A^T dy),
-
-with ``S^{-1} = blockdiag(I, W_1^2, ..., W_K^2)`` (no inverse needed). On the neck (76 cables, 24
-equations) that is 24 (case 1), 48 (case 2) or 72 (case 3) unknowns instead of 100. ``delta`` (1e-13
-of the matrix's scale) keeps it definite when ``A`` loses rank (the 2-link arm at q = 0); one step of
-iterative refinement on the unregularised system removes its effect.
+**Centrality correctors** (Gondzio): after Mehrotra's corrector, while the step is below 0.9, at most
+``ncorr`` corrections of the bounds' complementarity targets towards ``[0.1, 10] sigma mu`` at a
+longer trial step, each kept only when it lengthens the step.
 
 **Crossover.** Once the relative duality gap is below ``crossover_gap``, the active set read off the
 iterate (bounds whose slack is below their multiplier, cones whose slack is nearer the cone's
@@ -46,20 +45,23 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from . import _ipm_linalg as la
 from . import _kkt
 
 # return codes
 SOLVED, CROSSOVER, INFEASIBLE_CERT, MAX_ITER, NUMERICAL = 0, 1, 2, 3, 4
 
 _FM = {"reassoc", "contract"}  # reassociation lets numba vectorise the dot products; no NaN/inf flags
+_dot = la.dot
 
 
-@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def _dot(a, b):
-    s = 0.0
-    for i in range(a.shape[0]):
-        s += a[i] * b[i]
-    return s
+@njit(cache=True, nogil=True, error_model="numpy")
+def _mv3(M, v):
+    """``M v`` for a 3x3 ``M`` (no BLAS call: its overhead exceeds the work)."""
+    out = np.empty(3)
+    for a in range(3):
+        out[a] = M[a, 0] * v[0] + M[a, 1] * v[1] + M[a, 2] * v[2]
+    return out
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -89,27 +91,6 @@ def _soc_scaling(s, z, W, Winv):
     for a in range(3):
         lam[a] = W[a, 0] * z[0] + W[a, 1] * z[1] + W[a, 2] * z[2]
     return lam
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _soc_prod(u, v):
-    """The Jordan product of the second-order cone: ``(u.v, u0 v1 + v0 u1, u0 v2 + v0 u2)``."""
-    out = np.empty(3)
-    out[0] = u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
-    out[1] = u[0] * v[1] + v[0] * u[1]
-    out[2] = u[0] * v[2] + v[0] * u[2]
-    return out
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _soc_div(lam, r):
-    """``x`` with ``lam o x = r`` (``lam`` in the cone's interior)."""
-    det = lam[0] * lam[0] - lam[1] * lam[1] - lam[2] * lam[2]
-    x = np.empty(3)
-    x[0] = (lam[0] * r[0] - lam[1] * r[1] - lam[2] * r[2]) / det
-    x[1] = (r[1] - x[0] * lam[1]) / lam[0]
-    x[2] = (r[2] - x[0] * lam[2]) / lam[0]
-    return x
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -160,248 +141,6 @@ def _shift_into_cones(su, sl, sc):
             sc[k, 0] += shift
 
 
-@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def _factor(H0, diag, T, Vc, A, iu, il, su, zu, sl, zl):
-    """Form ``H = H0 + barrier diagonal + sum_k T_k^T V_k T_k`` and factor it (Cholesky, lower, in a
-    new array), then the Schur complement ``S = A H^-1 A^T = Y^T Y`` with ``Y = L^-1 A^T``.
-    ``diag``: ``H0`` is diagonal and there are no cones (then ``H`` is diagonal: no dense work).
-    Returns ``(L, Y, Ls, floored)``: ``floored`` when a pivot had to be replaced (a dependent
-    equation, a singular ``H``): the solves then take a step of iterative refinement."""
-    n = H0.shape[0]
-    neq = A.shape[0]
-    K = T.shape[0]
-    L = np.zeros((n, n)) if not diag else np.zeros((n, 1))
-    if diag:
-        for i in range(n):
-            L[i, 0] = H0[i, i]
-    else:
-        for i in range(n):
-            for j in range(i + 1):
-                L[i, j] = H0[i, j]
-    for q in range(iu.shape[0]):
-        i = iu[q]
-        if diag:
-            L[i, 0] += zu[q] / su[q]
-        else:
-            L[i, i] += zu[q] / su[q]
-    for q in range(il.shape[0]):
-        i = il[q]
-        if diag:
-            L[i, 0] += zl[q] / sl[q]
-        else:
-            L[i, i] += zl[q] / sl[q]
-    for k in range(K):
-        Tk = T[k]
-        R = np.empty((3, n))
-        for e in range(3):
-            for i in range(n):
-                R[e, i] = Vc[k, e, 0] * Tk[0, i] + Vc[k, e, 1] * Tk[1, i] + Vc[k, e, 2] * Tk[2, i]
-        for i in range(n):
-            t0, t1, t2 = Tk[0, i], Tk[1, i], Tk[2, i]
-            Li = L[i]
-            for j in range(i + 1):
-                Li[j] += t0 * R[0, j] + t1 * R[1, j] + t2 * R[2, j]
-    # Cholesky (row-oriented: the inner products run over contiguous rows)
-    scale = 1e-300
-    for i in range(n):
-        scale = max(scale, L[i, 0] if diag else L[i, i])
-    floor = 1e-30 * scale
-    floored = False
-    if diag:
-        for i in range(n):
-            if not L[i, 0] > floor:
-                floored = True
-            L[i, 0] = np.sqrt(max(L[i, 0], floor))
-    else:
-        floored = _chol_rows(L, floor, floor)
-    # Y = L^-1 A^T, row by row (each row a combination of the previous rows: contiguous axpys)
-    Y = np.empty((n, neq))
-    for i in range(n):
-        Yi = Y[i]
-        for a in range(neq):
-            Yi[a] = A[a, i]
-        if not diag:
-            Li = L[i]
-            for k in range(i):
-                lk = Li[k]
-                if lk != 0.0:
-                    Yk = Y[k]
-                    for a in range(neq):
-                        Yi[a] -= lk * Yk[a]
-            inv = 1.0 / Li[i]
-        else:
-            inv = 1.0 / L[i, 0]
-        for a in range(neq):
-            Yi[a] *= inv
-    # S = Y^T Y (lower), then its Cholesky; a dependent equation (A losing rank) gives a pivot at
-    # rounding level: it is replaced by a huge one (the equation is dropped; refinement checks)
-    Ls = np.zeros((neq, neq))
-    for i in range(n):
-        Yi = Y[i]
-        for a in range(neq):
-            ya = Yi[a]
-            for b in range(a + 1):
-                Ls[a, b] += ya * Yi[b]
-    sscale = 1e-300
-    for a in range(neq):
-        sscale = max(sscale, Ls[a, a])
-    if _chol_rows(Ls, 1e-13 * sscale, 1e300):
-        floored = True
-    return L, Y, Ls, floored
-
-
-@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def _chol_rows(L, tiny, replace):
-    """Cholesky of the lower triangle of ``L`` in place, row-oriented (the inner products run over
-    contiguous rows); a pivot not above ``tiny`` becomes ``replace`` (``tiny`` itself: a singular ``H``
-    kept barely definite; a huge value: a dependent equation dropped). Returns whether one did."""
-    n = L.shape[0]
-    replaced = False
-    for j in range(n):
-        Lj = L[j]
-        acc = 0.0
-        for k in range(j):
-            acc += Lj[k] * Lj[k]
-        d = Lj[j] - acc
-        if not d > tiny:
-            d = replace
-            replaced = True
-        d = np.sqrt(d)
-        Lj[j] = d
-        inv = 1.0 / d
-        for i in range(j + 1, n):
-            Li = L[i]
-            acc = 0.0
-            for k in range(j):
-                acc += Li[k] * Lj[k]
-            Li[j] = (Li[j] - acc) * inv
-    return replaced
-
-
-@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def _lsolve(L, r, diag):
-    """``L^-1 r`` (``diag``: L stored as its diagonal, (n, 1))."""
-    n = r.shape[0]
-    u = r.copy()
-    if diag:
-        for i in range(n):
-            u[i] /= L[i, 0]
-        return u
-    for i in range(n):
-        Li = L[i]
-        acc = 0.0
-        for k in range(i):
-            acc += Li[k] * u[k]
-        u[i] = (u[i] - acc) / Li[i]
-    return u
-
-
-@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def _ltsolve(L, u, diag):
-    """``L^-T u``."""
-    n = u.shape[0]
-    x = u.copy()
-    if diag:
-        for i in range(n):
-            x[i] /= L[i, 0]
-        return x
-    for i in range(n - 1, -1, -1):
-        xi = x[i] / L[i, i]
-        x[i] = xi
-        Li = L[i]
-        for k in range(i):
-            x[k] -= Li[k] * xi
-    return x
-
-
-@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def _dense_solve(L, Y, Ls, r1, r2, diag):
-    """``H dx + A^T dy = r1, A dx = r2`` with the factors of :func:`_factor`:
-    ``u = L^-1 r1``, ``S dy = Y^T u - r2``, ``dx = L^-T (u - Y dy)``."""
-    n = r1.shape[0]
-    neq = r2.shape[0]
-    u = _lsolve(L, r1, diag)
-    rhs = -r2.copy()
-    for i in range(n):
-        ui = u[i]
-        Yi = Y[i]
-        for a in range(neq):
-            rhs[a] += Yi[a] * ui
-    dy = _kkt._chol_apply(Ls, rhs)
-    for i in range(n):
-        Yi = Y[i]
-        acc = 0.0
-        for a in range(neq):
-            acc += Yi[a] * dy[a]
-        u[i] -= acc
-    return _ltsolve(L, u, diag), dy
-
-
-@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def _apply_H(v, H0, diag, T, Vc, iu, il, su, zu, sl, zl):
-    """``H v`` with ``H = H0 + barrier diagonal + sum_k T_k^T V_k T_k``."""
-    n = v.shape[0]
-    if diag:
-        out = np.empty(n)
-        for i in range(n):
-            out[i] = H0[i, i] * v[i]
-    else:
-        out = H0 @ v
-    for t in range(iu.shape[0]):
-        out[iu[t]] += zu[t] / su[t] * v[iu[t]]
-    for t in range(il.shape[0]):
-        out[il[t]] += zl[t] / sl[t] * v[il[t]]
-    for k in range(T.shape[0]):
-        tv = np.empty(3)
-        for e in range(3):
-            tv[e] = _dot(T[k, e], v)
-        for e in range(3):
-            s = Vc[k, e, 0] * tv[0] + Vc[k, e, 1] * tv[1] + Vc[k, e, 2] * tv[2]
-            for i in range(n):
-                out[i] += s * T[k, e, i]
-    return out
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _newton(bx, by, bzu, bzl, bzc, L, Y, Ls, H0, diag, T, A, Vc, iu, il, su, zu, sl, zl, refine):
-    """Solve the scaled Newton system for ``(dx, dy, dzu, dzl, dzc)`` (module docstring)."""
-    n = bx.shape[0]
-    K = T.shape[0]
-    r1 = bx.copy()
-    for t in range(iu.shape[0]):
-        r1[iu[t]] += zu[t] / su[t] * bzu[t]
-    for t in range(il.shape[0]):
-        r1[il[t]] -= zl[t] / sl[t] * bzl[t]
-    for k in range(K):
-        vb = np.empty(3)
-        for e in range(3):
-            vb[e] = Vc[k, e, 0] * bzc[k, 0] + Vc[k, e, 1] * bzc[k, 1] + Vc[k, e, 2] * bzc[k, 2]
-        for e in range(3):
-            for i in range(n):
-                r1[i] -= vb[e] * T[k, e, i]
-    dx, dy = _dense_solve(L, Y, Ls, r1, by, diag)
-    for _ in range(refine):
-        e1 = r1 - _apply_H(dx, H0, diag, T, Vc, iu, il, su, zu, sl, zl) - A.T @ dy
-        e2 = by - A @ dx
-        cx, cy = _dense_solve(L, Y, Ls, e1, e2, diag)
-        dx += cx
-        dy += cy
-    dzu = np.empty(iu.shape[0])
-    for t in range(iu.shape[0]):
-        dzu[t] = zu[t] / su[t] * (dx[iu[t]] - bzu[t])
-    dzl = np.empty(il.shape[0])
-    for t in range(il.shape[0]):
-        dzl[t] = zl[t] / sl[t] * (-dx[il[t]] - bzl[t])
-    dzc = np.empty((K, 3))
-    for k in range(K):
-        q = np.empty(3)
-        for e in range(3):
-            q[e] = -_dot(T[k, e], dx) - bzc[k, e]
-        for e in range(3):
-            dzc[k, e] = Vc[k, e, 0] * q[0] + Vc[k, e, 1] * q[1] + Vc[k, e, 2] * q[2]
-    return dx, dy, dzu, dzl, dzc
-
-
 @njit(cache=True, nogil=True, error_model="numpy")
 def _slack_step(dx, rzu, rzl, rzc, iu, il, T):
     """The slacks' step from the linearised constraints ``G dx + ds = -r_z`` (exact to rounding, so
@@ -436,39 +175,6 @@ def _max_step(su, dsu, sl, dsl, sc, dsc):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _residuals(x, y, zu, zl, zc, su, sl, sc, H0, diag, c, A, b, iu, il, lb, ub, T, t):
-    n = x.shape[0]
-    if diag:
-        Hx = np.empty(n)
-        for i in range(n):
-            Hx[i] = H0[i, i] * x[i]
-    else:
-        Hx = H0 @ x
-    rx = Hx + c + A.T @ y
-    for q in range(iu.shape[0]):
-        rx[iu[q]] += zu[q]
-    for q in range(il.shape[0]):
-        rx[il[q]] -= zl[q]
-    K = T.shape[0]
-    rzc = np.empty((K, 3))
-    for k in range(K):
-        for e in range(3):
-            tx = _dot(T[k, e], x)
-            for i in range(n):
-                rx[i] -= zc[k, e] * T[k, e, i]
-            rzc[k, e] = -tx + sc[k, e] - t[k, e]
-    ry = A @ x - b
-    rzu = np.empty(iu.shape[0])
-    for q in range(iu.shape[0]):
-        rzu[q] = x[iu[q]] + su[q] - ub[iu[q]]
-    rzl = np.empty(il.shape[0])
-    for q in range(il.shape[0]):
-        rzl[q] = -x[il[q]] + sl[q] + lb[il[q]]
-    pobj = 0.5 * _dot(Hx, x) + _dot(c, x)
-    return rx, ry, rzu, rzl, rzc, pobj
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
 def _inf_norm(v):
     m = 0.0
     for i in range(v.shape[0]):
@@ -477,35 +183,243 @@ def _inf_norm(v):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def ipm_solve(H, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax, tn, basis0,
-              max_pivots, as_tols):
-    """The interior-point method with crossover (module docstring).
-
-    Args:
-        H (n, n): ``P`` (symmetric positive semidefinite); c (n,): linear term.
-        A (k, n), b (k,): equalities. lb, ub (n,): bounds (may be infinite).
-        T (K, 3, n), t (K, 3): cone rows ``s = T x + t`` in the second-order cone.
-        max_iter, eps: iteration limit; relative residual and gap tolerance.
-        crossover_gap: try the active set once the relative gap is below this (0: never).
-        G, gc, ax, tn, basis0: the cones in the active-set solver's form (``F = gc + G x``, axis,
-            tan, a normal) for the crossover.
-        max_pivots: pivot limit of each crossover attempt.
-        as_tols (5,): the active-set solver's step, primal, dual, equation-of-motion and
-            regularisation tolerances.
-
-    Returns ``(code, x, y, zbox, zc, iterations, state, cact, mus, dirs)``: ``code`` one of SOLVED,
-    CROSSOVER, INFEASIBLE_CERT (then ``y, zbox, zc`` are the certificate), MAX_ITER, NUMERICAL;
-    ``zbox`` (n,) the bounds' multipliers (> 0 at an upper bound), ``zc`` (K, 3) the cones' duals;
-    after a crossover ``state, cact, mus, dirs`` the verified active set (else empty).
-    """
-    n = c.shape[0]
-    neq = A.shape[0]
+def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t):
+    """``(rx, ry, rzu, rzl, rzc, pobj)``: the dual residual ``P x + c + A^T y + G^T z``, the
+    equations' ``A x - b``, the slacks' ``G x + s - h`` and the objective."""
+    Px = la.apply_P(x, d0, Fm)
+    rx = Px + c
+    for a in range(A.shape[0]):
+        la.axpy(y[a], A[a], rx)
+    for q in range(iu.shape[0]):
+        rx[iu[q]] += zu[q]
+    for q in range(il.shape[0]):
+        rx[il[q]] -= zl[q]
     K = T.shape[0]
-    diag = K == 0
-    for i in range(n):
-        for j in range(n):
-            if i != j and H[i, j] != 0.0:
-                diag = False
+    rzc = np.empty((K, 3))
+    for k in range(K):
+        for e in range(3):
+            la.axpy(-zc[k, e], T[k, e], rx)
+            rzc[k, e] = -_dot(T[k, e], x) + sc[k, e] - t[k, e]
+    ry = np.empty(A.shape[0])
+    for a in range(A.shape[0]):
+        ry[a] = la.dot(A[a], x) - b[a]
+    rzu = np.empty(iu.shape[0])
+    for q in range(iu.shape[0]):
+        rzu[q] = x[iu[q]] + su[q] - ub[iu[q]]
+    rzl = np.empty(il.shape[0])
+    for q in range(il.shape[0]):
+        rzl[q] = -x[il[q]] + sl[q] + lb[il[q]]
+    pobj = 0.5 * _dot(Px, x) + _dot(c, x)
+    return rx, ry, rzu, rzl, rzc, pobj
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _barrier(d0, iu, il, su, zu, sl, zl, floor):
+    """``(dbar, dinv)``: ``D = d0 +`` the bounds' ``z/s``, and ``1 / max(D, floor)`` (a variable
+    without bounds or weight: refinement against the exact ``D`` corrects the floor)."""
+    dbar = d0.copy()
+    for q in range(iu.shape[0]):
+        dbar[iu[q]] += zu[q] / su[q]
+    for q in range(il.shape[0]):
+        dbar[il[q]] += zl[q] / sl[q]
+    dinv = np.empty(d0.shape[0])
+    for i in range(d0.shape[0]):
+        dinv[i] = 1.0 / max(dbar[i], floor)
+    return dbar, dinv
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, LK, dinv, dbar, Fm, T, A, W2, iu, il, su, zu, sl, zl, refine):
+    """The scaled Newton system's ``(dx, dy, dzu, dzl, dzc)`` for the right-hand sides
+    ``P dx + A^T dy + G^T dz = bx, A dx = by, G dx - W^2 dz = bz``: the bounds' ``dz`` eliminated
+    (``dz = (z/s) (G dx - bz)``), the cones' kept (:func:`._ipm_linalg.solve`: no ``W^-2`` is ever
+    formed, whose entries grow like ``1/mu`` on an active cone)."""
+    r1 = bx.copy()
+    for q in range(iu.shape[0]):
+        r1[iu[q]] += zu[q] / su[q] * bzu[q]
+    for q in range(il.shape[0]):
+        r1[il[q]] -= zl[q] / sl[q] * bzl[q]
+    dx, dy, dzc = la.solve(B, rf, Ct, LK, dinv, r1, bzc, by)
+    if refine:
+        la.refine(B, rf, Ct, LK, dinv, dbar, Fm, T, W2, A, r1, bzc, by, dx, dy, dzc, refine)
+    dzu = np.empty(iu.shape[0])
+    for q in range(iu.shape[0]):
+        dzu[q] = zu[q] / su[q] * (dx[iu[q]] - bzu[q])
+    dzl = np.empty(il.shape[0])
+    for q in range(il.shape[0]):
+        dzl[q] = zl[q] / sl[q] * (-dx[il[q]] - bzl[q])
+    return dx, dy, dzu, dzl, dzc
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, floor):
+    """CVXOPT's initial point: ``x, y`` of the Newton system with the identity scaling (the least
+    squares point of the slacks on the equations, with the objective), ``s = h - G x``, ``z = -s``,
+    each shifted into its cone's interior when it is not (:func:`_shift_into_cones`). Starting from
+    the middle of the box costs nothing in iterations: every step is long (on the neck 11-13
+    iterations to the crossover, where a start at the least-squares forces took 25-45 short ones)."""
+    nu, nl, K = iu.shape[0], il.shape[0], T.shape[0]
+    one_u, one_l = np.ones(nu), np.ones(nl)
+    Vc = np.zeros((K, 3, 3))
+    for k in range(K):
+        for e in range(3):
+            Vc[k, e, e] = 1.0
+    dbar, dinv = _barrier(d0, iu, il, one_u, one_u, one_l, one_l, floor)
+    LK, dropped = la.factor(B, rf, M0inv, Ct, Vc, dinv, 1e-14)
+    hu = np.empty(nu)
+    for q in range(nu):
+        hu[q] = ub[iu[q]]
+    hl = np.empty(nl)
+    for q in range(nl):
+        hl[q] = -lb[il[q]]
+    x, y, zu, zl, zc = _newton(-c, b, hu, hl, t.copy(), B, rf, Ct, LK, dinv, dbar, Fm, T, A, Vc, iu, il, one_u,
+                               one_u, one_l, one_l, 1)
+    su, sl, sc = -zu, -zl, -zc
+    _shift_into_cones(su, sl, sc)
+    _shift_into_cones(zu, zl, zc)
+    return x, y, su, zu, sl, zl, sc, zc
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _gap(su, zu, sl, zl, sc, zc):
+    g = _dot(su, zu) + _dot(sl, zl)
+    for k in range(sc.shape[0]):
+        g += sc[k, 0] * zc[k, 0] + sc[k, 1] * zc[k, 1] + sc[k, 2] * zc[k, 2]
+    return g
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc):
+    return min(_max_step(su, dsu, sl, dsl, sc, dsc), _max_step(zu, dzu, zl, dzl, zc, dzc))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _centring(s, ds, z, dz, a, lo, hi, rs):
+    """Gondzio's correction of the bounds' complementarity targets ``rs`` (in place): the products
+    ``s_i z_i`` a longer step ``a`` would reach, pulled back into ``[lo, hi]``."""
+    for q in range(s.shape[0]):
+        v = (s[q] + a * ds[q]) * (z[q] + a * dz[q])
+        if v < lo:
+            rs[q] += lo - v
+        elif v > hi:
+            rs[q] += max(hi - v, -hi)
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def _gap_at(s, ds, z, dz, a):
+    """``(s + a ds)^T (z + a dz)`` without temporaries."""
+    g = 0.0
+    for i in range(s.shape[0]):
+        g += (s[i] + a * ds[i]) * (z[i] + a * dz[i])
+    return g
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _cone_corrector(lamc, Winv, Wm, dsc, dzc, rzc, smu):
+    """The cones' corrector right-hand side ``bz = -r_z - W (lam \\ rs)`` with
+    ``rs = -lam o lam - (W^-1 ds_a) o (W dz_a) + sigma mu e`` (scalar code: no small arrays)."""
+    K = lamc.shape[0]
+    bzc = np.empty((K, 3))
+    for k in range(K):
+        Wi, Wk, ds, dz, lam = Winv[k], Wm[k], dsc[k], dzc[k], lamc[k]
+        u0 = Wi[0, 0] * ds[0] + Wi[0, 1] * ds[1] + Wi[0, 2] * ds[2]
+        u1 = Wi[1, 0] * ds[0] + Wi[1, 1] * ds[1] + Wi[1, 2] * ds[2]
+        u2 = Wi[2, 0] * ds[0] + Wi[2, 1] * ds[1] + Wi[2, 2] * ds[2]
+        v0 = Wk[0, 0] * dz[0] + Wk[0, 1] * dz[1] + Wk[0, 2] * dz[2]
+        v1 = Wk[1, 0] * dz[0] + Wk[1, 1] * dz[1] + Wk[1, 2] * dz[2]
+        v2 = Wk[2, 0] * dz[0] + Wk[2, 1] * dz[1] + Wk[2, 2] * dz[2]
+        l0, l1, l2 = lam[0], lam[1], lam[2]
+        # rs = -(lam o lam) - (u o v) + smu e
+        r0 = -(l0 * l0 + l1 * l1 + l2 * l2) - (u0 * v0 + u1 * v1 + u2 * v2) + smu
+        r1 = -2.0 * l0 * l1 - (u0 * v1 + v0 * u1)
+        r2 = -2.0 * l0 * l2 - (u0 * v2 + v0 * u2)
+        # x = lam \ rs
+        det = l0 * l0 - l1 * l1 - l2 * l2
+        x0 = (l0 * r0 - l1 * r1 - l2 * r2) / det
+        x1 = (r1 - x0 * l1) / l0
+        x2 = (r2 - x0 * l2) / l0
+        for e in range(3):
+            bzc[k, e] = -rzc[k, e] - (Wk[e, 0] * x0 + Wk[e, 1] * x1 + Wk[e, 2] * x2)
+    return bzc
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, LK, dinv, dbar, Fm, T, A, W2,
+               Wm, Winv, lamc, iu, il, refine, ncorr):
+    """Mehrotra's predictor-corrector direction with Gondzio's centrality correctors on the bounds
+    (at most ``ncorr``, each kept only when it lengthens the step); returns the direction and its
+    largest step."""
+    K = T.shape[0]
+    gap = mu * (su.shape[0] + sl.shape[0] + K)
+    lu = np.sqrt(su * zu)
+    ll = np.sqrt(sl * zl)
+    # predictor (affine scaling): bz = -rz + s
+    dx, dy, dzu, dzl, dzc = _newton(-rx, -ry, -rzu + su, -rzl + sl, -rzc + sc, B, rf, Ct, LK, dinv, dbar, Fm,
+                                    T, A, W2, iu, il, su, zu, sl, zl, refine)
+    dsu, dsl, dsc = _slack_step(dx, rzu, rzl, rzc, iu, il, T)
+    a_p = min(1.0, _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc))
+    gap_aff = _gap_at(su, dsu, zu, dzu, a_p) + _gap_at(sl, dsl, zl, dzl, a_p)
+    for k in range(K):
+        for e in range(3):
+            gap_aff += (sc[k, e] + a_p * dsc[k, e]) * (zc[k, e] + a_p * dzc[k, e])
+    sigma = min(1.0, max(0.0, gap_aff / max(gap, 1e-300))) ** 3
+    smu = sigma * mu
+    # corrector: rs = -lam o lam - (W^-1 ds_a) o (W dz_a) + sigma mu e
+    rsu = -lu * lu - dsu * dzu + smu
+    rsl = -ll * ll - dsl * dzl + smu
+    bzc = _cone_corrector(lamc, Winv, Wm, dsc, dzc, rzc, smu)
+    best = (dx, dy, dzu, dzl, dzc, dsu, dsl, dsc, 0.0)
+    for j in range(ncorr + 1):
+        # W (lam \ rs) = rs / z on the bounds
+        dx, dy, dzu, dzl, dzc = _newton(-rx, -ry, -rzu - rsu / zu, -rzl - rsl / zl, bzc, B, rf, Ct, LK, dinv,
+                                        dbar, Fm, T, A, W2, iu, il, su, zu, sl, zl, refine)
+        dsu, dsl, dsc = _slack_step(dx, rzu, rzl, rzc, iu, il, T)
+        a = _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc)
+        if not np.isfinite(_dot(dx, dx) + _dot(dy, dy)):
+            a = 0.0
+        if j > 0 and not a > 1.01 * best[8]:
+            break
+        best = (dx, dy, dzu, dzl, dzc, dsu, dsl, dsc, a)
+        if a >= 0.9:  # long enough: a corrector would cost more than it gains
+            break
+        at = min(1.0, a + 0.5)
+        _centring(su, dsu, zu, dzu, at, 0.1 * smu, 10.0 * smu, rsu)
+        _centring(sl, dsl, zl, dzl, at, 0.1 * smu, 10.0 * smu, rsl)
+    return best
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _certificate(x, y, zu, zl, zc, A, b, lb, ub, T, t, iu, il, eps, bscale, hscale):
+    """Whether ``(y, z)`` certifies primal infeasibility: ``A^T y + G^T z = 0``, ``b^T y + h^T z < 0``."""
+    hz = _dot(b, y)
+    for q in range(iu.shape[0]):
+        hz += ub[iu[q]] * zu[q]
+    for q in range(il.shape[0]):
+        hz -= lb[il[q]] * zl[q]
+    for k in range(T.shape[0]):
+        hz += t[k, 0] * zc[k, 0] + t[k, 1] * zc[k, 1] + t[k, 2] * zc[k, 2]
+    if not hz < 0.0:
+        return False
+    g = A.T @ y
+    for q in range(iu.shape[0]):
+        g[iu[q]] += zu[q]
+    for q in range(il.shape[0]):
+        g[il[q]] -= zl[q]
+    for k in range(T.shape[0]):
+        for e in range(3):
+            la.axpy(-zc[k, e], T[k, e], g)
+    ysz = _inf_norm(y) * bscale
+    for q in range(iu.shape[0]):
+        ysz = max(ysz, abs(zu[q]) * hscale)
+    for q in range(il.shape[0]):
+        ysz = max(ysz, abs(zl[q]) * hscale)
+    return _inf_norm(g) * hscale <= eps * -hz and -hz > 1e-6 * ysz
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _bounded(lb, ub):
+    """The indices of the finite upper and lower bounds."""
+    n = lb.shape[0]
     nu, nl = 0, 0
     for i in range(n):
         if np.isfinite(ub[i]):
@@ -522,32 +436,98 @@ def ipm_solve(H, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax,
         if np.isfinite(lb[i]):
             il[b_] = i
             b_ += 1
-    deg = nu + nl + K
-    # scales of the data, for relative tests
+    return iu, il
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _scales(b, lb, ub, t, c, iu, il):
     bscale = max(1.0, _inf_norm(b))
     hscale = 1.0
-    for q in range(nu):
+    for q in range(iu.shape[0]):
         hscale = max(hscale, abs(ub[iu[q]]))
-    for q in range(nl):
+    for q in range(il.shape[0]):
         hscale = max(hscale, abs(lb[il[q]]))
-    for k in range(K):
+    for k in range(t.shape[0]):
         for e in range(3):
             hscale = max(hscale, abs(t[k, e]))
-    cscale = max(1.0, _inf_norm(c))
-    empty_state = np.zeros(0, dtype=np.int8)
-    empty_b = np.zeros(0, dtype=np.bool_)
-    empty_f = np.zeros(0)
-    empty_d = np.zeros((0, 3))
+    return bscale, hscale, max(1.0, _inf_norm(c))
 
-    # ---- initial point (Mehrotra's idea for LPs): the minimiser of the objective, slightly
-    # regularised, on the equations alone; slacks kept at least theta inside, duals mu0 / slack. On
-    # the neck (forces of ~1 N under limits of 1000 N) this saves the 4-5 iterations that CVXOPT's
-    # start (the middle of the box) spends shrinking from 1000 N to 1 N.
-    x, y, su, zu, sl, zl, sc, zc = _start(H, diag, c, A, b, lb, ub, T, t, iu, il)
-    Wc2 = np.zeros((K, 3, 3))
-    Vc = np.zeros((K, 3, 3))
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _primal_res(ry, rzu, rzl, rzc, bscale, hscale):
+    pres = _inf_norm(ry) / bscale
+    pres = max(pres, _inf_norm(rzu) / hscale)
+    pres = max(pres, _inf_norm(rzl) / hscale)
+    for k in range(rzc.shape[0]):
+        for e in range(3):
+            pres = max(pres, abs(rzc[k, e]) / hscale)
+    return pres
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _cone_scalings(sc, zc, Wm, Winv, Wc2, lamc):
+    """Every cone's Nesterov-Todd ``W``, ``W^-1``, ``W^2`` and ``lambda = W z``, in place."""
     Wk = np.empty((3, 3))
     Wik = np.empty((3, 3))
+    for k in range(sc.shape[0]):
+        lamc[k] = _soc_scaling(sc[k], zc[k], Wk, Wik)
+        Wm[k] = Wk
+        Winv[k] = Wik
+        for e in range(3):
+            Wc2[k, e] = _mv3(Wk, Wk[e])  # W symmetric: row e of W W
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _crossover(x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots,
+               as_tols, last_state, last_cact):
+    """The active set the iterate points at, verified by the compiled active-set solver when it
+    differs from the last one tried: ``(tried, code, x, mus, grad, state, cact, dirs, y)``."""
+    state, cact, cdir = _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, G, gc, ax, basis0)
+    if not _new_guess(state, cact, last_state, last_cact):
+        return (0, -1, x, np.zeros(0), np.zeros(0), state, cact, np.zeros((0, 3)), np.zeros(0))
+    code, f, mus, grad, st, ca, dirs, nxt, yy = _kkt.active_set_solve(
+        H, c, A, b, lb, ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, 10,
+        as_tols[0], as_tols[1], as_tols[2], as_tols[3], as_tols[4])
+    return (1, code, f, mus, grad, st, ca, dirs, yy)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax, tn, basis0,
+              max_pivots, as_tols, ncorr, rank_tol):
+    """The interior-point method with crossover (module docstring).
+
+    Args:
+        H (n, n): ``P`` (symmetric positive semidefinite; the crossover's active-set solver uses it);
+            d0 (n,), Fm (r, n): the same ``P = diag(d0) + Fm^T Fm`` (the Newton systems use it).
+        c (n,): linear term. A (k, n), b (k,): equalities. lb, ub (n,): bounds (may be infinite).
+        T (K, 3, n), t (K, 3): cone rows ``s = T x + t`` in the second-order cone.
+        max_iter, eps: iteration limit; relative residual and gap tolerance.
+        crossover_gap: try the active set once the relative gap is below this (0: never).
+        G, gc, ax, tn, basis0: the cones in the active-set solver's form (``F = gc + G x``, axis,
+            tan, a normal) for the crossover.
+        max_pivots: pivot limit of each crossover attempt.
+        as_tols (5,): the active-set solver's step, primal, dual, equation-of-motion and
+            regularisation tolerances.
+        ncorr: at most this many centrality correctors per iteration.
+        rank_tol: relative residual below which a row of ``[Fm; T]`` counts as dependent.
+
+    Returns ``(code, x, y, zbox, zc, iterations, state, cact, mus, dirs)``: ``code`` one of SOLVED,
+    CROSSOVER, INFEASIBLE_CERT (then ``y, zbox, zc`` are the certificate), MAX_ITER, NUMERICAL;
+    ``zbox`` (n,) the bounds' multipliers (> 0 at an upper bound), ``zc`` (K, 3) the cones' duals;
+    after a crossover ``state, cact, mus, dirs`` the verified active set (else empty).
+    """
+    n = c.shape[0]
+    K = T.shape[0]
+    iu, il = _bounded(lb, ub)
+    deg = iu.shape[0] + il.shape[0] + K
+    bscale, hscale, cscale = _scales(b, lb, ub, t, c, iu, il)
+    hmax = 0.0
+    for i in range(n):
+        hmax = max(hmax, H[i, i])
+    floor = 1e-12 * max(hmax, 1e-300) if hmax > 0.0 else 1e-12
+    B, rf, M0inv, Ct = la.structure(Fm, T, A, rank_tol)
+    x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, floor)
+    Wc2 = np.zeros((K, 3, 3))
     Winv = np.zeros((K, 3, 3))
     Wm = np.zeros((K, 3, 3))
     lamc = np.zeros((K, 3))
@@ -557,113 +537,40 @@ def ipm_solve(H, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax,
     last_cact = np.zeros(K, dtype=np.bool_)
     it = 0
     for it in range(max_iter):
-        rx, ry, rzu, rzl, rzc, pobj = _residuals(x, y, zu, zl, zc, su, sl, sc, H, diag, c, A, b, iu, il,
-                                                 lb, ub, T, t)
-        gap = _dot(su, zu) + _dot(sl, zl)
-        for k in range(K):
-            gap += sc[k, 0] * zc[k, 0] + sc[k, 1] * zc[k, 1] + sc[k, 2] * zc[k, 2]
+        rx, ry, rzu, rzl, rzc, pobj = _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb,
+                                                 ub, T, t)
+        gap = _gap(su, zu, sl, zl, sc, zc)
         mu = gap / max(deg, 1)
-        pres = _inf_norm(ry) / bscale
-        for q in range(nu):
-            pres = max(pres, abs(rzu[q]) / hscale)
-        for q in range(nl):
-            pres = max(pres, abs(rzl[q]) / hscale)
-        for k in range(K):
-            for e in range(3):
-                pres = max(pres, abs(rzc[k, e]) / hscale)
+        pres = _primal_res(ry, rzu, rzl, rzc, bscale, hscale)
         dres = _inf_norm(rx) / cscale
         # relative to the objective, with an absolute floor of 1e-13 (the data are of order one)
         gap_rel = gap / max(1e-13 / max(eps, 1e-300), abs(pobj))
-        if pres <= eps and dres <= eps and gap_rel <= eps:
-            # converged: the active set it points at, once more, for the exact point
+        done = pres <= eps and dres <= eps and gap_rel <= eps
+        if done or (crossover_gap > 0.0 and gap_rel <= crossover_gap and pres <= 1e3 * crossover_gap
+                    and attempts < 8):
+            # the active set the iterate points at, verified by the active-set solver
             if crossover_gap > 0.0:
-                state, cact, cdir = _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, G, gc, ax, basis0)
-                if _new_guess(state, cact, last_state, last_cact):
-                    code, f, mus, grad, st, ca, dirs, nxt, yy = _kkt.active_set_solve(
-                        H, c, A, b, lb, ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, 10,
-                        as_tols[0], as_tols[1], as_tols[2], as_tols[3], as_tols[4])
-                    if code == _kkt.FOUND:
-                        return (CROSSOVER, f, yy, -grad, zc, it, st, ca, mus, dirs)
-            return (SOLVED, x, y, _zbox(zu, zl, iu, il, n), zc, it, empty_state, empty_b, empty_f,
-                    empty_d)
-        # primal infeasibility certificate: A^T y + G^T z = 0, b^T y + h^T z < 0
-        hz = _dot(b, y)
-        for q in range(nu):
-            hz += ub[iu[q]] * zu[q]
-        for q in range(nl):
-            hz -= lb[il[q]] * zl[q]
-        for k in range(K):
-            hz += t[k, 0] * zc[k, 0] + t[k, 1] * zc[k, 1] + t[k, 2] * zc[k, 2]
-        if hz < 0.0:
-            g = A.T @ y
-            for q in range(nu):
-                g[iu[q]] += zu[q]
-            for q in range(nl):
-                g[il[q]] -= zl[q]
-            for k in range(K):
-                for e in range(3):
-                    for i in range(n):
-                        g[i] -= zc[k, e] * T[k, e, i]
-            ysz = _inf_norm(y) * bscale
-            for q in range(nu):
-                ysz = max(ysz, abs(zu[q]) * hscale)
-            for q in range(nl):
-                ysz = max(ysz, abs(zl[q]) * hscale)
-            if _inf_norm(g) * hscale <= eps * -hz and -hz > 1e-6 * ysz:
-                return (INFEASIBLE_CERT, x, y, _zbox(zu, zl, iu, il, n), zc, it, empty_state, empty_b,
-                        empty_f, empty_d)
-        # ---- crossover: the active set the iterate points at, verified by the active-set solver
-        if crossover_gap > 0.0 and gap_rel <= crossover_gap and pres <= 1e3 * crossover_gap \
-                and attempts < 8:
-            state, cact, cdir = _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, G, gc, ax, basis0)
-            if _new_guess(state, cact, last_state, last_cact):
-                attempts += 1
-                code, f, mus, grad, st, ca, dirs, nxt, yy = _kkt.active_set_solve(
-                    H, c, A, b, lb, ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, 10,
-                    as_tols[0], as_tols[1], as_tols[2], as_tols[3], as_tols[4])
+                tried, code, f, mus, grad, st, ca, dirs, yy = _crossover(
+                    x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots,
+                    as_tols, last_state, last_cact)
+                attempts += tried
                 if code == _kkt.FOUND:
                     return (CROSSOVER, f, yy, -grad, zc, it, st, ca, mus, dirs)
-        # ---- scaling
-        lu = np.sqrt(su * zu)
-        ll = np.sqrt(sl * zl)
-        for k in range(K):
-            lamc[k] = _soc_scaling(sc[k], zc[k], Wk, Wik)
-            Wm[k] = Wk
-            Winv[k] = Wik
-            Wc2[k] = Wk @ Wk
-            Vc[k] = Wik @ Wik
-        L, Y, Ls, floored = _factor(H, diag, T, Vc, A, iu, il, su, zu, sl, zl)
-        refine = 1 if floored else 0
-        # ---- predictor (affine scaling direction): bz = -rz + s
-        dx, dy, dzu, dzl, dzc = _newton(-rx, -ry, -rzu + su, -rzl + sl, -rzc + sc, L, Y, Ls, H, diag, T,
-                                        A, Vc, iu, il, su, zu, sl, zl, refine)
-        dsu, dsl, dsc = _slack_step(dx, rzu, rzl, rzc, iu, il, T)
-        a_p = min(_max_step(su, dsu, sl, dsl, sc, dsc), _max_step(zu, dzu, zl, dzl, zc, dzc))
-        a_p = min(1.0, a_p)
-        gap_aff = _dot(su + a_p * dsu, zu + a_p * dzu) + _dot(sl + a_p * dsl, zl + a_p * dzl)
-        for k in range(K):
-            gap_aff += _dot(sc[k] + a_p * dsc[k], zc[k] + a_p * dzc[k])
-        sigma = min(1.0, max(0.0, gap_aff / max(gap, 1e-300))) ** 3
-        smu = sigma * mu
-        # ---- corrector: rs = -lam o lam - (W^-1 ds_a) o (W dz_a) + sigma mu e
-        rsu = -lu * lu - dsu * dzu + smu
-        rsl = -ll * ll - dsl * dzl + smu
-        bzu = -rzu - np.sqrt(su / zu) * (rsu / lu)
-        bzl = -rzl - np.sqrt(sl / zl) * (rsl / ll)
-        bzc = np.empty((K, 3))
-        divc = np.empty((K, 3))
-        for k in range(K):
-            rs = -_soc_prod(lamc[k], lamc[k]) - _soc_prod(Winv[k] @ dsc[k], Wm[k] @ dzc[k])
-            rs[0] += smu
-            divc[k] = _soc_div(lamc[k], rs)
-            bzc[k] = -rzc[k] - Wm[k] @ divc[k]
-        dx, dy, dzu, dzl, dzc = _newton(-rx, -ry, bzu, bzl, bzc, L, Y, Ls, H, diag, T, A, Vc, iu, il, su,
-                                        zu, sl, zl, refine)
-        dsu, dsl, dsc = _slack_step(dx, rzu, rzl, rzc, iu, il, T)
-        a = min(_max_step(su, dsu, sl, dsl, sc, dsc), _max_step(zu, dzu, zl, dzl, zc, dzc))
+            if done:
+                return (SOLVED, x, y, _zbox(zu, zl, iu, il, n), zc, it, np.zeros(0, dtype=np.int8),
+                        np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
+        if _certificate(x, y, zu, zl, zc, A, b, lb, ub, T, t, iu, il, eps, bscale, hscale):
+            return (INFEASIBLE_CERT, x, y, _zbox(zu, zl, iu, il, n), zc, it, np.zeros(0, dtype=np.int8),
+                    np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
+        # ---- scaling and the factor of the Newton system
+        _cone_scalings(sc, zc, Wm, Winv, Wc2, lamc)
+        dbar, dinv = _barrier(d0, iu, il, su, zu, sl, zl, floor)
+        LK, dropped = la.factor(B, rf, M0inv, Ct, Wc2, dinv, 1e-14)
+        refine = 1 if dropped or gap_rel < 1e-5 else 0
+        dx, dy, dzu, dzl, dzc, dsu, dsl, dsc, a = _direction(
+            rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, LK, dinv, dbar, Fm, T, A, Wc2, Wm, Winv,
+            lamc, iu, il, refine, ncorr)
         a = min(1.0, 0.99 * a)
-        if not np.isfinite(_dot(dx, dx) + _dot(dy, dy)):
-            a = 0.0
         if not (a > 1e-14) or not np.isfinite(a):
             end = NUMERICAL
             break
@@ -678,61 +585,13 @@ def ipm_solve(H, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax,
         zc += a * dzc
     # no convergence: one last crossover from where the iterations stopped
     if crossover_gap > 0.0:
-        state, cact, cdir = _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, G, gc, ax, basis0)
-        if _new_guess(state, cact, last_state, last_cact):
-            code, f, mus, grad, st, ca, dirs, nxt, yy = _kkt.active_set_solve(
-                H, c, A, b, lb, ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, 10,
-                as_tols[0], as_tols[1], as_tols[2], as_tols[3], as_tols[4])
-            if code == _kkt.FOUND:
-                return (CROSSOVER, f, yy, -grad, zc, it + 1, st, ca, mus, dirs)
-    return (end, x, y, _zbox(zu, zl, iu, il, n), zc, it + 1, empty_state, empty_b, empty_f, empty_d)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _start(H, diag, c, A, b, lb, ub, T, t, iu, il):
-    """The initial point (see :func:`ipm_solve`)."""
-    n = c.shape[0]
-    K = T.shape[0]
-    nu, nl = iu.shape[0], il.shape[0]
-    hmax = 0.0
-    for i in range(n):
-        hmax = max(hmax, abs(H[i, i]))
-    cmax = _inf_norm(c)
-    delta = max(1e-6 * hmax, 1e-3 * cmax, 1e-12)
-    su = np.ones(nu)
-    zu = np.full(nu, delta)
-    sl = np.ones(nl)
-    zl = np.full(nl, delta)
-    Vc = np.zeros((K, 3, 3))
-    for k in range(K):
-        for e in range(3):
-            Vc[k, e, e] = delta
-    L, Y, Ls, floored = _factor(H, diag, T, Vc, A, iu, il, su, zu, sl, zl)
-    x, y, _, _, _ = _newton(-c, b, np.zeros(nu), np.zeros(nl), np.zeros((K, 3)), L, Y, Ls, H, diag, T, A,
-                            Vc, iu, il, su, zu, sl, zl, 1)
-    xs = max(1.0, _inf_norm(x))
-    theta = 1e-1 * xs
-    g = H @ x + c
-    mu0 = theta * max(1.0, _inf_norm(g))
-    for q in range(nu):
-        su[q] = max(ub[iu[q]] - x[iu[q]], theta)
-        zu[q] = mu0 / su[q]
-    for q in range(nl):
-        sl[q] = max(x[il[q]] - lb[il[q]], theta)
-        zl[q] = mu0 / sl[q]
-    sc = np.empty((K, 3))
-    zc = np.empty((K, 3))
-    for k in range(K):
-        for e in range(3):
-            sc[k, e] = _dot(T[k, e], x) + t[k, e]
-        nrm = np.sqrt(sc[k, 1] ** 2 + sc[k, 2] ** 2)
-        if sc[k, 0] - nrm < theta:
-            sc[k, 0] = nrm + theta
-        det = sc[k, 0] ** 2 - nrm ** 2
-        zc[k, 0] = mu0 * sc[k, 0] / det
-        zc[k, 1] = -mu0 * sc[k, 1] / det
-        zc[k, 2] = -mu0 * sc[k, 2] / det
-    return x, y, su, zu, sl, zl, sc, zc
+        tried, code, f, mus, grad, st, ca, dirs, yy = _crossover(
+            x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots, as_tols,
+            last_state, last_cact)
+        if code == _kkt.FOUND:
+            return (CROSSOVER, f, yy, -grad, zc, it + 1, st, ca, mus, dirs)
+    return (end, x, y, _zbox(zu, zl, iu, il, n), zc, it + 1, np.zeros(0, dtype=np.int8),
+            np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -21,17 +21,35 @@ from .base import INACCURATE, INFEASIBLE, OPTIMAL, Solution, Stage, failure
 REASONS = {_ipm.MAX_ITER: "iteration limit", _ipm.NUMERICAL: "numerical breakdown (the step vanished)"}
 
 
+def p_structure(qp) -> tuple[np.ndarray, np.ndarray]:
+    """``(d0, F)`` with ``P = diag(d0) + F^T F``: the problem's own (:attr:`QPData.P_diag`,
+    ``P_factor``) when it has them, else the diagonal of a diagonal ``P``, else a factor from the
+    eigenvalues of ``P`` (those above 1e-14 of the largest)."""
+    if qp.structured:
+        return np.asarray(qp.P_diag, dtype=float), np.asarray(qp.P_factor, dtype=float).reshape(-1, qp.n)
+    P = np.asarray(qp.P, dtype=float)
+    d = np.diag(P).copy()
+    if not np.any(P - np.diag(d)):
+        return d, np.zeros((0, qp.n))
+    w, V = np.linalg.eigh(0.5 * (P + P.T))
+    keep = w > 1e-14 * max(w.max(initial=0.0), 1e-300)
+    return np.zeros(qp.n), (np.sqrt(w[keep])[:, None] * V[:, keep].T)
+
+
 def ipm_arguments(qp, max_iter: int = tol.IPM_MAX_ITER, eps: float = tol.IPM_EPS,
-                  crossover_gap: float = tol.IPM_CROSSOVER_GAP, max_pivots: int = 30) -> tuple:
+                  crossover_gap: float = tol.IPM_CROSSOVER_GAP, max_pivots: int = 30,
+                  correctors: int = tol.IPM_CORRECTORS, rank_tol: float = tol.IPM_RANK_TOL) -> tuple:
     """The arguments of :func:`._ipm.ipm_solve` for ``qp`` (C-ordered float arrays and Python scalars:
     one compiled specialisation serves every call)."""
     c_ = np.ascontiguousarray
     T, t = qp.cone_rows()
     G, gc, ax, tn, basis0 = qp.cone_arrays()
-    return (c_(qp.P, dtype=float), c_(qp.c, dtype=float), c_(qp.A, dtype=float), c_(qp.b, dtype=float),
-            c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), c_(T, dtype=float), c_(t, dtype=float),
-            int(max_iter), float(eps), float(crossover_gap), c_(G, dtype=float), c_(gc, dtype=float),
-            c_(ax, dtype=float), c_(tn, dtype=float), c_(basis0, dtype=float), int(max_pivots), _AS_TOLS)
+    d0, F = p_structure(qp)
+    return (c_(qp.P, dtype=float), c_(d0, dtype=float), c_(F, dtype=float), c_(qp.c, dtype=float),
+            c_(qp.A, dtype=float), c_(qp.b, dtype=float), c_(qp.lb, dtype=float), c_(qp.ub, dtype=float),
+            c_(T, dtype=float), c_(t, dtype=float), int(max_iter), float(eps), float(crossover_gap),
+            c_(G, dtype=float), c_(gc, dtype=float), c_(ax, dtype=float), c_(tn, dtype=float),
+            c_(basis0, dtype=float), int(max_pivots), _AS_TOLS, int(correctors), float(rank_tol))
 
 
 def ipm_solve(qp, **options) -> Solution:
@@ -84,8 +102,8 @@ def warm_calls():
     cone = ConeData("j", np.ones((3, n)), np.zeros(3), axis, 30.0, perpendicular_basis(axis))
     qp = QPData(np.eye(n), np.zeros(n), 0.0, np.ones((1, n)), np.ones(1), np.zeros(n), np.ones(n), [cone])
     args = ipm_arguments(qp)
-    G, gc, ax, tn, basis0 = args[11:16]
-    as_args = (args[0], args[1], args[2], args[3], args[4], args[5], np.zeros(n, dtype=np.int8), G, gc, ax,
+    G, gc, ax, tn, basis0 = args[13:18]
+    as_args = (args[0], args[3], args[4], args[5], args[6], args[7], np.zeros(n, dtype=np.int8), G, gc, ax,
                tn, basis0, np.zeros(1, dtype=np.bool_), np.zeros((1, 3)), 2, 2, *(float(v) for v in _AS_TOLS))
     return [(_ipm.ipm_solve, args), (_kkt.active_set_solve, as_args)]
 

@@ -1,0 +1,399 @@
+r"""The linear algebra of the compiled interior-point method (:mod:`._ipm`): its Newton system solved
+through the problem's structure.
+
+Each Newton step solves, with the bounds' multipliers eliminated and the cones' ``dz_c`` kept,
+
+.. math:: (D + F^T F)\,dx + A^T dy - T^T dz_c = r_1, \qquad A\,dx = r_2, \qquad
+          -T\,dx - W^2 dz_c = r_3,
+
+``D`` diagonal (the objective's diagonal ``d0`` plus the bounds' barrier terms ``z/s``), ``F`` the
+objective's factor (``P = diag(d0) + F^T F``: the interaction objective's weighted wrench rows), ``T``
+the cones' rows and ``W^2 = blockdiag(W_k^2)`` their Nesterov-Todd scaling.
+
+**Once per solve** (:func:`structure`): modified Gram-Schmidt with pivoting turns the rows of ``F``
+into an orthonormal basis ``Q`` (``rf`` rows; a row whose part outside the span of the rows before it
+is below ``rank_tol`` counts as dependent) with ``F = C Q``, and ``M_0 = C^T C``.
+
+**Per iteration** (:func:`factor`, :func:`solve`): with ``w_F = M_0 Q dx`` and ``w_T = -dz_c``,
+eliminating ``dx = D^{-1} (r_1 - Q^T w_F - T^T w_T - A^T dy)`` leaves
+
+.. math::
+
+    \left( \begin{bmatrix} M_0^{-1} & & \\ & W^2 & \\ & & 0 \end{bmatrix} + B D^{-1} B^T \right)
+    \begin{bmatrix} w_F \\ w_T \\ dy \end{bmatrix} =
+    B D^{-1} r_1 + \begin{bmatrix} 0 \\ r_3 \\ -r_2 \end{bmatrix}, \qquad B = [Q; T; A],
+
+symmetric positive definite, of size ``rf + 3K + k_eq`` (the neck: 24, 48, 72 in cases 1, 2, 3). Its
+condition number grows like ``1/mu`` only: ``W_k^2`` is small on an active cone but every direction
+that ``B^T`` annihilates has its ``Q`` part weighted by ``M_0^{-1}`` (bounded). A form with
+``M = M_0 + T^T W^{-2} T`` folded into one ``rf``-sized block (48 unknowns in case 3) needs
+``M^{-1}``, whose error grows with ``cond(M) ~ 1/mu^2`` (2e-4 absolute at a relative gap of 1e-5 on
+the neck: the iteration then breaks down).
+
+When every cone row lies in the span of ``Q`` (the neck: each cone's rows are a rotation of its
+joint's force rows), ``T = C_t Q`` and only ``[Q; A]`` meets ``D^{-1}``: the products of the ``T`` rows
+follow from those of ``Q`` (:func:`_expand`), 24 x 24 work instead of 24 x 76.
+
+A dependent equation (``A`` losing rank: the 2-link arm at q = 0) shows as a pivot at rounding level
+and is dropped (its multiplier set to zero); :func:`refine` then corrects against the exact operators.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+_FM = {"reassoc", "contract"}  # reassociation lets numba vectorise the dot products; no NaN/inf flags
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def dot(a, b):
+    s = 0.0
+    for i in range(a.shape[0]):
+        s += a[i] * b[i]
+    return s
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def axpy(a, x, y):
+    """``y += a x`` in place."""
+    for i in range(y.shape[0]):
+        y[i] += a * x[i]
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def chol_inplace(L, drop_rel):
+    """Cholesky factor of the lower triangle of ``L`` in place (row-oriented; four rows at a time share
+    the loads of the pivot row: twice the speed of one). A pivot at or below ``drop_rel`` times the
+    largest diagonal entry becomes 1e300 (its unknown is dropped: the solves set it to zero).
+    Returns whether one was dropped."""
+    p = L.shape[0]
+    scale = 1e-300
+    for i in range(p):
+        scale = max(scale, L[i, i])
+    floor = drop_rel * scale
+    dropped = False
+    for j in range(p):
+        Lj = L[j]
+        d = Lj[j]
+        for k in range(j):
+            d -= Lj[k] * Lj[k]
+        if not d > floor:
+            d = 1e300
+            dropped = True
+        d = np.sqrt(d)
+        Lj[j] = d
+        inv = 1.0 / d
+        i = j + 1
+        while i + 3 < p:
+            A0, A1, A2, A3 = L[i], L[i + 1], L[i + 2], L[i + 3]
+            s0, s1, s2, s3 = A0[j], A1[j], A2[j], A3[j]
+            for k in range(j):
+                lk = Lj[k]
+                s0 -= A0[k] * lk
+                s1 -= A1[k] * lk
+                s2 -= A2[k] * lk
+                s3 -= A3[k] * lk
+            A0[j], A1[j], A2[j], A3[j] = s0 * inv, s1 * inv, s2 * inv, s3 * inv
+            i += 4
+        while i < p:
+            Ai = L[i]
+            s = Ai[j]
+            for k in range(j):
+                s -= Ai[k] * Lj[k]
+            Ai[j] = s * inv
+            i += 1
+    return dropped
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def chol_solve(L, r):
+    """``(L L^T)^{-1} r`` (both passes along rows of ``L``)."""
+    p = L.shape[0]
+    y = r.copy()
+    for i in range(p):
+        Li = L[i]
+        y[i] = (y[i] - dot(Li[:i], y[:i])) / Li[i]
+    for i in range(p - 1, -1, -1):
+        Li = L[i]
+        xi = y[i] / Li[i]
+        y[i] = xi
+        for k in range(i):
+            y[k] -= Li[k] * xi
+    return y
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def add_inverse(L, out):
+    """``out += (L L^T)^{-1}`` on the lower triangle (``L^{-1}`` formed row by row)."""
+    p = L.shape[0]
+    Li_ = np.zeros((p, p))
+    for i in range(p):
+        Li = L[i]
+        inv = 1.0 / Li[i]
+        row = Li_[i]
+        row[i] = inv
+        for k in range(i):
+            lk = Li[k] * inv
+            if lk != 0.0:
+                Rk = Li_[k]
+                for j in range(k + 1):
+                    row[j] -= lk * Rk[j]
+    # (L L^T)^-1 = L^-T L^-1: entry (a, b) = sum_i Li_[i, a] Li_[i, b]
+    for i in range(p):
+        row = Li_[i]
+        for a in range(i + 1):
+            ra = row[a]
+            if ra != 0.0:
+                Oa = out[a]
+                for b in range(a + 1):
+                    Oa[b] += ra * row[b]
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def structure(Fm, T, A, rank_tol):
+    """The rows of the reduced system (module docstring): ``(B, rf, M0inv, Ct)`` with ``B = [Q; T_1;
+    ...; T_K; A]``, ``M0inv = (C^T C)^{-1}`` (full, ``rf x rf``) for ``F = C Q``; when every cone row
+    lies in the span of ``Q``, ``T = Ct Q`` and ``B = [Q; A]`` (else ``Ct`` is empty)."""
+    r = Fm.shape[0]
+    K = T.shape[0]
+    n = A.shape[1]
+    neq = A.shape[0]
+    W = Fm.copy()
+    norm0 = np.empty(r)
+    res = np.empty(r)
+    for i in range(r):
+        norm0[i] = dot(W[i], W[i])
+        res[i] = norm0[i]
+    C = np.zeros((r, r))
+    used = np.zeros(r, dtype=np.bool_)
+    Q = np.empty((r, n))
+    rf = 0
+    for _ in range(r):
+        best, piv = 0.0, -1
+        for i in range(r):
+            if not used[i] and res[i] > rank_tol * rank_tol * norm0[i] and res[i] > best:
+                best, piv = res[i], i
+        if piv < 0:
+            break
+        used[piv] = True
+        nrm = np.sqrt(dot(W[piv], W[piv]))
+        q = W[piv] / nrm
+        Q[rf] = q
+        C[piv, rf] = nrm
+        for i in range(r):
+            if not used[i] and res[i] > 0.0:
+                cc = dot(W[i], q)
+                C[i, rf] = cc
+                axpy(-cc, q, W[i])
+                res[i] = dot(W[i], W[i])
+        rf += 1
+    # the cones' rows in the basis Q, when they lie in its span (the neck: each cone's rows are a
+    # rotation of its joint's force rows): then only [Q; A] enters the products with D^-1
+    Ct = np.empty((3 * K, rf))
+    inside = K > 0
+    for k in range(K):
+        for e in range(3):
+            rrow = T[k, e].copy()
+            for a in range(rf):
+                Ct[3 * k + e, a] = dot(T[k, e], Q[a])
+                axpy(-Ct[3 * k + e, a], Q[a], rrow)
+            if dot(rrow, rrow) > rank_tol * rank_tol * max(dot(T[k, e], T[k, e]), 1e-300):
+                inside = False
+    if not inside:
+        Ct = np.empty((0, rf))
+    nB = rf + neq if inside else rf + 3 * K + neq
+    B = np.empty((nB, n))
+    for i in range(rf):
+        B[i] = Q[i]
+    o = rf
+    if not inside:
+        for k in range(K):
+            for e in range(3):
+                B[rf + 3 * k + e] = T[k, e]
+        o = rf + 3 * K
+    for a in range(neq):
+        B[o + a] = A[a]
+    M0 = np.zeros((rf, rf))
+    for i in range(r):
+        for a in range(rf):
+            ca = C[i, a]
+            if ca != 0.0:
+                for b in range(a + 1):
+                    M0[a, b] += ca * C[i, b]
+    chol_inplace(M0, 1e-300)
+    M0inv = np.zeros((rf, rf))
+    add_inverse(M0, M0inv)
+    for a in range(rf):
+        for b in range(a):
+            M0inv[b, a] = M0inv[a, b]
+    return B, rf, M0inv, Ct
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def _gram(B, dinv):
+    """``B diag(dinv) B^T`` (lower triangle; four rows of ``B`` at a time)."""
+    rb, n = B.shape
+    Km = np.zeros((rb, rb))
+    row = np.empty(n)
+    for i in range(rb):
+        Bi = B[i]
+        for t in range(n):
+            row[t] = Bi[t] * dinv[t]
+        j = 0
+        while j + 3 <= i:
+            B0, B1, B2, B3 = B[j], B[j + 1], B[j + 2], B[j + 3]
+            s0, s1, s2, s3 = 0.0, 0.0, 0.0, 0.0
+            for t in range(n):
+                r = row[t]
+                s0 += r * B0[t]
+                s1 += r * B1[t]
+                s2 += r * B2[t]
+                s3 += r * B3[t]
+            Km[i, j], Km[i, j + 1], Km[i, j + 2], Km[i, j + 3] = s0, s1, s2, s3
+            j += 4
+        while j <= i:
+            Km[i, j] = dot(row, B[j])
+            j += 1
+    return Km
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def _expand(Kb, rf, Ct):
+    """The reduced matrix's products for ``B = [Q; T; A]`` from those of ``[Q; A]`` (``T = Ct Q``):
+    ``T D^-1 Q^T = Ct (Q D^-1 Q^T)`` etc."""
+    m = Ct.shape[0]
+    neq = Kb.shape[0] - rf
+    p = rf + m + neq
+    Km = np.zeros((p, p))
+    KFF = np.empty((rf, rf))
+    for a in range(rf):
+        for b in range(a + 1):
+            KFF[a, b] = Kb[a, b]
+            KFF[b, a] = Kb[a, b]
+            Km[a, b] = Kb[a, b]
+    G1 = np.empty((m, rf))  # Ct KFF
+    for i in range(m):
+        for b in range(rf):
+            G1[i, b] = dot(Ct[i], KFF[b])
+        for b in range(rf):
+            Km[rf + i, b] = G1[i, b]
+        for j in range(i + 1):
+            Km[rf + i, rf + j] = dot(G1[i], Ct[j])
+    for a in range(neq):
+        KA = Kb[rf + a, :rf]
+        for b in range(rf):
+            Km[rf + m + a, b] = KA[b]
+        for j in range(m):
+            Km[rf + m + a, rf + j] = dot(KA, Ct[j])
+        for b in range(a + 1):
+            Km[rf + m + a, rf + m + b] = Kb[rf + a, rf + b]
+    return Km
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def factor(B, rf, M0inv, Ct, W2, dinv, drop_rel):
+    """The Cholesky factor (lower) of the reduced matrix of the module docstring, and whether an
+    equation was dropped."""
+    K = W2.shape[0]
+    Km = _gram(B, dinv)
+    if Ct.shape[0]:
+        Km = _expand(Km, rf, Ct)
+    for a in range(rf):
+        for b in range(a + 1):
+            Km[a, b] += M0inv[a, b]
+    for k in range(K):
+        o = rf + 3 * k
+        for a in range(3):
+            for b in range(a + 1):
+                Km[o + a, o + b] += W2[k, a, b]
+    dropped = chol_inplace(Km, drop_rel)
+    return Km, dropped
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def solve(B, rf, Ct, LK, dinv, r1, r3, r2):
+    """``(dx, dy, dzc)`` of ``(D + F^T F) dx + A^T dy - T^T dzc = r1``, ``A dx = r2``,
+    ``-T dx - W^2 dzc = r3`` (``r3`` (K, 3)) from :func:`factor`'s factor."""
+    n = B.shape[1]
+    K = r3.shape[0]
+    m = 3 * K
+    p = LK.shape[0]
+    nw = rf + m
+    u = dinv * r1
+    rhs = np.empty(p)
+    inside = Ct.shape[0] > 0
+    for i in range(rf):
+        rhs[i] = dot(B[i], u)
+    ob = rf if inside else rf + m  # first row of A in B
+    for i in range(rf, ob):
+        rhs[i] = dot(B[i], u)
+    for a in range(p - nw):
+        rhs[nw + a] = dot(B[ob + a], u) - r2[a]
+    if inside:
+        for i in range(m):
+            rhs[rf + i] = dot(Ct[i], rhs[:rf])
+    for k in range(K):
+        for e in range(3):
+            rhs[rf + 3 * k + e] += r3[k, e]
+    sol = chol_solve(LK, rhs)
+    dx = r1.copy()
+    wq = sol[:rf].copy()
+    if inside:
+        for i in range(m):
+            axpy(sol[rf + i], Ct[i], wq)
+    else:
+        for i in range(m):
+            if sol[rf + i] != 0.0:
+                axpy(-sol[rf + i], B[rf + i], dx)
+    for i in range(rf):
+        if wq[i] != 0.0:
+            axpy(-wq[i], B[i], dx)
+    for a in range(p - nw):
+        if sol[nw + a] != 0.0:
+            axpy(-sol[nw + a], B[ob + a], dx)
+    for t in range(n):
+        dx[t] *= dinv[t]
+    dzc = np.empty((K, 3))
+    for k in range(K):
+        for e in range(3):
+            dzc[k, e] = -sol[rf + 3 * k + e]
+    return dx, sol[nw:].copy(), dzc
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def apply_P(x, d0, Fm):
+    """``P x = d0 x + F^T F x``."""
+    out = d0 * x
+    for i in range(Fm.shape[0]):
+        s = dot(Fm[i], x)
+        if s != 0.0:
+            axpy(s, Fm[i], out)
+    return out
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def refine(B, rf, Ct, LK, dinv, dbar, Fm, T, W2, A, r1, r3, r2, dx, dy, dzc, steps):
+    """``steps`` rounds of iterative refinement of ``(dx, dy, dzc)`` against the exact operators of
+    :func:`solve`'s system (``dbar``: ``d0`` plus the barrier diagonal, without the floor)."""
+    K = T.shape[0]
+    for _ in range(steps):
+        e1 = r1 - apply_P(dx, dbar, Fm)
+        for a in range(A.shape[0]):
+            if dy[a] != 0.0:
+                axpy(-dy[a], A[a], e1)
+        e3 = r3.copy()
+        for k in range(K):
+            for e in range(3):
+                axpy(dzc[k, e], T[k, e], e1)
+                e3[k, e] += dot(T[k, e], dx) + W2[k, e, 0] * dzc[k, 0] + W2[k, e, 1] * dzc[k, 1] + \
+                    W2[k, e, 2] * dzc[k, 2]
+        e2 = r2.copy()
+        for a in range(A.shape[0]):
+            e2[a] -= dot(A[a], dx)
+        cx, cy, cz = solve(B, rf, Ct, LK, dinv, e1, e3, e2)
+        axpy(1.0, cx, dx)
+        axpy(1.0, cy, dy)
+        for k in range(K):
+            for e in range(3):
+                dzc[k, e] += cz[k, e]
