@@ -15,7 +15,9 @@ bounds' multipliers eliminated and the cones' kept, one symmetric positive defin
 ``rank(F) + 3K + k_eq`` (the neck: 24 in case 1, 48 in case 2, 72 in case 3) instead of a Cholesky
 factor of the ``n x n`` Hessian and a Schur complement on ``A``; the cones enter through ``W_k^2``,
 never through ``W_k^{-2}`` (whose entries grow like ``1/mu`` on an active cone: the dense form's
-breakdowns, "the step vanished", on 2 % of the neck's case-3 instants).
+breakdowns, "the step vanished", on 2 % of the neck's case-3 instants). A pivot is dropped as a
+dependent equation only in the equations' rows, and only at rounding level of its own row
+(:func:`._ipm_linalg.chol_inplace`).
 
 **The start** is CVXOPT's: ``x`` from the Newton system with the identity scaling (the least-squares
 point of the slacks, with the objective: the middle of the box), ``s = h - G x``, ``z = -s``, each
