@@ -335,7 +335,7 @@ def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None) -> tuple[So
 
 
 def _cone_angles(qp: QPData) -> np.ndarray:
-    return np.array([c.angle_deg for c in qp.cones], dtype=float)
+    return qp.cone_consts()[1]
 
 
 _NO_G = np.zeros((0, 3, 0))

@@ -25,15 +25,22 @@ from .conftest import REPO
 
 @pytest.fixture(scope="module")
 def instants():
-    """(qp, terms, solution) of every instant of the 2-link arm (cases 1-3, traj1) and of the human
-    arm's abduct (case 3: a flat optimal face, non-unique first-stage optima)."""
+    """(qp, terms, solution) of every 7th instant of the 2-link arm (cases 1-3, traj1), of the human
+    arm's abduct (case 3: a flat optimal face, non-unique first-stage optima) and of the CASPR neck's
+    roll (case 3: eight cones, some held)."""
     jit.prepare(policy="wait")
     out = []
-    for robot_file, traj, cases in (("two_link_sr.yaml", "traj1", (1, 2, 3)), ("human_arm.yaml", "abduct", (2, 3))):
+    neck = "caspr/8S_neck/8S_neck.yaml"
+    for robot_file, traj, cases in (("two_link_sr.yaml", "traj1", (1, 2, 3)), ("human_arm.yaml", "abduct", (2, 3)),
+                                    (neck, "roll", (3,))):
         robot = Robot.load(REPO / "robots" / robot_file)
         tr = load_trajectory(robot, traj)
         for case in cases:
-            idp = InverseDynamics.for_case(robot, case)
+            # the neck with the paper's weights and 15 deg cones (benchmarks/_common.py): cones held
+            options = {} if robot_file != neck else dict(
+                alpha={j: 0.125 for j in robot.joint_names}, beta={j: 0.0 for j in robot.joint_names},
+                cones={j: 15.0 for j in robot.joint_names})
+            idp = InverseDynamics.for_case(robot, case, **options)
             for k in range(0, len(tr.t), 7):
                 terms = idp.evaluate(tr.q[k], tr.qd[k], tr.qdd[k])
                 qp = idp.problem.assemble(terms, Context(robot, None))
@@ -120,3 +127,77 @@ def test_warm_stage_counts_its_kkt_solves(instants):
     line = stage_counts(run)
     assert line.startswith(f"answered by warm_active_set at {warm.sum()} instants (median ")
     assert "KKT solves" in line
+
+
+def test_cone_batch_is_the_numpy_ones(instants):
+    seen = 0
+    for qp, terms, _, idp in instants:
+        batch = idp.problem._plan["cones"]
+        if batch is None:
+            continue
+        seen += 1
+        compiled = batch(terms)[1]
+        for a, b in zip(compiled, batch.arrays(terms) + (batch.tan, batch.basis0)):
+            np.testing.assert_allclose(a, b, rtol=1e-14, atol=1e-14 * np.abs(b).max())
+        assert qp.cone_consts()[0] == tuple(c.joint for c in qp.cones)
+        np.testing.assert_array_equal(qp.cone_consts()[1], [c.angle_deg for c in qp.cones])
+    assert seen > 10
+
+
+def _reference_try(qp, guess, max_pivots):
+    """:func:`try_active_set` as it was before its compiled answer: the kernel, then the numpy
+    :func:`active_solution`."""
+    from mcdm_pin.solvers import active_set as AS
+
+    G, gc, ax, tn, basis0 = qp.cone_arrays()
+    state = guess.cable_state(qp.n)
+    names = [c.joint for c in qp.cones]
+    cact = np.array([nm in guess.cones for nm in names], dtype=np.bool_)
+    cdir = basis0.copy()
+    for k in np.flatnonzero(cact):
+        cdir[k] = guess.cones[names[k]][0]
+    c_ = np.ascontiguousarray
+    code, x, mus, grad, state, cact, dirs, nxt, y, _, solves = _kkt.active_set_run(
+        c_(qp.P), qp.c, c_(qp.A), qp.b, qp.lb, qp.ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, 10,
+        *AS._AS_TOLS)
+    if code != _kkt.FOUND:
+        return None
+    return AS.active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt, iterations=int(solves))
+
+
+def test_warm_answer_is_the_numpy_ones(instants):
+    """The compiled answer of the active-set stage (kernel, duals, objective, next guess) equals the
+    kernel's point converted by the numpy code, from guesses near (the previous sampled instant's
+    answer) and far (no bound, no cone held)."""
+    from mcdm_pin.solvers.active_set import ActiveSet, try_active_set
+
+    found = held = 0
+    prev = None
+    for qp, _, sol, idp in instants:
+        guesses = [ActiveSet(np.zeros(0, int), np.zeros(0, int))]
+        if prev is not None and prev[1] is idp and prev[0].active is not None:
+            guesses.append(prev[0].active)
+        prev = (sol, idp)
+        for guess in guesses:
+            got, want = try_active_set(qp, guess, 50), _reference_try(qp, guess, 50)
+            assert (got is None) == (want is None)
+            if got is None:
+                continue
+            found += 1
+            np.testing.assert_array_equal(got.x, want.x)
+            np.testing.assert_array_equal(got.y, want.y)
+            np.testing.assert_array_equal(got.z, want.z)
+            scale = max(1.0, np.abs(want.z_cone).max(initial=0.0))
+            np.testing.assert_allclose(got.z_cone, want.z_cone, rtol=1e-14, atol=1e-14 * scale)
+            assert got.objective == pytest.approx(want.objective, rel=1e-12, abs=1e-12)
+            assert got.iterations == want.iterations and got.verified and got.status == want.status
+            np.testing.assert_array_equal(got.active.state, want.active.state)
+            assert got.active.cones.keys() == want.active.cones.keys()
+            for name, (d, mu) in want.active.cones.items():
+                np.testing.assert_array_equal(got.active.cones[name][0], d)
+                assert got.active.cones[name][1] == mu
+                held += 1
+            # the next guess's arrays say what its dictionary says
+            mask, dirs = got.active.cone_guess(qp)
+            assert [c.joint for k, c in enumerate(qp.cones) if mask[k]] == list(want.active.cones)
+    assert found > 20 and held > 0

@@ -98,7 +98,7 @@ def project_to_bounds(qp, sol: Solution) -> Solution:
     iterative back-ends meet bounds to their tolerance, which at forces of 1e6 N is beyond the
     check's absolute 1e-9 N. A larger miss is left for the check to flag."""
     x = sol.x
-    if not (np.any(x < qp.lb) or np.any(x > qp.ub)):
+    if not ((x < qp.lb).any() or (x > qp.ub).any()):
         return sol
     slack = tol.BOUND_SNAP_REL * (1.0 + np.maximum(np.abs(qp.lb), np.abs(qp.ub)))
     if np.all(x >= qp.lb - slack) and np.all(x <= qp.ub + slack):

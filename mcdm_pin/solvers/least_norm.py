@@ -117,16 +117,16 @@ def _compiled_unique(qp, sol: Solution) -> bool | None:
         return None
     from ._fast import unique_test
 
-    c_ = np.ascontiguousarray
+    c_ = np.ascontiguousarray  # (no copies: an assembled problem's arrays are C-ordered floats)
     if qp.cones:
         G, gc, ax, tn, _ = qp.cone_arrays()
-        cosr = np.cos(np.radians([c.angle_deg for c in qp.cones]))
+        cosr = qp.cone_consts()[2]
         zc = sol.z_cone
     else:
         G, gc, ax, tn, cosr, zc = _NO_G, _NO_3, _NO_3, _NO_1, _NO_1, _NO_3
     n = qp.n
     return bool(unique_test(
-        c_(sol.x, dtype=float), c_(sol.z, dtype=float), c_(qp.gradient(sol.x), dtype=float), c_(qp.c, dtype=float),
+        c_(sol.x, dtype=float), c_(sol.z, dtype=float), c_(qp.c, dtype=float),
         c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), c_(qp.A, dtype=float).reshape(len(qp.b), n),
         c_(qp.P, dtype=float), c_(G, dtype=float).reshape(len(gc), 3, n), c_(gc, dtype=float), c_(ax, dtype=float),
         c_(tn, dtype=float), c_(cosr, dtype=float), c_(zc, dtype=float).reshape(len(gc), 3),
