@@ -88,9 +88,12 @@ def test_answer_check_and_outputs_equal_the_numpy_ones(instants):
         # the residual of an exact answer is itself rounding (~1e-16): the order of the sums decides
         # its digits; anything that matters (the check's 1e-8) is far above 1e-14
         assert eom1 == pytest.approx(eom2, rel=1e-9, abs=1e-14)
-        for a, b in zip(ID._outputs(terms, sol.x[:m], len(idp.robot.joints)),
-                        _numpy(ID._outputs, terms, sol.x[:m], len(idp.robot.joints))):
-            np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * max(1.0, np.abs(b).max()))
+        reference = _numpy(ID._outputs, terms, sol.x[:m], len(idp.robot.joints))
+        s3, eom3, fused = ID._check(qp, terms, sol, m, with_outputs=True)  # the runner's one pass
+        assert s3.status == s1.status and s3.message == s1.message and eom3 == eom1
+        for outputs in (ID._outputs(terms, sol.x[:m], len(idp.robot.joints)), fused):
+            for a, b in zip(outputs, reference):
+                np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * max(1.0, np.abs(b).max()))
     # a broken answer is reported by both paths with the same message
     qp, terms, sol, idp = instants[0]
     bad = sol.but(x=sol.x + 1.0)
@@ -201,3 +204,32 @@ def test_warm_answer_is_the_numpy_ones(instants):
             mask, dirs = got.active.cone_guess(qp)
             assert [c.joint for k, c in enumerate(qp.cones) if mask[k]] == list(want.active.cones)
     assert found > 20 and held > 0
+
+
+def test_interaction_quadratic_is_the_numpy_ones(instants):
+    from mcdm_pin.objectives import MinInteractions
+
+    seen = 0
+    for _, terms, _, idp in instants:
+        obj = idp.problem.objective
+        if not isinstance(obj, MinInteractions):
+            continue
+        seen += 1
+        compiled = obj.quadratic(terms, None)
+        reference = _numpy(obj.quadratic, terms, None)
+        for a, b in ((compiled.P, reference.P), (compiled.c, reference.c), (compiled.factor, reference.factor),
+                     (compiled.diag, reference.diag)):
+            np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-13 * max(np.abs(b).max(initial=0.0), 1e-300))
+        assert compiled.r == pytest.approx(reference.r, rel=1e-13, abs=1e-300)
+        np.testing.assert_array_equal(compiled.P, compiled.P.T)
+    assert seen > 10
+
+
+def test_projection_decision_is_the_numpy_ones(instants):
+    from mcdm_pin.solvers.check import project_to_bounds
+
+    for qp, _, sol, _ in instants:
+        for x in (sol.x, np.clip(sol.x - 1e-13, qp.lb, None), sol.x + 1e-3, np.full(qp.n, np.nan)):
+            s = sol.but(x=x)
+            a, b = project_to_bounds(qp, s), _numpy(project_to_bounds, qp, s)
+            np.testing.assert_array_equal(a.x, b.x)

@@ -190,6 +190,43 @@ def cone_batch(RT, u, R_socket, axes, index, socket):
     return G, g, ax
 
 
+@njit(cache=True, nogil=True)
+def interaction_quadratic(RT, u, keep, sw):
+    """:meth:`mcdm_pin.objectives.MinInteractions.quadratic` (the numpy reference) in one pass: with
+    ``K = sw R^T[keep]`` and ``k = sw u[keep]`` (rows of the flattened (J*6, m) and (J*6,) arrays),
+    ``F = sqrt(2) K``, ``P = F^T F``, ``c = 2 K^T k``, ``r = k . k``; returns ``(P, c, r, F)``."""
+    m = RT.shape[2]
+    nk = keep.shape[0]
+    R = RT.reshape(RT.shape[0] * 6, m)
+    uf = u.reshape(u.shape[0] * 6)
+    s2 = np.sqrt(2.0)
+    F = np.empty((nk, m))
+    c = np.zeros(m)
+    r = 0.0
+    for t in range(nk):
+        row = keep[t]
+        kt = sw[t] * uf[row]
+        r += kt * kt
+        for j in range(m):
+            Kj = sw[t] * R[row, j]
+            F[t, j] = s2 * Kj
+            c[j] += kt * Kj
+    for j in range(m):
+        c[j] = 2.0 * c[j]
+    P = np.zeros((m, m))
+    for t in range(nk):
+        Ft = F[t]
+        for a in range(m):
+            fa = Ft[a]
+            if fa != 0.0:
+                for b in range(a + 1):
+                    P[a, b] += fa * Ft[b]
+    for a in range(m):
+        for b in range(a):
+            P[b, a] = P[a, b]
+    return P, c, r, F
+
+
 def csr(lists, n):
     """(ptr, idx) int64 arrays of a list of index lists."""
     ptr = np.zeros(n + 1, dtype=np.int64)
@@ -262,6 +299,7 @@ def warm_calls():
     z = np.zeros
     i64 = np.int64
     return [(spread, (z((1, 2)), z(1))),
+            (interaction_quadratic, (z((1, 6, 2)), z((1, 6)), z(1, dtype=i64), z(1))),
             (cone_batch, (z((1, 6, 2)), z((1, 6)), z((1, 3, 3)), z((1, 3)), z(1, dtype=i64), np.ones(1, dtype=np.bool_))),
             (needs_scaling, (z((1, 2)), z(1), z(2), z(2), z(2), z((1, 2)), z(2), z((1, 3, 2)), z((1, 3)), 1e3)),
             (cable_terms, (np.tile(np.eye(4), (1, 1, 1)), z((1, 6)), z((2, 3)), z(2, dtype=i64),

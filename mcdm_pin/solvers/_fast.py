@@ -13,7 +13,7 @@ overhead cost as much as the solve). The scaling decision has its own compiled p
 Two more fuse the runner's per-instant numpy steps after the solve into one pass each, with the
 same formulas: :func:`answer_check` (equation-of-motion residual, bounds, cones: the runner's check
 of every answer on the original problem) and :func:`instant_outputs` (interaction wrenches, socket
-forces and angles).
+forces and angles); :func:`answer_check_outputs` calls both at once (the runner's usual path).
 """
 
 from __future__ import annotations
@@ -280,6 +280,24 @@ def active_set_answer(H, g, r, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact
     return code, f, y, z, zc, obj, held, mus, dirs, nxt, solves
 
 
+@njit(cache=True, nogil=True)
+def answer_check_outputs(L, tau, extra, x, lb, ub, G, g, ax, angle_deg, u, RT, R_socket, axes):
+    """:func:`answer_check` and :func:`instant_outputs` (at the first ``L.shape[0]`` entries of
+    ``x``, the cable forces) in one call: ``(eom, broken, viol, k, W, Fs, angles)``."""
+    eom, broken, viol, k = answer_check(L, tau, extra, x, lb, ub, G, g, ax, angle_deg)
+    W, Fs, ang = instant_outputs(u, RT, R_socket, axes, x[:L.shape[0]])
+    return eom, broken, viol, k, W, Fs, ang
+
+
+@njit(cache=True, nogil=True)
+def outside_bounds(x, lb, ub):
+    """Whether some ``x_i < lb_i`` or ``x_i > ub_i`` (NaN: no)."""
+    for i in range(x.shape[0]):
+        if x[i] < lb[i] or x[i] > ub[i]:
+            return True
+    return False
+
+
 def warm_calls():
     """The kernels with example arguments of the types the library passes (registered with
     :mod:`mcdm_pin.jit` by :mod:`.active_set`)."""
@@ -292,4 +310,7 @@ def warm_calls():
     return calls + [(unique_test, (z(n), z(n), z(n), z(n), z(n), z((1, n)), z((n, n)), z((1, 3, n)), z((1, 3)),
                            z((1, 3)), z(1), z(1), z((1, 3)), 1e-8, 1e-9)),
             (answer_check, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1))),
+            (answer_check_outputs, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1),
+                                    z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)))),
+            (outside_bounds, (z(n), z(n), z(n))),
             (instant_outputs, (z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)), z(n)))]

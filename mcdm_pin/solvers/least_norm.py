@@ -71,7 +71,7 @@ def _strongly_active(qp, sol: Solution, curvature: bool = True):
 def is_unique(qp, sol: Solution) -> bool:
     """Whether the optimum ``sol`` is provably unique (module docstring). Needs its duals; ``False``
     without them (not proven)."""
-    if qp.P_diag is not None and qp.P_diag.size and bool(np.all(qp.P_diag > 0.0)):
+    if qp.P_diag is not None and qp.P_diag.size and float(qp.P_diag.min()) > 0.0:
         return True  # P = diag(d) + F^T F with d > 0 is positive definite: strictly convex (case 1)
     if sol.z is None or (qp.cones and sol.z_cone is None):
         return False
