@@ -233,3 +233,25 @@ def test_projection_decision_is_the_numpy_ones(instants):
             s = sol.but(x=x)
             a, b = project_to_bounds(qp, s), _numpy(project_to_bounds, qp, s)
             np.testing.assert_array_equal(a.x, b.x)
+
+
+def test_ratio_test_with_the_vertex_factors_is_the_fresh_ones():
+    """The dual simplex step's ratio test reuses the vertex solve's LU of the free columns (the same
+    matrix): the same entering cable as solving that matrix afresh."""
+    rng = np.random.default_rng(5)
+    n, neq = 12, 5
+    for _ in range(50):
+        A = rng.standard_normal((neq, n))
+        state = np.ones(n, dtype=np.int8)
+        state[rng.choice(n, neq, replace=False)] = 0
+        state[(state != 0) & (rng.random(n) < 0.3)] = 2
+        free = np.flatnonzero(state == 0)
+        grad = rng.standard_normal(n)
+        LU, perm, ok = _kkt._lu_factor(np.ascontiguousarray(A[:, free]))
+        assert ok
+        G, z3 = np.zeros((0, 3, n)), np.zeros((0, 3))
+        for kind in (1, 2):
+            r = int(free[rng.integers(neq)])
+            args = (A, G, z3, z3, np.zeros(0), np.zeros(0, dtype=np.bool_), z3, state, grad, kind, r, n)
+            assert _kkt._ratio_test(*args, LU, perm, True) == \
+                _kkt._ratio_test(*args, np.zeros((0, 0)), np.zeros(0, dtype=np.int64), False)

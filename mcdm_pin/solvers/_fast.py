@@ -273,7 +273,7 @@ def active_set_answer(H, g, r, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact
     for i in range(n):
         acc = 0.0
         for j in range(n):
-            acc += f[j] * H[j, i]
+            acc += H[i, j] * f[j]  # (H symmetric: row i is column i)
         quad += acc * f[i]
         lin += g[i] * f[i]
     obj = 0.5 * quad + lin + r
