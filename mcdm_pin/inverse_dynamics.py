@@ -291,10 +291,8 @@ def _outputs(terms, f, n_joints: int):
     """Interaction wrenches (child frame), socket-frame forces and their angles at forces ``f``
     (``None``: no answer, NaN wrenches)."""
     if f is not None and jit.ready():  # one compiled pass, the same formulas
-        from .solvers._fast import instant_outputs
-
         c_ = np.ascontiguousarray
-        return instant_outputs(c_(terms.u, dtype=float), c_(terms.RT, dtype=float),
+        return jit.kernels("solvers._fast").instant_outputs(c_(terms.u, dtype=float), c_(terms.RT, dtype=float),
                                c_(terms.R_socket, dtype=float), c_(terms.socket_axes, dtype=float),
                                c_(f, dtype=float))
     wrench = terms.wrenches(f) if f is not None else np.full((n_joints, 6), np.nan)
@@ -312,8 +310,7 @@ def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None, with_output
     extra = None if actuation is None else -actuation.S @ f[m:]
     outputs = None
     if jit.ready():  # one compiled pass, the same formulas
-        from .solvers._fast import answer_check, answer_check_outputs
-
+        fast = jit.kernels("solvers._fast")
         G, g, axis = qp.cone_arrays()[:3] if qp.cones else (_NO_G, _NO_3, _NO_3)
         c_ = np.ascontiguousarray
         args = (c_(terms.L, dtype=float), c_(terms.tau, dtype=float),
@@ -321,11 +318,11 @@ def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None, with_output
                 c_(qp.ub, dtype=float), c_(G, dtype=float).reshape(len(g), 3, len(f)), c_(g, dtype=float),
                 c_(axis, dtype=float), _cone_angles(qp))
         if with_outputs:
-            eom, broken, worst, k, *outputs = answer_check_outputs(
+            eom, broken, worst, k, *outputs = fast.answer_check_outputs(
                 *args, c_(terms.u, dtype=float), c_(terms.RT, dtype=float), c_(terms.R_socket, dtype=float),
                 c_(terms.socket_axes, dtype=float))
         else:
-            eom, broken, worst, k = answer_check(*args)
+            eom, broken, worst, k = fast.answer_check(*args)
     else:
         eom = terms.eom_residual(f[:m], extra)
         broken = max(float((qp.lb - f).max(initial=0.0)), float((f - qp.ub).max(initial=0.0)))

@@ -118,10 +118,9 @@ def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool =
     if f_scale is None and not force and qp.structured and jit.ready():
         # the usual well-scaled instant: one compiled pass, no arrays made (it answers "maybe" for a
         # Hessian diagonal with a negative entry: then the factors below decide)
-        from .model.kernels import needs_scaling
-
         G, g = qp.cone_arrays()[:2]
         c_ = np.ascontiguousarray  # (no copies: an assembled problem's arrays are C-ordered floats)
+        needs_scaling = jit.kernels("model.kernels").needs_scaling
         if not needs_scaling(c_(qp.A, dtype=float), c_(qp.b, dtype=float), c_(qp.lb, dtype=float),
                              c_(qp.ub, dtype=float), c_(qp.P_diag, dtype=float),
                              c_(qp.P_factor, dtype=float), c_(qp.c, dtype=float), c_(G, dtype=float),

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import jit
 from ..exceptions import ProblemError
 from .base import ConeData, Constraint, perpendicular_basis
 
@@ -93,13 +94,9 @@ class ConeBatch:
         self._made = [(c.joint, float(c.angle_deg), c.basis) for c in cones]
 
     def __call__(self, terms) -> tuple[list[ConeData], tuple]:
-        from .. import jit
-
         if jit.ready():
-            from ..model.kernels import cone_batch
-
             c_ = np.ascontiguousarray  # (no copy: the terms' arrays are C-ordered floats)
-            G, g, axes = cone_batch(c_(terms.RT, dtype=float), c_(terms.u, dtype=float),
+            G, g, axes = jit.kernels("model.kernels").cone_batch(c_(terms.RT, dtype=float), c_(terms.u, dtype=float),
                                     c_(terms.R_socket, dtype=float), c_(terms.socket_axes, dtype=float),
                                     self.index, self.socket)
         else:

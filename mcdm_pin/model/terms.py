@@ -204,8 +204,9 @@ class TermsEvaluator:
         self._zeros = np.zeros(model.nv)
         self._tril = np.tril_indices(model.nv, -1)
         if compiled:
-            from .kernels import csr
+            from .kernels import cable_terms, csr
 
+            self._kernel = cable_terms
             K = len(keys)
             self._v_csr = csr([np.flatnonzero(self._sub_v[:, k]).tolist() for k in range(K)], K)
             self._a_csr = csr([np.flatnonzero(self._sub_phys[:, k]).tolist() for k in range(K)], K)
@@ -262,10 +263,8 @@ class TermsEvaluator:
         J = data.J.reshape(6, -1)
         cables = self.cables
         if self.compiled:
-            from .kernels import cable_terms
-
             # J.T: C-ordered for any nv (one compiled specialisation; a (6, 1) array counts as C)
-            X, _, lengths, L, RT, R_socket, bad = cable_terms(oMi, np.ascontiguousarray(J.T), *self._kernel_args)
+            X, _, lengths, L, RT, R_socket, bad = self._kernel(oMi, np.ascontiguousarray(J.T), *self._kernel_args)
             if bad >= 0:
                 raise StateError(f"cable {cables.cables[cables.seg_cable[bad]].name!r}: a segment has zero "
                                  f"length at this configuration, so its direction is undefined")

@@ -56,10 +56,8 @@ class MinInteractions(Objective):
         if not self.bound:
             return self._bound_for(context).quadratic(terms, context)
         if jit.ready():  # one compiled pass, the same formulas (numpy below: the reference)
-            from ..model.kernels import interaction_quadratic
-
             c_ = np.ascontiguousarray  # (no copies: the terms' arrays are C-ordered floats)
-            P, c, r, F = interaction_quadratic(c_(terms.RT, dtype=float), c_(terms.u, dtype=float),
+            P, c, r, F = jit.kernels("model.kernels").interaction_quadratic(c_(terms.RT, dtype=float), c_(terms.u, dtype=float),
                                                self._keep, self._sqrt_w)
             return Quadratic(P, c, r, np.zeros(P.shape[0]), F)
         keep, sw = self._keep, self._sqrt_w

@@ -31,6 +31,7 @@ import numpy as np
 from .. import jit
 from .. import tolerances as tol
 from ..problem import QPData
+from . import _fast
 from . import _kkt as K
 from .base import OPTIMAL, Solution, Stage
 
@@ -136,8 +137,6 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     equality-constrained solves; a repeated active set stops it. One compiled call
     (:func:`._fast.active_set_answer`: the kernel and the answer's duals, what
     :func:`active_solution` computes in numpy)."""
-    from ._fast import active_set_answer
-
     G, gc, ax, tn, basis0 = qp.cone_arrays()
     names, _, cosr, basis = qp.cone_consts()
     state = guess.cable_state(qp.n)  # (the kernel frees variables guessed at an infinite bound)
@@ -145,7 +144,7 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     # C-ordered float arrays and Python scalars: one compiled specialisation serves every call (an
     # assembled problem's arrays are C-ordered already: no copies)
     c_ = np.ascontiguousarray
-    code, x, y, z, zc, objective, held, mus, dirs, nxt_state, solves = active_set_answer(
+    code, x, y, z, zc, objective, held, mus, dirs, nxt_state, solves = _fast.active_set_answer(
         c_(qp.P, dtype=float), c_(qp.c, dtype=float), qp.r, c_(qp.A, dtype=float), c_(qp.b, dtype=float),
         c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), c_(state, dtype=np.int8), c_(G, dtype=float),
         c_(gc, dtype=float), c_(ax, dtype=float), c_(tn, dtype=float), c_(basis0, dtype=float), cact,
@@ -286,8 +285,6 @@ def numpy_polish(qp: QPData, sol: Solution) -> Solution | None:
 def warm_calls():
     """This module's kernels with example arguments of the types :func:`try_active_set` passes, and
     the warm path's compiled decisions (:mod:`._fast`)."""
-    from . import _fast
-
     n, z = 2, np.zeros
     args = (z((n, n)), z(n), z((1, n)), z(1), z(n), z(n), z(n, dtype=np.int8), z((1, 3, n)), z((1, 3)), z((1, 3)),
             z(1), z((1, 3)), z(1, dtype=np.bool_), z((1, 3)), 2, 2, *(float(v) for v in _AS_TOLS))

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import jit
 from .. import tolerances as tol
 from .base import INACCURATE, OPTIMAL, Solution, Stage, cone_violation_deg
 
@@ -110,13 +111,9 @@ def project_to_bounds(qp, sol: Solution) -> Solution:
 def _outside(x, lb, ub) -> bool:
     """Whether ``x`` leaves the bounds anywhere (compiled when the kernels are: one call instead of
     four numpy ones on every instant)."""
-    from .. import jit
-
     if jit.ready():
-        from ._fast import outside_bounds
-
         c_ = np.ascontiguousarray
-        return bool(outside_bounds(c_(x, dtype=float), c_(lb, dtype=float), c_(ub, dtype=float)))
+        return bool(jit.kernels("solvers._fast").outside_bounds(c_(x, dtype=float), c_(lb, dtype=float), c_(ub, dtype=float)))
     return bool((x < lb).any() or (x > ub).any())
 
 

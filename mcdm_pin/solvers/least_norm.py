@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import jit
 from .. import tolerances as tol
 from .base import OPTIMAL, Solution, Stage
 
@@ -111,12 +112,8 @@ def is_unique(qp, sol: Solution) -> bool:
 def _compiled_unique(qp, sol: Solution) -> bool | None:
     """The rest of :func:`is_unique` compiled (:func:`._fast.unique_test`, the same steps and
     thresholds); ``None`` while the kernels are not compiled."""
-    from .. import jit
-
     if not jit.ready():
         return None
-    from ._fast import unique_test
-
     c_ = np.ascontiguousarray  # (no copies: an assembled problem's arrays are C-ordered floats)
     if qp.cones:
         G, gc, ax, tn, _ = qp.cone_arrays()
@@ -125,7 +122,7 @@ def _compiled_unique(qp, sol: Solution) -> bool | None:
     else:
         G, gc, ax, tn, cosr, zc = _NO_G, _NO_3, _NO_3, _NO_1, _NO_1, _NO_3
     n = qp.n
-    return bool(unique_test(
+    return bool(jit.kernels("solvers._fast").unique_test(
         c_(sol.x, dtype=float), c_(sol.z, dtype=float), c_(qp.c, dtype=float),
         c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), c_(qp.A, dtype=float).reshape(len(qp.b), n),
         c_(qp.P, dtype=float), c_(G, dtype=float).reshape(len(gc), 3, n), c_(gc, dtype=float), c_(ax, dtype=float),
