@@ -311,12 +311,11 @@ def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None, with_output
     outputs = None
     if jit.ready():  # one compiled pass, the same formulas
         fast = jit.kernels("solvers._fast")
-        G, g, axis = qp.cone_arrays()[:3] if qp.cones else (_NO_G, _NO_3, _NO_3)
+        _, _, _, lb, ub, G, g, axis = qp.kernel_arrays()[:8]
         c_ = np.ascontiguousarray
         args = (c_(terms.L, dtype=float), c_(terms.tau, dtype=float),
-                _NO_1 if extra is None else c_(extra, dtype=float), c_(f, dtype=float), c_(qp.lb, dtype=float),
-                c_(qp.ub, dtype=float), c_(G, dtype=float).reshape(len(g), 3, len(f)), c_(g, dtype=float),
-                c_(axis, dtype=float), _cone_angles(qp))
+                _NO_1 if extra is None else c_(extra, dtype=float), c_(f, dtype=float), lb, ub, G, g, axis,
+                c_(_cone_angles(qp), dtype=float))
         if with_outputs:
             eom, broken, worst, k, *outputs = fast.answer_check_outputs(
                 *args, c_(terms.u, dtype=float), c_(terms.RT, dtype=float), c_(terms.R_socket, dtype=float),
@@ -346,8 +345,6 @@ def _cone_angles(qp: QPData) -> np.ndarray:
     return qp.cone_consts()[1]
 
 
-_NO_G = np.zeros((0, 3, 0))
-_NO_3 = np.zeros((0, 3))
 _NO_1 = np.zeros(0)
 
 

@@ -57,7 +57,7 @@ class QPData:
     """
 
     __slots__ = ("_P", "c", "r", "A", "b", "lb", "ub", "cones", "P_diag", "P_factor", "norm_weight",
-                 "_cone_arrays", "_cone_consts")
+                 "_cone_arrays", "_cone_consts", "_kernel_arrays")
 
     def __init__(self, P, c, r, A, b, lb, ub, cones=(), *, P_diag=None, P_factor=None, norm_weight=None,
                  cone_arrays=None, cone_consts=None):
@@ -68,6 +68,7 @@ class QPData:
         self.norm_weight = norm_weight
         self._cone_arrays = cone_arrays
         self._cone_consts = cone_consts
+        self._kernel_arrays = None
         if P is None and (P_diag is None or P_factor is None):
             raise ProblemError("QPData: give P or both P_diag and P_factor")
 
@@ -100,6 +101,23 @@ class QPData:
                 np.array([c.tan for c in cs], dtype=float).reshape(k),
                 np.array([c.basis[0] for c in cs], dtype=float).reshape(k, 3))
         return self._cone_arrays
+
+    def kernel_arrays(self) -> tuple:
+        """``(c, A, b, lb, ub, G, g, axis, tan, basis0)`` (the vectors and equations, then
+        :meth:`cone_arrays`) as C-ordered float arrays, made once: what the compiled steps of an
+        instant read (no copies when they are so already, as an assembled problem's are; ``A`` is
+        (k, n) even when empty, ``G`` (K, 3, n))."""
+        if self._kernel_arrays is None:
+            c_ = np.ascontiguousarray
+            n = self.n
+            G, g, ax, tn, basis0 = self.cone_arrays()
+            K = len(g)
+            self._kernel_arrays = (
+                c_(self.c, dtype=float), c_(self.A, dtype=float).reshape(len(self.b), n), c_(self.b, dtype=float),
+                c_(self.lb, dtype=float), c_(self.ub, dtype=float), c_(G, dtype=float).reshape(K, 3, n),
+                c_(g, dtype=float).reshape(K, 3), c_(ax, dtype=float).reshape(K, 3), c_(tn, dtype=float).reshape(K),
+                c_(basis0, dtype=float).reshape(K, 3))
+        return self._kernel_arrays
 
     def cone_consts(self) -> tuple:
         """What does not change from instant to instant about the cones, stacked for compiled code:

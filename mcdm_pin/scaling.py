@@ -118,13 +118,11 @@ def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool =
     if f_scale is None and not force and qp.structured and jit.ready():
         # the usual well-scaled instant: one compiled pass, no arrays made (it answers "maybe" for a
         # Hessian diagonal with a negative entry: then the factors below decide)
-        G, g = qp.cone_arrays()[:2]
+        c, A, b, lb, ub, G, g = qp.kernel_arrays()[:7]
         c_ = np.ascontiguousarray  # (no copies: an assembled problem's arrays are C-ordered floats)
         needs_scaling = jit.kernels("model.kernels").needs_scaling
-        if not needs_scaling(c_(qp.A, dtype=float), c_(qp.b, dtype=float), c_(qp.lb, dtype=float),
-                             c_(qp.ub, dtype=float), c_(qp.P_diag, dtype=float),
-                             c_(qp.P_factor, dtype=float), c_(qp.c, dtype=float), c_(G, dtype=float),
-                             c_(g, dtype=float), float(SPREAD)):
+        if not needs_scaling(A, b, lb, ub, c_(qp.P_diag, dtype=float), c_(qp.P_factor, dtype=float), c, G, g,
+                             float(SPREAD)):
             return None
     absA = np.abs(qp.A) if m else None
     ruiz = m and (spread(qp.A) > SPREAD or f_scale is not None)

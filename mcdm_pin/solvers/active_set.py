@@ -137,18 +137,15 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     equality-constrained solves; a repeated active set stops it. One compiled call
     (:func:`._fast.active_set_answer`: the kernel and the answer's duals, what
     :func:`active_solution` computes in numpy)."""
-    G, gc, ax, tn, basis0 = qp.cone_arrays()
+    c, A, b, lb, ub, G, gc, ax, tn, basis0 = qp.kernel_arrays()
     names, _, cosr, basis = qp.cone_consts()
     state = guess.cable_state(qp.n)  # (the kernel frees variables guessed at an infinite bound)
     cact, cdir = guess.cone_guess(qp)
-    # C-ordered float arrays and Python scalars: one compiled specialisation serves every call (an
-    # assembled problem's arrays are C-ordered already: no copies)
+    # C-ordered float arrays and Python scalars: one compiled specialisation serves every call
     c_ = np.ascontiguousarray
     code, x, y, z, zc, objective, held, mus, dirs, nxt_state, solves = _fast.active_set_answer(
-        c_(qp.P, dtype=float), c_(qp.c, dtype=float), qp.r, c_(qp.A, dtype=float), c_(qp.b, dtype=float),
-        c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), c_(state, dtype=np.int8), c_(G, dtype=float),
-        c_(gc, dtype=float), c_(ax, dtype=float), c_(tn, dtype=float), c_(basis0, dtype=float), cact,
-        c_(cdir, dtype=float), cosr, basis, int(max_pivots), int(max_newton), *_AS_TOLS)
+        c_(qp.P, dtype=float), c, qp.r, A, b, lb, ub, c_(state, dtype=np.int8), G, gc, ax, tn, basis0,
+        c_(cact, dtype=np.bool_), c_(cdir, dtype=float), cosr, basis, int(max_pivots), int(max_newton), *_AS_TOLS)
     if code != K.FOUND:
         _miss(K.REASONS[code])
         return None

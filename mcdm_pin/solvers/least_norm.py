@@ -114,23 +114,16 @@ def _compiled_unique(qp, sol: Solution) -> bool | None:
     thresholds); ``None`` while the kernels are not compiled."""
     if not jit.ready():
         return None
-    c_ = np.ascontiguousarray  # (no copies: an assembled problem's arrays are C-ordered floats)
-    if qp.cones:
-        G, gc, ax, tn, _ = qp.cone_arrays()
-        cosr = qp.cone_consts()[2]
-        zc = sol.z_cone
-    else:
-        G, gc, ax, tn, cosr, zc = _NO_G, _NO_3, _NO_3, _NO_1, _NO_1, _NO_3
-    n = qp.n
+    c_ = np.ascontiguousarray
+    c, A, _, lb, ub, G, gc, ax, tn, _ = qp.kernel_arrays()
+    cosr = qp.cone_consts()[2] if qp.cones else _NO_1
+    zc = sol.z_cone if qp.cones else _NO_3
     return bool(jit.kernels("solvers._fast").unique_test(
-        c_(sol.x, dtype=float), c_(sol.z, dtype=float), c_(qp.c, dtype=float),
-        c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), c_(qp.A, dtype=float).reshape(len(qp.b), n),
-        c_(qp.P, dtype=float), c_(G, dtype=float).reshape(len(gc), 3, n), c_(gc, dtype=float), c_(ax, dtype=float),
-        c_(tn, dtype=float), c_(cosr, dtype=float), c_(zc, dtype=float).reshape(len(gc), 3),
+        c_(sol.x, dtype=float), c_(sol.z, dtype=float), c, lb, ub, A, c_(qp.P, dtype=float), G, gc, ax, tn,
+        c_(cosr, dtype=float), c_(zc, dtype=float).reshape(len(gc), 3),
         float(tol.ACTIVE_SET_FROM_SOLUTION), float(tol.UNIQUE_REL)))
 
 
-_NO_G = np.zeros((0, 3, 0))
 _NO_3 = np.zeros((0, 3))
 _NO_1 = np.zeros(0)
 
