@@ -255,3 +255,18 @@ def test_ratio_test_with_the_vertex_factors_is_the_fresh_ones():
             args = (A, G, z3, z3, np.zeros(0), np.zeros(0, dtype=np.bool_), z3, state, grad, kind, r, n)
             assert _kkt._ratio_test(*args, LU, perm, True) == \
                 _kkt._ratio_test(*args, np.zeros((0, 0)), np.zeros(0, dtype=np.int64), False)
+
+
+def test_terms_read_back_through_views_follow_every_state():
+    """The evaluator reads Pinocchio's joint wrenches through views of its own data made once: at
+    every state they equal a computation in fresh data."""
+    from mcdm_pin.model.terms import TermsEvaluator
+
+    robot = Robot.load(REPO / "robots" / "caspr" / "8S_neck" / "8S_neck.yaml")
+    tr = load_trajectory(robot, "roll")
+    ev = TermsEvaluator(robot, compiled=jit.ready())
+    for k in range(0, len(tr.t), 10):
+        own = ev(tr.q[k], tr.qd[k], tr.qdd[k])
+        fresh = ev(tr.q[k], tr.qd[k], tr.qdd[k], data=robot.model.createData())
+        np.testing.assert_array_equal(own.u, fresh.u)
+        np.testing.assert_array_equal(own.RT, fresh.RT)
