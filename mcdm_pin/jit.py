@@ -49,6 +49,20 @@ def ready() -> bool:
     return _READY
 
 
+_KERNEL_MODULES: dict = {}
+
+
+def kernels(module: str):
+    """The kernels' module ``mcdm_pin.<module>`` (``"model.kernels"``, ``"solvers._fast"``), imported
+    on first use (they import numba, which ``import mcdm_pin`` does not) and then looked up: an
+    ``import`` inside a function costs ~1 us on every call, and the per-instant hot path calls
+    several."""
+    mod = _KERNEL_MODULES.get(module)
+    if mod is None:
+        mod = _KERNEL_MODULES[module] = importlib.import_module(f"mcdm_pin.{module}")
+    return mod
+
+
 def _lock_path() -> Path:
     return Path(tempfile.gettempdir()) / f"mcdm_pin_jit_{os.getuid() if hasattr(os, 'getuid') else 0}.lock"
 
