@@ -88,8 +88,10 @@ class InverseDynamics:
             self.evaluate = TermsEvaluator(self.robot, compiled=True)
 
     @contextmanager
-    def _blas_limit(self):
-        """BLAS limited to ``blas_threads`` threads inside (once, when calls nest)."""
+    def blas_limit(self):
+        """BLAS limited to ``blas_threads`` threads inside (once, when calls nest): :meth:`solve`
+        enters it at every call (~0.05 ms); a caller solving many instants one by one (a workspace's
+        chunk of poses) enters it once around them all."""
         if self.blas_threads is None or self._limited:
             yield
             return
@@ -109,7 +111,7 @@ class InverseDynamics:
 
     def solve(self, q, qd=None, qdd=None, f_prev=None) -> InstantResult:
         """Cable forces at one state."""
-        with self._blas_limit():
+        with self.blas_limit():
             return self._solve(q, qd, qdd, f_prev, checked=False)
 
     def _solve(self, q, qd, qdd, f_prev, checked: bool) -> InstantResult:
@@ -145,8 +147,10 @@ class InverseDynamics:
         eom = float("nan")
         m = self.robot.m
         act = self.problem.actuation
+        outputs = None
         if sol.found:
-            sol, eom = _check(qp, terms, sol, m, act)
+            # the answer checked on the original problem (and, compiled, the outputs in the same pass)
+            sol, eom, outputs = _check(qp, terms, sol, m, act, with_outputs=True)
             message = sol.message or message
         f, tau_act = sol.x[:m], sol.x[m:]
         if sol.found:
@@ -154,7 +158,9 @@ class InverseDynamics:
                          else self.problem.value(terms, sol.x, context, qp))
         else:
             objective = float("nan")
-        wrench, F_socket, angles = _outputs(terms, f if sol.found else None, len(self.robot.joints))
+        if outputs is None or not sol.found:
+            outputs = _outputs(terms, f if sol.found else None, len(self.robot.joints))
+        wrench, F_socket, angles = outputs
         return InstantResult(
             f=f, status=sol.status, objective=objective, eom_residual=eom,
             interaction_wrench=wrench, interaction_force_socket=F_socket,
@@ -193,7 +199,7 @@ class InverseDynamics:
             problem_json=self.problem.to_json())
 
     def _solve_range(self, traj, indices, progress=False) -> list[InstantResult]:
-        with self._blas_limit():
+        with self.blas_limit():
             return self._solve_range_limited(traj, indices, progress)
 
     def _solve_range_limited(self, traj, indices, progress=False) -> list[InstantResult]:
@@ -287,10 +293,8 @@ def _outputs(terms, f, n_joints: int):
     """Interaction wrenches (child frame), socket-frame forces and their angles at forces ``f``
     (``None``: no answer, NaN wrenches)."""
     if f is not None and jit.ready():  # one compiled pass, the same formulas
-        from .solvers._fast import instant_outputs
-
         c_ = np.ascontiguousarray
-        return instant_outputs(c_(terms.u, dtype=float), c_(terms.RT, dtype=float),
+        return jit.kernels("solvers._fast").instant_outputs(c_(terms.u, dtype=float), c_(terms.RT, dtype=float),
                                c_(terms.R_socket, dtype=float), c_(terms.socket_axes, dtype=float),
                                c_(f, dtype=float))
     wrench = terms.wrenches(f) if f is not None else np.full((n_joints, 6), np.nan)
@@ -298,23 +302,28 @@ def _outputs(terms, f, n_joints: int):
     return wrench, F_socket, interaction_angles(F_socket, terms.socket_axes)
 
 
-def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None) -> tuple[Solution, float]:
+def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None, with_outputs: bool = False):
     """Downgrade a solution that breaks a constraint beyond tolerance to ``inaccurate``. Returns the
     solution and its relative equation-of-motion residual (``m`` cables; ``actuation``: the problem's
-    actuated joints, whose torques follow the cable forces in ``sol.x``)."""
+    actuated joints, whose torques follow the cable forces in ``sol.x``); ``with_outputs``: and the
+    :func:`_outputs` at its forces when they came in the same compiled pass (else ``None``)."""
     f = sol.x
     problems = []
     extra = None if actuation is None else -actuation.S @ f[m:]
+    outputs = None
     if jit.ready():  # one compiled pass, the same formulas
-        from .solvers._fast import answer_check
-
-        G, g, axis = qp.cone_arrays()[:3] if qp.cones else (_NO_G, _NO_3, _NO_3)
+        fast = jit.kernels("solvers._fast")
+        _, _, _, lb, ub, G, g, axis = qp.kernel_arrays()[:8]
         c_ = np.ascontiguousarray
-        eom, broken, worst, k = answer_check(
-            c_(terms.L, dtype=float), c_(terms.tau, dtype=float), _NO_1 if extra is None else c_(extra, dtype=float),
-            c_(f, dtype=float), c_(qp.lb, dtype=float), c_(qp.ub, dtype=float),
-            c_(G, dtype=float).reshape(len(g), 3, len(f)), c_(g, dtype=float), c_(axis, dtype=float),
-            _cone_angles(qp))
+        args = (c_(terms.L, dtype=float), c_(terms.tau, dtype=float),
+                _NO_1 if extra is None else c_(extra, dtype=float), c_(f, dtype=float), lb, ub, G, g, axis,
+                c_(_cone_angles(qp), dtype=float))
+        if with_outputs:
+            eom, broken, worst, k, *outputs = fast.answer_check_outputs(
+                *args, c_(terms.u, dtype=float), c_(terms.RT, dtype=float), c_(terms.R_socket, dtype=float),
+                c_(terms.socket_axes, dtype=float))
+        else:
+            eom, broken, worst, k = fast.answer_check(*args)
     else:
         eom = terms.eom_residual(f[:m], extra)
         broken = max(float((qp.lb - f).max(initial=0.0)), float((f - qp.ub).max(initial=0.0)))
@@ -329,17 +338,15 @@ def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None) -> tuple[So
         problems.append(f"cable (or actuator) bounds broken by {broken:.2e}")
     if qp.cones and sol.status == OPTIMAL and not worst <= tol.CONE_DEG:
         problems.append(f"cone of {qp.cones[k].joint!r} broken by {worst:.2e} deg")
-    if not problems:
-        return sol, eom
-    return sol.but(status=INACCURATE, message="; ".join(problems)), eom
+    if problems:
+        sol = sol.but(status=INACCURATE, message="; ".join(problems))
+    return (sol, eom, outputs) if with_outputs else (sol, eom)
 
 
 def _cone_angles(qp: QPData) -> np.ndarray:
-    return np.array([c.angle_deg for c in qp.cones], dtype=float)
+    return qp.cone_consts()[1]
 
 
-_NO_G = np.zeros((0, 3, 0))
-_NO_3 = np.zeros((0, 3))
 _NO_1 = np.zeros(0)
 
 

@@ -15,6 +15,12 @@ library's kernels on 2 cores) and caches it on disk (``__pycache__`` beside the 
   uncompiled path: the numpy cable terms and the ProxQP/Clarabel stages (the compiled stages skip
   themselves while :func:`ready` is false). Later runs load the cache.
 
+numba invalidates a cached kernel when *its own* source file changes, not when a kernel it calls
+in another module does (``_fast.py``'s kernels call ``_kkt.py``'s): after such an edit (a ``git
+pull``, an upgrade in place) the cache would serve the old code. So the cache carries a stamp, the
+digest of every kernel module's source (:func:`sources_digest`); a cache whose stamp differs is
+flushed (numba's own ``flush`` of every kernel's index) and compiled again.
+
 The policy is ``MCDM_PIN_JIT`` (or ``prepare(policy=...)``): ``background`` (default), ``wait``
 (compile in this process, with a note: tests and benchmarks use it), ``off`` (never compile here:
 uncompiled path only, the cache is used when complete).
@@ -22,8 +28,10 @@ uncompiled path only, the cache is used when complete).
 
 from __future__ import annotations
 
+import hashlib
 import importlib
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -47,6 +55,20 @@ def register(name: str, calls) -> None:
 def ready() -> bool:
     """Whether the compiled kernels are available in this process."""
     return _READY
+
+
+_KERNEL_MODULES: dict = {}
+
+
+def kernels(module: str):
+    """The kernels' module ``mcdm_pin.<module>`` (``"model.kernels"``, ``"solvers._fast"``), imported
+    on first use (they import numba, which ``import mcdm_pin`` does not) and then looked up: an
+    ``import`` inside a function costs ~1 us on every call, and the per-instant hot path calls
+    several."""
+    mod = _KERNEL_MODULES.get(module)
+    if mod is None:
+        mod = _KERNEL_MODULES[module] = importlib.import_module(f"mcdm_pin.{module}")
+    return mod
 
 
 def _lock_path() -> Path:
@@ -75,20 +97,95 @@ def _load_cached(disp, args) -> bool:
     return True
 
 
+def kernel_sources() -> list[Path]:
+    """The package's source files that define numba kernels (those that import numba's ``njit``)."""
+    root = Path(__file__).resolve().parent
+    pattern = re.compile(r"^from numba import .*\bnjit\b", re.M)
+    return sorted(p for p in root.rglob("*.py") if pattern.search(p.read_text(encoding="utf-8")))
+
+
+def sources_digest(paths=None) -> str:
+    """sha256 over the names and bytes of ``paths`` (default: :func:`kernel_sources`)."""
+    h = hashlib.sha256()
+    for p in (kernel_sources() if paths is None else paths):
+        h.update(Path(p).name.encode() + b"\0" + Path(p).read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+STAMP = "mcdm_pin_kernels.sha256"  # the stamp's file name, in the kernels' cache folder
+
+
+def _dispatchers():
+    """Every numba dispatcher of the kernel modules (registered or called by registered ones)."""
+    _all_calls()
+    out = []
+    for name, mod in list(sys.modules.items()):
+        path = getattr(mod, "__file__", None)
+        if not (name.startswith("mcdm_pin.") and path and Path(path).resolve() in set(kernel_sources())):
+            continue
+        out += [v for v in vars(mod).values() if getattr(v, "_cache", None) is not None
+                and hasattr(v, "py_func") and v.py_func.__module__ == name]
+    return out
+
+
+def _stamp_path(disps) -> Path | None:
+    for d in disps:
+        try:
+            return Path(d._cache.cache_path) / STAMP
+        except Exception:  # noqa: BLE001 - no cache folder for this kernel: try the next
+            continue
+    return None
+
+
+def stamp_current() -> bool:
+    """Whether the cache's stamp equals the sources' digest; if not, flush every kernel's cache
+    index (the next load finds nothing and the kernels are compiled again)."""
+    disps = _dispatchers()
+    path = _stamp_path(disps)
+    if path is None:
+        return True  # no cache at all: numba compiles in memory, nothing can be stale
+    try:
+        if path.is_file() and path.read_text().strip() == sources_digest():
+            return True
+    except OSError:
+        pass
+    for d in disps:
+        try:
+            d._cache.flush()
+        except Exception:  # noqa: BLE001 - an unwritable cache: numba then compiles in memory
+            pass
+    return False
+
+
+def _write_stamp() -> None:
+    path = _stamp_path(_dispatchers())
+    if path is None:
+        return
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(sources_digest() + "\n")
+    except OSError:
+        pass  # an unwritable cache folder: nothing is cached there either
+
+
 def cached() -> bool:
-    """Whether every registered kernel can be loaded from the cache (loads those that can)."""
+    """Whether every registered kernel can be loaded from the cache (loads those that can); a cache
+    stamped for other kernel sources is flushed first and is not."""
     try:
         calls = _all_calls()
+        if not stamp_current():
+            return False
         return bool(calls) and all([_load_cached(disp, args) for disp, args in calls])
     except Exception:  # noqa: BLE001 - numba internals changed: treat as not cached
         return False
 
 
 def compile_now() -> None:
-    """Compile (or load) every registered kernel in this process, blocking."""
+    """Compile (or load) every registered kernel in this process, blocking, and stamp the cache."""
     global _READY
     for disp, args in _all_calls():
         disp(*args)
+    _write_stamp()
     _READY = True
 
 

@@ -57,16 +57,18 @@ class QPData:
     """
 
     __slots__ = ("_P", "c", "r", "A", "b", "lb", "ub", "cones", "P_diag", "P_factor", "norm_weight",
-                 "_cone_arrays")
+                 "_cone_arrays", "_cone_consts", "_kernel_arrays")
 
     def __init__(self, P, c, r, A, b, lb, ub, cones=(), *, P_diag=None, P_factor=None, norm_weight=None,
-                 cone_arrays=None):
+                 cone_arrays=None, cone_consts=None):
         self._P = P
         self.c, self.r, self.A, self.b, self.lb, self.ub = c, float(r), A, b, lb, ub
         self.cones = list(cones)
         self.P_diag, self.P_factor = P_diag, P_factor
         self.norm_weight = norm_weight
         self._cone_arrays = cone_arrays
+        self._cone_consts = cone_consts
+        self._kernel_arrays = None
         if P is None and (P_diag is None or P_factor is None):
             raise ProblemError("QPData: give P or both P_diag and P_factor")
 
@@ -99,6 +101,31 @@ class QPData:
                 np.array([c.tan for c in cs], dtype=float).reshape(k),
                 np.array([c.basis[0] for c in cs], dtype=float).reshape(k, 3))
         return self._cone_arrays
+
+    def kernel_arrays(self) -> tuple:
+        """``(c, A, b, lb, ub, G, g, axis, tan, basis0)`` (the vectors and equations, then
+        :meth:`cone_arrays`) as C-ordered float arrays, made once: what the compiled steps of an
+        instant read (no copies when they are so already, as an assembled problem's are; ``A`` is
+        (k, n) even when empty, ``G`` (K, 3, n))."""
+        if self._kernel_arrays is None:
+            c_ = np.ascontiguousarray
+            n = self.n
+            G, g, ax, tn, basis0 = self.cone_arrays()
+            K = len(g)
+            self._kernel_arrays = (
+                c_(self.c, dtype=float), c_(self.A, dtype=float).reshape(len(self.b), n), c_(self.b, dtype=float),
+                c_(self.lb, dtype=float), c_(self.ub, dtype=float), c_(G, dtype=float).reshape(K, 3, n),
+                c_(g, dtype=float).reshape(K, 3), c_(ax, dtype=float).reshape(K, 3), c_(tn, dtype=float).reshape(K),
+                c_(basis0, dtype=float).reshape(K, 3))
+        return self._kernel_arrays
+
+    def cone_consts(self) -> tuple:
+        """What does not change from instant to instant about the cones, stacked for compiled code:
+        their joints' names (a tuple), half-angles in degrees (k,), the cosines of the half-angles
+        (k,) and the bases normal to the axes (k, 2, 3)."""
+        if self._cone_consts is None:
+            self._cone_consts = cone_constants(self.cones)
+        return self._cone_consts
 
     def cone_rows(self) -> tuple[np.ndarray, np.ndarray]:
         r"""Per cone, ``T (3, n)`` and ``t (3,)`` with ``s = T x + t`` in the second-order cone
@@ -136,6 +163,7 @@ class QPData:
                       norm_weight=self.norm_weight)
         if "cones" not in changes:
             fields["cone_arrays"] = self._cone_arrays
+            fields["cone_consts"] = self._cone_consts
         if "P" in changes and "P_diag" not in changes:
             fields["P_diag"] = fields["P_factor"] = None
         fields.update(changes)
@@ -147,6 +175,15 @@ class QPData:
 
     def with_cones(self, cones) -> "QPData":
         return self.replace(cones=list(cones))
+
+
+def cone_constants(cones) -> tuple:
+    """:meth:`QPData.cone_consts` of a list of cones (:class:`~mcdm_pin.constraints.ConeData` or
+    bound :class:`~mcdm_pin.constraints.InteractionCone`)."""
+    k = len(cones)
+    deg = np.array([float(c.angle_deg) for c in cones], dtype=float).reshape(k)
+    return (tuple(c.joint for c in cones), deg, np.cos(np.radians(deg)),
+            np.array([c.basis for c in cones], dtype=float).reshape(k, 2, 3))
 
 
 class Problem:
@@ -246,7 +283,8 @@ class Problem:
             A = np.vstack([terms.L.T] + A_rows) if plan["eom"] else np.vstack(A_rows)
             b = np.concatenate([-terms.tau] + b_rows) if plan["eom"] else np.concatenate(b_rows)
         elif plan["eom"]:
-            A, b = terms.L.T, -terms.tau
+            # C order: the compiled steps of the instant read it as it is (no copy per step)
+            A, b = np.ascontiguousarray(terms.L.T), -terms.tau
         else:
             A, b = np.zeros((0, m)), np.zeros(0)
         P = quad.P if getattr(self.objective, "symmetric", False) else 0.5 * (quad.P + quad.P.T)
@@ -254,6 +292,7 @@ class Problem:
         batch = plan["cones"]
         if batch is not None and not cones:
             qp.cones, qp._cone_arrays = batch(terms)
+            qp._cone_consts = batch.consts
         elif batch is not None:
             qp.cones = batch(terms)[0] + cones
         return qp if self.actuation is None else self.actuation.extend(qp, plan["eom"], terms.L.shape[1])

@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import jit
 from .constraints import ConeData
 from .problem import QPData
 from .solvers.base import INACCURATE, OPTIMAL, Solution, Solver
@@ -71,8 +72,6 @@ def spread(A: np.ndarray) -> float:
     largest and smallest non-zero row maxima and column maxima of ``|A|`` (1 when ``A`` is zero).
     (The right-hand side is left out: an equation whose torque happens to be near zero is not badly
     scaled.) Compiled when the kernels are (:func:`mcdm_pin.model.kernels.spread`)."""
-    from . import jit
-
     if jit.ready():
         from .model.kernels import spread as compiled
 
@@ -116,19 +115,15 @@ def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool =
     ``force`` is false): computed from maxima only, without copying the problem (a uniform variable
     scale, the usual case, is handled as a scalar)."""
     m, n = qp.A.shape
-    if f_scale is None and not force and qp.structured and bool(np.all(qp.P_diag >= 0.0)):
-        from . import jit
-
-        if jit.ready():  # the usual well-scaled instant: one compiled pass, no arrays made
-            from .model.kernels import needs_scaling
-
-            G, g = qp.cone_arrays()[:2]
-            c_ = np.ascontiguousarray
-            if not needs_scaling(c_(qp.A, dtype=float), c_(qp.b, dtype=float), c_(qp.lb, dtype=float),
-                                 c_(qp.ub, dtype=float), c_(qp.P_diag, dtype=float),
-                                 c_(qp.P_factor, dtype=float), c_(qp.c, dtype=float), c_(G, dtype=float),
-                                 c_(g, dtype=float), float(SPREAD)):
-                return None
+    if f_scale is None and not force and qp.structured and jit.ready():
+        # the usual well-scaled instant: one compiled pass, no arrays made (it answers "maybe" for a
+        # Hessian diagonal with a negative entry: then the factors below decide)
+        c, A, b, lb, ub, G, g = qp.kernel_arrays()[:7]
+        c_ = np.ascontiguousarray  # (no copies: an assembled problem's arrays are C-ordered floats)
+        needs_scaling = jit.kernels("model.kernels").needs_scaling
+        if not needs_scaling(A, b, lb, ub, c_(qp.P_diag, dtype=float), c_(qp.P_factor, dtype=float), c, G, g,
+                             float(SPREAD)):
+            return None
     absA = np.abs(qp.A) if m else None
     ruiz = m and (spread(qp.A) > SPREAD or f_scale is not None)
     if ruiz:

@@ -125,6 +125,45 @@ def test_background_compiler_sees_every_kernel():
     assert expected >= 4 and out.startswith(f"{expected} kernel specialisations registered"), out
 
 
+def test_cache_stamped_with_every_kernel_source(tmp_path, monkeypatch):
+    """numba invalidates a cached kernel when its own file changes, not when a kernel it calls in
+    another module does (``_fast.py`` calls ``_kkt.py``): the cache's stamp is the digest of every
+    kernel module, and a stamp that differs flushes every kernel's cache (here on stand-ins, so that
+    the real cache stays)."""
+    from mcdm_pin import jit
+
+    names = {p.name for p in jit.kernel_sources()}
+    assert {"kernels.py", "_kkt.py", "_fast.py", "_ipm.py"} <= names and "jit.py" not in names
+    # the real cache, compiled by this session's conftest, carries the current stamp
+    assert (jit._stamp_path(jit._dispatchers()).read_text().strip() == jit.sources_digest())
+    # one changed byte in any kernel module changes the digest
+    files = []
+    for p in jit.kernel_sources():
+        files.append(tmp_path / p.name)
+        files[-1].write_bytes(p.read_bytes())
+    before = jit.sources_digest(files)
+    files[1].write_bytes(files[1].read_bytes() + b"#")
+    assert jit.sources_digest(files) != before
+
+    flushed = []
+
+    class Cache:
+        cache_path = str(tmp_path / "cache")
+
+        def flush(self):
+            flushed.append(1)
+
+    class Kernel:
+        _cache = Cache()
+
+    monkeypatch.setattr(jit, "_dispatchers", lambda: [Kernel(), Kernel()])
+    assert not jit.stamp_current() and len(flushed) == 2  # no stamp yet: flushed
+    jit._write_stamp()
+    assert jit.stamp_current() and len(flushed) == 2  # stamped: kept
+    monkeypatch.setattr(jit, "sources_digest", lambda paths=None: "another source")
+    assert not jit.stamp_current() and len(flushed) == 4  # a kernel module changed: flushed
+
+
 def test_compiled_scaling_check_agrees_with_scaling_factors(tmp_path):
     """``needs_scaling`` (one compiled pass) says "no scaling" only where ``scaling_factors``' numpy path
     returns None: on the neck (cases 1-3) and on the 2-link arm with masses and bounds scaled by 1e6,

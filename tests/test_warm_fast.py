@@ -25,15 +25,22 @@ from .conftest import REPO
 
 @pytest.fixture(scope="module")
 def instants():
-    """(qp, terms, solution) of every instant of the 2-link arm (cases 1-3, traj1) and of the human
-    arm's abduct (case 3: a flat optimal face, non-unique first-stage optima)."""
+    """(qp, terms, solution) of every 7th instant of the 2-link arm (cases 1-3, traj1), of the human
+    arm's abduct (case 3: a flat optimal face, non-unique first-stage optima) and of the CASPR neck's
+    roll (case 3: eight cones, some held)."""
     jit.prepare(policy="wait")
     out = []
-    for robot_file, traj, cases in (("two_link_sr.yaml", "traj1", (1, 2, 3)), ("human_arm.yaml", "abduct", (2, 3))):
+    neck = "caspr/8S_neck/8S_neck.yaml"
+    for robot_file, traj, cases in (("two_link_sr.yaml", "traj1", (1, 2, 3)), ("human_arm.yaml", "abduct", (2, 3)),
+                                    (neck, "roll", (3,))):
         robot = Robot.load(REPO / "robots" / robot_file)
         tr = load_trajectory(robot, traj)
         for case in cases:
-            idp = InverseDynamics.for_case(robot, case)
+            # the neck with the paper's weights and 15 deg cones (benchmarks/_common.py): cones held
+            options = {} if robot_file != neck else dict(
+                alpha={j: 0.125 for j in robot.joint_names}, beta={j: 0.0 for j in robot.joint_names},
+                cones={j: 15.0 for j in robot.joint_names})
+            idp = InverseDynamics.for_case(robot, case, **options)
             for k in range(0, len(tr.t), 7):
                 terms = idp.evaluate(tr.q[k], tr.qd[k], tr.qdd[k])
                 qp = idp.problem.assemble(terms, Context(robot, None))
@@ -81,9 +88,12 @@ def test_answer_check_and_outputs_equal_the_numpy_ones(instants):
         # the residual of an exact answer is itself rounding (~1e-16): the order of the sums decides
         # its digits; anything that matters (the check's 1e-8) is far above 1e-14
         assert eom1 == pytest.approx(eom2, rel=1e-9, abs=1e-14)
-        for a, b in zip(ID._outputs(terms, sol.x[:m], len(idp.robot.joints)),
-                        _numpy(ID._outputs, terms, sol.x[:m], len(idp.robot.joints))):
-            np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * max(1.0, np.abs(b).max()))
+        reference = _numpy(ID._outputs, terms, sol.x[:m], len(idp.robot.joints))
+        s3, eom3, fused = ID._check(qp, terms, sol, m, with_outputs=True)  # the runner's one pass
+        assert s3.status == s1.status and s3.message == s1.message and eom3 == eom1
+        for outputs in (ID._outputs(terms, sol.x[:m], len(idp.robot.joints)), fused):
+            for a, b in zip(outputs, reference):
+                np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * max(1.0, np.abs(b).max()))
     # a broken answer is reported by both paths with the same message
     qp, terms, sol, idp = instants[0]
     bad = sol.but(x=sol.x + 1.0)
@@ -120,3 +130,143 @@ def test_warm_stage_counts_its_kkt_solves(instants):
     line = stage_counts(run)
     assert line.startswith(f"answered by warm_active_set at {warm.sum()} instants (median ")
     assert "KKT solves" in line
+
+
+def test_cone_batch_is_the_numpy_ones(instants):
+    seen = 0
+    for qp, terms, _, idp in instants:
+        batch = idp.problem._plan["cones"]
+        if batch is None:
+            continue
+        seen += 1
+        compiled = batch(terms)[1]
+        for a, b in zip(compiled, batch.arrays(terms) + (batch.tan, batch.basis0)):
+            np.testing.assert_allclose(a, b, rtol=1e-14, atol=1e-14 * np.abs(b).max())
+        assert qp.cone_consts()[0] == tuple(c.joint for c in qp.cones)
+        np.testing.assert_array_equal(qp.cone_consts()[1], [c.angle_deg for c in qp.cones])
+    assert seen > 10
+
+
+def _reference_try(qp, guess, max_pivots):
+    """:func:`try_active_set` as it was before its compiled answer: the kernel, then the numpy
+    :func:`active_solution`."""
+    from mcdm_pin.solvers import active_set as AS
+
+    G, gc, ax, tn, basis0 = qp.cone_arrays()
+    state = guess.cable_state(qp.n)
+    names = [c.joint for c in qp.cones]
+    cact = np.array([nm in guess.cones for nm in names], dtype=np.bool_)
+    cdir = basis0.copy()
+    for k in np.flatnonzero(cact):
+        cdir[k] = guess.cones[names[k]][0]
+    c_ = np.ascontiguousarray
+    code, x, mus, grad, state, cact, dirs, nxt, y, _, solves = _kkt.active_set_run(
+        c_(qp.P), qp.c, c_(qp.A), qp.b, qp.lb, qp.ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, 10,
+        *AS._AS_TOLS)
+    if code != _kkt.FOUND:
+        return None
+    return AS.active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt, iterations=int(solves))
+
+
+def test_warm_answer_is_the_numpy_ones(instants):
+    """The compiled answer of the active-set stage (kernel, duals, objective, next guess) equals the
+    kernel's point converted by the numpy code, from guesses near (the previous sampled instant's
+    answer) and far (no bound, no cone held)."""
+    from mcdm_pin.solvers.active_set import ActiveSet, try_active_set
+
+    found = held = 0
+    prev = None
+    for qp, _, sol, idp in instants:
+        guesses = [ActiveSet(np.zeros(0, int), np.zeros(0, int))]
+        if prev is not None and prev[1] is idp and prev[0].active is not None:
+            guesses.append(prev[0].active)
+        prev = (sol, idp)
+        for guess in guesses:
+            got, want = try_active_set(qp, guess, 50), _reference_try(qp, guess, 50)
+            assert (got is None) == (want is None)
+            if got is None:
+                continue
+            found += 1
+            np.testing.assert_array_equal(got.x, want.x)
+            np.testing.assert_array_equal(got.y, want.y)
+            np.testing.assert_array_equal(got.z, want.z)
+            scale = max(1.0, np.abs(want.z_cone).max(initial=0.0))
+            np.testing.assert_allclose(got.z_cone, want.z_cone, rtol=1e-14, atol=1e-14 * scale)
+            assert got.objective == pytest.approx(want.objective, rel=1e-12, abs=1e-12)
+            assert got.iterations == want.iterations and got.verified and got.status == want.status
+            np.testing.assert_array_equal(got.active.state, want.active.state)
+            assert got.active.cones.keys() == want.active.cones.keys()
+            for name, (d, mu) in want.active.cones.items():
+                np.testing.assert_array_equal(got.active.cones[name][0], d)
+                assert got.active.cones[name][1] == mu
+                held += 1
+            # the next guess's arrays say what its dictionary says
+            mask, dirs = got.active.cone_guess(qp)
+            assert [c.joint for k, c in enumerate(qp.cones) if mask[k]] == list(want.active.cones)
+    assert found > 20 and held > 0
+
+
+def test_interaction_quadratic_is_the_numpy_ones(instants):
+    from mcdm_pin.objectives import MinInteractions
+
+    seen = 0
+    for _, terms, _, idp in instants:
+        obj = idp.problem.objective
+        if not isinstance(obj, MinInteractions):
+            continue
+        seen += 1
+        compiled = obj.quadratic(terms, None)
+        reference = _numpy(obj.quadratic, terms, None)
+        for a, b in ((compiled.P, reference.P), (compiled.c, reference.c), (compiled.factor, reference.factor),
+                     (compiled.diag, reference.diag)):
+            np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-13 * max(np.abs(b).max(initial=0.0), 1e-300))
+        assert compiled.r == pytest.approx(reference.r, rel=1e-13, abs=1e-300)
+        np.testing.assert_array_equal(compiled.P, compiled.P.T)
+    assert seen > 10
+
+
+def test_projection_decision_is_the_numpy_ones(instants):
+    from mcdm_pin.solvers.check import project_to_bounds
+
+    for qp, _, sol, _ in instants:
+        for x in (sol.x, np.clip(sol.x - 1e-13, qp.lb, None), sol.x + 1e-3, np.full(qp.n, np.nan)):
+            s = sol.but(x=x)
+            a, b = project_to_bounds(qp, s), _numpy(project_to_bounds, qp, s)
+            np.testing.assert_array_equal(a.x, b.x)
+
+
+def test_ratio_test_with_the_vertex_factors_is_the_fresh_ones():
+    """The dual simplex step's ratio test reuses the vertex solve's LU of the free columns (the same
+    matrix): the same entering cable as solving that matrix afresh."""
+    rng = np.random.default_rng(5)
+    n, neq = 12, 5
+    for _ in range(50):
+        A = rng.standard_normal((neq, n))
+        state = np.ones(n, dtype=np.int8)
+        state[rng.choice(n, neq, replace=False)] = 0
+        state[(state != 0) & (rng.random(n) < 0.3)] = 2
+        free = np.flatnonzero(state == 0)
+        grad = rng.standard_normal(n)
+        LU, perm, ok = _kkt._lu_factor(np.ascontiguousarray(A[:, free]))
+        assert ok
+        G, z3 = np.zeros((0, 3, n)), np.zeros((0, 3))
+        for kind in (1, 2):
+            r = int(free[rng.integers(neq)])
+            args = (A, G, z3, z3, np.zeros(0), np.zeros(0, dtype=np.bool_), z3, state, grad, kind, r, n)
+            assert _kkt._ratio_test(*args, LU, perm, True) == \
+                _kkt._ratio_test(*args, np.zeros((0, 0)), np.zeros(0, dtype=np.int64), False)
+
+
+def test_terms_read_back_through_views_follow_every_state():
+    """The evaluator reads Pinocchio's joint wrenches through views of its own data made once: at
+    every state they equal a computation in fresh data."""
+    from mcdm_pin.model.terms import TermsEvaluator
+
+    robot = Robot.load(REPO / "robots" / "caspr" / "8S_neck" / "8S_neck.yaml")
+    tr = load_trajectory(robot, "roll")
+    ev = TermsEvaluator(robot, compiled=jit.ready())
+    for k in range(0, len(tr.t), 10):
+        own = ev(tr.q[k], tr.qd[k], tr.qdd[k])
+        fresh = ev(tr.q[k], tr.qd[k], tr.qdd[k], data=robot.model.createData())
+        np.testing.assert_array_equal(own.u, fresh.u)
+        np.testing.assert_array_equal(own.RT, fresh.RT)

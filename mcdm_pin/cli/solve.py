@@ -102,6 +102,15 @@ def run(args) -> int:
     return 0
 
 
+def _peak(col) -> int:
+    """The instant of the largest finite value of ``col``: the first one within 1e-9 (relative) of
+    it, so that a tie to rounding (a symmetric trajectory's two equal peaks) reports the same
+    instant whatever the last bits of the answers."""
+    k = int(np.nanargmax(col))
+    with np.errstate(invalid="ignore"):
+        return int(np.flatnonzero(col >= col[k] - 1e-9 * abs(col[k]))[0])
+
+
 def summary(result) -> str:
     """The solve summary: peaks per cable and joint, infeasible instants, timing."""
     t = result.t
@@ -113,7 +122,7 @@ def summary(result) -> str:
     for i, name in enumerate(result.cable_names):
         col = result.f[:, i]
         if np.any(np.isfinite(col)):
-            k = int(np.nanargmax(col))
+            k = _peak(col)
             rows.append([name, f"{col[k]:.4f}", f"{t[k]:.3f}", f"{np.nanmin(col):.4f}"])
         else:
             rows.append([name, "-", "-", "-"])
@@ -123,10 +132,10 @@ def summary(result) -> str:
     types = list(result.joint_types) if result.joint_types is not None else ["spherical"] * len(result.joint_names)
     for j, name in enumerate(result.joint_names):
         if np.any(np.isfinite(Fmag[:, j])):
-            k = int(np.nanargmax(Fmag[:, j]))
+            k = _peak(Fmag[:, j])
             cone = result.cone_deg[j]
             if types[j] == "spherical":  # an interaction angle means something only about a socket axis
-                a = int(np.nanargmax(result.interaction_angle_deg[:, j]))
+                a = _peak(result.interaction_angle_deg[:, j])
                 angle = [f"{result.interaction_angle_deg[a, j]:.4f}", f"{t[a]:.3f}"]
             else:
                 angle = ["-", "-"]

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import jit
 from ..exceptions import ProblemError
 from .base import ConeData, Constraint, perpendicular_basis
 
@@ -77,17 +78,35 @@ class InteractionCone(Constraint):
 class ConeBatch:
     """All bound :class:`InteractionCone` constraints of a problem evaluated at once: one batched
     product for every cone's ``G, g`` instead of one small product per cone (the per-instant hot
-    path)."""
+    path; one compiled pass, :func:`mcdm_pin.model.kernels.cone_batch`, when the kernels are
+    compiled)."""
 
     def __init__(self, cones: list[InteractionCone]):
+        from ..problem import cone_constants
+
         self.cones = cones
-        self.index = np.array([c.index for c in cones], dtype=int)
-        self.socket = np.array([c.frame == "socket" for c in cones])
+        self.index = np.array([c.index for c in cones], dtype=np.int64)
+        self.socket = np.array([c.frame == "socket" for c in cones], dtype=np.bool_)
         self.all_socket = bool(self.socket.all())
         self.tan = np.array([np.tan(np.radians(float(c.angle_deg))) for c in cones])
         self.basis0 = np.array([c.basis[0] for c in cones]).reshape(len(cones), 3)
+        self.consts = cone_constants(cones)  # QPData.cone_consts: the same at every instant
+        self._made = [(c.joint, float(c.angle_deg), c.basis) for c in cones]
 
     def __call__(self, terms) -> tuple[list[ConeData], tuple]:
+        if jit.ready():
+            c_ = np.ascontiguousarray  # (no copy: the terms' arrays are C-ordered floats)
+            G, g, axes = jit.kernels("model.kernels").cone_batch(c_(terms.RT, dtype=float), c_(terms.u, dtype=float),
+                                    c_(terms.R_socket, dtype=float), c_(terms.socket_axes, dtype=float),
+                                    self.index, self.socket)
+        else:
+            G, g, axes = self.arrays(terms)
+        data = [ConeData(joint, G[k], g[k], axes[k], angle, basis)
+                for k, (joint, angle, basis) in enumerate(self._made)]
+        return data, (G, g, axes, self.tan, self.basis0)
+
+    def arrays(self, terms) -> tuple:
+        """``(G, g, axes)`` of every cone, in numpy (the reference of the compiled pass)."""
         idx = self.index
         G, g = terms.RT[idx, :3], terms.u[idx, :3]
         if self.all_socket:
@@ -98,7 +117,4 @@ class ConeBatch:
             Rs = terms.R_socket[idx[s]]
             G, g = G.copy(), g.copy()
             G[s], g[s] = Rs @ G[s], np.einsum("kab,kb->ka", Rs, g[s])
-        axes = terms.socket_axes[idx]
-        data = [ConeData(joint=c.joint, G=G[k], g=g[k], axis=axes[k], angle_deg=float(c.angle_deg),
-                         basis=c.basis) for k, c in enumerate(self.cones)]
-        return data, (G, g, axes, self.tan, self.basis0)
+        return G, g, terms.socket_axes[idx]

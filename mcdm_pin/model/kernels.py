@@ -161,6 +161,72 @@ def spread(A, b):
     return out
 
 
+@njit(cache=True, nogil=True)
+def cone_batch(RT, u, R_socket, axes, index, socket):
+    """Every cone's force map at once (:class:`mcdm_pin.constraints.cone.ConeBatch`, whose numpy
+    ``arrays`` is the reference): cone ``k`` on physical joint ``j = index[k]`` has ``F = g + G f``
+    with ``G = R^T[j, :3]``, ``g = u[j, :3]``, both turned into the socket frame by ``R_socket[j]``
+    when ``socket[k]``; returns ``(G (K, 3, m), g (K, 3), axes (K, 3))``."""
+    K = index.shape[0]
+    m = RT.shape[2]
+    G = np.empty((K, 3, m))
+    g = np.empty((K, 3))
+    ax = np.empty((K, 3))
+    for k in range(K):
+        j = index[k]
+        for a in range(3):
+            ax[k, a] = axes[j, a]
+        if socket[k]:
+            for a in range(3):
+                r0, r1, r2 = R_socket[j, a, 0], R_socket[j, a, 1], R_socket[j, a, 2]
+                g[k, a] = r0 * u[j, 0] + r1 * u[j, 1] + r2 * u[j, 2]
+                for c in range(m):
+                    G[k, a, c] = r0 * RT[j, 0, c] + r1 * RT[j, 1, c] + r2 * RT[j, 2, c]
+        else:
+            for a in range(3):
+                g[k, a] = u[j, a]
+                for c in range(m):
+                    G[k, a, c] = RT[j, a, c]
+    return G, g, ax
+
+
+@njit(cache=True, nogil=True)
+def interaction_quadratic(RT, u, keep, sw):
+    """:meth:`mcdm_pin.objectives.MinInteractions.quadratic` (the numpy reference) in one pass: with
+    ``K = sw R^T[keep]`` and ``k = sw u[keep]`` (rows of the flattened (J*6, m) and (J*6,) arrays),
+    ``F = sqrt(2) K``, ``P = F^T F``, ``c = 2 K^T k``, ``r = k . k``; returns ``(P, c, r, F)``."""
+    m = RT.shape[2]
+    nk = keep.shape[0]
+    R = RT.reshape(RT.shape[0] * 6, m)
+    uf = u.reshape(u.shape[0] * 6)
+    s2 = np.sqrt(2.0)
+    F = np.empty((nk, m))
+    c = np.zeros(m)
+    r = 0.0
+    for t in range(nk):
+        row = keep[t]
+        kt = sw[t] * uf[row]
+        r += kt * kt
+        for j in range(m):
+            Kj = sw[t] * R[row, j]
+            F[t, j] = s2 * Kj
+            c[j] += kt * Kj
+    for j in range(m):
+        c[j] = 2.0 * c[j]
+    P = np.zeros((m, m))
+    for t in range(nk):
+        Ft = F[t]
+        for a in range(m):
+            fa = Ft[a]
+            if fa != 0.0:
+                for b in range(a + 1):
+                    P[a, b] += fa * Ft[b]
+    for a in range(m):
+        for b in range(a):
+            P[b, a] = P[a, b]
+    return P, c, r, F
+
+
 def csr(lists, n):
     """(ptr, idx) int64 arrays of a list of index lists."""
     ptr = np.zeros(n + 1, dtype=np.int64)
@@ -178,8 +244,13 @@ def _outside(v, limit):
 def needs_scaling(A, b, lb, ub, P_diag, P_factor, c, G, g, limit):
     """Whether :func:`mcdm_pin.scaling.scaling_factors` would scale this structured problem
     (``P = diag(P_diag) + P_factor^T P_factor``) at all: the same tests in one pass, for the usual
-    well-scaled instant (then no copy is made). ``False`` means: every factor would be one."""
+    well-scaled instant (then no copy is made). ``False`` means: every factor would be one; ``True``
+    that some may not be, or that ``P_diag`` has a negative (or NaN) entry, which these tests do
+    not cover (the caller then computes the factors)."""
     m, n = A.shape
+    for j in range(n):
+        if not P_diag[j] >= 0.0:
+            return True
     if m and spread(A, np.zeros(0)) > limit:
         return True
     unit = 0.0
@@ -228,6 +299,8 @@ def warm_calls():
     z = np.zeros
     i64 = np.int64
     return [(spread, (z((1, 2)), z(1))),
+            (interaction_quadratic, (z((1, 6, 2)), z((1, 6)), z(1, dtype=i64), z(1))),
+            (cone_batch, (z((1, 6, 2)), z((1, 6)), z((1, 3, 3)), z((1, 3)), z(1, dtype=i64), np.ones(1, dtype=np.bool_))),
             (needs_scaling, (z((1, 2)), z(1), z(2), z(2), z(2), z((1, 2)), z(2), z((1, 3, 2)), z((1, 3)), 1e3)),
             (cable_terms, (np.tile(np.eye(4), (1, 1, 1)), z((1, 6)), z((2, 3)), z(2, dtype=i64),
                            np.array([0], dtype=i64), np.array([1], dtype=i64), np.array([0], dtype=i64),

@@ -201,11 +201,15 @@ class TermsEvaluator:
         # evaluator's own data (they follow every update; 3x cheaper than indexing data.oMi anew)
         self._oMi_refs = [self.data.oMi[j] for j in keys]
         self._f_refs = [self.data.f[c] for c in self._child]
+        # ... and the joint wrenches' vectors are views of that data (4x cheaper to stack than
+        # asking each wrench for its vector at every instant)
+        self._u_views = [f.vector for f in self._f_refs]
         self._zeros = np.zeros(model.nv)
         self._tril = np.tril_indices(model.nv, -1)
         if compiled:
-            from .kernels import csr
+            from .kernels import cable_terms, csr
 
+            self._kernel = cable_terms
             K = len(keys)
             self._v_csr = csr([np.flatnonzero(self._sub_v[:, k]).tolist() for k in range(K)], K)
             self._a_csr = csr([np.flatnonzero(self._sub_phys[:, k]).tolist() for k in range(K)], K)
@@ -262,10 +266,8 @@ class TermsEvaluator:
         J = data.J.reshape(6, -1)
         cables = self.cables
         if self.compiled:
-            from .kernels import cable_terms
-
             # J.T: C-ordered for any nv (one compiled specialisation; a (6, 1) array counts as C)
-            X, _, lengths, L, RT, R_socket, bad = cable_terms(oMi, np.ascontiguousarray(J.T), *self._kernel_args)
+            X, _, lengths, L, RT, R_socket, bad = self._kernel(oMi, np.ascontiguousarray(J.T), *self._kernel_args)
             if bad >= 0:
                 raise StateError(f"cable {cables.cables[cables.seg_cable[bad]].name!r}: a segment has zero "
                                  f"length at this configuration, so its direction is undefined")
@@ -278,7 +280,7 @@ class TermsEvaluator:
             bad = -1 if np.all(np.isfinite(L)) else -2
         tau = pin.rnea(model, data, q, qd, qdd).copy()
         if own:
-            u = np.array([w.vector for w in self._f_refs]).reshape(len(self._child), 6)
+            u = np.array(self._u_views).reshape(len(self._child), 6)
         else:
             u = np.array([data.f[c].vector for c in self._child]).reshape(len(self._child), 6)
         return Terms(q=q.copy(), qd=qd.copy(), qdd=qdd.copy(), tau=tau, lengths=lengths, L=L, u=u,

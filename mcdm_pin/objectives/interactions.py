@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import jit
 from ..exceptions import ProblemError
 from .base import Objective, Quadratic
 
@@ -30,7 +31,7 @@ class MinInteractions(Objective):
         self._w = _w
         if _w is not None:
             w = _w.reshape(-1)
-            self._keep = np.flatnonzero(w != 0.0)
+            self._keep = np.flatnonzero(w != 0.0).astype(np.int64)
             self._sqrt_w = np.sqrt(w[self._keep])
 
     def bind(self, robot) -> "MinInteractions":
@@ -54,6 +55,11 @@ class MinInteractions(Objective):
     def quadratic(self, terms, context) -> Quadratic:
         if not self.bound:
             return self._bound_for(context).quadratic(terms, context)
+        if jit.ready():  # one compiled pass, the same formulas (numpy below: the reference)
+            c_ = np.ascontiguousarray  # (no copies: the terms' arrays are C-ordered floats)
+            P, c, r, F = jit.kernels("model.kernels").interaction_quadratic(c_(terms.RT, dtype=float), c_(terms.u, dtype=float),
+                                               self._keep, self._sqrt_w)
+            return Quadratic(P, c, r, np.zeros(P.shape[0]), F)
         keep, sw = self._keep, self._sqrt_w
         K = sw[:, None] * terms.RT.reshape(self._w.size, -1)[keep]  # sqrt(w) R^T, (k, m)
         k = sw * terms.u.reshape(-1)[keep]

@@ -6,11 +6,14 @@ overhead cost as much as the solve). The scaling decision has its own compiled p
 - :func:`unique_test`: :func:`mcdm_pin.solvers.least_norm.is_unique` (strongly active constraints,
   their rows' rank on the free variables, the reduced Hessian), the same steps and thresholds; the
   numpy code stays the reference (and the path while the kernels are not compiled).
+- :func:`active_set_answer`: the active-set kernel (:func:`._kkt.active_set_run`) and, at a verified
+  point, its answer's duals and objective (:func:`mcdm_pin.solvers.active_set.active_solution`, the
+  numpy reference), in one call.
 
 Two more fuse the runner's per-instant numpy steps after the solve into one pass each, with the
 same formulas: :func:`answer_check` (equation-of-motion residual, bounds, cones: the runner's check
 of every answer on the original problem) and :func:`instant_outputs` (interaction wrenches, socket
-forces and angles).
+forces and angles); :func:`answer_check_outputs` calls both at once (the runner's usual path).
 """
 
 from __future__ import annotations
@@ -18,15 +21,21 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._kkt import cone_force
+from ._kkt import FOUND, active_set_run, cone_force
 
 
 @njit(cache=True, nogil=True)
-def unique_test(x, z, grad, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel):
+def unique_test(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel):
     """:func:`mcdm_pin.solvers.least_norm.is_unique` after its first two tests (its
     ``_strongly_active``, the Cholesky of ``J^T J``, then the null space of ``J`` by an SVD and the
     reduced Hessian's smallest eigenvalue): 1 unique, 0 not proven unique."""
     n = x.shape[0]
+    grad = c.copy()  # the objective's gradient P x + c
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += P[i, j] * x[j]
+        grad[i] += acc
     gscale = 1e-300
     for i in range(n):
         gscale = max(gscale, abs(grad[i]), abs(c[i]))
@@ -219,12 +228,89 @@ def instant_outputs(u, RT, R_socket, axes, f):
     return W, Fs, ang
 
 
+@njit(cache=True, nogil=True)
+def active_set_answer(H, g, r, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, dirs0, cosr, basis,
+                      max_pivots, max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel):
+    """:func:`._kkt.active_set_run` from the guess ``(state0, cact0, dirs0)`` (``dirs0``: the held
+    cones' surface directions; the others start from ``basis0``), then, at a verified point, what
+    :func:`mcdm_pin.solvers.active_set.active_solution` makes of it: the bounds' multipliers ``z``
+    (base convention), the cone duals ``z_cone`` (:func:`mcdm_pin.solvers.active_set.cone_duals`,
+    ``cosr`` the half-angles' cosines, ``basis`` (K, 2, 3) the planes normal to the axes), the
+    objective ``1/2 f^T H f + g^T f + r`` and the cones held with a positive multiplier.
+
+    Returns ``(code, f, y, z, z_cone, objective, held, mus, dirs, next_state, solves)`` (``mus``: the
+    cones' multipliers); only ``code``
+    and ``solves`` mean anything unless ``code`` is :data:`._kkt.FOUND`."""
+    nc = G.shape[0]
+    cdir = basis0.copy()
+    for k in range(nc):
+        if cact0[k]:
+            for a in range(3):
+                cdir[k, a] = dirs0[k, a]
+    code, f, mus, grad, state, cact, dirs, nxt, y, _, solves = active_set_run(
+        H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir, max_pivots, max_newton, step_tol,
+        primal_tol, dual_tol, eom_tol, reg_rel)
+    n = f.shape[0]
+    z = np.zeros(n)
+    zc = np.zeros((nc, 3))
+    held = np.zeros(nc, dtype=np.bool_)
+    obj = np.nan
+    if code != FOUND:
+        return code, f, y, z, zc, obj, held, mus, dirs, nxt, solves
+    for i in range(n):
+        if state[i] != 0:
+            z[i] = -grad[i]
+    for k in range(nc):
+        mu = mus[k] if cact[k] else 0.0
+        held[k] = cact[k] and mus[k] > 0.0
+        if mu != 0.0:
+            zc[k, 0] = mu / cosr[k]
+            for e in range(2):
+                zc[k, 1 + e] = -zc[k, 0] * (basis[k, e, 0] * dirs[k, 0] + basis[k, e, 1] * dirs[k, 1]
+                                            + basis[k, e, 2] * dirs[k, 2])
+    quad = 0.0
+    lin = 0.0
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += H[i, j] * f[j]  # (H symmetric: row i is column i)
+        quad += acc * f[i]
+        lin += g[i] * f[i]
+    obj = 0.5 * quad + lin + r
+    return code, f, y, z, zc, obj, held, mus, dirs, nxt, solves
+
+
+@njit(cache=True, nogil=True)
+def answer_check_outputs(L, tau, extra, x, lb, ub, G, g, ax, angle_deg, u, RT, R_socket, axes):
+    """:func:`answer_check` and :func:`instant_outputs` (at the first ``L.shape[0]`` entries of
+    ``x``, the cable forces) in one call: ``(eom, broken, viol, k, W, Fs, angles)``."""
+    eom, broken, viol, k = answer_check(L, tau, extra, x, lb, ub, G, g, ax, angle_deg)
+    W, Fs, ang = instant_outputs(u, RT, R_socket, axes, x[:L.shape[0]])
+    return eom, broken, viol, k, W, Fs, ang
+
+
+@njit(cache=True, nogil=True)
+def outside_bounds(x, lb, ub):
+    """Whether some ``x_i < lb_i`` or ``x_i > ub_i`` (NaN: no)."""
+    for i in range(x.shape[0]):
+        if x[i] < lb[i] or x[i] > ub[i]:
+            return True
+    return False
+
+
 def warm_calls():
     """The kernels with example arguments of the types the library passes (registered with
     :mod:`mcdm_pin.jit` by :mod:`.active_set`)."""
     z = np.zeros
     n = 2
-    return [(unique_test, (z(n), z(n), z(n), z(n), z(n), z(n), z((1, n)), z((n, n)), z((1, 3, n)), z((1, 3)),
+    tols = (1e-12, 1e-9, 1e-9, 1e-9, 1e-12)
+    calls = [(active_set_answer, (z((n, n)), z(n), 0.0, z((1, n)), z(1), z(n), z(n), z(n, dtype=np.int8),
+                                  z((1, 3, n)), z((1, 3)), z((1, 3)), z(1), z((1, 3)), z(1, dtype=np.bool_),
+                                  z((1, 3)), z(1), z((1, 2, 3)), 2, 2, *tols))]
+    return calls + [(unique_test, (z(n), z(n), z(n), z(n), z(n), z((1, n)), z((n, n)), z((1, 3, n)), z((1, 3)),
                            z((1, 3)), z(1), z(1), z((1, 3)), 1e-8, 1e-9)),
             (answer_check, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1))),
+            (answer_check_outputs, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1),
+                                    z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)))),
+            (outside_bounds, (z(n), z(n), z(n))),
             (instant_outputs, (z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)), z(n)))]

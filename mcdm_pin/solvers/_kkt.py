@@ -85,13 +85,21 @@ def _kkt_solve(K, rhs, square):
     return sol
 
 
-@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+@njit(cache=True, nogil=True)
 def _vertex_solve(K, rhs, nf, square):
     """``K = [[Hxx, R^T], [R, 0]]`` with a square ``R`` (nf x nf: at a vertex, as many free variables
     as equations and held cone surfaces, the usual warm instant): ``x`` is fixed by the rows alone,
     ``R x = r_c``, and the multipliers by ``R^T l = r_x - Hxx x``: one LU of ``R`` (nf unknowns)
     instead of one of ``K`` (2 nf: 8x the arithmetic). Falls back to :func:`_kkt_solve` when ``R``
     is singular (then so is ``K``)."""
+    return _vertex_solve_lu(K, rhs, nf, square)[0]
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _vertex_solve_lu(K, rhs, nf, square):
+    """:func:`_vertex_solve`, also returning ``R``'s factors ``(LU, perm, ok)`` (:func:`_lu_factor`;
+    ``ok`` false when the solution did not come from them): the ratio test of the next pivot solves
+    with ``R^T`` again (:func:`_ratio_test`)."""
     N = K.shape[0]
     R = np.empty((nf, nf))
     for i in range(nf):
@@ -99,7 +107,7 @@ def _vertex_solve(K, rhs, nf, square):
             R[i, j] = K[nf + i, j]
     LU, perm, ok = _lu_factor(R)
     if not ok:
-        return _kkt_solve(K, rhs, square)
+        return _kkt_solve(K, rhs, square), LU, perm, False
     x = _lu_apply(LU, perm, rhs[nf:])
     w = np.empty(nf)
     for a in range(nf):
@@ -114,8 +122,8 @@ def _vertex_solve(K, rhs, nf, square):
         sol[nf + i] = lam[i]
     for i in range(N):
         if not np.isfinite(sol[i]):
-            return _kkt_solve(K, rhs, square)
-    return sol
+            return _kkt_solve(K, rhs, square), LU, perm, False
+    return sol, LU, perm, True
 
 
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
@@ -316,9 +324,11 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
     the ridge nearest the origin. The KKT check of the original problem decides whether the point is
     accepted (its stationarity residual ``reg |f|`` is ~1e-12 of the gradient's scale).
 
-    Returns ``(code, f, y, mus, dirs, solves)``: ``mus`` (nc,) the active cones' multipliers (0
-    elsewhere), ``dirs`` (nc, 3) their surface directions at ``f``, ``solves`` the linear KKT systems
-    solved (1 without active cones; one per Newton step with them).
+    Returns ``(code, f, y, mus, dirs, solves, LU, perm, lu_ok)``: ``mus`` (nc,) the active cones'
+    multipliers (0 elsewhere), ``dirs`` (nc, 3) their surface directions at ``f``, ``solves`` the
+    linear KKT systems solved (1 without active cones; one per Newton step with them); at a vertex,
+    ``(LU, perm)`` the factors of the last solve's rows on the free cables (:func:`_vertex_solve_lu`;
+    ``lu_ok`` false otherwise).
     """
     n = H.shape[0]
     neq = A.shape[0]
@@ -365,6 +375,9 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
     iters = max_newton if na > 0 else 1
     converged = False
     solves = 0
+    LU = np.empty((0, 0))
+    perm = np.empty(0, dtype=np.int64)
+    lu_ok = False
     for _ in range(iters):
         K = np.zeros((N, N))
         rhs = np.empty(N)
@@ -388,7 +401,7 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
                 p0, p1, p2 = F[0] - al * ax[k, 0], F[1] - al * ax[k, 1], F[2] - al * ax[k, 2]
                 nrm = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
                 if nrm <= 1e-300:
-                    return VANISHED, f, y, mus, dirs, solves
+                    return VANISHED, f, y, mus, dirs, solves, LU, perm, False
                 d0, d1, d2 = p0 / nrm, p1 / nrm, p2 / nrm
                 dirs[k, 0], dirs[k, 1], dirs[k, 2] = d0, d1, d2
                 mu = mus[k]
@@ -426,13 +439,14 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
                 K[nf + neq + s, p] = row[free[p]]
             rhs[nf + neq + s] = rr
         if nf == neq + na:
-            sol = _vertex_solve(K, rhs, nf, square)
+            sol, LU, perm, lu_ok = _vertex_solve_lu(K, rhs, nf, square)
         else:
+            lu_ok = False
             sol = _kkt_solve(K, rhs, square) if square else _determined_solve(K, rhs, nf)
         solves += 1
         for i in range(N):
             if not np.isfinite(sol[i]):
-                return SINGULAR, f, y, mus, dirs, solves
+                return SINGULAR, f, y, mus, dirs, solves, LU, perm, False
         for p in range(nf):
             f[free[p]] = sol[p]
         y = sol[nf:nf + neq].copy()
@@ -444,7 +458,7 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
         if have_cur:
             for s in range(na):
                 if mus[act[s]] < 0.0:
-                    return DROP, f, y, mus, dirs, solves
+                    return DROP, f, y, mus, dirs, solves, LU, perm, lu_ok
         if have_prev:
             dx = 0.0
             xx = 0.0
@@ -464,8 +478,8 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
         f_cur[:] = f
         have_cur = True
     if not converged:
-        return NO_CONVERGENCE, f, y, mus, dirs, solves
-    return OK, f, y, mus, dirs, solves
+        return NO_CONVERGENCE, f, y, mus, dirs, solves, LU, perm, lu_ok
+    return OK, f, y, mus, dirs, solves, LU, perm, lu_ok
 
 
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
@@ -675,8 +689,8 @@ def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdi
                 return CYCLE, f, mus, grad, state, cact, cdir, state, y, it, solves
         hist_s[it] = state
         hist_c[it] = cact
-        code, f, y, mus, dirs, ns = eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir,
-                                             max_newton, step_tol, reg)
+        code, f, y, mus, dirs, ns, LU, perm, lu_ok = eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn,
+                                                              cact, cdir, max_newton, step_tol, reg)
         solves += ns
         if code == DROP:  # a cone pulls the force inwards: it is not active
             for k in range(nc):
@@ -755,7 +769,8 @@ def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdi
             if (worst_kind == 1 or worst_kind == 2) and n - np.count_nonzero(state) == neq + n_act:
                 # at a vertex (as many free cables as equations): a dual simplex step, the fixed
                 # cable to free chosen by the ratio test (keeps the other multipliers' signs)
-                enter = _ratio_test(A, G, gc, ax, tn, cact, dirs, state, grad, worst_kind, worst_idx, n)
+                enter = _ratio_test(A, G, gc, ax, tn, cact, dirs, state, grad, worst_kind, worst_idx, n,
+                                    LU, perm, lu_ok)
             if enter >= 0:
                 state = state.copy()
                 state[worst_idx] = worst_kind
@@ -769,12 +784,14 @@ def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdi
 
 
 @njit(cache=True, nogil=True)
-def _ratio_test(A, G, gc, ax, tn, cact, dirs, state, grad, kind, r, n):
+def _ratio_test(A, G, gc, ax, tn, cact, dirs, state, grad, kind, r, n, LU, perm, lu_ok):
     """The fixed cable whose release lets the leaving free cable ``r`` reach its bound (``kind`` 1:
     it is below its lower bound, 2: above its upper bound) at the least dual cost: min over eligible
     j of multiplier_j / |dx_r/df_j|, with ``x_F = B^-1 (rhs - col_j f_j)`` and ``B`` the square
     matrix of the equations (and held cones' surface rows) on the free cables. -1 if none is
-    eligible or ``B`` is singular."""
+    eligible or ``B`` is singular. ``(LU, perm)``: ``B``'s factors when ``lu_ok`` (the vertex solve
+    of this active set factored the same matrix, :func:`_vertex_solve_lu`), else ``B`` is solved
+    afresh."""
     neq = A.shape[0]
     nc = G.shape[0]
     rows = np.zeros((neq + nc, n))
@@ -792,22 +809,25 @@ def _ratio_test(A, G, gc, ax, tn, cact, dirs, state, grad, kind, r, n):
     free = np.flatnonzero(state == 0)
     if free.shape[0] != m:
         return -1
-    B = np.empty((m, m))
     pos = -1
     for q in range(m):
-        j = free[q]
-        if j == r:
+        if free[q] == r:
             pos = q
-        for i in range(m):
-            B[i, q] = rows[i, j]
     if pos < 0:
         return -1
     e = np.zeros(m)
     e[pos] = 1.0
-    try:
-        u = np.linalg.solve(B.T, e)  # row pos of B^-1
-    except Exception:  # noqa: BLE001 (singular basis)
-        return -1
+    if lu_ok and LU.shape[0] == m:
+        u = _lu_apply_t(LU, perm, e)  # row pos of B^-1
+    else:
+        B = np.empty((m, m))
+        for q in range(m):
+            for i in range(m):
+                B[i, q] = rows[i, free[q]]
+        try:
+            u = np.linalg.solve(B.T, e)  # row pos of B^-1
+        except Exception:  # noqa: BLE001 (singular basis)
+            return -1
     need_up = kind == 1  # x_r must rise to its lower bound
     best, enter = np.inf, -1
     for j in range(n):

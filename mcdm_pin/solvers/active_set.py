@@ -31,6 +31,7 @@ import numpy as np
 from .. import jit
 from .. import tolerances as tol
 from ..problem import QPData
+from . import _fast
 from . import _kkt as K
 from .base import OPTIMAL, Solution, Stage
 
@@ -42,12 +43,28 @@ _AS_TOLS = np.array([tol.ACTIVE_SET_STEP, tol.ACTIVE_SET_PRIMAL, tol.ACTIVE_SET_
 class ActiveSet:
     """A guess: index arrays of variables at their lower/upper bound, and per cone joint its surface
     direction (unit vector of F_perp) and multiplier when it binds. ``state``, when given (int8
-    codes per variable: 0 free, 1 lower, 2 upper), takes the place of ``lower`` and ``upper``."""
+    codes per variable: 0 free, 1 lower, 2 upper), takes the place of ``lower`` and ``upper``.
+    ``held``, when given, is ``cones`` as arrays for the problem's cones named ``names`` (a mask and
+    the directions, (K,) and (K, 3)): what the compiled kernel takes, kept from the answer that
+    made the guess."""
 
     lower: np.ndarray
     upper: np.ndarray
     cones: dict = field(default_factory=dict)  # joint -> (direction (3,), multiplier)
     state: np.ndarray | None = None
+    held: tuple | None = None  # (names, mask, directions)
+
+    def cone_guess(self, qp: QPData) -> tuple[np.ndarray, np.ndarray]:
+        """``(mask, directions)`` of the held cones over ``qp``'s cones (directions of the others:
+        anything, the kernel starts them from ``basis0``)."""
+        names = qp.cone_consts()[0]
+        if self.held is not None and self.held[0] == names:
+            return self.held[1], self.held[2]
+        mask = np.array([nm in self.cones for nm in names], dtype=np.bool_)
+        dirs = np.zeros((len(names), 3))
+        for k in np.flatnonzero(mask):
+            dirs[k] = self.cones[names[k]][0]
+        return mask, dirs
 
     def cable_state(self, n: int) -> np.ndarray:
         if self.state is not None and self.state.shape == (n,):
@@ -117,34 +134,31 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     Starting from ``guess``, the active set is corrected by block principal pivoting (free variables
     that leave their bounds are fixed there, fixed ones whose multiplier has the wrong sign are
     freed, broken cones join, cones with a negative multiplier leave) for at most ``max_pivots``
-    equality-constrained solves; a repeated active set stops it."""
-    G, gc, ax, tn, basis0 = qp.cone_arrays()
+    equality-constrained solves; a repeated active set stops it. One compiled call
+    (:func:`._fast.active_set_answer`: the kernel and the answer's duals, what
+    :func:`active_solution` computes in numpy)."""
+    c, A, b, lb, ub, G, gc, ax, tn, basis0 = qp.kernel_arrays()
+    names, _, cosr, basis = qp.cone_consts()
     state = guess.cable_state(qp.n)  # (the kernel frees variables guessed at an infinite bound)
-    if qp.cones:
-        names = [c.joint for c in qp.cones]
-        cact = np.array([nm in guess.cones for nm in names], dtype=np.bool_)
-        cdir = basis0.copy()
-        for k in np.flatnonzero(cact):
-            cdir[k] = guess.cones[names[k]][0]
-    else:
-        names, cact, cdir = [], _NO_CONES, _NO_DIRS
+    cact, cdir = guess.cone_guess(qp)
     # C-ordered float arrays and Python scalars: one compiled specialisation serves every call
     c_ = np.ascontiguousarray
-    code, x, mus, grad, state, cact, dirs, nxt_state, y, _, solves = K.active_set_run(
-        c_(qp.P, dtype=float), c_(qp.c, dtype=float), c_(qp.A, dtype=float), c_(qp.b, dtype=float),
-        c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), c_(state, dtype=np.int8), c_(G, dtype=float), c_(gc, dtype=float),
-        c_(ax, dtype=float), c_(tn, dtype=float), c_(basis0, dtype=float), cact, c_(cdir, dtype=float),
-        int(max_pivots), int(max_newton), *_AS_TOLS)
+    code, x, y, z, zc, objective, held, mus, dirs, nxt_state, solves = _fast.active_set_answer(
+        c_(qp.P, dtype=float), c, qp.r, A, b, lb, ub, c_(state, dtype=np.int8), G, gc, ax, tn, basis0,
+        c_(cact, dtype=np.bool_), c_(cdir, dtype=float), cosr, basis, int(max_pivots), int(max_newton), *_AS_TOLS)
     if code != K.FOUND:
         _miss(K.REASONS[code])
         return None
-    return active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state, iterations=int(solves),
-                           stage=stage)
+    nxt_cones = {names[k]: (dirs[k], float(mus[k])) for k in np.flatnonzero(held)} if held.any() else {}
+    return Solution(x, OPTIMAL, objective, y=y, z=z, z_cone=zc,
+                    active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt_state, (names, held, dirs)),
+                    verified=True, iterations=int(solves), stage=stage)
 
 
 def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state, **fields) -> Solution:
     """A verified active-set point as a :class:`~.base.Solution` (duals converted; ``fields``: more
-    of its fields, e.g. ``stage``)."""
+    of its fields, e.g. ``stage``). The numpy reference of :func:`._fast.active_set_answer`'s
+    answer."""
     z = np.where(state != 0, -grad, 0.0)
     held = np.flatnonzero(cact & (mus > 0))
     nxt_cones = {qp.cones[k].joint: (dirs[k], float(mus[k])) for k in held}
@@ -268,8 +282,6 @@ def numpy_polish(qp: QPData, sol: Solution) -> Solution | None:
 def warm_calls():
     """This module's kernels with example arguments of the types :func:`try_active_set` passes, and
     the warm path's compiled decisions (:mod:`._fast`)."""
-    from . import _fast
-
     n, z = 2, np.zeros
     args = (z((n, n)), z(n), z((1, n)), z(1), z(n), z(n), z(n, dtype=np.int8), z((1, 3, n)), z((1, 3)), z((1, 3)),
             z(1), z((1, 3)), z(1, dtype=np.bool_), z((1, 3)), 2, 2, *(float(v) for v in _AS_TOLS))

@@ -75,7 +75,8 @@ class Cascade(Solver):
                 continue
             if not s.refines:
                 iterations += out.iterations
-                out = out.but(iterations=iterations)
+                if out.iterations != iterations:  # (the first answering stage's count is the sum)
+                    out = out.but(iterations=iterations)
             sol = out
         if sol is None:
             return failure(qp.n, ERROR, "no stage answered", iterations)

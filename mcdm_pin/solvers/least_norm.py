@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import jit
 from .. import tolerances as tol
 from .base import OPTIMAL, Solution, Stage
 
@@ -71,7 +72,7 @@ def _strongly_active(qp, sol: Solution, curvature: bool = True):
 def is_unique(qp, sol: Solution) -> bool:
     """Whether the optimum ``sol`` is provably unique (module docstring). Needs its duals; ``False``
     without them (not proven)."""
-    if qp.P_diag is not None and qp.P_diag.size and bool(np.all(qp.P_diag > 0.0)):
+    if qp.P_diag is not None and qp.P_diag.size and float(qp.P_diag.min()) > 0.0:
         return True  # P = diag(d) + F^T F with d > 0 is positive definite: strictly convex (case 1)
     if sol.z is None or (qp.cones and sol.z_cone is None):
         return False
@@ -111,29 +112,18 @@ def is_unique(qp, sol: Solution) -> bool:
 def _compiled_unique(qp, sol: Solution) -> bool | None:
     """The rest of :func:`is_unique` compiled (:func:`._fast.unique_test`, the same steps and
     thresholds); ``None`` while the kernels are not compiled."""
-    from .. import jit
-
     if not jit.ready():
         return None
-    from ._fast import unique_test
-
     c_ = np.ascontiguousarray
-    if qp.cones:
-        G, gc, ax, tn, _ = qp.cone_arrays()
-        cosr = np.cos(np.radians([c.angle_deg for c in qp.cones]))
-        zc = sol.z_cone
-    else:
-        G, gc, ax, tn, cosr, zc = _NO_G, _NO_3, _NO_3, _NO_1, _NO_1, _NO_3
-    n = qp.n
-    return bool(unique_test(
-        c_(sol.x, dtype=float), c_(sol.z, dtype=float), c_(qp.gradient(sol.x), dtype=float), c_(qp.c, dtype=float),
-        c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), c_(qp.A, dtype=float).reshape(len(qp.b), n),
-        c_(qp.P, dtype=float), c_(G, dtype=float).reshape(len(gc), 3, n), c_(gc, dtype=float), c_(ax, dtype=float),
-        c_(tn, dtype=float), c_(cosr, dtype=float), c_(zc, dtype=float).reshape(len(gc), 3),
+    c, A, _, lb, ub, G, gc, ax, tn, _ = qp.kernel_arrays()
+    cosr = qp.cone_consts()[2] if qp.cones else _NO_1
+    zc = sol.z_cone if qp.cones else _NO_3
+    return bool(jit.kernels("solvers._fast").unique_test(
+        c_(sol.x, dtype=float), c_(sol.z, dtype=float), c, lb, ub, A, c_(qp.P, dtype=float), G, gc, ax, tn,
+        c_(cosr, dtype=float), c_(zc, dtype=float).reshape(len(gc), 3),
         float(tol.ACTIVE_SET_FROM_SOLUTION), float(tol.UNIQUE_REL)))
 
 
-_NO_G = np.zeros((0, 3, 0))
 _NO_3 = np.zeros((0, 3))
 _NO_1 = np.zeros(0)
 

@@ -138,24 +138,30 @@ class ProxQPStage(Stage):
         self._cuts: dict[str, list[np.ndarray]] = {}
 
     def learn(self, qp, sol):
-        if self.warm_start and np.all(np.isfinite(sol.x)):
-            # the previous forces as the starting point but not the previous multipliers: next to a
-            # singular instant (2-link arm, q = 0 at t = 0.5 s) they are huge and sent ProxQP into
-            # ~1e6 inner iterations (4 s) or a false "infeasible"
-            self._warm = (sol.x.copy(), np.zeros(len(qp.b)), np.zeros(qp.n))
+        # the previous forces as the starting point but not the previous multipliers: next to a
+        # singular instant (2-link arm, q = 0 at t = 0.5 s) they are huge and sent ProxQP into
+        # ~1e6 inner iterations (4 s) or a false "infeasible". Kept as they are (an optimal answer's
+        # forces are finite): copied by the solve that uses them (most instants have none)
+        if self.warm_start:
+            self._warm = sol.x
 
     def seed(self, hint):
         if np.all(np.isfinite(hint.x)):
-            self._warm = (hint.x.copy(), np.zeros(0), np.zeros(len(hint.x)))
+            self._warm = hint.x
+
+    def _start(self, qp):
+        """The warm start ``(x, y, z)`` for ``qp`` (``None``: none)."""
+        x = self._warm if self.warm_start else None
+        if x is None or not np.all(np.isfinite(x)):
+            return None
+        return x.copy(), np.zeros(len(qp.b)), np.zeros(len(x))
 
     def run(self, qp, sol, deadline):
         n, cones = qp.n, qp.cones
         if not self.keep_cuts:
             self._cuts = {}
         cuts = [list(self._cuts.get(c.joint, [])) for c in cones]
-        warm = self._warm if self.warm_start else None
-        if warm is not None and warm[1].shape != (len(qp.b),):
-            warm = (warm[0], np.zeros(len(qp.b)), warm[2])
+        warm = self._start(qp)
         iterations = 0
         for rounds in range(1, self.max_rounds + 1):
             if rounds > 1 and now() > deadline:

@@ -121,18 +121,23 @@ class PoseSolver:
                    interaction_wrench=np.full((n, J, 6), np.nan),
                    interaction_angle_deg=np.full((n, J), np.nan),
                    needed_f_max=np.full(n, np.nan), needed_cone_deg=np.full(n, np.nan))
-        for k in range(n):
-            self.ident.reset()
-            res = self.ident.solve(out["q"][k], self.qd, self.qdd)
-            out["status"][k] = res.status
-            out["objective"][k] = res.objective
-            out["f"][k] = res.f
-            out["interaction_wrench"][k] = res.interaction_wrench
-            out["interaction_angle_deg"][k] = res.interaction_angle_deg
-            if self.setup.margins:
-                out["needed_f_max"][k], out["needed_cone_deg"][k] = pose_margins(
-                    self.assemble(out["q"][k]), self.ident.solver, self.cones)
+        with self.ident.blas_limit():  # once for the chunk, not per pose
+            for k in range(n):
+                self._solve_pose(out, k)
         return out
+
+    def _solve_pose(self, out: dict, k: int) -> None:
+        """Pose ``k`` of ``out["q"]``, cold, into row ``k`` of ``out``."""
+        self.ident.reset()
+        res = self.ident.solve(out["q"][k], self.qd, self.qdd)
+        out["status"][k] = res.status
+        out["objective"][k] = res.objective
+        out["f"][k] = res.f
+        out["interaction_wrench"][k] = res.interaction_wrench
+        out["interaction_angle_deg"][k] = res.interaction_angle_deg
+        if self.setup.margins:
+            out["needed_f_max"][k], out["needed_cone_deg"][k] = pose_margins(
+                self.assemble(out["q"][k]), self.ident.solver, self.cones)
 
     def assemble(self, q):
         """The pose's assembled problem (``QPData``), for the margins."""
