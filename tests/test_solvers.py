@@ -278,3 +278,44 @@ def test_every_warm_start_path_gives_the_same_optimum(two_link, options):
     ok = ref.found
     assert np.array_equal(res.found, ok)
     assert np.allclose(res.objective[ok], ref.objective[ok], rtol=OBJ_RTOL)
+
+
+def _weak_factor_problem(seed: int, cone: bool):
+    """``P = F^T F`` without a diagonal (``P_diag = 0``), ``F`` (18 x 24) of rank 15 with singular
+    values from 4 down to 5e-7 and three dependent rows, the equations in the span of ``F``'s rows:
+    the shape of the generated robots' case-3 problems on which the compiled interior-point method
+    dropped every equation (its pivot test was relative to the largest diagonal entry of the reduced
+    system, which ``(F^T F)``'s inverse on its weak directions dominated)."""
+    from mcdm_pin.constraints import ConeData, perpendicular_basis
+    from mcdm_pin.problem import QPData
+
+    rng = np.random.default_rng(seed)
+    n, r, rank, k = 24, 18, 15, 5
+    U, _ = np.linalg.qr(rng.normal(size=(r, r)))
+    V, _ = np.linalg.qr(rng.normal(size=(n, n)))
+    F = (U[:, :rank] * np.geomspace(4.0, 5e-7, rank)) @ V[:, :rank].T
+    F[rank:] = 1e-3 * rng.normal(size=(r - rank, rank)) @ F[:rank]
+    x0 = rng.uniform(1.0, 20.0, n)
+    A = rng.normal(size=(k, r)) @ F
+    cones = []
+    if cone:
+        axis = np.array([0.0, 0.0, 1.0])
+        G = F[:3].copy()
+        cones = [ConeData("j", G, axis * np.linalg.norm(G @ x0) - G @ x0, axis, 30.0, perpendicular_basis(axis))]
+    return QPData(None, rng.uniform(0.0, 1.0, n), 0.0, A, A @ x0, np.full(n, 0.1), np.full(n, 500.0), cones,
+                  P_diag=np.zeros(n), P_factor=F)
+
+
+@pytest.mark.parametrize("cone", [False, True])
+def test_ipm_answers_with_a_nearly_rank_deficient_objective_factor(cone):
+    """The compiled interior-point method answers these (it stopped at its iteration limit or with a
+    vanishing step on 19 of these 40 before the fix, and Clarabel answered) at Clarabel's optimum."""
+    from mcdm_pin.solvers.cascade import make_solver
+    from mcdm_pin.solvers.ipm import ipm_solve
+
+    for seed in range(20):
+        qp = _weak_factor_problem(seed, cone)
+        ours, ref = ipm_solve(qp), make_solver("clarabel").solve(qp)
+        assert ours.status == "optimal" and ref.status == "optimal", (seed, ours.message)
+        assert qp.objective(ours.x) == pytest.approx(qp.objective(ref.x), rel=OBJ_RTOL), seed
+        assert ours.iterations <= 20, (seed, ours.iterations)
