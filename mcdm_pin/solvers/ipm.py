@@ -43,13 +43,11 @@ def ipm_arguments(qp, max_iter: int = tol.IPM_MAX_ITER, eps: float = tol.IPM_EPS
     one compiled specialisation serves every call)."""
     c_ = np.ascontiguousarray
     T, t = qp.cone_rows()
-    G, gc, ax, tn, basis0 = qp.cone_arrays()
+    c, A, b, lb, ub, G, gc, ax, tn, basis0 = qp.kernel_arrays()  # made once per problem
     d0, F = p_structure(qp)
-    return (c_(qp.P, dtype=float), c_(d0, dtype=float), c_(F, dtype=float), c_(qp.c, dtype=float),
-            c_(qp.A, dtype=float), c_(qp.b, dtype=float), c_(qp.lb, dtype=float), c_(qp.ub, dtype=float),
+    return (c_(qp.P, dtype=float), c_(d0, dtype=float), c_(F, dtype=float), c, A, b, lb, ub,
             c_(T, dtype=float), c_(t, dtype=float), int(max_iter), float(eps), float(crossover_gap),
-            c_(G, dtype=float), c_(gc, dtype=float), c_(ax, dtype=float), c_(tn, dtype=float),
-            c_(basis0, dtype=float), int(max_pivots), _AS_TOLS, int(correctors), float(rank_tol))
+            G, gc, ax, tn, basis0, int(max_pivots), _AS_TOLS, int(correctors), float(rank_tol))
 
 
 def ipm_solve(qp, **options) -> Solution:
