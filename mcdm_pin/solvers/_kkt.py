@@ -24,43 +24,15 @@ REASONS = {SINGULAR: "singular KKT system", NO_CONVERGENCE: "Newton steps on the
            CYCLE: "the active set cycles", PIVOT_LIMIT: "no verified point within the pivot limit"}
 
 
-@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+@njit(cache=True, nogil=True)
 def _lu_solve(K, rhs):
-    """``K x = rhs`` by LU with partial pivoting, in place on copies (LAPACK's ``dgesv`` without the
-    copies to Fortran order that ``np.linalg.solve`` makes: 3x faster at these sizes). Returns
-    ``(x, ok)``; ``ok`` false when a pivot is exactly zero or not finite."""
-    n = K.shape[0]
-    M = K.copy()
-    x = rhs.copy()
-    for k in range(n):
-        p = k
-        big = abs(M[k, k])
-        for i in range(k + 1, n):
-            v = abs(M[i, k])
-            if v > big:
-                big, p = v, i
-        if not (big > 0.0) or not np.isfinite(big):
-            return x, False
-        if p != k:
-            for j in range(n):
-                M[k, j], M[p, j] = M[p, j], M[k, j]
-            x[k], x[p] = x[p], x[k]
-        Mk = M[k]
-        inv = 1.0 / Mk[k]
-        for i in range(k + 1, n):
-            Mi = M[i]
-            l = Mi[k] * inv
-            if l != 0.0:
-                for j in range(k + 1, n):
-                    Mi[j] -= l * Mk[j]
-                x[i] -= l * x[k]
-    for i in range(n - 1, -1, -1):
-        Mi = M[i]
-        acc = x[i]
-        for j in range(i + 1, n):
-            acc -= Mi[j] * x[j]
-        x[i] = acc / Mi[i]
-    return x, True
+    """``K x = rhs`` by LU with partial pivoting (:func:`_lu_factor`, then :func:`_lu_apply`): LAPACK's
+    ``dgesv`` without the copies to Fortran order that ``np.linalg.solve`` makes, 3x faster at these
+    sizes. Returns ``(x, ok)``; ``ok`` false when a pivot is exactly zero or not finite."""
+    LU, perm, ok = _lu_factor(K)
+    if not ok:
+        return rhs.copy(), False
+    return _lu_apply(LU, perm, rhs), True
 
 
 @njit(cache=True, nogil=True)
