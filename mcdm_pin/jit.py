@@ -118,10 +118,11 @@ STAMP = "mcdm_pin_kernels.sha256"  # the stamp's file name, in the kernels' cach
 def _dispatchers():
     """Every numba dispatcher of the kernel modules (registered or called by registered ones)."""
     _all_calls()
+    sources = set(kernel_sources())  # (reads the package's files: once, not per module)
     out = []
     for name, mod in list(sys.modules.items()):
         path = getattr(mod, "__file__", None)
-        if not (name.startswith("mcdm_pin.") and path and Path(path).resolve() in set(kernel_sources())):
+        if not (name.startswith("mcdm_pin.") and path and Path(path).resolve() in sources):
             continue
         out += [v for v in vars(mod).values() if getattr(v, "_cache", None) is not None
                 and hasattr(v, "py_func") and v.py_func.__module__ == name]
