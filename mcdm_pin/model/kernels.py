@@ -191,6 +191,21 @@ def cone_batch(RT, u, R_socket, axes, index, socket):
 
 
 @njit(cache=True, nogil=True)
+def gram_lower(X, rows, cols, out):
+    """Add the lower triangle (diagonal included) of ``X[:rows, :cols]^T X[:rows, :cols]`` to ``out``
+    (cols x cols), row by row, skipping zero entries: the Gram matrices of the interaction objective
+    (:func:`interaction_quadratic`), the uniqueness test (:func:`mcdm_pin.solvers._fast.unique_test`)
+    and the interior-point method's reduced system (:func:`mcdm_pin.solvers._ipm_linalg.structure`)."""
+    for t in range(rows):
+        Xt = X[t]
+        for a in range(cols):
+            xa = Xt[a]
+            if xa != 0.0:
+                for b in range(a + 1):
+                    out[a, b] += xa * Xt[b]
+
+
+@njit(cache=True, nogil=True)
 def interaction_quadratic(RT, u, keep, sw):
     """:meth:`mcdm_pin.objectives.MinInteractions.quadratic` (the numpy reference) in one pass: with
     ``K = sw R^T[keep]`` and ``k = sw u[keep]`` (rows of the flattened (J*6, m) and (J*6,) arrays),
@@ -214,13 +229,7 @@ def interaction_quadratic(RT, u, keep, sw):
     for j in range(m):
         c[j] = 2.0 * c[j]
     P = np.zeros((m, m))
-    for t in range(nk):
-        Ft = F[t]
-        for a in range(m):
-            fa = Ft[a]
-            if fa != 0.0:
-                for b in range(a + 1):
-                    P[a, b] += fa * Ft[b]
+    gram_lower(F, nk, m, P)
     for a in range(m):
         for b in range(a):
             P[b, a] = P[a, b]

@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..model.kernels import gram_lower
 from ._kkt import FOUND, active_set_run, cone_force
 
 
@@ -90,12 +91,7 @@ def unique_test(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel
     if rows >= nf:
         # the usual case (a vertex): J has full column rank, the null space is empty
         JtJ = np.zeros((nf, nf))
-        for r in range(rows):
-            for a in range(nf):
-                va = J[r, a]
-                if va != 0.0:
-                    for bb in range(a + 1):
-                        JtJ[a, bb] += va * J[r, bb]
+        gram_lower(J, rows, nf, JtJ)
         big = 1e-300
         for a in range(nf):
             for bb in range(a + 1):

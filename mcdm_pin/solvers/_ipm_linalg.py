@@ -52,6 +52,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..model.kernels import gram_lower
+
 _FM = {"reassoc", "contract"}  # reassociation lets numba vectorise the dot products; no NaN/inf flags
 
 
@@ -229,12 +231,7 @@ def structure(Fm, T, A, rank_tol):
     for a in range(neq):
         B[o + a] = A[a]
     M0 = np.zeros((rf, rf))
-    for i in range(r):
-        for a in range(rf):
-            ca = C[i, a]
-            if ca != 0.0:
-                for b in range(a + 1):
-                    M0[a, b] += ca * C[i, b]
+    gram_lower(C, r, rf, M0)
     chol_inplace(M0, 1e-300, rf)
     M0inv = np.zeros((rf, rf))
     add_inverse(M0, M0inv)
