@@ -317,7 +317,7 @@ def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None, with_output
         c_ = np.ascontiguousarray
         args = (c_(terms.L, dtype=float), c_(terms.tau, dtype=float),
                 _NO_1 if extra is None else c_(extra, dtype=float), c_(f, dtype=float), lb, ub, G, g, axis,
-                c_(_cone_angles(qp), dtype=float))
+                c_(qp.cone_consts()[1], dtype=float))
         if with_outputs:
             eom, broken, worst, k, *outputs = fast.answer_check_outputs(
                 *args, c_(terms.u, dtype=float), c_(terms.RT, dtype=float), c_(terms.R_socket, dtype=float),
@@ -341,10 +341,6 @@ def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None, with_output
     if problems:
         sol = sol.but(status=INACCURATE, message="; ".join(problems))
     return (sol, eom, outputs) if with_outputs else (sol, eom)
-
-
-def _cone_angles(qp: QPData) -> np.ndarray:
-    return qp.cone_consts()[1]
 
 
 _NO_1 = np.zeros(0)

@@ -167,8 +167,6 @@ def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state, **fields)
                     active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt_state), verified=True, **fields)
 
 
-_NO_CONES = np.zeros(0, dtype=np.bool_)
-_NO_DIRS = np.zeros((0, 3))
 _EMPTY = np.zeros(0, dtype=int)
 MISSES: dict[str, int] = {}  # why guesses were rejected (counts, for profiling)
 

@@ -59,8 +59,7 @@ def ipm_solve(qp, **options) -> Solution:
         thr = 1e-12 * max(np.abs(grad).max(initial=0.0), 1e-300)
         nxt = state.copy()
         nxt[((state == 1) & ~(grad > thr)) | ((state == 2) & ~(grad < -thr))] = 0
-        sol = active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt)
-        return sol.but(iterations=int(it), stage="ipm")
+        return active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt, iterations=int(it), stage="ipm")
     if code == _ipm.SOLVED:
         return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z, z_cone=zc, iterations=int(it), stage="ipm",
                         verified=False)
