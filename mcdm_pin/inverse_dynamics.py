@@ -90,8 +90,8 @@ class InverseDynamics:
     @contextmanager
     def blas_limit(self):
         """BLAS limited to ``blas_threads`` threads inside (once, when calls nest): :meth:`solve`
-        enters it at every call (~0.05 ms); a caller solving many instants one by one (a workspace's
-        chunk of poses) enters it once around them all."""
+        enters it at every call (~0.02 ms, threadpoolctl); a caller solving many instants one by one
+        (a workspace's chunk of poses) enters it once around them all."""
         if self.blas_threads is None or self._limited:
             yield
             return
