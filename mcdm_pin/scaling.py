@@ -14,7 +14,8 @@ And a robot whose numbers are all large or all small (links of 1e6 kg, forces to
 (:math:`R`, :math:`D` positive diagonal: Ruiz equilibration when the equation of motion spreads over
 more than ``SPREAD`` (three decades), then the variables' unit set by their bounds and each row by
 its size; :math:`s_k > 0` per cone: cones are invariant under positive scaling of :math:`F_k`), the
-objective divided by its own size, and bounds :math:`l/d \le x \le u/d`, the scaled problem has the
+objective divided by its own size (each variable at its unit, or at its largest bound where that is
+smaller), and bounds :math:`l/d \le x \le u/d`, the scaled problem has the
 same solution set mapped by :math:`D`. The variables' unit is the size the equations ask for
 (``|b_i| / max_j |A_ij|``), at least the geometric middle of the bounds, ``sqrt(max f_min * min f_max)``
 (the lower bounds alone when no upper bound is finite), so that scaling every mass and every bound by
@@ -131,11 +132,9 @@ def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool =
         if f_scale is not None:
             d = d * _pow2(np.asarray(f_scale, dtype=float))
         rows = (absA * d[None, :]).max(axis=1, initial=0.0) * r
-        dmax = float(d.max())
     else:
         r, d = None, 1.0
         rows = absA.max(axis=1, initial=0.0) if m else np.zeros(0)
-        dmax = 1.0
     # the variables' unit: the size the equations ask for (|b_i| / max_j |A_ij|), at least the
     # geometric middle of the bounds (the lower bound alone when no upper bound is finite: an upper
     # bound is a limit, often far above the forces that occur). An instant that asks for no force
@@ -158,14 +157,19 @@ def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool =
     row_f = np.where((rows > 0) & ((rows < 1 / SPREAD) | (rows > SPREAD)), _pow2(np.where(rows > 0, rows, 1.0)), 1.0)
     r = (np.ones(m) if r is None else r) / row_f
     scalar = np.ndim(d) == 0
+    # the objective's size: each variable at its unit, or at its largest bound where that is smaller.
+    # (Ruiz gives a cable that the equations barely see (moment arms ~1e-7 m) a unit of 4e6 N; at its
+    # 500 N limit its scaled range is 1e-4, and the objective sized at 4e6 N made the scaled optimum
+    # 3.5e-11, below the interior-point method's gap floor: tests/test_properties.py)
+    with np.errstate(invalid="ignore"):
+        bound = np.maximum(np.abs(qp.lb), np.abs(qp.ub))
+    reach = np.minimum(np.full(n, d) if scalar else d, np.where(np.isfinite(bound), bound, np.inf))
     if qp._P is not None:
-        size = float(np.abs(qp.P).max(initial=0.0)) * u * u if scalar else \
-            float(np.abs(d[:, None] * qp.P * d[None, :]).max(initial=0.0))
+        size = float(np.abs(reach[:, None] * qp.P * reach[None, :]).max(initial=0.0))
     else:
-        dd = d if not scalar else np.full(n, d)
-        size = max(float(np.abs(qp.P_diag * dd * dd).max(initial=0.0)),
-                   float(((qp.P_factor * dd[None, :]) ** 2).sum(axis=0).max(initial=0.0)))
-    size = max(size, float(np.abs(qp.c).max(initial=0.0)) * (u if scalar else dmax * u), 1e-300)
+        size = max(float(np.abs(qp.P_diag * reach * reach).max(initial=0.0)),
+                   float(((qp.P_factor * reach[None, :]) ** 2).sum(axis=0).max(initial=0.0)))
+    size = max(size, float(np.abs(qp.c * reach).max(initial=0.0)), 1e-300)
     obj = float(_pow2(size)) if _outside(size) else 1.0
     cone_s = np.ones(len(qp.cones))
     if qp.cones:

@@ -216,6 +216,25 @@ def test_generator_covers_feasible_and_infeasible_instants():
     assert inaccurate <= 0.02 * total, SOLVER_STATS
 
 
+def test_ipm_reaches_the_optimum_where_the_scaled_objective_is_tiny():
+    """The generated robot whose scaled case-1 objective is 3.5e-11 (tests/regressions.py): the compiled
+    interior-point method stopped at an absolute duality gap of 1e-13, 4e-4 above the optimum, and
+    called it optimal. Its gap is now relative to the objective, and its answer is Clarabel's optimum
+    (the crossover makes it exact: 1e-9 covers Clarabel's own gap of 1e-11 relative and rounding)."""
+    from .regressions import IPM_GAP_FLOOR, IPM_GAP_FLOOR_SEED
+
+    with tempfile.TemporaryDirectory() as d:
+        robot = IPM_GAP_FLOOR.load(d)
+        q, qd, qdd, _ = state(robot, IPM_GAP_FLOOR_SEED)
+        ours = InverseDynamics.for_case(robot, 1).solve(q, qd, qdd)
+        ref = InverseDynamics.for_case(robot, 1, solver="clarabel").solve(q, qd, qdd)
+    assert ours.status == "optimal" and ref.status == "optimal"
+    assert ours.stage == "ipm", ours.stage
+    assert ours.eom_residual <= EOM_TOL
+    assert ours.objective == pytest.approx(ref.objective, rel=1e-9)
+    assert ours.objective <= ref.objective * (1 + 1e-12)
+
+
 def test_one_dof_robot(tmp_path):
     """Regression: pin.getJointJacobian returns a 1-DoF model's 6 x 1 Jacobian as a flat (6,) array,
     which gave L the wrong shape (found by the generator; fixed in terms.py)."""

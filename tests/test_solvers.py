@@ -319,3 +319,25 @@ def test_ipm_answers_with_a_nearly_rank_deficient_objective_factor(cone):
         assert ours.status == "optimal" and ref.status == "optimal", (seed, ours.message)
         assert qp.objective(ours.x) == pytest.approx(qp.objective(ref.x), rel=OBJ_RTOL), seed
         assert ours.iterations <= 20, (seed, ours.iterations)
+
+
+@pytest.mark.parametrize("quadratic", [True, False])
+def test_ipm_stops_on_a_problem_whose_optimum_is_zero(quadratic):
+    """An objective whose optimum is exactly zero (no force needed, and none wanted: ``|f|^2`` or
+    ``sum f`` from a zero lower bound) has no relative duality gap to reach: the method's gap is
+    relative to ``max(|objective|, eps)``, so it stops at a gap of ``eps^2`` there, with the
+    forces at zero to ~1e-10 N, in a few iterations more than an ordinary instant."""
+    from mcdm_pin.problem import QPData
+    from mcdm_pin.solvers.ipm import ipm_solve
+
+    rng = np.random.default_rng(0)
+    n, k = 12, 4
+    A = rng.normal(size=(k, n))
+    A[:, : n // 2] = -A[:, n // 2:]  # A 1 = 0: zero forces meet A f = 0
+    P_diag = np.ones(n) if quadratic else np.zeros(n)
+    qp = QPData(None, np.zeros(n) if quadratic else np.ones(n), 0.0, A, np.zeros(k), np.zeros(n),
+                np.full(n, 500.0), [], P_diag=P_diag, P_factor=np.zeros((0, n)))
+    out = ipm_solve(qp)
+    assert out.status == "optimal", out.message
+    assert np.abs(out.x).max() <= 1e-8
+    assert out.iterations <= 30

@@ -545,8 +545,11 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
         mu = gap / max(deg, 1)
         pres = _primal_res(ry, rzu, rzl, rzc, bscale, hscale)
         dres = _inf_norm(rx) / cscale
-        # relative to the objective, with an absolute floor of 1e-13 (the data are of order one)
-        gap_rel = gap / max(1e-13 / max(eps, 1e-300), abs(pobj))
+        # relative to the objective; an objective below eps counts as zero (then the gap must reach
+        # eps^2). (An absolute floor of 1e-3 (1e-13 / eps) stopped a scaled problem whose optimum is
+        # 3.5e-11 at a gap of 1e-13, 1e-3 above its optimum, after its crossover attempts had been
+        # spent at relative gaps of order one: tests/test_solvers.py)
+        gap_rel = gap / max(eps, abs(pobj), abs(pobj - gap))
         done = pres <= eps and dres <= eps and gap_rel <= eps
         if done or (crossover_gap > 0.0 and gap_rel <= crossover_gap and pres <= 1e3 * crossover_gap
                     and attempts < 8):
