@@ -270,3 +270,44 @@ def test_terms_read_back_through_views_follow_every_state():
         fresh = ev(tr.q[k], tr.qd[k], tr.qdd[k], data=robot.model.createData())
         np.testing.assert_array_equal(own.u, fresh.u)
         np.testing.assert_array_equal(own.RT, fresh.RT)
+
+
+def test_ipm_answer_is_the_numpy_ones(instants):
+    """The interior-point stage's compiled call (cone rows, method, duals, objective, next guess:
+    :func:`mcdm_pin.solvers._fast.ipm_answer`) equals the method run on the numpy cone rows
+    (:meth:`QPData.cone_rows`) with its crossover point converted by the numpy
+    :func:`active_solution`: the same point (the cone rows agree to rounding, and the crossover
+    lands on the same active set), duals and guess."""
+    from mcdm_pin.solvers import _ipm
+    from mcdm_pin.solvers import active_set as AS
+    from mcdm_pin.solvers.ipm import ipm_arguments, ipm_solve
+
+    crossed = cones_held = 0
+    for qp, _, _, _ in instants:
+        got = ipm_solve(qp)
+        args = ipm_arguments(qp)
+        H, d0, F, c, _, A, b, lb, ub, G, gc, ax, tn, basis0 = args[:14]
+        T, t = qp.cone_rows()
+        c_ = np.ascontiguousarray
+        code, x, y, z, zc, it, state, cact, mus, dirs = _ipm.ipm_solve(
+            H, d0, F, c, A, b, lb, ub, c_(T), c_(t), *args[16:19], G, gc, ax, tn, basis0, *args[19:])
+        assert got.iterations == it
+        if code != _ipm.CROSSOVER:
+            assert got.active is None
+            continue
+        crossed += 1
+        grad = -z
+        thr = 1e-12 * max(np.abs(grad).max(initial=0.0), 1e-300)
+        nxt = state.copy()
+        nxt[((state == 1) & ~(grad > thr)) | ((state == 2) & ~(grad < -thr))] = 0
+        want = AS.active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt, iterations=int(it), stage="ipm")
+        scale = max(1.0, np.abs(want.x).max())
+        np.testing.assert_allclose(got.x, want.x, rtol=1e-12, atol=1e-12 * scale)
+        np.testing.assert_allclose(got.z, want.z, rtol=1e-9, atol=1e-9 * max(1.0, np.abs(want.z).max()))
+        zscale = max(1.0, np.abs(want.z_cone).max(initial=0.0))
+        np.testing.assert_allclose(got.z_cone, want.z_cone, rtol=1e-9, atol=1e-9 * zscale)
+        assert got.objective == pytest.approx(want.objective, rel=1e-12, abs=1e-12)
+        np.testing.assert_array_equal(got.active.state, want.active.state)
+        assert got.active.cones.keys() == want.active.cones.keys()
+        cones_held += len(want.active.cones)
+    assert crossed > 20 and cones_held > 0, (crossed, cones_held)

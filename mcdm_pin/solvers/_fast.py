@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from ..model.kernels import gram_lower
+from ._ipm import CROSSOVER, ipm_solve
 from ._kkt import FOUND, active_set_run, cone_force
 
 
@@ -246,13 +247,26 @@ def active_set_answer(H, g, r, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact
     code, f, mus, grad, state, cact, dirs, nxt, y, _, solves = active_set_run(
         H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir, max_pivots, max_newton, step_tol,
         primal_tol, dual_tol, eom_tol, reg_rel)
+    if code != FOUND:
+        n = f.shape[0]
+        return code, f, y, np.zeros(n), np.zeros((nc, 3)), np.nan, np.zeros(nc, dtype=np.bool_), mus, dirs, nxt, \
+            solves
+    z, zc, obj, held = answer_duals(H, g, r, f, grad, state, cact, mus, dirs, cosr, basis)
+    return code, f, y, z, zc, obj, held, mus, dirs, nxt, solves
+
+
+@njit(cache=True, nogil=True)
+def answer_duals(H, g, r, f, grad, state, cact, mus, dirs, cosr, basis):
+    """A verified active-set point's duals and objective (what
+    :func:`mcdm_pin.solvers.active_set.active_solution` computes in numpy): the bounds' multipliers
+    ``z`` (base convention), the cone duals ``z_cone`` (:func:`mcdm_pin.solvers.active_set.cone_duals`,
+    ``cosr`` the half-angles' cosines, ``basis`` (K, 2, 3) the planes normal to the axes), the
+    objective ``1/2 f^T H f + g^T f + r`` and the cones held with a positive multiplier."""
     n = f.shape[0]
+    nc = mus.shape[0]
     z = np.zeros(n)
     zc = np.zeros((nc, 3))
     held = np.zeros(nc, dtype=np.bool_)
-    obj = np.nan
-    if code != FOUND:
-        return code, f, y, z, zc, obj, held, mus, dirs, nxt, solves
     for i in range(n):
         if state[i] != 0:
             z[i] = -grad[i]
@@ -272,8 +286,62 @@ def active_set_answer(H, g, r, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact
             acc += H[i, j] * f[j]  # (H symmetric: row i is column i)
         quad += acc * f[i]
         lin += g[i] * f[i]
-    obj = 0.5 * quad + lin + r
-    return code, f, y, z, zc, obj, held, mus, dirs, nxt, solves
+    return z, zc, 0.5 * quad + lin + r, held
+
+
+@njit(cache=True, nogil=True)
+def cone_rows(G, g, ax, cosr, basis):
+    """:meth:`mcdm_pin.problem.QPData.cone_rows` from the stacked cones: per cone ``T = W G``,
+    ``t = W g`` with ``W = [sin(rho) axis; cos(rho) basis]``."""
+    K, _, n = G.shape
+    T = np.zeros((K, 3, n))
+    t = np.zeros((K, 3))
+    for k in range(K):
+        c = cosr[k]
+        W = np.empty((3, 3))
+        for a in range(3):
+            W[0, a] = np.sqrt(max(1.0 - c * c, 0.0)) * ax[k, a]
+            W[1, a] = c * basis[k, 0, a]
+            W[2, a] = c * basis[k, 1, a]
+        for e in range(3):
+            for a in range(3):
+                w = W[e, a]
+                if w != 0.0:
+                    t[k, e] += w * g[k, a]
+                    for j in range(n):
+                        T[k, e, j] += w * G[k, a, j]
+    return T, t
+
+
+@njit(cache=True, nogil=True)
+def ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, G, g, ax, tn, basis0, cosr, basis, max_iter, eps, crossover_gap,
+               max_pivots, as_tols, ncorr, rank_tol):
+    """:func:`._ipm.ipm_solve` on a problem's stacked arrays (its cone rows made here:
+    :func:`cone_rows`) and, after a crossover, the answer's duals and objective (:func:`answer_duals`)
+    and the next instant's guess of the bounds (multipliers below 1e-12 of the largest free their
+    variable), in one call.
+
+    Returns ``(code, x, y, z, z_cone, objective, iterations, held, mus, dirs, next_state)``: after a
+    crossover as :func:`active_set_answer`'s; otherwise ``z, z_cone`` the method's own (or the
+    certificate) and the rest empty."""
+    T, t = cone_rows(G, g, ax, cosr, basis)
+    code, x, y, z, zc, it, state, cact, mus, dirs = ipm_solve(
+        H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, g, ax, tn, basis0, max_pivots,
+        as_tols, ncorr, rank_tol)
+    n = x.shape[0]
+    if code != CROSSOVER:
+        return code, x, y, z, zc, np.nan, it, np.zeros(0, dtype=np.bool_), mus, dirs, state
+    grad = -z
+    thr = 0.0
+    for i in range(n):
+        thr = max(thr, abs(grad[i]))
+    thr = 1e-12 * max(thr, 1e-300)
+    nxt = state.copy()
+    for i in range(n):
+        if (state[i] == 1 and not grad[i] > thr) or (state[i] == 2 and not grad[i] < -thr):
+            nxt[i] = 0
+    zb, zcone, obj, held = answer_duals(H, c, r, x, grad, state, cact, mus, dirs, cosr, basis)
+    return code, x, y, zb, zcone, obj, it, held, mus, dirs, nxt
 
 
 @njit(cache=True, nogil=True)

@@ -14,8 +14,8 @@ import numpy as np
 
 from .. import jit
 from .. import tolerances as tol
-from . import _ipm, _kkt
-from .active_set import _AS_TOLS, active_solution
+from . import _fast, _ipm, _kkt
+from .active_set import _AS_TOLS, _EMPTY, ActiveSet
 from .base import INACCURATE, INFEASIBLE, OPTIMAL, Solution, Stage, failure
 
 REASONS = {_ipm.MAX_ITER: "iteration limit", _ipm.NUMERICAL: "numerical breakdown (the step vanished)"}
@@ -39,27 +39,29 @@ def p_structure(qp) -> tuple[np.ndarray, np.ndarray]:
 def ipm_arguments(qp, max_iter: int = tol.IPM_MAX_ITER, eps: float = tol.IPM_EPS,
                   crossover_gap: float = tol.IPM_CROSSOVER_GAP, max_pivots: int = 30,
                   correctors: int = tol.IPM_CORRECTORS, rank_tol: float = tol.IPM_RANK_TOL) -> tuple:
-    """The arguments of :func:`._ipm.ipm_solve` for ``qp`` (C-ordered float arrays and Python scalars:
-    one compiled specialisation serves every call)."""
+    """The arguments of :func:`._fast.ipm_answer` for ``qp`` (C-ordered float arrays and Python
+    scalars: one compiled specialisation serves every call)."""
     c_ = np.ascontiguousarray
-    T, t = qp.cone_rows()
     c, A, b, lb, ub, G, gc, ax, tn, basis0 = qp.kernel_arrays()  # made once per problem
+    _, _, cosr, basis = qp.cone_consts()
     d0, F = p_structure(qp)
-    return (c_(qp.P, dtype=float), c_(d0, dtype=float), c_(F, dtype=float), c, A, b, lb, ub,
-            c_(T, dtype=float), c_(t, dtype=float), int(max_iter), float(eps), float(crossover_gap),
-            G, gc, ax, tn, basis0, int(max_pivots), _AS_TOLS, int(correctors), float(rank_tol))
+    return (c_(qp.P, dtype=float), c_(d0, dtype=float), c_(F, dtype=float), c, float(qp.r), A, b, lb, ub, G, gc, ax,
+            tn, basis0, cosr, basis, int(max_iter), float(eps), float(crossover_gap), int(max_pivots), _AS_TOLS,
+            int(correctors), float(rank_tol))
 
 
 def ipm_solve(qp, **options) -> Solution:
-    """Solve ``qp`` with the compiled interior-point method (``options``: :func:`ipm_arguments`)."""
-    code, x, y, z, zc, it, state, cact, mus, dirs = _ipm.ipm_solve(*ipm_arguments(qp, **options))
+    """Solve ``qp`` with the compiled interior-point method (``options``: :func:`ipm_arguments`): one
+    compiled call (:func:`._fast.ipm_answer`) makes the cone rows, solves, and after a crossover
+    computes the answer's duals and the next guess (:func:`.active_set.active_solution` in numpy)."""
+    code, x, y, z, zc, obj, it, held, mus, dirs, nxt = _fast.ipm_answer(*ipm_arguments(qp, **options))
     n = qp.n
     if code == _ipm.CROSSOVER:
-        grad = -z
-        thr = 1e-12 * max(np.abs(grad).max(initial=0.0), 1e-300)
-        nxt = state.copy()
-        nxt[((state == 1) & ~(grad > thr)) | ((state == 2) & ~(grad < -thr))] = 0
-        return active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt, iterations=int(it), stage="ipm")
+        names = qp.cone_consts()[0]
+        nxt_cones = {names[k]: (dirs[k], float(mus[k])) for k in np.flatnonzero(held)} if held.any() else {}
+        return Solution(x, OPTIMAL, float(obj), y=y, z=z, z_cone=zc,
+                        active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt, (names, held, dirs)), verified=True,
+                        iterations=int(it), stage="ipm")
     if code == _ipm.SOLVED:
         return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z, z_cone=zc, iterations=int(it), stage="ipm",
                         verified=False)
@@ -99,10 +101,10 @@ def warm_calls():
     cone = ConeData("j", np.ones((3, n)), np.zeros(3), axis, 30.0, perpendicular_basis(axis))
     qp = QPData(np.eye(n), np.zeros(n), 0.0, np.ones((1, n)), np.ones(1), np.zeros(n), np.ones(n), [cone])
     args = ipm_arguments(qp)
-    G, gc, ax, tn, basis0 = args[13:18]
-    as_args = (args[0], args[3], args[4], args[5], args[6], args[7], np.zeros(n, dtype=np.int8), G, gc, ax,
-               tn, basis0, np.zeros(1, dtype=np.bool_), np.zeros((1, 3)), 2, 2, *(float(v) for v in _AS_TOLS))
-    return [(_ipm.ipm_solve, args), (_kkt.active_set_solve, as_args)]
+    H, _, _, c, _, A, b, lb, ub, G, gc, ax, tn, basis0, cosr, basis = args[:16]
+    as_args = (H, c, A, b, lb, ub, np.zeros(n, dtype=np.int8), G, gc, ax, tn, basis0, np.zeros(1, dtype=np.bool_),
+               np.zeros((1, 3)), 2, 2, *(float(v) for v in _AS_TOLS))
+    return [(_fast.ipm_answer, args), (_kkt.active_set_solve, as_args)]
 
 
 jit.register("mcdm_pin.solvers", warm_calls)
