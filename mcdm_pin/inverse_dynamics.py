@@ -90,16 +90,26 @@ class InverseDynamics:
     @contextmanager
     def blas_limit(self):
         """BLAS limited to ``blas_threads`` threads inside (once, when calls nest): :meth:`solve`
-        enters it at every call (~0.02 ms, threadpoolctl); a caller solving many instants one by one
+        enters it at every call (~6 us); a caller solving many instants one by one
         (a workspace's chunk of poses) enters it once around them all."""
         if self.blas_threads is None or self._limited:
             yield
             return
         self._limited = True
+        # each BLAS library's own setter, restored on the way out (~6 us; threadpoolctl's limit()
+        # context, which asks every library for its whole description, ~15 us: one cold instant
+        # of the neck's case 1 takes ~0.5 ms)
+        changed = []
         try:
-            with _blas_controller().limit(limits=self.blas_threads, user_api="blas"):
-                yield
+            for lib in _blas_libraries():
+                old = lib.num_threads
+                if old != self.blas_threads:
+                    lib.set_num_threads(self.blas_threads)
+                    changed.append((lib, old))
+            yield
         finally:
+            for lib, old in changed:
+                lib.set_num_threads(old)
             self._limited = False
 
     @property
@@ -242,6 +252,17 @@ class InverseDynamics:
 
 _BATCH = None
 _CONTROLLER = None
+
+
+def _blas_libraries():
+    """The loaded BLAS libraries' threadpoolctl controllers (listed once)."""
+    global _BLAS_LIBS
+    if _BLAS_LIBS is None:
+        _BLAS_LIBS = tuple(_blas_controller().select(user_api="blas").lib_controllers)
+    return _BLAS_LIBS
+
+
+_BLAS_LIBS = None
 
 
 def _blas_controller():

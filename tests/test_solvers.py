@@ -341,3 +341,30 @@ def test_ipm_stops_on_a_problem_whose_optimum_is_zero(quadratic):
     assert out.status == "optimal", out.message
     assert np.abs(out.x).max() <= 1e-8
     assert out.iterations <= 30
+
+
+def test_blas_limit_sets_and_restores_every_blas_library(two_link):
+    """Inside :meth:`InverseDynamics.blas_limit` every loaded BLAS library runs ``blas_threads``
+    threads; outside (also after an exception, and after nested entries) each has its own count
+    back."""
+    import scipy.linalg  # noqa: F401  (the limit loads scipy's BLAS too: loaded before counting)
+    from threadpoolctl import threadpool_info
+
+    def counts():
+        return [(i["filepath"], i["num_threads"]) for i in threadpool_info() if i["user_api"] == "blas"]
+
+    before = counts()
+    assert before
+    idp = InverseDynamics.for_case(two_link, 1)
+    with idp.blas_limit():
+        assert all(n == 1 for _, n in counts())
+        with idp.blas_limit():
+            assert all(n == 1 for _, n in counts())
+        assert all(n == 1 for _, n in counts())
+    assert counts() == before
+    with pytest.raises(RuntimeError):
+        with idp.blas_limit():
+            raise RuntimeError("inside")
+    assert counts() == before
+    idp.solve(np.zeros(two_link.nq))
+    assert counts() == before
