@@ -174,7 +174,7 @@ def test_warm_answer_is_the_numpy_ones(instants):
     answer) and far (no bound, no cone held)."""
     from mcdm_pin.solvers.active_set import ActiveSet, try_active_set
 
-    found = held = 0
+    found = held = uniques = 0
     prev = None
     for qp, _, sol, idp in instants:
         guesses = [ActiveSet(np.zeros(0, int), np.zeros(0, int))]
@@ -194,6 +194,9 @@ def test_warm_answer_is_the_numpy_ones(instants):
             np.testing.assert_allclose(got.z_cone, want.z_cone, rtol=1e-14, atol=1e-14 * scale)
             assert got.objective == pytest.approx(want.objective, rel=1e-12, abs=1e-12)
             assert got.iterations == want.iterations and got.verified and got.status == want.status
+            # the uniqueness decided in the same call is the least-norm stage's numpy decision
+            assert got.unique == (True if _numpy(LN.is_unique, qp, want) else None)
+            uniques += bool(got.unique)
             np.testing.assert_array_equal(got.active.state, want.active.state)
             assert got.active.cones.keys() == want.active.cones.keys()
             for name, (d, mu) in want.active.cones.items():
@@ -204,6 +207,8 @@ def test_warm_answer_is_the_numpy_ones(instants):
             mask, dirs = got.active.cone_guess(qp)
             assert [c.joint for k, c in enumerate(qp.cones) if mask[k]] == list(want.active.cones)
     assert found > 20 and held > 0
+    # both decisions occur: the human arm's abduct has a flat optimal face (not unique)
+    assert 0 < uniques < found, (uniques, found)
 
 
 def test_interaction_quadratic_is_the_numpy_ones(instants):
@@ -290,7 +295,7 @@ def test_ipm_answer_is_the_numpy_ones(instants):
         T, t = qp.cone_rows()
         c_ = np.ascontiguousarray
         code, x, y, z, zc, it, state, cact, mus, dirs = _ipm.ipm_solve(
-            H, d0, F, c, A, b, lb, ub, c_(T), c_(t), *args[16:19], G, gc, ax, tn, basis0, *args[19:])
+            H, d0, F, c, A, b, lb, ub, c_(T), c_(t), *args[16:19], G, gc, ax, tn, basis0, *args[19:23])
         assert got.iterations == it
         if code != _ipm.CROSSOVER:
             assert got.active is None
@@ -310,4 +315,5 @@ def test_ipm_answer_is_the_numpy_ones(instants):
         np.testing.assert_array_equal(got.active.state, want.active.state)
         assert got.active.cones.keys() == want.active.cones.keys()
         cones_held += len(want.active.cones)
+        assert got.unique == (True if _numpy(LN.is_unique, qp, want) else None)
     assert crossed > 20 and cones_held > 0, (crossed, cones_held)

@@ -227,7 +227,8 @@ def instant_outputs(u, RT, R_socket, axes, f):
 
 @njit(cache=True, nogil=True)
 def active_set_answer(H, g, r, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, dirs0, cosr, basis,
-                      max_pivots, max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel):
+                      max_pivots, max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel, strict, near,
+                      unique_rel):
     """:func:`._kkt.active_set_run` from the guess ``(state0, cact0, dirs0)`` (``dirs0``: the held
     cones' surface directions; the others start from ``basis0``), then, at a verified point, what
     :func:`mcdm_pin.solvers.active_set.active_solution` makes of it: the bounds' multipliers ``z``
@@ -235,9 +236,13 @@ def active_set_answer(H, g, r, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact
     ``cosr`` the half-angles' cosines, ``basis`` (K, 2, 3) the planes normal to the axes), the
     objective ``1/2 f^T H f + g^T f + r`` and the cones held with a positive multiplier.
 
-    Returns ``(code, f, y, z, z_cone, objective, held, mus, dirs, next_state, solves)`` (``mus``: the
-    cones' multipliers); only ``code``
-    and ``solves`` mean anything unless ``code`` is :data:`._kkt.FOUND`."""
+    And whether the optimum is provably unique (:func:`answer_unique`: ``strict``, the objective
+    is strictly convex; ``near``, ``unique_rel``: :func:`unique_test`'s thresholds), so that the
+    least-norm stage need not ask again.
+
+    Returns ``(code, f, y, z, z_cone, objective, held, mus, dirs, next_state, solves, unique)``
+    (``mus``: the cones' multipliers; ``unique`` 1 proven unique, 0 not proven); only ``code`` and
+    ``solves`` mean anything unless ``code`` is :data:`._kkt.FOUND`."""
     nc = G.shape[0]
     cdir = basis0.copy()
     for k in range(nc):
@@ -250,9 +255,19 @@ def active_set_answer(H, g, r, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact
     if code != FOUND:
         n = f.shape[0]
         return code, f, y, np.zeros(n), np.zeros((nc, 3)), np.nan, np.zeros(nc, dtype=np.bool_), mus, dirs, nxt, \
-            solves
+            solves, 0
     z, zc, obj, held = answer_duals(H, g, r, f, grad, state, cact, mus, dirs, cosr, basis)
-    return code, f, y, z, zc, obj, held, mus, dirs, nxt, solves
+    unique = answer_unique(f, z, g, lb, ub, A, H, G, gc, ax, tn, cosr, zc, strict, near, unique_rel)
+    return code, f, y, z, zc, obj, held, mus, dirs, nxt, solves, unique
+
+
+@njit(cache=True, nogil=True)
+def answer_unique(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, strict, near, unique_rel):
+    """:func:`mcdm_pin.solvers.least_norm.is_unique` of an answer with its duals: 1 when ``strict``
+    (its first test: a strictly convex objective), else :func:`unique_test`."""
+    if strict:
+        return 1
+    return unique_test(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel)
 
 
 @njit(cache=True, nogil=True)
@@ -315,22 +330,22 @@ def cone_rows(G, g, ax, cosr, basis):
 
 @njit(cache=True, nogil=True)
 def ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, G, g, ax, tn, basis0, cosr, basis, max_iter, eps, crossover_gap,
-               max_pivots, as_tols, ncorr, rank_tol):
+               max_pivots, as_tols, ncorr, rank_tol, strict, near, unique_rel):
     """:func:`._ipm.ipm_solve` on a problem's stacked arrays (its cone rows made here:
     :func:`cone_rows`) and, after a crossover, the answer's duals and objective (:func:`answer_duals`)
     and the next instant's guess of the bounds (multipliers below 1e-12 of the largest free their
     variable), in one call.
 
-    Returns ``(code, x, y, z, z_cone, objective, iterations, held, mus, dirs, next_state)``: after a
-    crossover as :func:`active_set_answer`'s; otherwise ``z, z_cone`` the method's own (or the
-    certificate) and the rest empty."""
+    Returns ``(code, x, y, z, z_cone, objective, iterations, held, mus, dirs, next_state, unique)``:
+    after a crossover as :func:`active_set_answer`'s; otherwise ``z, z_cone`` the method's own (or
+    the certificate), the rest empty and ``unique`` 0."""
     T, t = cone_rows(G, g, ax, cosr, basis)
     code, x, y, z, zc, it, state, cact, mus, dirs = ipm_solve(
         H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, g, ax, tn, basis0, max_pivots,
         as_tols, ncorr, rank_tol)
     n = x.shape[0]
     if code != CROSSOVER:
-        return code, x, y, z, zc, np.nan, it, np.zeros(0, dtype=np.bool_), mus, dirs, state
+        return code, x, y, z, zc, np.nan, it, np.zeros(0, dtype=np.bool_), mus, dirs, state, 0
     grad = -z
     thr = 0.0
     for i in range(n):
@@ -341,7 +356,8 @@ def ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, G, g, ax, tn, basis0, cosr, basis,
         if (state[i] == 1 and not grad[i] > thr) or (state[i] == 2 and not grad[i] < -thr):
             nxt[i] = 0
     zb, zcone, obj, held = answer_duals(H, c, r, x, grad, state, cact, mus, dirs, cosr, basis)
-    return code, x, y, zb, zcone, obj, it, held, mus, dirs, nxt
+    unique = answer_unique(x, zb, c, lb, ub, A, H, G, g, ax, tn, cosr, zcone, strict, near, unique_rel)
+    return code, x, y, zb, zcone, obj, it, held, mus, dirs, nxt, unique
 
 
 @njit(cache=True, nogil=True)
@@ -370,7 +386,7 @@ def warm_calls():
     tols = (1e-12, 1e-9, 1e-9, 1e-9, 1e-12)
     calls = [(active_set_answer, (z((n, n)), z(n), 0.0, z((1, n)), z(1), z(n), z(n), z(n, dtype=np.int8),
                                   z((1, 3, n)), z((1, 3)), z((1, 3)), z(1), z((1, 3)), z(1, dtype=np.bool_),
-                                  z((1, 3)), z(1), z((1, 2, 3)), 2, 2, *tols))]
+                                  z((1, 3)), z(1), z((1, 2, 3)), 2, 2, *tols, False, 1e-8, 1e-9))]
     return calls + [(unique_test, (z(n), z(n), z(n), z(n), z(n), z((1, n)), z((n, n)), z((1, 3, n)), z((1, 3)),
                            z((1, 3)), z(1), z(1), z((1, 3)), 1e-8, 1e-9)),
             (answer_check, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1))),

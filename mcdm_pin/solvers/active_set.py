@@ -143,16 +143,26 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     cact, cdir = guess.cone_guess(qp)
     # C-ordered float arrays and Python scalars: one compiled specialisation serves every call
     c_ = np.ascontiguousarray
-    code, x, y, z, zc, objective, held, mus, dirs, nxt_state, solves = _fast.active_set_answer(
+    code, x, y, z, zc, objective, held, mus, dirs, nxt_state, solves, unique = _fast.active_set_answer(
         c_(qp.P, dtype=float), c, qp.r, A, b, lb, ub, c_(state, dtype=np.int8), G, gc, ax, tn, basis0,
-        c_(cact, dtype=np.bool_), c_(cdir, dtype=float), cosr, basis, int(max_pivots), int(max_newton), *_AS_TOLS)
+        c_(cact, dtype=np.bool_), c_(cdir, dtype=float), cosr, basis, int(max_pivots), int(max_newton), *_AS_TOLS,
+        *unique_args(qp))
     if code != K.FOUND:
         _miss(K.REASONS[code])
         return None
     nxt_cones = {names[k]: (dirs[k], float(mus[k])) for k in np.flatnonzero(held)} if held.any() else {}
     return Solution(x, OPTIMAL, objective, y=y, z=z, z_cone=zc,
                     active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt_state, (names, held, dirs)),
-                    verified=True, iterations=int(solves), stage=stage)
+                    verified=True, iterations=int(solves), stage=stage, unique=True if unique else None)
+
+
+def unique_args(qp: QPData) -> tuple:
+    """The compiled answers' arguments of the uniqueness test (:func:`._fast.answer_unique`):
+    ``(strict, near, unique_rel)``, ``strict`` when ``P = diag(d) + F^T F`` with ``d > 0``
+    (:func:`.least_norm.is_unique`'s first test). An answer proven unique carries ``unique=True``
+    and the least-norm stage passes it on; one not proven is asked again there (``None``)."""
+    strict = qp.P_diag is not None and qp.P_diag.size > 0 and float(qp.P_diag.min()) > 0.0
+    return bool(strict), float(tol.ACTIVE_SET_FROM_SOLUTION), float(tol.UNIQUE_REL)
 
 
 def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state, **fields) -> Solution:

@@ -15,7 +15,7 @@ import numpy as np
 from .. import jit
 from .. import tolerances as tol
 from . import _fast, _ipm, _kkt
-from .active_set import _AS_TOLS, _EMPTY, ActiveSet
+from .active_set import _AS_TOLS, _EMPTY, ActiveSet, unique_args
 from .base import INACCURATE, INFEASIBLE, OPTIMAL, Solution, Stage, failure
 
 REASONS = {_ipm.MAX_ITER: "iteration limit", _ipm.NUMERICAL: "numerical breakdown (the step vanished)"}
@@ -47,21 +47,22 @@ def ipm_arguments(qp, max_iter: int = tol.IPM_MAX_ITER, eps: float = tol.IPM_EPS
     d0, F = p_structure(qp)
     return (c_(qp.P, dtype=float), c_(d0, dtype=float), c_(F, dtype=float), c, float(qp.r), A, b, lb, ub, G, gc, ax,
             tn, basis0, cosr, basis, int(max_iter), float(eps), float(crossover_gap), int(max_pivots), _AS_TOLS,
-            int(correctors), float(rank_tol))
+            int(correctors), float(rank_tol), *unique_args(qp))
 
 
 def ipm_solve(qp, **options) -> Solution:
     """Solve ``qp`` with the compiled interior-point method (``options``: :func:`ipm_arguments`): one
     compiled call (:func:`._fast.ipm_answer`) makes the cone rows, solves, and after a crossover
-    computes the answer's duals and the next guess (:func:`.active_set.active_solution` in numpy)."""
-    code, x, y, z, zc, obj, it, held, mus, dirs, nxt = _fast.ipm_answer(*ipm_arguments(qp, **options))
+    computes the answer's duals, the next guess (:func:`.active_set.active_solution` in numpy) and
+    whether the optimum is provably unique (:func:`.least_norm.is_unique`)."""
+    code, x, y, z, zc, obj, it, held, mus, dirs, nxt, unique = _fast.ipm_answer(*ipm_arguments(qp, **options))
     n = qp.n
     if code == _ipm.CROSSOVER:
         names = qp.cone_consts()[0]
         nxt_cones = {names[k]: (dirs[k], float(mus[k])) for k in np.flatnonzero(held)} if held.any() else {}
         return Solution(x, OPTIMAL, float(obj), y=y, z=z, z_cone=zc,
                         active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt, (names, held, dirs)), verified=True,
-                        iterations=int(it), stage="ipm")
+                        iterations=int(it), stage="ipm", unique=True if unique else None)
     if code == _ipm.SOLVED:
         return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z, z_cone=zc, iterations=int(it), stage="ipm",
                         verified=False)
