@@ -77,7 +77,9 @@ class QPData:
         if self._P is None:
             F = self.P_factor
             self._P = F.T @ F
-            self._P[np.diag_indices_from(self._P)] += self.P_diag
+            # (the diagonal as a strided view of the flat array: fancy indexing by
+            # diag_indices_from cost 11 us of the 20 us this property took on the neck)
+            self._P.flat[:: self._P.shape[0] + 1] += self.P_diag
         return self._P
 
     @property
