@@ -203,7 +203,7 @@ class Robot:
         if arr.ndim != 1 or arr.shape[0] not in (self.nq, self.nv):
             want = f"{self.nq}" if self.nq == self.nv else f"{self.nq} (configuration) or {self.nv} (coordinates)"
             raise StateError(f"{name}: expected a vector of length {want}, got shape {arr.shape}")
-        if not np.all(np.isfinite(arr)):
+        if not np.isfinite(arr).all():
             bad = np.flatnonzero(~np.isfinite(arr))
             raise StateError(f"{name}: expected finite numbers, entries {bad.tolist()} are not")
         if self.nq == self.nv:
@@ -236,7 +236,7 @@ class Robot:
             raise StateError(f"{name}: expected {n} numbers, got {type(x).__name__}") from None
         if arr.shape != (n,):
             raise StateError(f"{name}: expected a vector of length {n}, got shape {arr.shape}")
-        if not np.all(np.isfinite(arr)):
+        if not np.isfinite(arr).all():
             bad = np.flatnonzero(~np.isfinite(arr))
             raise StateError(f"{name}: expected finite numbers, entries {bad.tolist()} are not")
         return arr

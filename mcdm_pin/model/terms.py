@@ -277,7 +277,7 @@ class TermsEvaluator:
             X, lengths = geo.points, geo.lengths
             RT, L = self._numpy_cable_maps(geo.w, J.copy(), oR, op)
             R_socket = (oR[self._parent_key] @ self._R_sp).transpose(0, 2, 1) @ oR[self._child_key]
-            bad = -1 if np.all(np.isfinite(L)) else -2
+            bad = -1 if np.isfinite(L).all() else -2
         tau = pin.rnea(model, data, q, qd, qdd).copy()
         if own:
             u = np.array(self._u_views).reshape(len(self._child), 6)
@@ -336,7 +336,7 @@ def _vector(x, name: str, n: int) -> np.ndarray:
         raise StateError(f"{name}: expected {n} numbers, got {type(x).__name__}") from None
     if arr.shape != (n,):
         raise StateError(f"{name}: expected a vector of length {n}, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         bad = np.flatnonzero(~np.isfinite(arr))
         raise StateError(f"{name}: expected finite numbers, entries {bad.tolist()} are not")
     return arr
