@@ -118,23 +118,6 @@ def chol_inplace(L, drop_rel, first_drop):
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def chol_solve(L, r):
-    """``(L L^T)^{-1} r`` (both passes along rows of ``L``)."""
-    p = L.shape[0]
-    y = r.copy()
-    for i in range(p):
-        Li = L[i]
-        y[i] = (y[i] - dot(Li[:i], y[:i])) / Li[i]
-    for i in range(p - 1, -1, -1):
-        Li = L[i]
-        xi = y[i] / Li[i]
-        y[i] = xi
-        for k in range(i):
-            y[k] -= Li[k] * xi
-    return y
-
-
-@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
 def add_inverse(L, out):
     """``out += (L L^T)^{-1}`` on the lower triangle (``L^{-1}`` formed row by row)."""
     p = L.shape[0]
@@ -242,11 +225,27 @@ def structure(Fm, T, A, rank_tol):
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def _gram(B, dinv):
-    """``B diag(dinv) B^T`` (lower triangle; four rows of ``B`` at a time)."""
+def chol_solve_inplace(L, y):
+    """``y <- (L L^T)^{-1} y`` (both passes along rows of ``L``; no temporaries)."""
+    p = L.shape[0]
+    for i in range(p):
+        Li = L[i]
+        s = 0.0
+        for k in range(i):
+            s += Li[k] * y[k]
+        y[i] = (y[i] - s) / Li[i]
+    for i in range(p - 1, -1, -1):
+        Li = L[i]
+        xi = y[i] / Li[i]
+        y[i] = xi
+        for k in range(i):
+            y[k] -= Li[k] * xi
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def _gram(B, dinv, row, Km):
+    """``Km <- B diag(dinv) B^T`` (lower triangle; four rows of ``B`` at a time; ``row`` (n,) work)."""
     rb, n = B.shape
-    Km = np.zeros((rb, rb))
-    row = np.empty(n)
     for i in range(rb):
         Bi = B[i]
         for t in range(n):
@@ -266,25 +265,21 @@ def _gram(B, dinv):
         while j <= i:
             Km[i, j] = dot(row, B[j])
             j += 1
-    return Km
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def _expand(Kb, rf, Ct):
-    """The reduced matrix's products for ``B = [Q; T; A]`` from those of ``[Q; A]`` (``T = Ct Q``):
-    ``T D^-1 Q^T = Ct (Q D^-1 Q^T)`` etc."""
+def _expand(Kb, rf, Ct, KFF, G1, Km):
+    """``Km <-`` the reduced matrix's products for ``B = [Q; T; A]`` from those of ``[Q; A]`` in ``Kb``
+    (``T = Ct Q``): ``T D^-1 Q^T = Ct (Q D^-1 Q^T)`` etc. (lower triangle; ``KFF`` (rf, rf) and ``G1``
+    (3K, rf) work)."""
     m = Ct.shape[0]
     neq = Kb.shape[0] - rf
-    p = rf + m + neq
-    Km = np.zeros((p, p))
-    KFF = np.empty((rf, rf))
     for a in range(rf):
         for b in range(a + 1):
             KFF[a, b] = Kb[a, b]
             KFF[b, a] = Kb[a, b]
             Km[a, b] = Kb[a, b]
-    G1 = np.empty((m, rf))  # Ct KFF
-    for i in range(m):
+    for i in range(m):  # G1 = Ct KFF
         for b in range(rf):
             G1[i, b] = dot(Ct[i], KFF[b])
         for b in range(rf):
@@ -299,17 +294,19 @@ def _expand(Kb, rf, Ct):
             Km[rf + m + a, rf + j] = dot(KA, Ct[j])
         for b in range(a + 1):
             Km[rf + m + a, rf + m + b] = Kb[rf + a, rf + b]
-    return Km
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def factor(B, rf, M0inv, Ct, W2, dinv, drop_rel):
-    """The Cholesky factor (lower) of the reduced matrix of the module docstring, and whether an
-    equation was dropped."""
+def factor(B, rf, M0inv, Ct, W2, dinv, drop_rel, work, Kb, Km, KFF, G1):
+    """The Cholesky factor (lower) of the reduced matrix of the module docstring, in place in ``Km``
+    ((p, p)); whether an equation was dropped. ``Kb`` ((rf + k_eq)^2 when the cones' rows are
+    expanded, else ``Km`` itself), ``work`` (n,), ``KFF``, ``G1``: work arrays (made once per solve)."""
     K = W2.shape[0]
-    Km = _gram(B, dinv)
     if Ct.shape[0]:
-        Km = _expand(Km, rf, Ct)
+        _gram(B, dinv, work, Kb)
+        _expand(Kb, rf, Ct, KFF, G1, Km)
+    else:
+        _gram(B, dinv, work, Km)
     for a in range(rf):
         for b in range(a + 1):
             Km[a, b] += M0inv[a, b]
@@ -318,26 +315,24 @@ def factor(B, rf, M0inv, Ct, W2, dinv, drop_rel):
         for a in range(3):
             for b in range(a + 1):
                 Km[o + a, o + b] += W2[k, a, b]
-    dropped = chol_inplace(Km, drop_rel, rf + 3 * K)
-    return Km, dropped
+    return chol_inplace(Km, drop_rel, rf + 3 * K)
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def solve(B, rf, Ct, LK, dinv, r1, r3, r2):
-    """``(dx, dy, dzc)`` of ``(D + F^T F) dx + A^T dy - T^T dzc = r1``, ``A dx = r2``,
-    ``-T dx - W^2 dzc = r3`` (``r3`` (K, 3)) from :func:`factor`'s factor."""
+def solve(B, rf, Ct, LK, dinv, r1, r3, r2, u, rhs, wq, dx, dy, dzc):
+    """``(dx, dy, dzc)`` (written in place) of ``(D + F^T F) dx + A^T dy - T^T dzc = r1``,
+    ``A dx = r2``, ``-T dx - W^2 dzc = r3`` (``r3`` (K, 3)) from :func:`factor`'s factor; ``u`` (n,),
+    ``rhs`` (p,), ``wq`` (rf,): work arrays."""
     n = B.shape[1]
     K = r3.shape[0]
     m = 3 * K
     p = LK.shape[0]
     nw = rf + m
-    u = dinv * r1
-    rhs = np.empty(p)
+    for t in range(n):
+        u[t] = dinv[t] * r1[t]
     inside = Ct.shape[0] > 0
-    for i in range(rf):
-        rhs[i] = dot(B[i], u)
     ob = rf if inside else rf + m  # first row of A in B
-    for i in range(rf, ob):
+    for i in range(ob):
         rhs[i] = dot(B[i], u)
     for a in range(p - nw):
         rhs[nw + a] = dot(B[ob + a], u) - r2[a]
@@ -347,49 +342,57 @@ def solve(B, rf, Ct, LK, dinv, r1, r3, r2):
     for k in range(K):
         for e in range(3):
             rhs[rf + 3 * k + e] += r3[k, e]
-    sol = chol_solve(LK, rhs)
-    dx = r1.copy()
-    wq = sol[:rf].copy()
+    chol_solve_inplace(LK, rhs)
+    for t in range(n):
+        dx[t] = r1[t]
+    for i in range(rf):
+        wq[i] = rhs[i]
     if inside:
         for i in range(m):
-            axpy(sol[rf + i], Ct[i], wq)
+            axpy(rhs[rf + i], Ct[i], wq)
     else:
         for i in range(m):
-            if sol[rf + i] != 0.0:
-                axpy(-sol[rf + i], B[rf + i], dx)
+            if rhs[rf + i] != 0.0:
+                axpy(-rhs[rf + i], B[rf + i], dx)
     for i in range(rf):
         if wq[i] != 0.0:
             axpy(-wq[i], B[i], dx)
     for a in range(p - nw):
-        if sol[nw + a] != 0.0:
-            axpy(-sol[nw + a], B[ob + a], dx)
+        if rhs[nw + a] != 0.0:
+            axpy(-rhs[nw + a], B[ob + a], dx)
     for t in range(n):
         dx[t] *= dinv[t]
-    dzc = np.empty((K, 3))
     for k in range(K):
         for e in range(3):
-            dzc[k, e] = -sol[rf + 3 * k + e]
-    return dx, sol[nw:].copy(), dzc
+            dzc[k, e] = -rhs[rf + 3 * k + e]
+    for a in range(p - nw):
+        dy[a] = rhs[nw + a]
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def apply_P(x, d0, Fm):
-    """``P x = d0 x + F^T F x``."""
-    out = d0 * x
+def apply_P(x, d0, Fm, out):
+    """``out <- P x = d0 x + F^T F x``."""
+    for t in range(x.shape[0]):
+        out[t] = d0[t] * x[t]
     for i in range(Fm.shape[0]):
         s = dot(Fm[i], x)
         if s != 0.0:
             axpy(s, Fm[i], out)
-    return out
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def refine(B, rf, Ct, LK, dinv, dbar, Fm, T, W2, A, r1, r3, r2, dx, dy, dzc, steps):
+def refine(B, rf, Ct, LK, dinv, dbar, Fm, T, W2, A, r1, r3, r2, dx, dy, dzc, steps, u, rhs, wq):
     """``steps`` rounds of iterative refinement of ``(dx, dy, dzc)`` against the exact operators of
-    :func:`solve`'s system (``dbar``: ``d0`` plus the barrier diagonal, without the floor)."""
+    :func:`solve`'s system (``dbar``: ``d0`` plus the barrier diagonal, without the floor; ``u``,
+    ``rhs``, ``wq``: :func:`solve`'s work arrays)."""
     K = T.shape[0]
+    Pdx = np.empty(dx.shape[0])
+    cx = np.empty(dx.shape[0])
+    cy = np.empty(dy.shape[0])
+    cz = np.empty((K, 3))
     for _ in range(steps):
-        e1 = r1 - apply_P(dx, dbar, Fm)
+        apply_P(dx, dbar, Fm, Pdx)
+        e1 = r1 - Pdx
         for a in range(A.shape[0]):
             if dy[a] != 0.0:
                 axpy(-dy[a], A[a], e1)
@@ -402,7 +405,7 @@ def refine(B, rf, Ct, LK, dinv, dbar, Fm, T, W2, A, r1, r3, r2, dx, dy, dzc, ste
         e2 = r2.copy()
         for a in range(A.shape[0]):
             e2[a] -= dot(A[a], dx)
-        cx, cy, cz = solve(B, rf, Ct, LK, dinv, e1, e3, e2)
+        solve(B, rf, Ct, LK, dinv, e1, e3, e2, u, rhs, wq, cx, cy, cz)
         axpy(1.0, cx, dx)
         axpy(1.0, cy, dy)
         for k in range(K):
