@@ -217,7 +217,7 @@ def _barrier(d0, iu, il, su, zu, sl, zl, floor, dbar, dinv, ru, rl):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx, dy,
+def _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx, dy,
             dzu, dzl, dzc):
     """The scaled Newton system's ``(dx, dy, dzu, dzl, dzc)`` (in place) for the right-hand sides
     ``P dx + A^T dy + G^T dz = bx, A dx = by, G dx - W^2 dz = bz``: the bounds' ``dz`` eliminated
@@ -231,9 +231,9 @@ def _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, LK, dinv, dbar, Fm, T, A, W2, iu, 
         r1[iu[q]] += ru[q] * bzu[q]
     for q in range(il.shape[0]):
         r1[il[q]] -= rl[q] * bzl[q]
-    la.solve(B, rf, Ct, LK, dinv, r1, bzc, by, u, rhs, wq, dx, dy, dzc)
+    la.solve(B, rf, Ct, cg, LK, dinv, r1, bzc, by, u, rhs, wq, dx, dy, dzc)
     if refine:
-        la.refine(B, rf, Ct, LK, dinv, dbar, Fm, T, W2, A, r1, bzc, by, dx, dy, dzc, refine, u, rhs, wq)
+        la.refine(B, rf, Ct, cg, LK, dinv, dbar, Fm, T, W2, A, r1, bzc, by, dx, dy, dzc, refine, u, rhs, wq)
     for q in range(iu.shape[0]):
         dzu[q] = ru[q] * (dx[iu[q]] - bzu[q])
     for q in range(il.shape[0]):
@@ -241,7 +241,7 @@ def _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, LK, dinv, dbar, Fm, T, A, W2, iu, 
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, floor, fw, ws):
+def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, floor, fw, ws):
     """CVXOPT's initial point: ``x, y`` of the Newton system with the identity scaling (the least
     squares point of the slacks on the equations, with the objective), ``s = h - G x``, ``z = -s``,
     each shifted into its cone's interior when it is not (:func:`_shift_into_cones`). Starting from
@@ -258,7 +258,7 @@ def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, floor, fw, w
     ru, rl = np.empty(nu), np.empty(nl)
     _barrier(d0, iu, il, one_u, one_u, one_l, one_l, floor, dbar, dinv, ru, rl)
     Kb, Km, KFF, G1 = fw
-    la.factor(B, rf, M0inv, Ct, Vc, dinv, 1e-14, ws[1], Kb, Km, KFF, G1)
+    la.factor(B, rf, M0inv, Ct, cg, Vc, dinv, 1e-14, ws[1], Kb, Km, KFF, G1)
     hu = np.empty(nu)
     for q in range(nu):
         hu[q] = ub[iu[q]]
@@ -266,7 +266,7 @@ def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, floor, fw, w
     for q in range(nl):
         hl[q] = -lb[il[q]]
     x, y, zu, zl, zc = np.empty(n), np.empty(A.shape[0]), np.empty(nu), np.empty(nl), np.empty((K, 3))
-    _newton(-c, b, hu, hl, t.copy(), B, rf, Ct, Km, dinv, dbar, Fm, T, A, Vc, iu, il, ru, rl, 1, ws, x, y, zu, zl,
+    _newton(-c, b, hu, hl, t.copy(), B, rf, Ct, cg, Km, dinv, dbar, Fm, T, A, Vc, iu, il, ru, rl, 1, ws, x, y, zu, zl,
             zc)
     su, sl, sc = -zu, -zl, -zc
     _shift_into_cones(su, sl, sc)
@@ -336,7 +336,7 @@ def _cone_corrector(lamc, Winv, Wm, dsc, dzc, rzc, smu, bzc):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, LK, dinv, dbar, Fm, T, A, W2,
+def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, LK, dinv, dbar, Fm, T, A, W2,
                Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D):
     """Mehrotra's predictor-corrector direction with Gondzio's centrality correctors on the bounds
     (at most ``ncorr``, each kept only when it lengthens the step). ``rb = (bx, by, bzu, bzl, rsu,
@@ -360,7 +360,7 @@ def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, LK,
         for e in range(3):
             bzc[k, e] = -rzc[k, e] + sc[k, e]
     dx, dy, dzu, dzl, dzc, dsu, dsl, dsc = DX[0], DY[0], DZU[0], DZL[0], DZC[0], DSU[0], DSL[0], DSC[0]
-    _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx, dy,
+    _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx, dy,
             dzu, dzl, dzc)
     _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc)
     a_p = min(1.0, _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc))
@@ -388,7 +388,7 @@ def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, LK,
             bzl[q] = -rzl[q] - rsl[q] / zl[q]
         dx, dy, dzu, dzl, dzc = DX[cur], DY[cur], DZU[cur], DZL[cur], DZC[cur]
         dsu, dsl, dsc = DSU[cur], DSL[cur], DSC[cur]
-        _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx,
+        _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx,
                 dy, dzu, dzl, dzc)
         _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc)
         a = _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc)
@@ -537,7 +537,7 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
     for i in range(n):
         hmax = max(hmax, H[i, i])
     floor = 1e-12 * max(hmax, 1e-300) if hmax > 0.0 else 1e-12
-    B, rf, M0inv, Ct = la.structure(Fm, T, A, rank_tol)
+    B, rf, M0inv, Ct, cg = la.structure(Fm, T, A, rank_tol)
     # every work array of the iterations, made once (a small array costs ~0.1-0.3 us to make)
     neq, nu, nl = A.shape[0], iu.shape[0], il.shape[0]
     p = rf + 3 * K + neq
@@ -545,7 +545,7 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
     Kb = np.empty((B.shape[0], B.shape[0])) if Ct.shape[0] else Km
     fw = (Kb, Km, np.empty((rf, rf)), np.empty((Ct.shape[0], rf)))
     ws = (np.empty(n), np.empty(n), np.empty(p), np.empty(rf))  # r1, u, rhs, wq
-    x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, floor, fw, ws)
+    x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, floor, fw, ws)
     Px, rx, ry, rzu, rzl, rzc = np.empty(n), np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty((K, 3))
     dbar, dinv, ru, rl = np.empty(n), np.empty(n), np.empty(nu), np.empty(nl)
     rb = (np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty(nu), np.empty(nl), np.empty((K, 3)))
@@ -593,9 +593,9 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
         # ---- scaling and the factor of the Newton system
         _cone_scalings(sc, zc, Wm, Winv, Wc2, lamc)
         _barrier(d0, iu, il, su, zu, sl, zl, floor, dbar, dinv, ru, rl)
-        dropped = la.factor(B, rf, M0inv, Ct, Wc2, dinv, 1e-14, ws[1], Kb, Km, fw[2], fw[3])
+        dropped = la.factor(B, rf, M0inv, Ct, cg, Wc2, dinv, 1e-14, ws[1], Kb, Km, fw[2], fw[3])
         refine = 1 if dropped or gap_rel < 1e-5 else 0
-        j, a = _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, Km, dinv, dbar, Fm, T, A,
+        j, a = _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, Km, dinv, dbar, Fm, T, A,
                           Wc2, Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D)
         a = min(1.0, 0.99 * a)
         if not (a > 1e-14) or not np.isfinite(a):
