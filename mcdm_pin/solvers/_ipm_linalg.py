@@ -72,10 +72,20 @@ def axpy(a, x, y):
         y[i] += a * x[i]
 
 
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy", inline="always")
+def _pivot(d, floor, j, first_drop):
+    """A pivot ``d`` (its row's diagonal entry less the squares before it) judged as in
+    :func:`chol_inplace`: ``(sqrt(d'), dropped)``."""
+    if not d > floor:
+        return np.sqrt(1e300 if j >= first_drop else max(floor, 1e-300)), True
+    return np.sqrt(d), False
+
+
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
 def chol_inplace(L, drop_rel, first_drop):
-    """Cholesky factor of the lower triangle of ``L`` in place (row-oriented; four rows at a time share
-    the loads of the pivot row: twice the speed of one). Each pivot is judged against its own row's
+    """Cholesky factor of the lower triangle of ``L`` in place (row-oriented, two columns at a time:
+    each row's products with both pivot rows share its loads, and four rows at a time share the
+    pivot rows' loads). Each pivot is judged against its own row's
     diagonal entry ``L_jj`` before the elimination (the factor does not depend on the scaling of the
     rows, nor should the test): a pivot at or below ``drop_rel L_jj`` in a row from ``first_drop`` on
     becomes 1e300 (its unknown is dropped: the solves set it to zero; a dependent equation), in a
@@ -83,37 +93,73 @@ def chol_inplace(L, drop_rel, first_drop):
     construction kept barely definite). Returns whether a pivot was dropped or raised."""
     p = L.shape[0]
     dropped = False
-    for j in range(p):
+    j = 0
+    while j + 1 < p:
+        Lj, Lk = L[j], L[j + 1]
+        d = Lj[j]
+        floor = drop_rel * abs(d)
+        for k in range(j):
+            d -= Lj[k] * Lj[k]
+        d, dr = _pivot(d, floor, j, first_drop)
+        dropped |= dr
+        Lj[j] = d
+        inv = 1.0 / d
+        s = Lk[j]
+        for k in range(j):
+            s -= Lk[k] * Lj[k]
+        Lk[j] = s * inv
+        d1 = Lk[j + 1]
+        floor1 = drop_rel * abs(d1)
+        for k in range(j + 1):
+            d1 -= Lk[k] * Lk[k]
+        d1, dr = _pivot(d1, floor1, j + 1, first_drop)
+        dropped |= dr
+        Lk[j + 1] = d1
+        inv1 = 1.0 / d1
+        ljk = Lk[j]
+        i = j + 2
+        while i + 3 < p:
+            A0, A1, A2, A3 = L[i], L[i + 1], L[i + 2], L[i + 3]
+            s0, s1, s2, s3 = A0[j], A1[j], A2[j], A3[j]
+            t0, t1, t2, t3 = A0[j + 1], A1[j + 1], A2[j + 1], A3[j + 1]
+            for k in range(j):
+                a = Lj[k]
+                b = Lk[k]
+                s0 -= A0[k] * a
+                s1 -= A1[k] * a
+                s2 -= A2[k] * a
+                s3 -= A3[k] * a
+                t0 -= A0[k] * b
+                t1 -= A1[k] * b
+                t2 -= A2[k] * b
+                t3 -= A3[k] * b
+            s0, s1, s2, s3 = s0 * inv, s1 * inv, s2 * inv, s3 * inv
+            A0[j], A1[j], A2[j], A3[j] = s0, s1, s2, s3
+            A0[j + 1] = (t0 - s0 * ljk) * inv1
+            A1[j + 1] = (t1 - s1 * ljk) * inv1
+            A2[j + 1] = (t2 - s2 * ljk) * inv1
+            A3[j + 1] = (t3 - s3 * ljk) * inv1
+            i += 4
+        while i < p:
+            Ai = L[i]
+            s0, t0 = Ai[j], Ai[j + 1]
+            for k in range(j):
+                s0 -= Ai[k] * Lj[k]
+                t0 -= Ai[k] * Lk[k]
+            s0 *= inv
+            Ai[j] = s0
+            Ai[j + 1] = (t0 - s0 * ljk) * inv1
+            i += 1
+        j += 2
+    if j < p:  # the last pivot when p is odd
         Lj = L[j]
         d = Lj[j]
         floor = drop_rel * abs(d)
         for k in range(j):
             d -= Lj[k] * Lj[k]
-        if not d > floor:
-            d = 1e300 if j >= first_drop else max(floor, 1e-300)
-            dropped = True
-        d = np.sqrt(d)
+        d, dr = _pivot(d, floor, j, first_drop)
+        dropped |= dr
         Lj[j] = d
-        inv = 1.0 / d
-        i = j + 1
-        while i + 3 < p:
-            A0, A1, A2, A3 = L[i], L[i + 1], L[i + 2], L[i + 3]
-            s0, s1, s2, s3 = A0[j], A1[j], A2[j], A3[j]
-            for k in range(j):
-                lk = Lj[k]
-                s0 -= A0[k] * lk
-                s1 -= A1[k] * lk
-                s2 -= A2[k] * lk
-                s3 -= A3[k] * lk
-            A0[j], A1[j], A2[j], A3[j] = s0 * inv, s1 * inv, s2 * inv, s3 * inv
-            i += 4
-        while i < p:
-            Ai = L[i]
-            s = Ai[j]
-            for k in range(j):
-                s -= Ai[k] * Lj[k]
-            Ai[j] = s * inv
-            i += 1
     return dropped
 
 
