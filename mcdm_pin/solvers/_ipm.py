@@ -145,9 +145,10 @@ def _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc):
     for q in range(il.shape[0]):
         dsl[q] = -rzl[q] + dx[il[q]]
     K = T.shape[0]
+    la.rows_dot(T.reshape((3 * K, dx.shape[0])), 0, 3 * K, dx, dsc.reshape(3 * K), 0)
     for k in range(K):
         for e in range(3):
-            dsc[k, e] = -rzc[k, e] + _dot(T[k, e], dx)
+            dsc[k, e] -= rzc[k, e]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -173,25 +174,29 @@ def _inf_norm(v):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, Px, rx, ry, rzu, rzl, rzc):
+def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, Px, rx, ry, rzu, rzl, rzc, fx):
     """The dual residual ``rx = P x + c + A^T y + G^T z``, the equations' ``ry = A x - b``, the slacks'
-    ``rz = G x + s - h`` (in place; ``Px`` (n,) work); returns the objective."""
-    la.apply_P(x, d0, Fm, Px)
-    for i in range(x.shape[0]):
+    ``rz = G x + s - h`` (in place; ``Px`` (n,), ``fx`` (r,) work); returns the objective."""
+    K = T.shape[0]
+    n = x.shape[0]
+    T2 = T.reshape((3 * K, n))
+    la.apply_P(x, d0, Fm, Px, fx)
+    for i in range(n):
         rx[i] = Px[i] + c[i]
-    for a in range(A.shape[0]):
-        la.axpy(y[a], A[a], rx)
+    la.rows_axpy(A, 0, A.shape[0], y, 0, 1.0, rx)
     for q in range(iu.shape[0]):
         rx[iu[q]] += zu[q]
     for q in range(il.shape[0]):
         rx[il[q]] -= zl[q]
-    K = T.shape[0]
+    la.rows_axpy(T2, 0, 3 * K, zc.reshape(3 * K), 0, -1.0, rx)
+    rz2 = rzc.reshape(3 * K)
+    la.rows_dot(T2, 0, 3 * K, x, rz2, 0)
     for k in range(K):
         for e in range(3):
-            la.axpy(-zc[k, e], T[k, e], rx)
-            rzc[k, e] = -_dot(T[k, e], x) + sc[k, e] - t[k, e]
+            rzc[k, e] = -rzc[k, e] + sc[k, e] - t[k, e]
+    la.rows_dot(A, 0, A.shape[0], x, ry, 0)
     for a in range(A.shape[0]):
-        ry[a] = la.dot(A[a], x) - b[a]
+        ry[a] -= b[a]
     for q in range(iu.shape[0]):
         rzu[q] = x[iu[q]] + su[q] - ub[iu[q]]
     for q in range(il.shape[0]):
@@ -547,6 +552,7 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
     ws = (np.empty(n), np.empty(n), np.empty(p), np.empty(rf))  # r1, u, rhs, wq
     x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, floor, fw, ws)
     Px, rx, ry, rzu, rzl, rzc = np.empty(n), np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty((K, 3))
+    fx = np.empty(Fm.shape[0])
     dbar, dinv, ru, rl = np.empty(n), np.empty(n), np.empty(nu), np.empty(nl)
     rb = (np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty(nu), np.empty(nl), np.empty((K, 3)))
     D = (np.empty((2, n)), np.empty((2, neq)), np.empty((2, nu)), np.empty((2, nl)), np.empty((2, K, 3)),
@@ -563,7 +569,7 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
     it = 0
     for it in range(max_iter):
         pobj = _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, Px, rx, ry, rzu,
-                          rzl, rzc)
+                          rzl, rzc, fx)
         gap = _gap(su, zu, sl, zl, sc, zc)
         mu = gap / max(deg, 1)
         pres = _primal_res(ry, rzu, rzl, rzc, bscale, hscale)

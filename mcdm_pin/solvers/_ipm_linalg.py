@@ -353,6 +353,47 @@ def structure(Fm, T, A, rank_tol):
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def rows_dot(B, lo, hi, u, out, off):
+    """``out[off + i - lo] = B[i] . u`` for the rows ``lo <= i < hi`` (four rows at a time share the
+    loads of ``u``)."""
+    n = u.shape[0]
+    i = lo
+    while i + 3 < hi:
+        B0, B1, B2, B3 = B[i], B[i + 1], B[i + 2], B[i + 3]
+        s0, s1, s2, s3 = 0.0, 0.0, 0.0, 0.0
+        for t in range(n):
+            ut = u[t]
+            s0 += B0[t] * ut
+            s1 += B1[t] * ut
+            s2 += B2[t] * ut
+            s3 += B3[t] * ut
+        o = off + i - lo
+        out[o], out[o + 1], out[o + 2], out[o + 3] = s0, s1, s2, s3
+        i += 4
+    while i < hi:
+        out[off + i - lo] = dot(B[i], u)
+        i += 1
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def rows_axpy(B, lo, hi, coef, off, scale, y):
+    """``y += scale sum_i coef[off + i - lo] B[i]`` over the rows ``lo <= i < hi`` (four rows at a
+    time: one pass over ``y`` per four rows)."""
+    n = y.shape[0]
+    i = lo
+    while i + 3 < hi:
+        B0, B1, B2, B3 = B[i], B[i + 1], B[i + 2], B[i + 3]
+        o = off + i - lo
+        c0, c1, c2, c3 = scale * coef[o], scale * coef[o + 1], scale * coef[o + 2], scale * coef[o + 3]
+        for t in range(n):
+            y[t] += c0 * B0[t] + c1 * B1[t] + c2 * B2[t] + c3 * B3[t]
+        i += 4
+    while i < hi:
+        axpy(scale * coef[off + i - lo], B[i], y)
+        i += 1
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
 def chol_solve_inplace(L, y):
     """``y <- (L L^T)^{-1} y`` (both passes along rows of ``L``; no temporaries)."""
     p = L.shape[0]
@@ -511,67 +552,63 @@ def solve(B, rf, Ct, cg, LK, dinv, r1, r3, r2, u, rhs, wq, dx, dy, dzc):
     m = 3 * K
     p = LK.shape[0]
     nw = rf + m
+    neq = p - nw
     for t in range(n):
         u[t] = dinv[t] * r1[t]
     inside = Ct.shape[0] > 0
-    ob = rf if inside else rf + m  # first row of A in B
-    for i in range(ob):
-        rhs[i] = dot(B[i], u)
-    for a in range(p - nw):
-        rhs[nw + a] = dot(B[ob + a], u) - r2[a]
-    if inside and cg.shape[0]:
-        for i in range(m):
-            g = cg[i // 3]
-            rhs[rf + i] = Ct[i, g] * rhs[g] + Ct[i, g + 1] * rhs[g + 1] + Ct[i, g + 2] * rhs[g + 2]
-    elif inside:
-        for i in range(m):
-            rhs[rf + i] = dot(Ct[i], rhs[:rf])
+    if inside:  # B = [Q; A]
+        rows_dot(B, 0, rf, u, rhs, 0)
+        rows_dot(B, rf, rf + neq, u, rhs, nw)
+        if cg.shape[0]:
+            for i in range(m):
+                g = cg[i // 3]
+                rhs[rf + i] = Ct[i, g] * rhs[g] + Ct[i, g + 1] * rhs[g + 1] + Ct[i, g + 2] * rhs[g + 2]
+        else:
+            for i in range(m):
+                rhs[rf + i] = dot(Ct[i], rhs[:rf])
+    else:  # B = [Q; T; A]: its rows are the unknowns'
+        rows_dot(B, 0, p, u, rhs, 0)
+    for a in range(neq):
+        rhs[nw + a] -= r2[a]
     for k in range(K):
         for e in range(3):
             rhs[rf + 3 * k + e] += r3[k, e]
     chol_solve_inplace(LK, rhs)
     for t in range(n):
         dx[t] = r1[t]
-    for i in range(rf):
-        wq[i] = rhs[i]
-    if inside and cg.shape[0]:
-        for i in range(m):
-            g = cg[i // 3]
-            si = rhs[rf + i]
-            wq[g] += si * Ct[i, g]
-            wq[g + 1] += si * Ct[i, g + 1]
-            wq[g + 2] += si * Ct[i, g + 2]
-    elif inside:
-        for i in range(m):
-            axpy(rhs[rf + i], Ct[i], wq)
+    if inside:
+        for i in range(rf):
+            wq[i] = rhs[i]
+        if cg.shape[0]:
+            for i in range(m):
+                g = cg[i // 3]
+                si = rhs[rf + i]
+                wq[g] += si * Ct[i, g]
+                wq[g + 1] += si * Ct[i, g + 1]
+                wq[g + 2] += si * Ct[i, g + 2]
+        else:
+            for i in range(m):
+                axpy(rhs[rf + i], Ct[i], wq)
+        rows_axpy(B, 0, rf, wq, 0, -1.0, dx)
+        rows_axpy(B, rf, rf + neq, rhs, nw, -1.0, dx)
     else:
-        for i in range(m):
-            if rhs[rf + i] != 0.0:
-                axpy(-rhs[rf + i], B[rf + i], dx)
-    for i in range(rf):
-        if wq[i] != 0.0:
-            axpy(-wq[i], B[i], dx)
-    for a in range(p - nw):
-        if rhs[nw + a] != 0.0:
-            axpy(-rhs[nw + a], B[ob + a], dx)
+        rows_axpy(B, 0, p, rhs, 0, -1.0, dx)
     for t in range(n):
         dx[t] *= dinv[t]
     for k in range(K):
         for e in range(3):
             dzc[k, e] = -rhs[rf + 3 * k + e]
-    for a in range(p - nw):
+    for a in range(neq):
         dy[a] = rhs[nw + a]
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def apply_P(x, d0, Fm, out):
-    """``out <- P x = d0 x + F^T F x``."""
+def apply_P(x, d0, Fm, out, fx):
+    """``out <- P x = d0 x + F^T F x`` (``fx`` (r,): work, ``F x``)."""
     for t in range(x.shape[0]):
         out[t] = d0[t] * x[t]
-    for i in range(Fm.shape[0]):
-        s = dot(Fm[i], x)
-        if s != 0.0:
-            axpy(s, Fm[i], out)
+    rows_dot(Fm, 0, Fm.shape[0], x, fx, 0)
+    rows_axpy(Fm, 0, Fm.shape[0], fx, 0, 1.0, out)
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
@@ -581,11 +618,12 @@ def refine(B, rf, Ct, cg, LK, dinv, dbar, Fm, T, W2, A, r1, r3, r2, dx, dy, dzc,
     ``rhs``, ``wq``: :func:`solve`'s work arrays)."""
     K = T.shape[0]
     Pdx = np.empty(dx.shape[0])
+    fx = np.empty(Fm.shape[0])
     cx = np.empty(dx.shape[0])
     cy = np.empty(dy.shape[0])
     cz = np.empty((K, 3))
     for _ in range(steps):
-        apply_P(dx, dbar, Fm, Pdx)
+        apply_P(dx, dbar, Fm, Pdx, fx)
         e1 = r1 - Pdx
         for a in range(A.shape[0]):
             if dy[a] != 0.0:
