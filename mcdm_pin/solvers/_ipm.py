@@ -262,8 +262,8 @@ def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, floor, f
     dbar, dinv = np.empty(n), np.empty(n)
     ru, rl = np.empty(nu), np.empty(nl)
     _barrier(d0, iu, il, one_u, one_u, one_l, one_l, floor, dbar, dinv, ru, rl)
-    Kb, Km, KFF, G1 = fw
-    la.factor(B, rf, M0inv, Ct, cg, Vc, dinv, 1e-14, ws[1], Kb, Km, KFF, G1)
+    Kb, Km, KFF, G1, gw = fw
+    la.factor(B, rf, M0inv, Ct, cg, Vc, dinv, 1e-14, gw, Kb, Km, KFF, G1)
     hu = np.empty(nu)
     for q in range(nu):
         hu[q] = ub[iu[q]]
@@ -548,7 +548,7 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
     p = rf + 3 * K + neq
     Km = np.empty((p, p))
     Kb = np.empty((B.shape[0], B.shape[0])) if Ct.shape[0] else Km
-    fw = (Kb, Km, np.empty((rf, rf)), np.empty((Ct.shape[0], rf)))
+    fw = (Kb, Km, np.empty((rf, rf)), np.empty((Ct.shape[0], rf)), np.empty((2, B.shape[1])))
     ws = (np.empty(n), np.empty(n), np.empty(p), np.empty(rf))  # r1, u, rhs, wq
     x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, floor, fw, ws)
     Px, rx, ry, rzu, rzl, rzc = np.empty(n), np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty((K, 3))
@@ -599,7 +599,7 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
         # ---- scaling and the factor of the Newton system
         _cone_scalings(sc, zc, Wm, Winv, Wc2, lamc)
         _barrier(d0, iu, il, su, zu, sl, zl, floor, dbar, dinv, ru, rl)
-        dropped = la.factor(B, rf, M0inv, Ct, cg, Wc2, dinv, 1e-14, ws[1], Kb, Km, fw[2], fw[3])
+        dropped = la.factor(B, rf, M0inv, Ct, cg, Wc2, dinv, 1e-14, fw[4], Kb, Km, fw[2], fw[3])
         refine = 1 if dropped or gap_rel < 1e-5 else 0
         j, a = _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, Km, dinv, dbar, Fm, T, A,
                           Wc2, Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D)

@@ -330,17 +330,18 @@ def structure(Fm, T, A, rank_tol):
         if not inside:
             Ct = np.empty((0, rf))
     nB = rf + neq if inside else rf + 3 * K + neq
-    B = np.empty((nB, n))
+    # columns padded with zeros to a multiple of 8: the Gram products' loops then have no remainder
+    B = np.zeros((nB, (n + 7) // 8 * 8))
     for i in range(rf):
-        B[i] = Q[i]
+        B[i, :n] = Q[i]
     o = rf
     if not inside:
         for k in range(K):
             for e in range(3):
-                B[rf + 3 * k + e] = T[k, e]
+                B[rf + 3 * k + e, :n] = T[k, e]
         o = rf + 3 * K
     for a in range(neq):
-        B[o + a] = A[a]
+        B[o + a, :n] = A[a]
     M0 = np.zeros((rf, rf))
     gram_lower(C, r, rf, M0)
     chol_inplace(M0, 1e-300, rf)
@@ -371,7 +372,11 @@ def rows_dot(B, lo, hi, u, out, off):
         out[o], out[o + 1], out[o + 2], out[o + 3] = s0, s1, s2, s3
         i += 4
     while i < hi:
-        out[off + i - lo] = dot(B[i], u)
+        Bi = B[i]
+        s0 = 0.0
+        for t in range(n):
+            s0 += Bi[t] * u[t]
+        out[off + i - lo] = s0
         i += 1
 
 
@@ -412,28 +417,66 @@ def chol_solve_inplace(L, y):
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def _gram(B, dinv, row, Km):
-    """``Km <- B diag(dinv) B^T`` (lower triangle; four rows of ``B`` at a time; ``row`` (n,) work)."""
-    rb, n = B.shape
-    for i in range(rb):
+def _gram(B, dinv, W, Km):
+    """``Km <- B diag(dinv) B^T`` (lower triangle): two rows of ``B diag(dinv)`` (in ``W`` (2, nb), its
+    padding columns zero) against four rows of ``B`` at a time (eight sums share six loads)."""
+    rb, nb = B.shape
+    n = dinv.shape[0]
+    R0, R1 = W[0], W[1]
+    for t in range(n, nb):
+        R0[t] = 0.0
+        R1[t] = 0.0
+    i = 0
+    while i < rb:
+        two = i + 1 < rb
         Bi = B[i]
         for t in range(n):
-            row[t] = Bi[t] * dinv[t]
+            R0[t] = Bi[t] * dinv[t]
+        if two:
+            Bi1 = B[i + 1]
+            for t in range(n):
+                R1[t] = Bi1[t] * dinv[t]
+        else:
+            for t in range(n):
+                R1[t] = 0.0
         j = 0
         while j + 3 <= i:
             B0, B1, B2, B3 = B[j], B[j + 1], B[j + 2], B[j + 3]
             s0, s1, s2, s3 = 0.0, 0.0, 0.0, 0.0
-            for t in range(n):
-                r = row[t]
-                s0 += r * B0[t]
-                s1 += r * B1[t]
-                s2 += r * B2[t]
-                s3 += r * B3[t]
+            u0, u1, u2, u3 = 0.0, 0.0, 0.0, 0.0
+            for t in range(nb):
+                a = R0[t]
+                b = R1[t]
+                x0, x1, x2, x3 = B0[t], B1[t], B2[t], B3[t]
+                s0 += a * x0
+                s1 += a * x1
+                s2 += a * x2
+                s3 += a * x3
+                u0 += b * x0
+                u1 += b * x1
+                u2 += b * x2
+                u3 += b * x3
             Km[i, j], Km[i, j + 1], Km[i, j + 2], Km[i, j + 3] = s0, s1, s2, s3
+            if two:
+                Km[i + 1, j], Km[i + 1, j + 1], Km[i + 1, j + 2], Km[i + 1, j + 3] = u0, u1, u2, u3
             j += 4
         while j <= i:
-            Km[i, j] = dot(row, B[j])
+            Bj = B[j]
+            s0, u0 = 0.0, 0.0
+            for t in range(nb):
+                s0 += R0[t] * Bj[t]
+                u0 += R1[t] * Bj[t]
+            Km[i, j] = s0
+            if two:
+                Km[i + 1, j] = u0
             j += 1
+        if two:
+            Bj = B[i + 1]
+            u0 = 0.0
+            for t in range(nb):
+                u0 += R1[t] * Bj[t]
+            Km[i + 1, i + 1] = u0
+        i += 2
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
@@ -521,7 +564,8 @@ def _expand_blocks(Kb, rf, Ct, cg, KFF, G1, Km):
 def factor(B, rf, M0inv, Ct, cg, W2, dinv, drop_rel, work, Kb, Km, KFF, G1):
     """The Cholesky factor (lower) of the reduced matrix of the module docstring, in place in ``Km``
     ((p, p)); whether an equation was dropped. ``Kb`` ((rf + k_eq)^2 when the cones' rows are
-    expanded, else ``Km`` itself), ``work`` (n,), ``KFF``, ``G1``: work arrays (made once per solve)."""
+    expanded, else ``Km`` itself), ``work`` (2, B's columns), ``KFF``, ``G1``: work arrays (made once
+    per solve)."""
     K = W2.shape[0]
     if Ct.shape[0]:
         _gram(B, dinv, work, Kb)
@@ -547,7 +591,7 @@ def solve(B, rf, Ct, cg, LK, dinv, r1, r3, r2, u, rhs, wq, dx, dy, dzc):
     """``(dx, dy, dzc)`` (written in place) of ``(D + F^T F) dx + A^T dy - T^T dzc = r1``,
     ``A dx = r2``, ``-T dx - W^2 dzc = r3`` (``r3`` (K, 3)) from :func:`factor`'s factor; ``u`` (n,),
     ``rhs`` (p,), ``wq`` (rf,): work arrays."""
-    n = B.shape[1]
+    n = r1.shape[0]
     K = r3.shape[0]
     m = 3 * K
     p = LK.shape[0]
