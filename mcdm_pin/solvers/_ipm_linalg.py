@@ -304,28 +304,38 @@ def structure(Fm, T, A, rank_tol):
             if piv < 0:
                 break
             used[piv] = True
-            nrm = np.sqrt(dot(W[piv], W[piv]))
-            q = W[piv] / nrm
-            Q[rf] = q
+            Wp = W[piv]
+            nrm = np.sqrt(dot(Wp, Wp))
+            q = Q[rf]
+            for t in range(n):
+                q[t] = Wp[t] / nrm
             C[piv, rf] = nrm
             for i in range(r):
                 if not used[i] and res[i] > 0.0:
-                    cc = dot(W[i], q)
+                    Wi = W[i]
+                    cc = dot(Wi, q)
                     C[i, rf] = cc
-                    axpy(-cc, q, W[i])
-                    res[i] = dot(W[i], W[i])
+                    acc = 0.0
+                    for t in range(n):  # the projection removed and the rest's norm in one pass
+                        w = Wi[t] - cc * q[t]
+                        Wi[t] = w
+                        acc += w * w
+                    res[i] = acc
             rf += 1
         # the cones' rows in the basis Q, when they lie in its span (the neck: each cone's rows are a
         # rotation of its joint's force rows): then only [Q; A] enters the products with D^-1
         Ct = np.empty((3 * K, rf))
         inside = K > 0
+        rrow = np.empty(n)
         for k in range(K):
             for e in range(3):
-                rrow = T[k, e].copy()
+                Tke = T[k, e]
+                for t in range(n):
+                    rrow[t] = Tke[t]
                 for a in range(rf):
-                    Ct[3 * k + e, a] = dot(T[k, e], Q[a])
+                    Ct[3 * k + e, a] = dot(Tke, Q[a])
                     axpy(-Ct[3 * k + e, a], Q[a], rrow)
-                if dot(rrow, rrow) > rank_tol * rank_tol * max(dot(T[k, e], T[k, e]), 1e-300):
+                if dot(rrow, rrow) > rank_tol * rank_tol * max(dot(Tke, Tke), 1e-300):
                     inside = False
         if not inside:
             Ct = np.empty((0, rf))
