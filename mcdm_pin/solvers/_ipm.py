@@ -263,7 +263,13 @@ def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, floor, f
     ru, rl = np.empty(nu), np.empty(nl)
     _barrier(d0, iu, il, one_u, one_u, one_l, one_l, floor, dbar, dinv, ru, rl)
     Kb, Km, KFF, G1, gw = fw
-    la.factor(B, rf, M0inv, Ct, cg, Vc, dinv, 1e-14, gw, Kb, Km, KFF, G1)
+    dropped = la.factor(B, rf, M0inv, Ct, cg, Vc, dinv, 1e-14, gw, Kb, Km, KFF, G1)
+    # refined only when the factor is not that of the exact system: a dropped equation, or a variable
+    # whose D fell below the floor (without bounds or weight)
+    refine = 1 if dropped else 0
+    for i in range(n):
+        if not dbar[i] >= floor:
+            refine = 1
     hu = np.empty(nu)
     for q in range(nu):
         hu[q] = ub[iu[q]]
@@ -271,8 +277,8 @@ def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, floor, f
     for q in range(nl):
         hl[q] = -lb[il[q]]
     x, y, zu, zl, zc = np.empty(n), np.empty(A.shape[0]), np.empty(nu), np.empty(nl), np.empty((K, 3))
-    _newton(-c, b, hu, hl, t.copy(), B, rf, Ct, cg, Km, dinv, dbar, Fm, T, A, Vc, iu, il, ru, rl, 1, ws, x, y, zu, zl,
-            zc)
+    _newton(-c, b, hu, hl, t.copy(), B, rf, Ct, cg, Km, dinv, dbar, Fm, T, A, Vc, iu, il, ru, rl, refine, ws, x, y,
+            zu, zl, zc)
     su, sl, sc = -zu, -zl, -zc
     _shift_into_cones(su, sl, sc)
     _shift_into_cones(zu, zl, zc)
