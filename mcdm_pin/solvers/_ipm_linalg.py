@@ -207,7 +207,7 @@ def _grouped(Fm, T, rank_tol, keep):
     C = np.zeros((r, r))
     Ct = np.zeros((3 * K, r))
     cg = np.empty(K, dtype=np.int64)
-    if K == 0 or r == 0 or r % 3 != 0:
+    if r == 0 or r % 3 != 0:
         return False, Q, C, Ct, cg
     W = np.empty((3, n))
     res = np.empty(3)
@@ -289,7 +289,7 @@ def structure(Fm, T, A, rank_tol):
     ok, Q, C, Ct, cg = _grouped(Fm, T, rank_tol, keep)
     if ok:
         rf = r
-        inside = True
+        inside = K > 0
     else:
         cg = np.empty(0, dtype=np.int64)
         C = np.zeros((r, r))
