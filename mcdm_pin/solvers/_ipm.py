@@ -58,18 +58,9 @@ _dot = la.dot
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _mv3(M, v):
-    """``M v`` for a 3x3 ``M`` (no BLAS call: its overhead exceeds the work)."""
-    out = np.empty(3)
-    for a in range(3):
-        out[a] = M[a, 0] * v[0] + M[a, 1] * v[1] + M[a, 2] * v[2]
-    return out
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _soc_scaling(s, z, W, Winv):
-    """Nesterov-Todd scaling of one 3-dimensional second-order cone: ``W`` and ``W^-1`` (3x3,
-    symmetric) with ``W z = W^-1 s``; returns ``lambda = W z``."""
+def _soc_scaling(s, z, W, Winv, W2, lam):
+    """Nesterov-Todd scaling of one 3-dimensional second-order cone, in place: ``W`` and ``W^-1`` (3x3,
+    symmetric) with ``W z = W^-1 s``, ``W2 = W W`` and ``lambda = W z``."""
     ns = np.sqrt(max(s[0] * s[0] - s[1] * s[1] - s[2] * s[2], 1e-300))
     nz = np.sqrt(max(z[0] * z[0] - z[1] * z[1] - z[2] * z[2], 1e-300))
     sb0, sb1, sb2 = s[0] / ns, s[1] / ns, s[2] / ns
@@ -89,10 +80,11 @@ def _soc_scaling(s, z, W, Winv):
             W[a, b] = eta * (2.0 * v[a] * v[b] - jab)
             # W^-1 = (2 J v v^T J - J) / eta
             Winv[a, b] = (2.0 * J[a] * v[a] * v[b] * J[b] - jab) / eta
-    lam = np.empty(3)
     for a in range(3):
         lam[a] = W[a, 0] * z[0] + W[a, 1] * z[1] + W[a, 2] * z[2]
-    return lam
+    for e in range(3):  # W symmetric: row e of W W
+        for a in range(3):
+            W2[e, a] = W[a, 0] * W[e, 0] + W[a, 1] * W[e, 1] + W[a, 2] * W[e, 2]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -144,22 +136,19 @@ def _shift_into_cones(su, sl, sc):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _slack_step(dx, rzu, rzl, rzc, iu, il, T):
+def _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc):
     """The slacks' step from the linearised constraints ``G dx + ds = -r_z`` (exact to rounding, so
     primal feasibility improves with every step even when the cones' scaling is ill-conditioned
-    and ``W^2 W^-2`` is far from the identity)."""
-    dsu = -rzu.copy()
+    and ``W^2 W^-2`` is far from the identity), written into ``dsu, dsl, dsc``."""
     for q in range(iu.shape[0]):
-        dsu[q] -= dx[iu[q]]
-    dsl = -rzl.copy()
+        dsu[q] = -rzu[q] - dx[iu[q]]
     for q in range(il.shape[0]):
-        dsl[q] += dx[il[q]]
+        dsl[q] = -rzl[q] + dx[il[q]]
     K = T.shape[0]
-    dsc = -rzc.copy()
+    la.rows_dot(T.reshape((3 * K, dx.shape[0])), 0, 3 * K, dx, dsc.reshape(3 * K), 0)
     for k in range(K):
         for e in range(3):
-            dsc[k, e] += _dot(T[k, e], dx)
-    return dsu, dsl, dsc
+            dsc[k, e] -= rzc[k, e]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -185,97 +174,111 @@ def _inf_norm(v):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t):
-    """``(rx, ry, rzu, rzl, rzc, pobj)``: the dual residual ``P x + c + A^T y + G^T z``, the
-    equations' ``A x - b``, the slacks' ``G x + s - h`` and the objective."""
-    Px = la.apply_P(x, d0, Fm)
-    rx = Px + c
-    for a in range(A.shape[0]):
-        la.axpy(y[a], A[a], rx)
+def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, Px, rx, ry, rzu, rzl, rzc, fx):
+    """The dual residual ``rx = P x + c + A^T y + G^T z``, the equations' ``ry = A x - b``, the slacks'
+    ``rz = G x + s - h`` (in place; ``Px`` (n,), ``fx`` (r,) work); returns the objective."""
+    K = T.shape[0]
+    n = x.shape[0]
+    T2 = T.reshape((3 * K, n))
+    la.apply_P(x, d0, Fm, Px, fx)
+    for i in range(n):
+        rx[i] = Px[i] + c[i]
+    la.rows_axpy(A, 0, A.shape[0], y, 0, 1.0, rx)
     for q in range(iu.shape[0]):
         rx[iu[q]] += zu[q]
     for q in range(il.shape[0]):
         rx[il[q]] -= zl[q]
-    K = T.shape[0]
-    rzc = np.empty((K, 3))
+    la.rows_axpy(T2, 0, 3 * K, zc.reshape(3 * K), 0, -1.0, rx)
+    rz2 = rzc.reshape(3 * K)
+    la.rows_dot(T2, 0, 3 * K, x, rz2, 0)
     for k in range(K):
         for e in range(3):
-            la.axpy(-zc[k, e], T[k, e], rx)
-            rzc[k, e] = -_dot(T[k, e], x) + sc[k, e] - t[k, e]
-    ry = np.empty(A.shape[0])
+            rzc[k, e] = -rzc[k, e] + sc[k, e] - t[k, e]
+    la.rows_dot(A, 0, A.shape[0], x, ry, 0)
     for a in range(A.shape[0]):
-        ry[a] = la.dot(A[a], x) - b[a]
-    rzu = np.empty(iu.shape[0])
+        ry[a] -= b[a]
     for q in range(iu.shape[0]):
         rzu[q] = x[iu[q]] + su[q] - ub[iu[q]]
-    rzl = np.empty(il.shape[0])
     for q in range(il.shape[0]):
         rzl[q] = -x[il[q]] + sl[q] + lb[il[q]]
-    pobj = 0.5 * _dot(Px, x) + _dot(c, x)
-    return rx, ry, rzu, rzl, rzc, pobj
+    return 0.5 * _dot(Px, x) + _dot(c, x)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _barrier(d0, iu, il, su, zu, sl, zl, floor):
-    """``(dbar, dinv)``: ``D = d0 +`` the bounds' ``z/s``, and ``1 / max(D, floor)`` (a variable
-    without bounds or weight: refinement against the exact ``D`` corrects the floor)."""
-    dbar = d0.copy()
+def _barrier(d0, iu, il, su, zu, sl, zl, floor, dbar, dinv, ru, rl):
+    """In place: ``D = d0 +`` the bounds' ``z/s`` (``dbar``; ``ru, rl`` the bounds' ``z/s``), and
+    ``dinv = 1 / max(D, floor)`` (a variable without bounds or weight: refinement against the exact
+    ``D`` corrects the floor)."""
+    for i in range(d0.shape[0]):
+        dbar[i] = d0[i]
     for q in range(iu.shape[0]):
-        dbar[iu[q]] += zu[q] / su[q]
+        ru[q] = zu[q] / su[q]
+        dbar[iu[q]] += ru[q]
     for q in range(il.shape[0]):
-        dbar[il[q]] += zl[q] / sl[q]
-    dinv = np.empty(d0.shape[0])
+        rl[q] = zl[q] / sl[q]
+        dbar[il[q]] += rl[q]
     for i in range(d0.shape[0]):
         dinv[i] = 1.0 / max(dbar[i], floor)
-    return dbar, dinv
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, LK, dinv, dbar, Fm, T, A, W2, iu, il, su, zu, sl, zl, refine):
-    """The scaled Newton system's ``(dx, dy, dzu, dzl, dzc)`` for the right-hand sides
+def _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx, dy,
+            dzu, dzl, dzc):
+    """The scaled Newton system's ``(dx, dy, dzu, dzl, dzc)`` (in place) for the right-hand sides
     ``P dx + A^T dy + G^T dz = bx, A dx = by, G dx - W^2 dz = bz``: the bounds' ``dz`` eliminated
-    (``dz = (z/s) (G dx - bz)``), the cones' kept (:func:`._ipm_linalg.solve`: no ``W^-2`` is ever
-    formed, whose entries grow like ``1/mu`` on an active cone)."""
-    r1 = bx.copy()
+    (``dz = (z/s) (G dx - bz)``, ``ru, rl`` the bounds' ``z/s``), the cones' kept
+    (:func:`._ipm_linalg.solve`: no ``W^-2`` is ever formed, whose entries grow like ``1/mu`` on an
+    active cone). ``ws = (r1, u, rhs, wq)``: work arrays."""
+    r1, u, rhs, wq = ws
+    for i in range(bx.shape[0]):
+        r1[i] = bx[i]
     for q in range(iu.shape[0]):
-        r1[iu[q]] += zu[q] / su[q] * bzu[q]
+        r1[iu[q]] += ru[q] * bzu[q]
     for q in range(il.shape[0]):
-        r1[il[q]] -= zl[q] / sl[q] * bzl[q]
-    dx, dy, dzc = la.solve(B, rf, Ct, LK, dinv, r1, bzc, by)
+        r1[il[q]] -= rl[q] * bzl[q]
+    la.solve(B, rf, Ct, cg, LK, dinv, r1, bzc, by, u, rhs, wq, dx, dy, dzc)
     if refine:
-        la.refine(B, rf, Ct, LK, dinv, dbar, Fm, T, W2, A, r1, bzc, by, dx, dy, dzc, refine)
-    dzu = np.empty(iu.shape[0])
+        la.refine(B, rf, Ct, cg, LK, dinv, dbar, Fm, T, W2, A, r1, bzc, by, dx, dy, dzc, refine, u, rhs, wq)
     for q in range(iu.shape[0]):
-        dzu[q] = zu[q] / su[q] * (dx[iu[q]] - bzu[q])
-    dzl = np.empty(il.shape[0])
+        dzu[q] = ru[q] * (dx[iu[q]] - bzu[q])
     for q in range(il.shape[0]):
-        dzl[q] = zl[q] / sl[q] * (-dx[il[q]] - bzl[q])
-    return dx, dy, dzu, dzl, dzc
+        dzl[q] = rl[q] * (-dx[il[q]] - bzl[q])
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, floor):
+def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, floor, fw, ws):
     """CVXOPT's initial point: ``x, y`` of the Newton system with the identity scaling (the least
     squares point of the slacks on the equations, with the objective), ``s = h - G x``, ``z = -s``,
     each shifted into its cone's interior when it is not (:func:`_shift_into_cones`). Starting from
     the middle of the box costs nothing in iterations: every step is long (on the neck 11-13
-    iterations to the crossover, where a start at the least-squares forces took 25-45 short ones)."""
-    nu, nl, K = iu.shape[0], il.shape[0], T.shape[0]
+    iterations to the crossover, where a start at the least-squares forces took 25-45 short ones).
+    ``fw``, ``ws``: the factor's and the solves' work arrays (:func:`ipm_solve`)."""
+    n, nu, nl, K = c.shape[0], iu.shape[0], il.shape[0], T.shape[0]
     one_u, one_l = np.ones(nu), np.ones(nl)
     Vc = np.zeros((K, 3, 3))
     for k in range(K):
         for e in range(3):
             Vc[k, e, e] = 1.0
-    dbar, dinv = _barrier(d0, iu, il, one_u, one_u, one_l, one_l, floor)
-    LK, dropped = la.factor(B, rf, M0inv, Ct, Vc, dinv, 1e-14)
+    dbar, dinv = np.empty(n), np.empty(n)
+    ru, rl = np.empty(nu), np.empty(nl)
+    _barrier(d0, iu, il, one_u, one_u, one_l, one_l, floor, dbar, dinv, ru, rl)
+    Kb, Km, KFF, G1, gw = fw
+    dropped = la.factor(B, rf, M0inv, Ct, cg, Vc, dinv, 1e-14, gw, Kb, Km, KFF, G1)
+    # refined only when the factor is not that of the exact system: a dropped equation, or a variable
+    # whose D fell below the floor (without bounds or weight)
+    refine = 1 if dropped else 0
+    for i in range(n):
+        if not dbar[i] >= floor:
+            refine = 1
     hu = np.empty(nu)
     for q in range(nu):
         hu[q] = ub[iu[q]]
     hl = np.empty(nl)
     for q in range(nl):
         hl[q] = -lb[il[q]]
-    x, y, zu, zl, zc = _newton(-c, b, hu, hl, t.copy(), B, rf, Ct, LK, dinv, dbar, Fm, T, A, Vc, iu, il, one_u,
-                               one_u, one_l, one_l, 1)
+    x, y, zu, zl, zc = np.empty(n), np.empty(A.shape[0]), np.empty(nu), np.empty(nl), np.empty((K, 3))
+    _newton(-c, b, hu, hl, t.copy(), B, rf, Ct, cg, Km, dinv, dbar, Fm, T, A, Vc, iu, il, ru, rl, refine, ws, x, y,
+            zu, zl, zc)
     su, sl, sc = -zu, -zl, -zc
     _shift_into_cones(su, sl, sc)
     _shift_into_cones(zu, zl, zc)
@@ -317,11 +320,10 @@ def _gap_at(s, ds, z, dz, a):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _cone_corrector(lamc, Winv, Wm, dsc, dzc, rzc, smu):
-    """The cones' corrector right-hand side ``bz = -r_z - W (lam \\ rs)`` with
+def _cone_corrector(lamc, Winv, Wm, dsc, dzc, rzc, smu, bzc):
+    """The cones' corrector right-hand side ``bz = -r_z - W (lam \\ rs)`` (into ``bzc``) with
     ``rs = -lam o lam - (W^-1 ds_a) o (W dz_a) + sigma mu e`` (scalar code: no small arrays)."""
     K = lamc.shape[0]
-    bzc = np.empty((K, 3))
     for k in range(K):
         Wi, Wk, ds, dz, lam = Winv[k], Wm[k], dsc[k], dzc[k], lamc[k]
         u0 = Wi[0, 0] * ds[0] + Wi[0, 1] * ds[1] + Wi[0, 2] * ds[2]
@@ -342,23 +344,36 @@ def _cone_corrector(lamc, Winv, Wm, dsc, dzc, rzc, smu):
         x2 = (r2 - x0 * l2) / l0
         for e in range(3):
             bzc[k, e] = -rzc[k, e] - (Wk[e, 0] * x0 + Wk[e, 1] * x1 + Wk[e, 2] * x2)
-    return bzc
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, LK, dinv, dbar, Fm, T, A, W2,
-               Wm, Winv, lamc, iu, il, refine, ncorr):
+def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, LK, dinv, dbar, Fm, T, A, W2,
+               Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D):
     """Mehrotra's predictor-corrector direction with Gondzio's centrality correctors on the bounds
-    (at most ``ncorr``, each kept only when it lengthens the step); returns the direction and its
-    largest step."""
+    (at most ``ncorr``, each kept only when it lengthens the step). ``rb = (bx, by, bzu, bzl, rsu,
+    rsl)`` and ``bzc``: right-hand-side work arrays; ``D = (DX, DY, DZU, DZL, DZC, DSU, DSL, DSC)``
+    two slots of directions. Returns the slot of the direction and its largest step."""
     K = T.shape[0]
-    gap = mu * (su.shape[0] + sl.shape[0] + K)
-    lu = np.sqrt(su * zu)
-    ll = np.sqrt(sl * zl)
+    nu, nl = su.shape[0], sl.shape[0]
+    gap = mu * (nu + nl + K)
+    bx, by, bzu, bzl, rsu, rsl, bzc = rb
+    DX, DY, DZU, DZL, DZC, DSU, DSL, DSC = D
+    for i in range(rx.shape[0]):
+        bx[i] = -rx[i]
+    for a in range(ry.shape[0]):
+        by[a] = -ry[a]
     # predictor (affine scaling): bz = -rz + s
-    dx, dy, dzu, dzl, dzc = _newton(-rx, -ry, -rzu + su, -rzl + sl, -rzc + sc, B, rf, Ct, LK, dinv, dbar, Fm,
-                                    T, A, W2, iu, il, su, zu, sl, zl, refine)
-    dsu, dsl, dsc = _slack_step(dx, rzu, rzl, rzc, iu, il, T)
+    for q in range(nu):
+        bzu[q] = -rzu[q] + su[q]
+    for q in range(nl):
+        bzl[q] = -rzl[q] + sl[q]
+    for k in range(K):
+        for e in range(3):
+            bzc[k, e] = -rzc[k, e] + sc[k, e]
+    dx, dy, dzu, dzl, dzc, dsu, dsl, dsc = DX[0], DY[0], DZU[0], DZL[0], DZC[0], DSU[0], DSL[0], DSC[0]
+    _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx, dy,
+            dzu, dzl, dzc)
+    _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc)
     a_p = min(1.0, _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc))
     gap_aff = _gap_at(su, dsu, zu, dzu, a_p) + _gap_at(sl, dsl, zl, dzl, a_p)
     for k in range(K):
@@ -367,27 +382,39 @@ def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, LK,
     sigma = min(1.0, max(0.0, gap_aff / max(gap, 1e-300))) ** 3
     smu = sigma * mu
     # corrector: rs = -lam o lam - (W^-1 ds_a) o (W dz_a) + sigma mu e
-    rsu = -lu * lu - dsu * dzu + smu
-    rsl = -ll * ll - dsl * dzl + smu
-    bzc = _cone_corrector(lamc, Winv, Wm, dsc, dzc, rzc, smu)
-    best = (dx, dy, dzu, dzl, dzc, dsu, dsl, dsc, 0.0)
+    for q in range(nu):
+        lq = np.sqrt(su[q] * zu[q])
+        rsu[q] = -lq * lq - dsu[q] * dzu[q] + smu
+    for q in range(nl):
+        lq = np.sqrt(sl[q] * zl[q])
+        rsl[q] = -lq * lq - dsl[q] * dzl[q] + smu
+    _cone_corrector(lamc, Winv, Wm, dsc, dzc, rzc, smu, bzc)
+    best, best_a = 0, 0.0
+    cur = 0  # the predictor's slot is free again
     for j in range(ncorr + 1):
         # W (lam \ rs) = rs / z on the bounds
-        dx, dy, dzu, dzl, dzc = _newton(-rx, -ry, -rzu - rsu / zu, -rzl - rsl / zl, bzc, B, rf, Ct, LK, dinv,
-                                        dbar, Fm, T, A, W2, iu, il, su, zu, sl, zl, refine)
-        dsu, dsl, dsc = _slack_step(dx, rzu, rzl, rzc, iu, il, T)
+        for q in range(nu):
+            bzu[q] = -rzu[q] - rsu[q] / zu[q]
+        for q in range(nl):
+            bzl[q] = -rzl[q] - rsl[q] / zl[q]
+        dx, dy, dzu, dzl, dzc = DX[cur], DY[cur], DZU[cur], DZL[cur], DZC[cur]
+        dsu, dsl, dsc = DSU[cur], DSL[cur], DSC[cur]
+        _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx,
+                dy, dzu, dzl, dzc)
+        _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc)
         a = _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc)
         if not np.isfinite(_dot(dx, dx) + _dot(dy, dy)):
             a = 0.0
-        if j > 0 and not a > 1.01 * best[8]:
+        if j > 0 and not a > 1.01 * best_a:
             break
-        best = (dx, dy, dzu, dzl, dzc, dsu, dsl, dsc, a)
+        best, best_a = cur, a
         if a >= 0.9:  # long enough: a corrector would cost more than it gains
             break
         at = min(1.0, a + 0.5)
         _centring(su, dsu, zu, dzu, at, 0.1 * smu, 10.0 * smu, rsu)
         _centring(sl, dsl, zl, dzl, at, 0.1 * smu, 10.0 * smu, rsl)
-    return best
+        cur = 1 - cur
+    return best, best_a
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -469,14 +496,8 @@ def _primal_res(ry, rzu, rzl, rzc, bscale, hscale):
 @njit(cache=True, nogil=True, error_model="numpy")
 def _cone_scalings(sc, zc, Wm, Winv, Wc2, lamc):
     """Every cone's Nesterov-Todd ``W``, ``W^-1``, ``W^2`` and ``lambda = W z``, in place."""
-    Wk = np.empty((3, 3))
-    Wik = np.empty((3, 3))
     for k in range(sc.shape[0]):
-        lamc[k] = _soc_scaling(sc[k], zc[k], Wk, Wik)
-        Wm[k] = Wk
-        Winv[k] = Wik
-        for e in range(3):
-            Wc2[k, e] = _mv3(Wk, Wk[e])  # W symmetric: row e of W W
+        _soc_scaling(sc[k], zc[k], Wm[k], Winv[k], Wc2[k], lamc[k])
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -527,8 +548,22 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
     for i in range(n):
         hmax = max(hmax, H[i, i])
     floor = 1e-12 * max(hmax, 1e-300) if hmax > 0.0 else 1e-12
-    B, rf, M0inv, Ct = la.structure(Fm, T, A, rank_tol)
-    x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, floor)
+    B, rf, M0inv, Ct, cg = la.structure(Fm, T, A, rank_tol)
+    # every work array of the iterations, made once (a small array costs ~0.1-0.3 us to make)
+    neq, nu, nl = A.shape[0], iu.shape[0], il.shape[0]
+    p = rf + 3 * K + neq
+    Km = np.empty((p, p))
+    Kb = np.empty((B.shape[0], B.shape[0])) if Ct.shape[0] else Km
+    fw = (Kb, Km, np.empty((rf, rf)), np.empty((Ct.shape[0], rf)), np.empty((2, B.shape[1])))
+    ws = (np.empty(n), np.empty(n), np.empty(p), np.empty(rf))  # r1, u, rhs, wq
+    x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, floor, fw, ws)
+    Px, rx, ry, rzu, rzl, rzc = np.empty(n), np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty((K, 3))
+    fx = np.empty(Fm.shape[0])
+    dbar, dinv, ru, rl = np.empty(n), np.empty(n), np.empty(nu), np.empty(nl)
+    rb = (np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty(nu), np.empty(nl), np.empty((K, 3)))
+    D = (np.empty((2, n)), np.empty((2, neq)), np.empty((2, nu)), np.empty((2, nl)), np.empty((2, K, 3)),
+         np.empty((2, nu)), np.empty((2, nl)), np.empty((2, K, 3)))
+    DX, DY, DZU, DZL, DZC, DSU, DSL, DSC = D
     Wc2 = np.zeros((K, 3, 3))
     Winv = np.zeros((K, 3, 3))
     Wm = np.zeros((K, 3, 3))
@@ -539,8 +574,8 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
     last_cact = np.zeros(K, dtype=np.bool_)
     it = 0
     for it in range(max_iter):
-        rx, ry, rzu, rzl, rzc, pobj = _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb,
-                                                 ub, T, t)
+        pobj = _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, Px, rx, ry, rzu,
+                          rzl, rzc, fx)
         gap = _gap(su, zu, sl, zl, sc, zc)
         mu = gap / max(deg, 1)
         pres = _primal_res(ry, rzu, rzl, rzc, bscale, hscale)
@@ -569,25 +604,31 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
                     np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
         # ---- scaling and the factor of the Newton system
         _cone_scalings(sc, zc, Wm, Winv, Wc2, lamc)
-        dbar, dinv = _barrier(d0, iu, il, su, zu, sl, zl, floor)
-        LK, dropped = la.factor(B, rf, M0inv, Ct, Wc2, dinv, 1e-14)
+        _barrier(d0, iu, il, su, zu, sl, zl, floor, dbar, dinv, ru, rl)
+        dropped = la.factor(B, rf, M0inv, Ct, cg, Wc2, dinv, 1e-14, fw[4], Kb, Km, fw[2], fw[3])
         refine = 1 if dropped or gap_rel < 1e-5 else 0
-        dx, dy, dzu, dzl, dzc, dsu, dsl, dsc, a = _direction(
-            rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, LK, dinv, dbar, Fm, T, A, Wc2, Wm, Winv,
-            lamc, iu, il, refine, ncorr)
+        j, a = _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, Km, dinv, dbar, Fm, T, A,
+                          Wc2, Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D)
         a = min(1.0, 0.99 * a)
         if not (a > 1e-14) or not np.isfinite(a):
             end = NUMERICAL
             break
         end = MAX_ITER
-        x += a * dx
-        y += a * dy
-        su += a * dsu
-        zu += a * dzu
-        sl += a * dsl
-        zl += a * dzl
-        sc += a * dsc
-        zc += a * dzc
+        dx, dy, dzu, dzl, dzc, dsu, dsl, dsc = DX[j], DY[j], DZU[j], DZL[j], DZC[j], DSU[j], DSL[j], DSC[j]
+        for i in range(n):
+            x[i] += a * dx[i]
+        for i in range(neq):
+            y[i] += a * dy[i]
+        for q in range(nu):
+            su[q] += a * dsu[q]
+            zu[q] += a * dzu[q]
+        for q in range(nl):
+            sl[q] += a * dsl[q]
+            zl[q] += a * dzl[q]
+        for k in range(K):
+            for e in range(3):
+                sc[k, e] += a * dsc[k, e]
+                zc[k, e] += a * dzc[k, e]
     # no convergence: one last crossover from where the iterations stopped
     if crossover_gap > 0.0:
         tried, code, f, mus, grad, st, ca, dirs, yy = _crossover(
