@@ -19,6 +19,8 @@ only. Nothing here or in the solvers assumes ``l >= 0`` or that every variable i
 
 from __future__ import annotations
 
+import functools
+
 import json
 from dataclasses import dataclass
 
@@ -96,6 +98,9 @@ class QPData:
         if self._cone_arrays is None:
             n, cs = self.n, self.cones
             k = len(cs)
+            if not k:  # no cones (cases 1 and 2): the empty arrays of this size, made once
+                self._cone_arrays = _no_cones(n)[0]
+                return self._cone_arrays
             self._cone_arrays = (
                 np.array([c.G for c in cs], dtype=float).reshape(k, 3, n),
                 np.array([c.g for c in cs], dtype=float).reshape(k, 3),
@@ -126,7 +131,7 @@ class QPData:
         their joints' names (a tuple), half-angles in degrees (k,), the cosines of the half-angles
         (k,) and the bases normal to the axes (k, 2, 3)."""
         if self._cone_consts is None:
-            self._cone_consts = cone_constants(self.cones)
+            self._cone_consts = cone_constants(self.cones) if self.cones else _no_cones(self.n)[1]
         return self._cone_consts
 
     def cone_rows(self) -> tuple[np.ndarray, np.ndarray]:
@@ -177,6 +182,16 @@ class QPData:
 
     def with_cones(self, cones) -> "QPData":
         return self.replace(cones=list(cones))
+
+
+@functools.lru_cache(maxsize=64)
+def _no_cones(n: int) -> tuple:
+    """``(cone_arrays, cone_consts)`` of a problem of ``n`` variables without cones: empty arrays,
+    shared (nothing can be written into them; not flagged read-only, which would be another type to
+    the compiled kernels). Making them per instant cost ~10 us in cases 1 and 2."""
+    arrays = (np.zeros((0, 3, n)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros((0, 3)))
+    consts = ((), np.zeros(0), np.zeros(0), np.zeros((0, 2, 3)))
+    return arrays, consts
 
 
 def cone_constants(cones) -> tuple:
