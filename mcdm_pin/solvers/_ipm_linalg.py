@@ -87,12 +87,17 @@ def axpy(a, x, y):
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy", inline="always")
-def _pivot(d, floor, j, first_drop):
-    """A pivot ``d`` (its row's diagonal entry less the squares before it) judged as in
-    :func:`chol_inplace`: ``(sqrt(d'), dropped)``."""
-    if not d > floor:
-        return np.sqrt(1e300 if j >= first_drop else max(floor, 1e-300)), True
-    return np.sqrt(d), False
+def _pivot(Lj, j, drop_rel, first_drop):
+    """Row ``Lj``'s pivot (its diagonal entry less the squares before it) judged as in
+    :func:`chol_inplace` and stored in ``Lj[j]``: ``(the pivot, dropped)``."""
+    d = Lj[j]
+    floor = drop_rel * abs(d)
+    for k in range(j):
+        d -= Lj[k] * Lj[k]
+    dropped = not d > floor
+    d = np.sqrt((1e300 if j >= first_drop else max(floor, 1e-300)) if dropped else d)
+    Lj[j] = d
+    return d, dropped
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
@@ -110,25 +115,15 @@ def chol_inplace(L, drop_rel, first_drop):
     j = 0
     while j + 1 < p:
         Lj, Lk = L[j], L[j + 1]
-        d = Lj[j]
-        floor = drop_rel * abs(d)
-        for k in range(j):
-            d -= Lj[k] * Lj[k]
-        d, dr = _pivot(d, floor, j, first_drop)
+        d, dr = _pivot(Lj, j, drop_rel, first_drop)
         dropped |= dr
-        Lj[j] = d
         inv = 1.0 / d
         s = Lk[j]
         for k in range(j):
             s -= Lk[k] * Lj[k]
         Lk[j] = s * inv
-        d1 = Lk[j + 1]
-        floor1 = drop_rel * abs(d1)
-        for k in range(j + 1):
-            d1 -= Lk[k] * Lk[k]
-        d1, dr = _pivot(d1, floor1, j + 1, first_drop)
+        d1, dr = _pivot(Lk, j + 1, drop_rel, first_drop)
         dropped |= dr
-        Lk[j + 1] = d1
         inv1 = 1.0 / d1
         ljk = Lk[j]
         i = j + 2
@@ -166,14 +161,7 @@ def chol_inplace(L, drop_rel, first_drop):
             i += 1
         j += 2
     if j < p:  # the last pivot when p is odd
-        Lj = L[j]
-        d = Lj[j]
-        floor = drop_rel * abs(d)
-        for k in range(j):
-            d -= Lj[k] * Lj[k]
-        d, dr = _pivot(d, floor, j, first_drop)
-        dropped |= dr
-        Lj[j] = d
+        dropped |= _pivot(L[j], j, drop_rel, first_drop)[1]
     return dropped
 
 
