@@ -23,7 +23,7 @@ from numba import njit
 
 from ..model.kernels import gram_lower
 from ._ipm import CROSSOVER, ipm_solve
-from ._kkt import FOUND, active_set_run, cone_force
+from ._kkt import FOUND, active_set_run, cone_force, next_guess
 
 
 @njit(cache=True, nogil=True)
@@ -343,18 +343,10 @@ def ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, G, g, ax, tn, basis0, cosr, basis,
     code, x, y, z, zc, it, state, cact, mus, dirs = ipm_solve(
         H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, g, ax, tn, basis0, max_pivots,
         as_tols, ncorr, rank_tol)
-    n = x.shape[0]
     if code != CROSSOVER:
         return code, x, y, z, zc, np.nan, it, np.zeros(0, dtype=np.bool_), mus, dirs, state, 0
     grad = -z
-    thr = 0.0
-    for i in range(n):
-        thr = max(thr, abs(grad[i]))
-    thr = 1e-12 * max(thr, 1e-300)
-    nxt = state.copy()
-    for i in range(n):
-        if (state[i] == 1 and not grad[i] > thr) or (state[i] == 2 and not grad[i] < -thr):
-            nxt[i] = 0
+    nxt = next_guess(state, grad)
     zb, zcone, obj, held = answer_duals(H, c, r, x, grad, state, cact, mus, dirs, cosr, basis)
     unique = answer_unique(x, zb, c, lb, ub, A, H, G, g, ax, tn, cosr, zcone, strict, near, unique_rel)
     return code, x, y, zb, zcone, obj, it, held, mus, dirs, nxt, unique

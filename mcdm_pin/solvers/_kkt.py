@@ -583,6 +583,21 @@ def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, c
 
 
 @njit(cache=True, nogil=True)
+def next_guess(state, grad):
+    """The next instant's guess of the bounds from a verified answer's: a variable whose multiplier
+    (``grad``, > 0 at a lower bound) is below 1e-12 of the largest is guessed free."""
+    gmx = 0.0
+    for i in range(grad.shape[0]):
+        gmx = max(gmx, abs(grad[i]))
+    thr = 1e-12 * max(gmx, 1e-300)
+    nxt = state.copy()
+    for i in range(state.shape[0]):
+        if (state[i] == 1 and not grad[i] > thr) or (state[i] == 2 and not grad[i] < -thr):
+            nxt[i] = 0
+    return nxt
+
+
+@njit(cache=True, nogil=True)
 def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
                    max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel):
     """Block principal pivoting from the guess ``(state0, cact0, cdir0)`` until a verified KKT point
@@ -685,15 +700,7 @@ def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdi
          worst_idx) = verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus,
                              primal_tol, dual_tol, eom_tol)
         if vcode == KKT_OPTIMAL:
-            gmx = 0.0
-            for i in range(n):
-                gmx = max(gmx, abs(grad[i]))
-            thr = 1e-12 * max(gmx, 1e-300)
-            nxt = state.copy()
-            for i in range(n):
-                if (state[i] == 1 and not grad[i] > thr) or (state[i] == 2 and not grad[i] < -thr):
-                    nxt[i] = 0
-            return FOUND, f, mus, grad, state, cact, dirs, nxt, y, it + 1, solves
+            return FOUND, f, mus, grad, state, cact, dirs, next_guess(state, grad), y, it + 1, solves
         if vcode != KKT_PIVOT:
             return 20 + vcode, f, mus, grad, state, cact, cdir, state, y, it + 1, solves
         have_prev = True
