@@ -494,6 +494,16 @@ def _gram(B, dinv, W, Km):
         i += 2
 
 
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy", inline="always")
+def _qq_block(Kb, rf, KFF, Km):
+    """``Q D^-1 Q^T`` from ``Kb``'s lower triangle into ``KFF`` (both triangles) and ``Km``'s."""
+    for a in range(rf):
+        for b in range(a + 1):
+            KFF[a, b] = Kb[a, b]
+            KFF[b, a] = Kb[a, b]
+            Km[a, b] = Kb[a, b]
+
+
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
 def _expand(Kb, rf, Ct, KFF, G1, Km):
     """``Km <-`` the reduced matrix's products for ``B = [Q; T; A]`` from those of ``[Q; A]`` in ``Kb``
@@ -501,11 +511,7 @@ def _expand(Kb, rf, Ct, KFF, G1, Km):
     (3K, rf) work)."""
     m = Ct.shape[0]
     neq = Kb.shape[0] - rf
-    for a in range(rf):
-        for b in range(a + 1):
-            KFF[a, b] = Kb[a, b]
-            KFF[b, a] = Kb[a, b]
-            Km[a, b] = Kb[a, b]
+    _qq_block(Kb, rf, KFF, Km)
     for i in range(m):  # G1 = Ct KFF
         for b in range(rf):
             G1[i, b] = dot(Ct[i], KFF[b])
@@ -532,11 +538,7 @@ def _expand_blocks(Kb, rf, Ct, cg, KFF, G1, Km):
     m = Ct.shape[0]
     K = m // 3
     neq = Kb.shape[0] - rf
-    for a in range(rf):
-        for b in range(a + 1):
-            KFF[a, b] = Kb[a, b]
-            KFF[b, a] = Kb[a, b]
-            Km[a, b] = Kb[a, b]
+    _qq_block(Kb, rf, KFF, Km)
     for k in range(K):  # G1 = Ct KFF
         g = cg[k]
         K0, K1, K2 = KFF[g], KFF[g + 1], KFF[g + 2]
