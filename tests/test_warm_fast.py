@@ -317,3 +317,49 @@ def test_ipm_answer_is_the_numpy_ones(instants):
         cones_held += len(want.active.cones)
         assert got.unique == (True if _numpy(LN.is_unique, qp, want) else None)
     assert crossed > 20 and cones_held > 0, (crossed, cones_held)
+
+
+def test_folded_cones_give_the_expanded_systems_directions(instants):
+    """The interior-point method's Newton directions with the neck's cones folded into their joints'
+    force groups (:func:`mcdm_pin.solvers._ipm_linalg._fold_factor`: a 48 x 48 system instead of
+    72 x 72) equal those of the expanded system, to 1e-9 relative, for scalings from far off the
+    cones (W^2 of order one) to a cone held at a gap of 1e-10 (W^2 of order 1e-10 in one direction)."""
+    from mcdm_pin.solvers import _fast, _ipm
+    from mcdm_pin.solvers import _ipm_linalg as la
+    from mcdm_pin.solvers.ipm import ipm_arguments
+
+    rng = np.random.default_rng(7)
+    folded = 0
+    for qp, _, _, _ in instants:
+        if len(qp.cones) != 8:
+            continue
+        args = ipm_arguments(qp)
+        _, d0, F, _, _, A, _, _, _, G, gc, ax, _, _, cosr, basis = args[:16]
+        T, t = _fast.cone_rows(G, gc, ax, cosr, basis)
+        B, rf, M0inv, Ct, cg, fold = la.structure(F, T, A, args[22])
+        assert fold[0].shape[0] == 8  # every cone folded into its joint's group
+        none = (np.empty((0, 3, 3)), np.empty(0, dtype=np.int64), np.empty((0, 3, 3)), np.empty((0, 3, 3)))
+        n, K, neq = len(d0), 8, A.shape[0]
+        for gap in (1.0, 1e-4, 1e-10):
+            # a cone scaling from interior points s, z whose product approaches the boundary
+            W2 = np.zeros((K, 3, 3))
+            for k in range(K):
+                s = np.array([1.0, *(rng.uniform(-1, 1, 2) * (1 - gap) / np.sqrt(2))])
+                z = np.array([1.0, *(-s[1:])]) * rng.uniform(0.5, 2.0)
+                _ipm._soc_scaling(s, z, np.zeros((3, 3)), np.zeros((3, 3)), W2[k], np.zeros(3))
+            dinv = 1.0 / rng.uniform(1e-3, 1e3, n)
+            r1, r2, r3 = rng.standard_normal(n), rng.standard_normal(neq), rng.standard_normal((K, 3))
+            out = []
+            for fd, p in ((fold, rf + neq), (none, rf + 3 * K + neq)):
+                Km = np.empty((p, p))
+                Kb = Km if fd[0].shape[0] else np.empty((B.shape[0], B.shape[0]))
+                la.factor(B, rf, M0inv, Ct, cg, fd, W2, dinv, 1e-14, np.empty((2, B.shape[1])), Kb, Km,
+                          np.empty((rf, rf)), np.empty((3 * K, rf)))
+                dx, dy, dzc = np.empty(n), np.empty(neq), np.empty((K, 3))
+                la.solve(B, rf, Ct, cg, fd, Km, dinv, r1, r3, r2, np.empty(n), np.empty(p), np.empty(rf), dx, dy,
+                         dzc)
+                out.append((dx, dy, dzc))
+            for got, want in zip(out[0], out[1]):
+                np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
+        folded += 1
+    assert folded >= 10, folded

@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from ..model.kernels import gram_lower
+from ._ipm_linalg import dot
 from ._ipm import CROSSOVER, ipm_solve
 from ._kkt import FOUND, active_set_run, cone_force, next_guess
 
@@ -296,10 +297,7 @@ def answer_duals(H, g, r, f, grad, state, cact, mus, dirs, cosr, basis):
     quad = 0.0
     lin = 0.0
     for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += H[i, j] * f[j]  # (H symmetric: row i is column i)
-        quad += acc * f[i]
+        quad += dot(H[i], f) * f[i]  # (H symmetric: row i is column i)
         lin += g[i] * f[i]
     return z, zc, 0.5 * quad + lin + r, held
 

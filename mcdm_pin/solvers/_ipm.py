@@ -12,7 +12,8 @@ quadratic cone program solvers", 2010, sections 3-4; the same steps as CVXOPT's 
 
 **The Newton system** is solved through the problem's structure (:mod:`._ipm_linalg`): with the
 bounds' multipliers eliminated and the cones' kept, one symmetric positive definite system of size
-``rank(F) + 3K + k_eq`` (the neck: 24 in case 1, 48 in case 2, 72 in case 3) instead of a Cholesky
+``rank(F) + 3K + k_eq`` (the neck: 24 in case 1, 48 in case 2, 72 in case 3, or 48 with each cone
+folded into its joint's force rows) instead of a Cholesky
 factor of the ``n x n`` Hessian and a Schur complement on ``A``; the cones enter through ``W_k^2``,
 never through ``W_k^{-2}`` (whose entries grow like ``1/mu`` on an active cone: the dense form's
 breakdowns, "the step vanished", on 2 % of the neck's case-3 instants). A pivot is dropped as a
@@ -222,8 +223,8 @@ def _barrier(d0, iu, il, su, zu, sl, zl, floor, dbar, dinv, ru, rl):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx, dy,
-            dzu, dzl, dzc):
+def _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx,
+            dy, dzu, dzl, dzc):
     """The scaled Newton system's ``(dx, dy, dzu, dzl, dzc)`` (in place) for the right-hand sides
     ``P dx + A^T dy + G^T dz = bx, A dx = by, G dx - W^2 dz = bz``: the bounds' ``dz`` eliminated
     (``dz = (z/s) (G dx - bz)``, ``ru, rl`` the bounds' ``z/s``), the cones' kept
@@ -236,9 +237,9 @@ def _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, LK, dinv, dbar, Fm, T, A, W2, 
         r1[iu[q]] += ru[q] * bzu[q]
     for q in range(il.shape[0]):
         r1[il[q]] -= rl[q] * bzl[q]
-    la.solve(B, rf, Ct, cg, LK, dinv, r1, bzc, by, u, rhs, wq, dx, dy, dzc)
+    la.solve(B, rf, Ct, cg, fold, LK, dinv, r1, bzc, by, u, rhs, wq, dx, dy, dzc)
     if refine:
-        la.refine(B, rf, Ct, cg, LK, dinv, dbar, Fm, T, W2, A, r1, bzc, by, dx, dy, dzc, refine, u, rhs, wq)
+        la.refine(B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, W2, A, r1, bzc, by, dx, dy, dzc, refine, u, rhs, wq)
     for q in range(iu.shape[0]):
         dzu[q] = ru[q] * (dx[iu[q]] - bzu[q])
     for q in range(il.shape[0]):
@@ -246,7 +247,7 @@ def _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, LK, dinv, dbar, Fm, T, A, W2, 
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, floor, fw, ws):
+def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor, fw, ws):
     """CVXOPT's initial point: ``x, y`` of the Newton system with the identity scaling (the least
     squares point of the slacks on the equations, with the objective), ``s = h - G x``, ``z = -s``,
     each shifted into its cone's interior when it is not (:func:`_shift_into_cones`). Starting from
@@ -263,7 +264,7 @@ def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, floor, f
     ru, rl = np.empty(nu), np.empty(nl)
     _barrier(d0, iu, il, one_u, one_u, one_l, one_l, floor, dbar, dinv, ru, rl)
     Kb, Km, KFF, G1, gw = fw
-    dropped = la.factor(B, rf, M0inv, Ct, cg, Vc, dinv, 1e-14, gw, Kb, Km, KFF, G1)
+    dropped = la.factor(B, rf, M0inv, Ct, cg, fold, Vc, dinv, 1e-14, gw, Kb, Km, KFF, G1)
     # refined only when the factor is not that of the exact system: a dropped equation, or a variable
     # whose D fell below the floor (without bounds or weight)
     refine = 1 if dropped else 0
@@ -277,8 +278,8 @@ def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, floor, f
     for q in range(nl):
         hl[q] = -lb[il[q]]
     x, y, zu, zl, zc = np.empty(n), np.empty(A.shape[0]), np.empty(nu), np.empty(nl), np.empty((K, 3))
-    _newton(-c, b, hu, hl, t.copy(), B, rf, Ct, cg, Km, dinv, dbar, Fm, T, A, Vc, iu, il, ru, rl, refine, ws, x, y,
-            zu, zl, zc)
+    _newton(-c, b, hu, hl, t.copy(), B, rf, Ct, cg, fold, Km, dinv, dbar, Fm, T, A, Vc, iu, il, ru, rl, refine, ws, x,
+            y, zu, zl, zc)
     su, sl, sc = -zu, -zl, -zc
     _shift_into_cones(su, sl, sc)
     _shift_into_cones(zu, zl, zc)
@@ -347,7 +348,7 @@ def _cone_corrector(lamc, Winv, Wm, dsc, dzc, rzc, smu, bzc):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, LK, dinv, dbar, Fm, T, A, W2,
+def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2,
                Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D):
     """Mehrotra's predictor-corrector direction with Gondzio's centrality correctors on the bounds
     (at most ``ncorr``, each kept only when it lengthens the step). ``rb = (bx, by, bzu, bzl, rsu,
@@ -371,8 +372,8 @@ def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg,
         for e in range(3):
             bzc[k, e] = -rzc[k, e] + sc[k, e]
     dx, dy, dzu, dzl, dzc, dsu, dsl, dsc = DX[0], DY[0], DZU[0], DZL[0], DZC[0], DSU[0], DSL[0], DSC[0]
-    _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx, dy,
-            dzu, dzl, dzc)
+    _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx,
+            dy, dzu, dzl, dzc)
     _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc)
     a_p = min(1.0, _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc))
     gap_aff = _gap_at(su, dsu, zu, dzu, a_p) + _gap_at(sl, dsl, zl, dzl, a_p)
@@ -399,8 +400,8 @@ def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg,
             bzl[q] = -rzl[q] - rsl[q] / zl[q]
         dx, dy, dzu, dzl, dzc = DX[cur], DY[cur], DZU[cur], DZL[cur], DZC[cur]
         dsu, dsl, dsc = DSU[cur], DSL[cur], DSC[cur]
-        _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx,
-                dy, dzu, dzl, dzc)
+        _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws,
+                dx, dy, dzu, dzl, dzc)
         _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc)
         a = _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc)
         if not np.isfinite(_dot(dx, dx) + _dot(dy, dy)):
@@ -548,15 +549,17 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
     for i in range(n):
         hmax = max(hmax, H[i, i])
     floor = 1e-12 * max(hmax, 1e-300) if hmax > 0.0 else 1e-12
-    B, rf, M0inv, Ct, cg = la.structure(Fm, T, A, rank_tol)
+    B, rf, M0inv, Ct, cg, fold = la.structure(Fm, T, A, rank_tol)
     # every work array of the iterations, made once (a small array costs ~0.1-0.3 us to make)
     neq, nu, nl = A.shape[0], iu.shape[0], il.shape[0]
-    p = rf + 3 * K + neq
+    folded = fold[0].shape[0] > 0  # the cones folded into their groups: no rows of their own
+    p = rf + neq if folded else rf + 3 * K + neq
     Km = np.empty((p, p))
-    Kb = np.empty((B.shape[0], B.shape[0])) if Ct.shape[0] else Km
+    Kb = np.empty((B.shape[0], B.shape[0])) if Ct.shape[0] and not folded else Km
     fw = (Kb, Km, np.empty((rf, rf)), np.empty((Ct.shape[0], rf)), np.empty((2, B.shape[1])))
     ws = (np.empty(n), np.empty(n), np.empty(p), np.empty(rf))  # r1, u, rhs, wq
-    x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, floor, fw, ws)
+    x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor, fw,
+                                          ws)
     Px, rx, ry, rzu, rzl, rzc = np.empty(n), np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty((K, 3))
     fx = np.empty(Fm.shape[0])
     dbar, dinv, ru, rl = np.empty(n), np.empty(n), np.empty(nu), np.empty(nl)
@@ -605,10 +608,10 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
         # ---- scaling and the factor of the Newton system
         _cone_scalings(sc, zc, Wm, Winv, Wc2, lamc)
         _barrier(d0, iu, il, su, zu, sl, zl, floor, dbar, dinv, ru, rl)
-        dropped = la.factor(B, rf, M0inv, Ct, cg, Wc2, dinv, 1e-14, fw[4], Kb, Km, fw[2], fw[3])
+        dropped = la.factor(B, rf, M0inv, Ct, cg, fold, Wc2, dinv, 1e-14, fw[4], Kb, Km, fw[2], fw[3])
         refine = 1 if dropped or gap_rel < 1e-5 else 0
-        j, a = _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, Km, dinv, dbar, Fm, T, A,
-                          Wc2, Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D)
+        j, a = _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, fold, Km, dinv, dbar, Fm, T,
+                          A, Wc2, Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D)
         a = min(1.0, 0.99 * a)
         if not (a > 1e-14) or not np.isfinite(a):
             end = NUMERICAL

@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ._ipm_linalg import dot
+
 # eq_solve codes
 OK, SINGULAR, NO_CONVERGENCE, DROP, VANISHED = 0, 1, 2, 3, 5
 # verify codes
@@ -118,16 +120,23 @@ def _lu_factor(R):
             for j in range(n):
                 M[k, j], M[p, j] = M[p, j], M[k, j]
             perm[k], perm[p] = perm[p], perm[k]
-        Mk = M[k]
-        inv = 1.0 / Mk[k]
+        inv = 1.0 / M[k, k]
+        Mk = M[k, k + 1:]
         for i in range(k + 1, n):
-            Mi = M[i]
-            l = Mi[k] * inv
-            Mi[k] = l
+            l = M[i, k] * inv
+            M[i, k] = l
             if l != 0.0:
-                for j in range(k + 1, n):
-                    Mi[j] -= l * Mk[j]
+                _axpy(-l, Mk, M[i, k + 1:])
     return M, perm, True
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"}, inline="always")
+def _axpy(a, x, y):
+    """``y += a x`` over slices (a loop from 0 over ``range(len)``: numba then knows the index is not
+    negative and vectorises it; the loop ``for j in range(k + 1, n)`` it replaces did not, 2x slower
+    for the 49 x 49 KKT systems of the crossover)."""
+    for t in range(x.shape[0]):
+        y[t] += a * x[t]
 
 
 @njit(cache=True, nogil=True)
@@ -256,6 +265,16 @@ def _chol_apply(L, r):
     return y
 
 
+@njit(cache=True, nogil=True)
+def _matvec(M, x):
+    """``M x`` by rows (:func:`._ipm_linalg.dot`): at these sizes numba's ``@`` (a BLAS call) costs
+    more than the arithmetic."""
+    out = np.empty(M.shape[0])
+    for i in range(M.shape[0]):
+        out[i] = dot(M[i], x)
+    return out
+
+
 @njit(cache=True, nogil=True, inline="always")
 def cone_force(G, gc, ax, k, x):
     """Cone ``k``'s force ``F = g_k + G_k x`` at ``x``, its component along the axis and the part
@@ -337,8 +356,8 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
     square = nf >= neq + na
     N = nf + neq + na
     # fixed part of the gradient and of the equations (f is zero on the free cables here)
-    Hf = H @ f
-    Af = A @ f
+    Hf = _matvec(H, f)
+    Af = _matvec(A, f)
     f_cur = f.copy()
     x_prev = np.zeros(nf)
     have_cur = False
@@ -619,10 +638,9 @@ def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdi
     (one per active set without cones, one per Newton step with them).
     """
     n = H.shape[0]
-    hmax = 0.0
+    hmax = 0.0  # H's largest entry: for a positive semidefinite H, its largest diagonal entry
     for i in range(n):
-        for j in range(n):
-            hmax = max(hmax, abs(H[i, j]))
+        hmax = max(hmax, H[i, i])
     gmax = 0.0
     umax = 0.0
     for i in range(n):
