@@ -586,7 +586,9 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
         # relative to the objective; an objective below eps counts as zero (then the gap must reach
         # eps^2). (An absolute floor of 1e-3 (1e-13 / eps) stopped a scaled problem whose optimum is
         # 3.5e-11 at a gap of 1e-13, 1e-3 above its optimum, after its crossover attempts had been
-        # spent at relative gaps of order one: tests/test_solvers.py)
+        # spent at relative gaps of order one: tests/test_properties.py::
+        # test_ipm_reaches_the_optimum_where_the_scaled_objective_is_tiny; an optimum of exactly
+        # zero still stops: tests/test_solvers.py::test_ipm_stops_on_a_problem_whose_optimum_is_zero)
         gap_rel = gap / max(eps, abs(pobj), abs(pobj - gap))
         done = pres <= eps and dres <= eps and gap_rel <= eps
         if done or (crossover_gap > 0.0 and gap_rel <= crossover_gap and pres <= 1e3 * crossover_gap

@@ -138,7 +138,7 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     (:func:`._fast.active_set_answer`: the kernel and the answer's duals, what
     :func:`active_solution` computes in numpy)."""
     c, A, b, lb, ub, G, gc, ax, tn, basis0 = qp.kernel_arrays()
-    names, _, cosr, basis = qp.cone_consts()
+    _, _, cosr, basis = qp.cone_consts()
     state = guess.cable_state(qp.n)  # (the kernel frees variables guessed at an infinite bound)
     cact, cdir = guess.cone_guess(qp)
     # C-ordered float arrays and Python scalars: one compiled specialisation serves every call
@@ -150,10 +150,21 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     if code != K.FOUND:
         _miss(K.REASONS[code])
         return None
+    return compiled_answer(qp, x, y, z, zc, objective, held, mus, dirs, nxt_state, unique, iterations=int(solves),
+                           stage=stage)
+
+
+def compiled_answer(qp: QPData, x, y, z, zc, objective, held, mus, dirs, nxt_state, unique, **fields) -> Solution:
+    """A verified point from a compiled answering call (:func:`._fast.active_set_answer`,
+    :func:`._fast.ipm_answer` after its crossover) as a :class:`~.base.Solution`: the cones held
+    with a positive multiplier and the bounds' guess become the next instant's :class:`ActiveSet`;
+    ``unique`` the compiled uniqueness test's 1/0 (``True`` / not proven: ``None``); ``fields``: more
+    of the solution's fields (``iterations``, ``stage``)."""
+    names = qp.cone_consts()[0]
     nxt_cones = {names[k]: (dirs[k], float(mus[k])) for k in np.flatnonzero(held)} if held.any() else {}
-    return Solution(x, OPTIMAL, objective, y=y, z=z, z_cone=zc,
+    return Solution(x, OPTIMAL, float(objective), y=y, z=z, z_cone=zc,
                     active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt_state, (names, held, dirs)),
-                    verified=True, iterations=int(solves), stage=stage, unique=True if unique else None)
+                    verified=True, unique=True if unique else None, **fields)
 
 
 def unique_args(qp: QPData) -> tuple:

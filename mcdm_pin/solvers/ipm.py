@@ -15,7 +15,7 @@ import numpy as np
 from .. import jit
 from .. import tolerances as tol
 from . import _fast, _ipm, _kkt
-from .active_set import _AS_TOLS, _EMPTY, ActiveSet, unique_args
+from .active_set import _AS_TOLS, compiled_answer, unique_args
 from .base import INACCURATE, INFEASIBLE, OPTIMAL, Solution, Stage, failure
 
 REASONS = {_ipm.MAX_ITER: "iteration limit", _ipm.NUMERICAL: "numerical breakdown (the step vanished)"}
@@ -58,11 +58,7 @@ def ipm_solve(qp, **options) -> Solution:
     code, x, y, z, zc, obj, it, held, mus, dirs, nxt, unique = _fast.ipm_answer(*ipm_arguments(qp, **options))
     n = qp.n
     if code == _ipm.CROSSOVER:
-        names = qp.cone_consts()[0]
-        nxt_cones = {names[k]: (dirs[k], float(mus[k])) for k in np.flatnonzero(held)} if held.any() else {}
-        return Solution(x, OPTIMAL, float(obj), y=y, z=z, z_cone=zc,
-                        active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt, (names, held, dirs)), verified=True,
-                        iterations=int(it), stage="ipm", unique=True if unique else None)
+        return compiled_answer(qp, x, y, z, zc, obj, held, mus, dirs, nxt, unique, iterations=int(it), stage="ipm")
     if code == _ipm.SOLVED:
         return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z, z_cone=zc, iterations=int(it), stage="ipm",
                         verified=False)
