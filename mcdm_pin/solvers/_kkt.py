@@ -667,7 +667,6 @@ def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdi
     have_prev = False
     prev_state = state.copy()
     prev_cact = cact.copy()
-    prev_cdir = cdir.copy()
     prev_grad = np.zeros(n)
     prev_kind, prev_idx = -1, -1
     prev_dirs = cdir.copy()
