@@ -23,6 +23,7 @@ from .model import charts
 from .model.actuators import Actuator, actuation_matrix
 from .model.cables import Cable, CableSet, RoutePoint
 from .model.joints import PhysicalJoint, group, massless_members, physical_joints
+from .model.terms import check_vector
 from .sidecar import Sidecar, _names, load_sidecar
 from .urdf import load_model, package_share_dirs, replace_joints, urdf_joint_axes
 
@@ -229,17 +230,7 @@ class Robot:
 
     def check_vector(self, x, name: str, n: int | None = None) -> np.ndarray:
         """Return ``x`` as a float array of length ``n`` (default: nv), or raise :class:`StateError`."""
-        n = self.nv if n is None else n
-        try:
-            arr = np.asarray(x, dtype=float)
-        except (TypeError, ValueError):
-            raise StateError(f"{name}: expected {n} numbers, got {type(x).__name__}") from None
-        if arr.shape != (n,):
-            raise StateError(f"{name}: expected a vector of length {n}, got shape {arr.shape}")
-        if not np.isfinite(arr).all():
-            bad = np.flatnonzero(~np.isfinite(arr))
-            raise StateError(f"{name}: expected finite numbers, entries {bad.tolist()} are not")
-        return arr
+        return check_vector(x, name, self.nv if n is None else n)
 
     # compatibility: the flattened routes, as the layers above read them
     point_joint = property(lambda self: self.cables.point_joint)

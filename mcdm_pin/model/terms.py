@@ -243,9 +243,9 @@ class TermsEvaluator:
     def check_state(self, q, v=None, a=None):
         """``(q, v, a)`` as float arrays of sizes nq, nv, nv (``None``: zeros), or :class:`StateError`."""
         model = self.model
-        q = _vector(q, "q", model.nq)
-        v = self._zeros if v is None else _vector(v, "qd", model.nv)
-        a = self._zeros if a is None else _vector(a, "qdd", model.nv)
+        q = check_vector(q, "q", model.nq)
+        v = self._zeros if v is None else check_vector(v, "qd", model.nv)
+        a = self._zeros if a is None else check_vector(a, "qdd", model.nv)
         return q, v, a
 
     def __call__(self, q, qd=None, qdd=None, checked: bool = False, data=None) -> Terms:
@@ -329,7 +329,9 @@ def _subtree(model) -> np.ndarray:
     return sub
 
 
-def _vector(x, name: str, n: int) -> np.ndarray:
+def check_vector(x, name: str, n: int) -> np.ndarray:
+    """``x`` as a float array of length ``n``, or :class:`StateError` naming ``name`` and what was
+    wrong (not numbers, the wrong shape, entries that are not finite)."""
     try:
         arr = np.asarray(x, dtype=float)
     except (TypeError, ValueError):
@@ -377,7 +379,7 @@ def cable_generalized_force(model, data, cables: CableSet, q, f) -> np.ndarray:
     """(nv,) the generalised force ``-L^T f`` of cable tensions ``f`` (N), Pinocchio's ``tau`` convention
     (``M a + h = tau``)."""
     L = cable_jacobian(model, data, cables, q)
-    f = _vector(f, "f", cables.m)
+    f = check_vector(f, "f", cables.m)
     return -(L.T @ f)
 
 
