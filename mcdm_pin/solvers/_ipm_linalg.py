@@ -212,6 +212,20 @@ def add_inverse(L, out):
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def _in_span(row, Q, lo, hi, coef, rest, rank_tol):
+    """Whether ``row`` lies in the span of the orthonormal rows ``Q[lo:hi]``: its part outside them
+    (left in ``rest``, (n,) work) at most ``rank_tol`` times its norm; its coefficients are written
+    into ``coef[lo:hi]``."""
+    for t in range(row.shape[0]):
+        rest[t] = row[t]
+    for a in range(lo, hi):
+        cc = dot(row, Q[a])
+        coef[a] = cc
+        axpy(-cc, Q[a], rest)
+    return not dot(rest, rest) > rank_tol * rank_tol * max(dot(row, row), 1e-300)
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
 def _grouped(Fm, T, rank_tol, keep):
     """The block basis of :func:`structure` when each cone's rows lie in the span of one group of
     three consecutive rows of ``F`` (the neck's case 3: a cone's rows are a rotation of its joint's
@@ -266,14 +280,7 @@ def _grouped(Fm, T, rank_tol, keep):
             o = 3 * j
             fits = True
             for e in range(3):
-                Tke = T[k, e]
-                for t in range(n):
-                    rrow[t] = Tke[t]
-                for a in range(3):
-                    cc = dot(Tke, Q[o + a])
-                    Ct[3 * k + e, o + a] = cc
-                    axpy(-cc, Q[o + a], rrow)
-                if dot(rrow, rrow) > rank_tol * rank_tol * max(dot(Tke, Tke), 1e-300):
+                if not _in_span(T[k, e], Q, o, o + 3, Ct[3 * k + e], rrow, rank_tol):
                     fits = False
                     break
             if fits:
@@ -354,13 +361,7 @@ def structure(Fm, T, A, rank_tol):
         rrow = np.empty(n)
         for k in range(K):
             for e in range(3):
-                Tke = T[k, e]
-                for t in range(n):
-                    rrow[t] = Tke[t]
-                for a in range(rf):
-                    Ct[3 * k + e, a] = dot(Tke, Q[a])
-                    axpy(-Ct[3 * k + e, a], Q[a], rrow)
-                if dot(rrow, rrow) > rank_tol * rank_tol * max(dot(Tke, Tke), 1e-300):
+                if not _in_span(T[k, e], Q, 0, rf, Ct[3 * k + e], rrow, rank_tol):
                     inside = False
         if not inside:
             Ct = np.empty((0, rf))
