@@ -8,7 +8,7 @@ library's kernels on 2 cores) and caches it on disk (``__pycache__`` beside the 
 - every module with kernels registers the calls that use them (:func:`register`: a function
   returning ``(kernel, example_args)`` pairs with the argument types the library passes);
 - :func:`prepare` (called when an :class:`~mcdm_pin.inverse_dynamics.InverseDynamics` is created)
-  loads every registered kernel from the cache when all are there (about a second: 0.8-1.2 s here) and reports
+  loads every registered kernel from the cache when all are there (about a second: docs/speed.md, "First run") and reports
   :func:`ready`; when one is missing, it starts **one** detached background process
   (``python -m mcdm_pin.jit``, a lock file makes a second one wait and then find the cache filled)
   that compiles and caches them, prints one line on stderr saying so, and this run uses the

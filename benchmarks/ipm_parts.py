@@ -1,0 +1,106 @@
+"""Where the compiled interior-point call of a cold instant spends its time, per case.
+
+    python benchmarks/ipm_parts.py [ROBOT.yaml] [TRAJECTORY] [--cases 1 2 3] [--instants 40] [--calls 50]
+
+The problems of ``--instants`` cold instants (shuffled, each after ``InverseDynamics.reset()``) are
+captured as the arguments of ``_fast.ipm_answer``; then, per case, the median over the instants of
+(each the mean of ``--calls`` calls on the same arguments): the whole call, the iterations alone (the
+same call with the crossover switched off and the iteration limit at the count the whole call took:
+per iteration, that time over the count) and the difference (the crossover and the answer's duals,
+next guess and uniqueness test). Last, the LU factor of the crossover's non-square KKT systems
+(``_kkt._lu_factor``) on random dense matrices of 49 and 76 rows. ``--objective-scale G ...``: also
+the mean iteration count with the objective multiplied by each ``G`` (the start is not scale
+invariant). Default robot: the CASPR neck with
+the paper's weights and 15 deg cones (``_common.neck_case_options``), trajectory ``roll``. The
+1-minute load average is printed first (the machine is shared).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import random
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+REPO = Path(__file__).resolve().parent.parent
+
+
+def _per_call(fn, args, calls: int) -> float:
+    fn(*args)
+    t0 = time.perf_counter()
+    for _ in range(calls):
+        fn(*args)
+    return (time.perf_counter() - t0) / calls * 1e6
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("robot", nargs="?", default=str(REPO / "robots" / "caspr" / "8S_neck" / "8S_neck.yaml"))
+    ap.add_argument("trajectory", nargs="?", default="roll")
+    ap.add_argument("--cases", type=int, nargs="+", default=[1, 2, 3])
+    ap.add_argument("--instants", type=int, default=40)
+    ap.add_argument("--calls", type=int, default=50)
+    ap.add_argument("--objective-scale", type=float, nargs="*", default=[])
+    a = ap.parse_args(argv)
+
+    from mcdm_pin import InverseDynamics, Robot, jit
+    from mcdm_pin.solvers import _fast, _kkt
+    from mcdm_pin.solvers import ipm as ipm_mod
+    from mcdm_pin.trajectory import load_trajectory
+    from _common import neck_case_options
+
+    jit.prepare(policy="wait")
+    print(f"1-minute load average {os.getloadavg()[0]:.2f}")
+    robot = Robot.load(a.robot)
+    tr = load_trajectory(robot, a.trajectory)
+    opts = neck_case_options(robot.joint_names) if "neck" in a.robot else {c: {} for c in (1, 2, 3)}
+    print("| case | iterations p50 | whole call, us | per iteration, us | crossover and answer, us |")
+    print("|---|---|---|---|---|")
+    for case in a.cases:
+        ident = InverseDynamics.for_case(robot, case, **opts[case])
+        captured = []
+        original = ipm_mod.ipm_arguments
+
+        def capture(qp, **options):
+            args = original(qp, **options)
+            captured.append(args)
+            return args
+
+        ipm_mod.ipm_arguments = capture
+        try:
+            order = list(range(len(tr.t)))
+            random.Random(0).shuffle(order)
+            for k in order[:a.instants]:
+                ident.reset()
+                ident.solve(tr.q[k], tr.qd[k], tr.qdd[k])
+        finally:
+            ipm_mod.ipm_arguments = original
+        its, whole, loop = [], [], []
+        for args in captured:
+            it = int(_fast.ipm_answer(*args)[6])
+            its.append(it)
+            whole.append(_per_call(_fast.ipm_answer, args, a.calls))
+            only = list(args)
+            only[16], only[18] = it, 0.0  # max_iter, crossover_gap: the iterations alone
+            loop.append(_per_call(_fast.ipm_answer, tuple(only), a.calls))
+        its, whole, loop = np.array(its), np.array(whole), np.array(loop)
+        print(f"| {case} | {np.median(its):.0f} | {np.median(whole):.1f} | {np.median(loop / its):.1f} | "
+              f"{np.median(whole - loop):.1f} |")
+        for g in a.objective_scale:  # P (and its diagonal and factor), c and r times g
+            mean = np.mean([_fast.ipm_answer(args[0] * g, args[1] * g, args[2] * np.sqrt(g), args[3] * g,
+                                             args[4] * g, *args[5:])[6] for args in captured])
+            print(f"|   objective x{g:g} | {mean:.2f} (mean) | | | |")
+    rng = np.random.default_rng(0)
+    for n in (49, 76):
+        M = rng.standard_normal((n, n))
+        print(f"LU factor {n} x {n}: {_per_call(_kkt._lu_factor, (M,), 2000):.1f} us")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
