@@ -127,9 +127,10 @@ class InverseDynamics:
     def _solve(self, q, qd, qdd, f_prev, checked: bool) -> InstantResult:
         """:meth:`solve` inside the BLAS limit; ``checked``: the state was validated already."""
         t0 = time.perf_counter()
-        if not checked:
+        if not checked:  # (q once: the configuration's check is the evaluator's and more)
             q = self.robot.check_configuration(q)
-        terms = self.evaluate(q, qd, qdd, checked=checked)
+            qd, qdd = self.evaluate.check_motion(qd, qdd)
+        terms = self.evaluate(q, qd, qdd, checked=True)
         if not terms.finite and not (np.all(np.isfinite(terms.tau)) and np.all(np.isfinite(terms.L))):
             raise StateError("the dynamics overflow at this state (non-finite M qdd + h or L): check "
                              "the model's masses, lengths and the state's magnitude")

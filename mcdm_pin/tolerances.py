@@ -41,6 +41,13 @@ UNIQUE_REL = 1e-9
 its smallest eigenvalue exceeds ``UNIQUE_REL`` times the Hessian's largest entry; a bound or cone
 whose multiplier is below ``UNIQUE_REL`` of the gradient's scale counts as weakly active (free)."""
 
+UNIQUE_PENALTY = 1e3
+"""The uniqueness test's shortcut (:mod:`mcdm_pin.solvers.least_norm`): ``H + gamma J^T J`` with
+``gamma`` this times the Hessian's largest entry over ``J^T J``'s. Large enough that a direction the
+active rows see is charged far more than ``UNIQUE_REL`` (the shortcut then decides the usual case),
+small enough that the Cholesky factor's rounding (~``n 1e-16 UNIQUE_PENALTY`` of the Hessian's
+scale) stays far below ``UNIQUE_REL``."""
+
 # ------------------------------------------------------------------------ compiled solvers
 ACTIVE_SET_PRIMAL = 1e-12
 """Active-set verification: bounds within ``tol * (1 + |bound|)``."""

@@ -80,6 +80,54 @@ def test_uniqueness_decision_is_the_numpy_ones(instants):
     assert seen == {True, False}  # both answers occur (the human arm's case 2/3 optimum is a face)
 
 
+def _exact_unique(H, J, thr):
+    """The exact test the shortcut stands in for: the smallest eigenvalue of H on null(J) above thr."""
+    _, s, Vt = np.linalg.svd(J, full_matrices=True)
+    Z = Vt[int((s > 1e-10 * s.max()).sum()):].T
+    return Z.shape[1] == 0 or np.linalg.eigvalsh(Z.T @ H @ Z).min() > thr
+
+
+def test_uniqueness_shortcut_only_claims_what_the_null_space_test_proves():
+    """``H + gamma J^T J - thr I`` definite (least_norm's shortcut, compiled and numpy) implies the
+    exact test's "unique", on random problems with free directions left (more columns than rows):
+    definite Hessians (both say unique), Hessians singular on null(J) (neither may: the shortcut
+    must fail) and Hessians whose only null directions the rows see (the shortcut decides)."""
+    from mcdm_pin import tolerances as tol
+    from mcdm_pin.solvers import _fast
+
+    rng = np.random.default_rng(3)
+    claimed = {True: 0, False: 0}
+    for trial in range(300):
+        nf = int(rng.integers(3, 30))
+        rows = int(rng.integers(1, nf))  # fewer rows than free variables: a null space of nf - rows
+        J = rng.standard_normal((rows, nf)) * 10.0 ** rng.uniform(-3, 3)
+        kind = trial % 3
+        if kind == 0:  # positive definite
+            X = rng.standard_normal((nf, nf + 2))
+            H = X @ X.T
+        elif kind == 1:  # singular on null(J): a null direction of J that H does not see
+            z = np.linalg.svd(J)[2][-1]
+            X = rng.standard_normal((nf, nf))
+            X -= np.outer(X @ z, z)  # X z = 0
+            H = X.T @ X
+        else:  # H's null space seen by J: H = F^T F with [F; J] of full column rank
+            F = rng.standard_normal((nf - rows, nf))
+            H = F.T @ F
+        H *= 10.0 ** rng.uniform(-4, 4)
+        hscale = float(np.abs(H).max())
+        thr = tol.UNIQUE_REL * hscale
+        exact = _exact_unique(H, J, thr)
+        compiled = bool(_fast.definite_beyond(np.ascontiguousarray(H), np.ascontiguousarray(J), rows, thr, hscale))
+        reference = LN._definite_beyond(H, J, thr, hscale)
+        assert compiled == reference
+        if compiled:
+            assert exact  # never "unique" where the null space test would not say so
+        if kind == 1:
+            assert not compiled and not exact
+        claimed[compiled] += 1
+    assert claimed[True] >= 150  # and it decides the definite cases (kinds 0 and 2)
+
+
 def test_answer_check_and_outputs_equal_the_numpy_ones(instants):
     for qp, terms, sol, idp in instants:
         m = idp.robot.m

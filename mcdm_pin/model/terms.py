@@ -242,11 +242,13 @@ class TermsEvaluator:
 
     def check_state(self, q, v=None, a=None):
         """``(q, v, a)`` as float arrays of sizes nq, nv, nv (``None``: zeros), or :class:`StateError`."""
-        model = self.model
-        q = check_vector(q, "q", model.nq)
-        v = self._zeros if v is None else check_vector(v, "qd", model.nv)
-        a = self._zeros if a is None else check_vector(a, "qdd", model.nv)
-        return q, v, a
+        return (check_vector(q, "q", self.model.nq), *self.check_motion(v, a))
+
+    def check_motion(self, v=None, a=None):
+        """``(v, a)`` as float arrays of size nv (``None``: zeros), or :class:`StateError`."""
+        nv = self.model.nv
+        return (self._zeros if v is None else check_vector(v, "qd", nv),
+                self._zeros if a is None else check_vector(a, "qdd", nv))
 
     def __call__(self, q, qd=None, qdd=None, checked: bool = False, data=None) -> Terms:
         """Terms at the configuration ``q`` (nq) with velocity ``qd`` and acceleration ``qdd`` (nv;
