@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import sys
 import time
-from contextlib import contextmanager
 
 import numpy as np
 
@@ -62,7 +61,7 @@ class InverseDynamics:
                  diagnose: bool = True, blas_threads: int | None = 1, budget_s: float | None = tol.BUDGET_S):
         self.robot = robot
         self.blas_threads = blas_threads
-        self._limited = False
+        self._blas = _BlasLimit()
         self.diagnose = diagnose
         self.problem = problem
         # every back-end solves a copy scaled to magnitudes of order one (mcdm_pin/scaling.py);
@@ -87,30 +86,12 @@ class InverseDynamics:
         if not self.evaluate.compiled and jit.ready():
             self.evaluate = TermsEvaluator(self.robot, compiled=True)
 
-    @contextmanager
-    def blas_limit(self):
-        """BLAS limited to ``blas_threads`` threads inside (once, when calls nest): :meth:`solve`
-        enters it at every call (~6 us); a caller solving many instants one by one
-        (a workspace's chunk of poses) enters it once around them all."""
-        if self.blas_threads is None or self._limited:
-            yield
-            return
-        self._limited = True
-        # each BLAS library's own setter, restored on the way out (~6 us; threadpoolctl's limit()
-        # context, which asks every library for its whole description, ~15 us: one cold instant
-        # of the neck's case 1 takes ~0.5 ms)
-        changed = []
-        try:
-            for lib in _blas_libraries():
-                old = lib.num_threads
-                if old != self.blas_threads:
-                    lib.set_num_threads(self.blas_threads)
-                    changed.append((lib, old))
-            yield
-        finally:
-            for lib, old in changed:
-                lib.set_num_threads(old)
-            self._limited = False
+    def blas_limit(self) -> "_BlasLimit":
+        """A context in which BLAS runs ``blas_threads`` threads (once, when entries nest): :meth:`solve`
+        enters it at every call; a caller solving many instants one by one (a workspace's chunk of
+        poses) enters it once around them all."""
+        self._blas.threads = self.blas_threads
+        return self._blas
 
     @property
     def cone_deg(self) -> np.ndarray:
@@ -252,6 +233,46 @@ class InverseDynamics:
 
 
 _BATCH = None
+class _BlasLimit:
+    """:meth:`InverseDynamics.blas_limit`'s context: each BLAS library's own setter, its count
+    restored on the way out (also after an exception; entries nest). A class, not a generator: it
+    is entered at every :meth:`~InverseDynamics.solve` (threadpoolctl's ``limit()``, which asks every
+    library for its whole description, ~15 us; a generator around the setters ~6 us, this ~4 us)."""
+
+    __slots__ = ("threads", "depth", "changed")
+
+    def __init__(self):
+        self.threads = None
+        self.depth = 0
+        self.changed = []
+
+    def __enter__(self):
+        if self.depth == 0 and self.threads is not None:
+            try:
+                for lib in _blas_libraries():
+                    old = lib.get_num_threads()
+                    if old != self.threads:
+                        lib.set_num_threads(self.threads)
+                        self.changed.append((lib, old))
+            except BaseException:
+                self._restore()
+                raise
+        self.depth += 1
+        return self
+
+    def __exit__(self, *exc) -> bool:
+        self.depth -= 1
+        if self.depth == 0:
+            self._restore()
+        return False
+
+    def _restore(self) -> None:
+        changed = self.changed
+        while changed:
+            lib, old = changed.pop()
+            lib.set_num_threads(old)
+
+
 _CONTROLLER = None
 
 

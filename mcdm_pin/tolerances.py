@@ -75,6 +75,14 @@ IPM_CORRECTORS = 1
 IPM_RANK_TOL = 1e-9
 """Interior-point method: a row of the objective's factor or of a cone whose part outside the span of
 the rows before it is below this (relative) counts as dependent."""
+IPM_CROSSOVER_PIVOTS = 4
+"""Interior-point method: pivots of each crossover attempt before the iterations go on (a right guess
+needs one KKT solve; on the neck's ``roll``, cold, a limit of 30 let one attempt take 17 solves, ~250
+us, where one more iteration costs ~27 us: case 2's slowest instant 674 -> 454 us, medians unchanged;
+``docs/speed.md``, "Fifth pass")."""
+IPM_START_BOX_WEIGHT = 0.2
+"""Interior-point method: the weight of the bounds in the start's least-squares problem when there
+is no cone (CVXOPT's start weighs them 1; :mod:`mcdm_pin.solvers._ipm`, "The start")."""
 
 # -------------------------------------------------------------------------------- ProxQP
 PROXQP_EPS_ABS = 1e-11

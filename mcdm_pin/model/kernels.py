@@ -55,7 +55,6 @@ def cable_terms(oM, Jt, point_local, point_key, seg_a, seg_b, seg_cable, seg_act
     L = np.zeros((n_cables, nv))
     Ww = np.zeros((n_joints, 6, n_cables))  # world, about the origin
     bad = -1
-    w = np.empty(6)
     for s in range(n_seg):
         a, b, c = seg_a[s], seg_b[s], seg_cable[s]
         d0 = X[b, 0] - X[a, 0]
@@ -75,21 +74,26 @@ def cable_terms(oM, Jt, point_local, point_key, seg_a, seg_b, seg_cable, seg_act
             e = b if end == 0 else a
             sg = 1.0 if end == 0 else -1.0
             x0, x1, x2 = X[e, 0], X[e, 1], X[e, 2]
-            w[0], w[1], w[2] = sg * u0, sg * u1, sg * u2
-            w[3] = sg * (x1 * u2 - x2 * u1)
-            w[4] = sg * (x2 * u0 - x0 * u2)
-            w[5] = sg * (x0 * u1 - x1 * u0)
+            # the end's Pluecker vector w (six scalars: as a small array, each column's product was
+            # a loop of six dependent adds, 6 of this kernel's 22 us on the neck)
+            w0, w1, w2 = sg * u0, sg * u1, sg * u2
+            w3 = sg * (x1 * u2 - x2 * u1)
+            w4 = sg * (x2 * u0 - x0 * u2)
+            w5 = sg * (x0 * u1 - x1 * u0)
             k = point_key[e]
+            Lc = L[c]
             for t in range(v_ptr[k], v_ptr[k + 1]):
                 v = v_idx[t]
-                acc = 0.0
-                for i in range(6):
-                    acc += w[i] * Jt[v, i]
-                L[c, v] += acc
+                Jv = Jt[v]
+                Lc[v] += (w0 * Jv[0] + w1 * Jv[1] + w2 * Jv[2]) + (w3 * Jv[3] + w4 * Jv[4] + w5 * Jv[5])
             for t in range(a_ptr[k], a_ptr[k + 1]):
-                j = a_idx[t]
-                for i in range(6):
-                    Ww[j, i, c] += w[i]
+                Wj = Ww[a_idx[t]]
+                Wj[0, c] += w0
+                Wj[1, c] += w1
+                Wj[2, c] += w2
+                Wj[3, c] += w3
+                Wj[4, c] += w4
+                Wj[5, c] += w5
     # to each joint's child frame at the joint point: F = R^T F_w, M = R^T (M_w - t x F_w)
     RT = np.empty((n_joints, 6, n_cables))
     for j in range(n_joints):

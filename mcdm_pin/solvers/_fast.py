@@ -202,12 +202,20 @@ def answer_check(L, tau, extra, x, lb, ub, G, g, ax, angle_deg):
     rmax = 0.0
     tmax = 0.0
     smax = 0.0
+    # row by row of L (each column's sums in the same order as a loop down the column: the same
+    # bits, without L's stride)
+    res = tau.copy()
+    mag = np.zeros(nv)
+    for c in range(m):
+        Lc = L[c]
+        xc = x[c]
+        ac = abs(xc)
+        for v in range(nv):
+            res[v] += Lc[v] * xc
+            mag[v] += abs(Lc[v]) * ac
     for v in range(nv):
-        r = tau[v]
-        s = 0.0
-        for c in range(m):
-            r += L[c, v] * x[c]
-            s += abs(L[c, v]) * abs(x[c])
+        r = res[v]
+        s = mag[v]
         if extra.shape[0]:
             r += extra[v]
         if not abs(r) <= rmax:

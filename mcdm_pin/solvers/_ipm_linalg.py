@@ -307,11 +307,10 @@ def structure(Fm, T, A, rank_tol):
     K = T.shape[0]
     n = A.shape[1]
     neq = A.shape[0]
-    W = Fm.copy()
     res = np.empty(r)
     big = 0.0
     for i in range(r):
-        res[i] = dot(W[i], W[i])
+        res[i] = dot(Fm[i], Fm[i])
         big = max(big, res[i])
     # a row's part outside the span of the rows before it is judged against F's largest row (a
     # direction of F weaker than rank_tol |F| adds below rounding to P; judged against the row's
@@ -323,6 +322,7 @@ def structure(Fm, T, A, rank_tol):
         rf = r
         inside = K > 0
     else:
+        W = Fm.copy()
         cg = np.empty(0, dtype=np.int64)
         C = np.zeros((r, r))
         used = np.zeros(r, dtype=np.bool_)
@@ -380,9 +380,16 @@ def structure(Fm, T, A, rank_tol):
         B[o + a, :n] = A[a]
     M0inv = np.zeros((rf, rf))
     if ok:  # C block diagonal: so are M0 and its inverse (eight 3 x 3 blocks on the neck, not 24 x 24)
+        X = np.empty((3, 3))
         for j in range(rf // 3):
             o = 3 * j
-            _gram_inverse(C[o:o + 3, o:o + 3], 3, 3, M0inv[o:o + 3, o:o + 3])
+            # (C_j^T C_j)^-1 = C_j^-1 C_j^-T: no temporaries, and C_j's condition, not its square
+            if _inv3(C[o:o + 3, o:o + 3], X) != 0.0:
+                for a in range(3):
+                    for b in range(3):
+                        M0inv[o + a, o + b] = X[a, 0] * X[b, 0] + X[a, 1] * X[b, 1] + X[a, 2] * X[b, 2]
+            else:
+                _gram_inverse(C[o:o + 3, o:o + 3], 3, 3, M0inv[o:o + 3, o:o + 3])
     else:
         _gram_inverse(C, r, rf, M0inv)
     fold = _fold_blocks(ok and inside, rf, K, M0inv, Ct, cg)

@@ -37,7 +37,7 @@ def p_structure(qp) -> tuple[np.ndarray, np.ndarray]:
 
 
 def ipm_arguments(qp, max_iter: int = tol.IPM_MAX_ITER, eps: float = tol.IPM_EPS,
-                  crossover_gap: float = tol.IPM_CROSSOVER_GAP, max_pivots: int = 30,
+                  crossover_gap: float = tol.IPM_CROSSOVER_GAP, max_pivots: int = tol.IPM_CROSSOVER_PIVOTS,
                   correctors: int = tol.IPM_CORRECTORS, rank_tol: float = tol.IPM_RANK_TOL) -> tuple:
     """The arguments of :func:`._fast.ipm_answer` for ``qp`` (C-ordered float arrays and Python
     scalars: one compiled specialisation serves every call)."""
