@@ -237,7 +237,8 @@ class _BlasLimit:
     """:meth:`InverseDynamics.blas_limit`'s context: each BLAS library's own setter, its count
     restored on the way out (also after an exception; entries nest). A class, not a generator: it
     is entered at every :meth:`~InverseDynamics.solve` (threadpoolctl's ``limit()``, which asks every
-    library for its whole description, ~15 us; a generator around the setters ~6 us, this ~4 us)."""
+    library for its whole description, ~15 us; a generator around the setters ~6 us; this, with the
+    libraries' own functions (:func:`_blas_setters`), ~2 us)."""
 
     __slots__ = ("threads", "depth", "changed")
 
@@ -249,11 +250,11 @@ class _BlasLimit:
     def __enter__(self):
         if self.depth == 0 and self.threads is not None:
             try:
-                for lib in _blas_libraries():
-                    old = lib.get_num_threads()
+                for get, set_ in _blas_setters():
+                    old = get()
                     if old != self.threads:
-                        lib.set_num_threads(self.threads)
-                        self.changed.append((lib, old))
+                        set_(self.threads)
+                        self.changed.append((set_, old))
             except BaseException:
                 self._restore()
                 raise
@@ -269,8 +270,8 @@ class _BlasLimit:
     def _restore(self) -> None:
         changed = self.changed
         while changed:
-            lib, old = changed.pop()
-            lib.set_num_threads(old)
+            set_, old = changed.pop()
+            set_(old)
 
 
 _CONTROLLER = None
@@ -285,6 +286,33 @@ def _blas_libraries():
 
 
 _BLAS_LIBS = None
+
+
+def _blas_setters():
+    """``(get, set)`` of each loaded BLAS library's thread count (listed once): OpenBLAS's own C
+    functions where threadpoolctl names them (``openblas_get_num_threads``, ``..._set_...`` with the
+    library's symbol affixes, its pthreads build: one process-wide count), else threadpoolctl's
+    methods. The C functions skip threadpoolctl's check of which Python thread controls OpenBLAS;
+    the limit is set and restored within one call, so two threads solving at once can only leave
+    each other's BLAS calls with the other's count meanwhile, never a count changed for good. In
+    a solve's time: ~0.2 us a call instead of ~1-3 us (an eighth of the instant's Python, measured
+    on the neck's cold instants: the limit cost 18 us of 0.52 ms)."""
+    global _BLAS_SETTERS
+    if _BLAS_SETTERS is None:
+        out = []
+        for lib in _blas_libraries():
+            get = set_ = None
+            symbol = getattr(lib, "_get_symbol", None)
+            if getattr(lib, "internal_api", "") == "openblas" and getattr(lib, "threading_layer", "") == "pthreads" \
+                    and symbol is not None:
+                get, set_ = symbol("openblas_get_num_threads"), symbol("openblas_set_num_threads")
+            out.append((get, set_) if get is not None and set_ is not None else (lib.get_num_threads,
+                                                                                 lib.set_num_threads))
+        _BLAS_SETTERS = tuple(out)
+    return _BLAS_SETTERS
+
+
+_BLAS_SETTERS = None
 
 
 def _blas_controller():

@@ -99,14 +99,18 @@ def cable_terms(oM, Jt, point_local, point_key, seg_a, seg_b, seg_cable, seg_act
     for j in range(n_joints):
         k = child_key[j]
         t0, t1, t2 = op[k, 0], op[k, 1], op[k, 2]
-        for c in range(n_cables):
-            f0, f1, f2 = Ww[j, 0, c], Ww[j, 1, c], Ww[j, 2, c]
-            m0 = Ww[j, 3, c] - (t1 * f2 - t2 * f1)
-            m1 = Ww[j, 4, c] - (t2 * f0 - t0 * f2)
-            m2 = Ww[j, 5, c] - (t0 * f1 - t1 * f0)
-            for i in range(3):
-                RT[j, i, c] = oR[k, 0, i] * f0 + oR[k, 1, i] * f1 + oR[k, 2, i] * f2
-                RT[j, 3 + i, c] = oR[k, 0, i] * m0 + oR[k, 1, i] * m1 + oR[k, 2, i] * m2
+        F0, F1, F2, M0, M1, M2 = Ww[j, 0], Ww[j, 1], Ww[j, 2], Ww[j, 3], Ww[j, 4], Ww[j, 5]
+        for c in range(n_cables):  # the moments about the joint point, in place (rows of Ww)
+            f0, f1, f2 = F0[c], F1[c], F2[c]
+            M0[c] = M0[c] - (t1 * f2 - t2 * f1)
+            M1[c] = M1[c] - (t2 * f0 - t0 * f2)
+            M2[c] = M2[c] - (t0 * f1 - t1 * f0)
+        for i in range(3):  # row by row of RT: contiguous, where a cable at a time wrote six rows
+            r0, r1, r2 = oR[k, 0, i], oR[k, 1, i], oR[k, 2, i]
+            Rf, Rm = RT[j, i], RT[j, 3 + i]
+            for c in range(n_cables):
+                Rf[c] = r0 * F0[c] + r1 * F1[c] + r2 * F2[c]
+                Rm[c] = r0 * M0[c] + r1 * M1[c] + r2 * M2[c]
     # R_socket = (R_parent R_sp)^T R_child
     R_socket = np.empty((n_joints, 3, 3))
     for j in range(n_joints):

@@ -516,17 +516,19 @@ def rows_axpy(B, lo, hi, coef, off, scale, y):
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
 def chol_solve_inplace(L, y):
-    """``y <- (L L^T)^{-1} y`` (both passes along rows of ``L``; no temporaries)."""
+    """``y <- (L L^T)^{-1} y`` for :func:`factor`'s ``L``, whose diagonal holds the pivots' inverses
+    (both passes along rows of ``L``; no temporaries; each row's pivot a product, not a division:
+    the next row waits on it)."""
     p = L.shape[0]
     for i in range(p):
         Li = L[i]
         s = 0.0
         for k in range(i):
             s += Li[k] * y[k]
-        y[i] = (y[i] - s) / Li[i]
+        y[i] = (y[i] - s) * Li[i]
     for i in range(p - 1, -1, -1):
         Li = L[i]
-        xi = y[i] / Li[i]
+        xi = y[i] * Li[i]
         y[i] = xi
         for k in range(i):
             y[k] -= Li[k] * xi
@@ -689,7 +691,7 @@ def factor(B, rf, M0inv, Ct, cg, fold, W2, dinv, drop_rel, work, Kb, Km, KFF, G1
     if fold[0].shape[0]:
         _gram(B, dinv, work, Km)
         _fold_factor(fold, W2, Km)
-        return chol_inplace(Km, drop_rel, rf)
+        return _invert_diagonal(Km, chol_inplace(Km, drop_rel, rf))
     if Ct.shape[0]:
         _gram(B, dinv, work, Kb)
         if cg.shape[0]:
@@ -706,7 +708,16 @@ def factor(B, rf, M0inv, Ct, cg, fold, W2, dinv, drop_rel, work, Kb, Km, KFF, G1
         for a in range(3):
             for b in range(a + 1):
                 Km[o + a, o + b] += W2[k, a, b]
-    return chol_inplace(Km, drop_rel, rf + 3 * K)
+    return _invert_diagonal(Km, chol_inplace(Km, drop_rel, rf + 3 * K))
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy", inline="always")
+def _invert_diagonal(L, dropped):
+    """``L``'s diagonal replaced by its inverse (what :func:`chol_solve_inplace` reads); ``dropped``
+    passed through."""
+    for i in range(L.shape[0]):
+        L[i, i] = 1.0 / L[i, i]
+    return dropped
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
