@@ -65,9 +65,11 @@ off another back-end's answer."""
 
 IPM_EPS = 1e-10
 """Interior-point method: relative primal and dual residuals and relative duality gap at the end."""
-IPM_CROSSOVER_GAP = 1e-4
+IPM_CROSSOVER_GAP = 1e-3
 """Interior-point method: from this relative duality gap on, the active set read off the iterate is
-tried (verified KKT point) before more iterations."""
+tried (verified KKT point) before more iterations. (1e-4 until a wrong guess became cheap: at most
+``IPM_CROSSOVER_PIVOTS`` pivots, no SVD; on the neck's ``roll``, cold, 1e-3 saves 0.3-0.9 iterations,
+7 us of case 2's 284 us kernel median; ``docs/speed.md``, "Fifth pass".)"""
 IPM_MAX_ITER = 60
 """Interior-point method: iteration limit."""
 IPM_CORRECTORS = 1
