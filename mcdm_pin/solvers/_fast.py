@@ -25,7 +25,7 @@ from ..model.kernels import gram_lower
 from ..tolerances import UNIQUE_PENALTY
 from ._ipm_linalg import dot
 from ._ipm import CROSSOVER, ipm_solve
-from ._kkt import FOUND, active_set_run, cone_force, next_guess
+from ._kkt import FOUND, active_set_run, chol_lower, cone_force, next_guess
 
 
 @njit(cache=True, nogil=True)
@@ -46,20 +46,7 @@ def definite_beyond(H, J, rows, thr, hscale):
         for b in range(a + 1):
             M[a, b] = H[a, b] + gam * M[a, b]
         M[a, a] -= thr
-    for j in range(nf):
-        acc = M[j, j]
-        for k in range(j):
-            acc -= M[j, k] * M[j, k]
-        if not acc > 0.0:
-            return False
-        d = np.sqrt(acc)
-        M[j, j] = d
-        for i in range(j + 1, nf):
-            t = M[i, j]
-            for k in range(j):
-                t -= M[i, k] * M[j, k]
-            M[i, j] = t / d
-    return True
+    return chol_lower(M, nf, 0.0)[0]
 
 
 @njit(cache=True, nogil=True)
@@ -132,24 +119,7 @@ def unique_test(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel
             for bb in range(a + 1):
                 JtJ[bb, a] = JtJ[a, bb]
                 big = max(big, abs(JtJ[a, bb]))
-        L = np.zeros((nf, nf))
-        dmin = np.inf
-        ok = True
-        for j in range(nf):
-            acc = JtJ[j, j]
-            for k in range(j):
-                acc -= L[j, k] * L[j, k]
-            if not acc > 0.0:
-                ok = False
-                break
-            d = np.sqrt(acc)
-            L[j, j] = d
-            dmin = min(dmin, d)
-            for i in range(j + 1, nf):
-                t = JtJ[i, j]
-                for k in range(j):
-                    t -= L[i, k] * L[j, k]
-                L[i, j] = t / d
+        ok, dmin = chol_lower(JtJ, nf, 0.0)
         if ok and dmin * dmin > 1e-10 * big:
             return 1
     H = np.empty((nf, nf))

@@ -202,19 +202,8 @@ def _determined_solve(K, rhs, nf):
     scale = 1e-300
     for a in range(nf):
         scale = max(scale, Nm[a, a])
-    for j in range(nf):
-        acc = Nm[j, j]
-        for k in range(j):
-            acc -= Nm[j, k] * Nm[j, k]
-        if not acc > 1e-12 * scale:
-            return _kkt_solve(K, rhs, False)
-        d = np.sqrt(acc)
-        Nm[j, j] = d
-        for i in range(j + 1, nf):
-            t = Nm[i, j]
-            for k in range(j):
-                t -= Nm[i, k] * Nm[j, k]
-            Nm[i, j] = t / d
+    if not chol_lower(Nm, nf, 1e-12 * scale)[0]:
+        return _kkt_solve(K, rhs, False)
     # x = N^-1 R^T r_c
     v = np.zeros(nf)
     for i in range(m):
@@ -262,6 +251,31 @@ def _determined_solve(K, rhs, nf):
             acc += K[nf + i, a] * u[a]
         sol[nf + i] = acc
     return sol
+
+
+@njit(cache=True, nogil=True)
+def chol_lower(M, n, floor):
+    """The Cholesky factor of ``M[:n, :n]``'s lower triangle, in place (column by column): ``(True,
+    its smallest pivot)``, or ``(False, 0)`` at the first pivot (before its square root) at or below
+    ``floor`` (then ``M`` is partly overwritten). Shared by the small factors of the active-set and
+    uniqueness tests (:func:`_determined_solve`, :func:`mcdm_pin.solvers._fast.unique_test`,
+    :func:`mcdm_pin.solvers._fast.definite_beyond`)."""
+    dmin = np.inf
+    for j in range(n):
+        acc = M[j, j]
+        for k in range(j):
+            acc -= M[j, k] * M[j, k]
+        if not acc > floor:
+            return False, 0.0
+        d = np.sqrt(acc)
+        M[j, j] = d
+        dmin = min(dmin, d)
+        for i in range(j + 1, n):
+            t = M[i, j]
+            for k in range(j):
+                t -= M[i, k] * M[j, k]
+            M[i, j] = t / d
+    return True, dmin
 
 
 @njit(cache=True, nogil=True)
