@@ -18,8 +18,9 @@ library's kernels on 2 cores) and caches it on disk (``__pycache__`` beside the 
 numba invalidates a cached kernel when *its own* source file changes, not when a kernel it calls
 in another module does (``_fast.py``'s kernels call ``_kkt.py``'s): after such an edit (a ``git
 pull``, an upgrade in place) the cache would serve the old code. So the cache carries a stamp, the
-digest of every kernel module's source (:func:`sources_digest`); a cache whose stamp differs is
-flushed (numba's own ``flush`` of every kernel's index) and compiled again.
+digest of every kernel module's source and of ``tolerances.py``, whose constants some kernels read
+when compiled (:func:`sources_digest`); a cache whose stamp differs is flushed (numba's own ``flush``
+of every kernel's index) and compiled again.
 
 The policy is ``MCDM_PIN_JIT`` (or ``prepare(policy=...)``): ``background`` (default), ``wait``
 (compile in this process, with a note: tests and benchmarks use it), ``off`` (never compile here:
@@ -98,10 +99,13 @@ def _load_cached(disp, args) -> bool:
 
 
 def kernel_sources() -> list[Path]:
-    """The package's source files that define numba kernels (those that import numba's ``njit``)."""
+    """The package's source files that define numba kernels (those that import numba's ``njit``),
+    and ``tolerances.py``: kernels read some of its constants when they are compiled
+    (``UNIQUE_PENALTY``, ``IPM_START_BOX_WEIGHT``), so a changed constant must recompile them too."""
     root = Path(__file__).resolve().parent
     pattern = re.compile(r"^from numba import .*\bnjit\b", re.M)
-    return sorted(p for p in root.rglob("*.py") if pattern.search(p.read_text(encoding="utf-8")))
+    found = {p for p in root.rglob("*.py") if pattern.search(p.read_text(encoding="utf-8"))}
+    return sorted(found | {root / "tolerances.py"})
 
 
 def sources_digest(paths=None) -> str:

@@ -134,6 +134,8 @@ def test_cache_stamped_with_every_kernel_source(tmp_path, monkeypatch):
 
     names = {p.name for p in jit.kernel_sources()}
     assert {"kernels.py", "_kkt.py", "_fast.py", "_ipm.py", "_ipm_linalg.py"} <= names and "jit.py" not in names
+    # and the tolerances some kernels read when compiled (a changed constant must recompile them)
+    assert "tolerances.py" in names
     # the real cache, compiled by this session's conftest, carries the current stamp
     assert (jit._stamp_path(jit._dispatchers()).read_text().strip() == jit.sources_digest())
     # one changed byte in any kernel module changes the digest
