@@ -233,6 +233,8 @@ class InverseDynamics:
 
 
 _BATCH = None
+
+
 class _BlasLimit:
     """:meth:`InverseDynamics.blas_limit`'s context: each BLAS library's own setter, its count
     restored on the way out (also after an exception; entries nest). A class, not a generator: it
@@ -293,8 +295,10 @@ def _blas_setters():
     functions where threadpoolctl names them (``openblas_get_num_threads``, ``..._set_...`` with the
     library's symbol affixes, its pthreads build: one process-wide count), else threadpoolctl's
     methods. The C functions skip threadpoolctl's check of which Python thread controls OpenBLAS;
-    the limit is set and restored within one call, so two threads solving at once can only leave
-    each other's BLAS calls with the other's count meanwhile, never a count changed for good. In
+    the limit is set and restored within one call, so two threads solving at once with the same
+    ``blas_threads`` only run each other's BLAS calls at the limit meanwhile and leave the count as
+    they found it (with different limits at once, the last to leave restores what it found, which
+    may be the other's limit: as before, threadpoolctl's own setters did not order them either). In
     a solve's time: ~0.2 us a call instead of ~1-3 us (an eighth of the instant's Python, measured
     on the neck's cold instants: the limit cost 18 us of 0.52 ms)."""
     global _BLAS_SETTERS
