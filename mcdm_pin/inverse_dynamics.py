@@ -279,17 +279,6 @@ class _BlasLimit:
 _CONTROLLER = None
 
 
-def _blas_libraries():
-    """The loaded BLAS libraries' threadpoolctl controllers (listed once)."""
-    global _BLAS_LIBS
-    if _BLAS_LIBS is None:
-        _BLAS_LIBS = tuple(_blas_controller().select(user_api="blas").lib_controllers)
-    return _BLAS_LIBS
-
-
-_BLAS_LIBS = None
-
-
 def _blas_setters():
     """``(get, set)`` of each loaded BLAS library's thread count (listed once): OpenBLAS's own C
     functions where threadpoolctl names them (``openblas_get_num_threads``, ``..._set_...`` with the
@@ -304,7 +293,7 @@ def _blas_setters():
     global _BLAS_SETTERS
     if _BLAS_SETTERS is None:
         out = []
-        for lib in _blas_libraries():
+        for lib in _blas_controller().select(user_api="blas").lib_controllers:
             get = set_ = None
             symbol = getattr(lib, "_get_symbol", None)
             if getattr(lib, "internal_api", "") == "openblas" and getattr(lib, "threading_layer", "") == "pthreads" \

@@ -691,7 +691,9 @@ def factor(B, rf, M0inv, Ct, cg, fold, W2, dinv, drop_rel, work, Kb, Km, KFF, G1
     if fold[0].shape[0]:
         _gram(B, dinv, work, Km)
         _fold_factor(fold, W2, Km)
-        return _invert_diagonal(Km, chol_inplace(Km, drop_rel, rf))
+        dropped = chol_inplace(Km, drop_rel, rf)
+        _invert_diagonal(Km)
+        return dropped
     if Ct.shape[0]:
         _gram(B, dinv, work, Kb)
         if cg.shape[0]:
@@ -708,16 +710,16 @@ def factor(B, rf, M0inv, Ct, cg, fold, W2, dinv, drop_rel, work, Kb, Km, KFF, G1
         for a in range(3):
             for b in range(a + 1):
                 Km[o + a, o + b] += W2[k, a, b]
-    return _invert_diagonal(Km, chol_inplace(Km, drop_rel, rf + 3 * K))
+    dropped = chol_inplace(Km, drop_rel, rf + 3 * K)
+    _invert_diagonal(Km)
+    return dropped
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy", inline="always")
-def _invert_diagonal(L, dropped):
-    """``L``'s diagonal replaced by its inverse (what :func:`chol_solve_inplace` reads); ``dropped``
-    passed through."""
+def _invert_diagonal(L):
+    """``L``'s diagonal replaced by its inverse (what :func:`chol_solve_inplace` reads)."""
     for i in range(L.shape[0]):
         L[i, i] = 1.0 / L[i, i]
-    return dropped
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
