@@ -245,6 +245,8 @@ def test_force_range_vectorised_over_instants_and_inverse():
     np.testing.assert_allclose(mu.activation(st, st.passive + st.gain * a)[live], a[live], rtol=1e-12)
     with pytest.raises(StateError, match="last axis of size 3"):
         mu.force_range(p, ell[:, :2], vel[:, :2])
+    with pytest.raises(StateError, match="tendon_velocities must be finite"):
+        mu.force_range(p, ell, np.where(vel > 0, np.nan, vel))
 
 
 # ------------------------------------------------------------------------------ MJCF

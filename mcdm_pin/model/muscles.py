@@ -197,6 +197,8 @@ def _lengths(params: MuscleParams, tendon_lengths, what: str) -> np.ndarray:
     if x.shape[-1:] != (params.size,):
         raise StateError(f"muscles: {what} must have last axis of size {params.size} (one per muscle), "
                          f"got shape {x.shape}")
+    if not np.all(np.isfinite(x)):
+        raise StateError(f"muscles: {what} must be finite, got {np.count_nonzero(~np.isfinite(x))} non-finite")
     return x
 
 
