@@ -323,6 +323,93 @@ def test_small_model_matches_mujoco():
         assert 0 < counts[name] < N_STATES, (name, counts)  # engages and disengages
 
 
+CLOUD = """
+<mujoco>
+  <worldbody>
+    <site name="a" pos="-0.3 0.04 0.02"/>
+    <body name="geoms">
+      <joint name="turn" type="ball"/>
+      <geom name="ball" type="sphere" size="0.1"/>
+      <geom name="cyl" type="cylinder" size="0.08 0.1" pos="0 0 0"/>
+      <site name="out" pos="0.05 -0.25 0.1"/>
+      <site name="in" pos="0.01 0.03 -0.02"/>
+      <site name="far" pos="0.02 0.01 0.3"/>
+    </body>
+    <body name="end">
+      <joint name="x" type="slide" axis="1 0 0"/>
+      <joint name="y" type="slide" axis="0 1 0"/>
+      <joint name="z" type="slide" axis="0 0 1"/>
+      <geom size="0.01"/>
+      <site name="e" pos="0 0 0"/>
+    </body>
+  </worldbody>
+  <tendon>
+    <spatial><site site="a"/><geom geom="ball"/><site site="e"/></spatial>
+    <spatial><site site="a"/><geom geom="ball" sidesite="out"/><site site="e"/></spatial>
+    <spatial><site site="a"/><geom geom="ball" sidesite="in"/><site site="e"/></spatial>
+    <spatial><site site="a"/><geom geom="cyl"/><site site="e"/></spatial>
+    <spatial><site site="a"/><geom geom="cyl" sidesite="out"/><site site="e"/></spatial>
+    <spatial><site site="a"/><geom geom="cyl" sidesite="in"/><site site="e"/></spatial>
+    <spatial><site site="a"/><geom geom="cyl" sidesite="far"/><site site="e"/></spatial>
+  </tendon>
+</mujoco>
+"""
+
+
+def test_random_end_points_round_spheres_and_cylinders_match_mujoco():
+    """The free end anywhere in a box round the geoms (also inside them), the geoms turned at random:
+    every kind of wrap, with no side site, one outside, one inside, and one whose projection is inside
+    the circle but whose 3-D distance is not (it counts as outside)."""
+    m = mujoco.MjModel.from_xml_string(CLOUD)
+    d = mujoco.MjData(m)
+    rng = np.random.default_rng(3)
+    errors, engaged, n = {"length": 0.0, "points": 0.0, "J": 0.0}, {}, 300
+    for k in range(n):
+        d.qpos[:4] = random_quat(rng, math.pi)
+        d.qpos[4:] = rng.uniform(-0.4, 0.4, 3) * (0.3 if k % 4 == 0 else 1.0)
+        mujoco.mj_forward(m, d)
+        compare(m, d, errors, engaged)
+    assert errors["length"] < 1e-12 and errors["points"] < 1e-12 and errors["J"] < 1e-10, errors
+    assert all(0.05 * n < c < 0.95 * n for c in engaged.values()), engaged
+
+
+def _cyl_at(m, d, q):
+    """Our path of tendon ``cyl`` with the elbow at ``q``: (engaged, length, dL/dq_elbow)."""
+    d.qpos[:] = m.qpos0
+    d.qpos[m.joint("elbow").qposadr[0]] = q
+    mujoco.mj_forward(m, d)
+    elements, bodies, _ = mj_elements(m, d, m.tendon("cyl").id)
+    path = tendon_path(elements)
+    return bool(path.arcs), path.length, our_jacobian(m, d, path, bodies)[m.joint("elbow").dofadr[0]]
+
+
+def test_sweep_through_wrap_onset_matches_mujoco_and_length_is_c1():
+    m = mujoco.MjModel.from_xml_string(ARM)
+    d = mujoco.MjData(m)
+    elbow, wrist = m.joint("elbow").qposadr[0], m.joint("wrist").qposadr[0]
+    qs, errors = np.linspace(-2.5, 2.5, 401), {"length": 0.0, "points": 0.0, "J": 0.0}
+    engaged = []
+    for q in qs:
+        d.qpos[:] = m.qpos0
+        d.qpos[elbow], d.qpos[wrist] = q, 0.3
+        mujoco.mj_forward(m, d)
+        compare(m, d, errors)
+        engaged.append(_cyl_at(m, d, q)[0])
+    assert errors["length"] < 1e-12 and errors["points"] < 1e-12 and errors["J"] < 1e-10, errors
+    onsets = np.flatnonzero(np.diff(engaged))
+    assert len(onsets) == 2  # engages, then disengages
+    for k in onsets:  # bisect to the onset: L and dL/dq continuous there, d2L/dq2 jumps
+        lo, hi = qs[k], qs[k + 1]
+        for _ in range(50):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if _cyl_at(m, d, mid)[0] == engaged[k] else (lo, mid)
+        (_, l_lo, j_lo), (_, l_hi, j_hi) = _cyl_at(m, d, lo - 1e-8), _cyl_at(m, d, hi + 1e-8)
+        assert abs(l_hi - l_lo) < 1e-9 and abs(j_hi - j_lo) < 1e-7
+        slope_lo = (j_lo - _cyl_at(m, d, lo - 1e-4)[2]) / 1e-4
+        slope_hi = (_cyl_at(m, d, hi + 1e-4)[2] - j_hi) / 1e-4
+        assert abs(slope_hi - slope_lo) > 0.05  # wrapped: moment arm = radius (slope 0); straight: 0.087
+
+
 def _myo():
     return pytest.importorskip("myo_sim", reason="MyoSuite's models (myo_sim) are not installed")
 

@@ -1,11 +1,13 @@
 r"""Spatial-tendon paths as MuJoCo 4.0 computes them: wrapping over spheres and cylinders, side sites, pulleys.
 
 The definitions are those of MuJoCo's ``mju_wrap`` (``engine_util_misc.c``) and ``mj_tendon``
-(``engine_core_smooth.c``), written again from their description, with the changes MuJoCo 4.0 made
-(its changelog: the side-site rule of commit a65050166, the inside-wrap and onset numerics of
-3bc4b769a and 8694cc9ce); tests compare every number with MuJoCo 4.0. Lengths in metres, angles in
-radians; counter-clockwise is positive about the geom's local ``z`` (cylinder) or about
-``n = p0 x p1`` (sphere). No input is modified.
+(``engine_core_smooth.c``) as read in its 3.12 sources, written again from their description, with
+the changes of MuJoCo 4.0 on top: the side-site winding rule its changelog and XML reference document
+(commit a65050166), and, inferred from MuJoCo 4.0's own numbers (its changelog cites 3bc4b769a and
+8694cc9ce), the inside wrap's Newton iteration on the angle ``beta`` and arc angles from ``atan2``.
+Tests compare every number with MuJoCo 4.0. Lengths in metres, angles in radians; counter-clockwise
+is positive about the geom's local ``z`` (cylinder) or about ``n = p0 x p1`` (sphere). No input is
+modified.
 
 **One wrap** (:func:`wrap_sphere`, :func:`wrap_cylinder`). Every point is given in the wrap geom's own
 frame: centre at the origin, the cylinder's axis along local ``z`` (the cylinder is infinite: its
@@ -31,12 +33,12 @@ plane, scaled onto the circle, and ``|side|`` (the full 3-D norm, also for a cyl
   cross).
 - Outside (``|side| >= r``): the path is the shortest path from ``p0`` to ``p1`` homotopic to the
   polyline ``p0 -> s -> p1`` in the plane without the disc, i.e. with its winding angle
-  ``w = angle(p0, s) + angle(s, p1)`` (each in ``[-pi, pi]``). It wraps, the way round of ``sign(w)``,
-  when ``|w| > alpha_0 + alpha_1``, with the circular arc ``r (|w| - alpha_0 - alpha_1)``; otherwise the
-  straight segment already passes the geom that way and the path is straight. So a side point can
-  force a wrap on a segment that misses the geom, and the path snaps off (a jump in length) when an
-  end point crosses the ray opposite ``s``, where ``w`` jumps by ``2 pi``. (Before 4.0 MuJoCo used a
-  half-plane test instead.)
+  ``w = angle(p0, s) + angle(s, p1)`` (each in ``[-pi, pi]``, counter-clockwise positive). It wraps,
+  the way round of ``sign(w)``, when ``|w| > alpha_0 + alpha_1``, with the circular arc
+  ``r (|w| - alpha_0 - alpha_1)``; otherwise the straight segment already passes the geom that way and
+  the path is straight. So a side point can force a wrap on a segment that misses the geom, and the
+  path snaps off (a jump in length) when an end point crosses the ray opposite ``s``, where ``w``
+  jumps by ``2 pi``. (Before 4.0 MuJoCo used a half-plane test instead.)
 - Inside (``|side| < r``): the *inside wrap*: the path is kept through the disc. When the straight
   segment meets the disc it is straight; otherwise it touches the circle at one point ``t0 = t1``
   (``arc = 0``) where both straight pieces make the same angle ``beta`` with the normal:
@@ -61,13 +63,16 @@ point *fixed on the body of its element at this instant* (a site's body; for a t
 geom's body). Arcs contribute nothing (both ends are on the same body), nor do segments between two
 points on one body (``u`` is parallel to ``b - a``); MuJoCo skips those and we list them anyway.
 Moving a tangent point along the surface changes the length only to second order, which is why this
-is the exact derivative of the length (and MuJoCo's ``ten_J``).
+is the derivative of the length (and MuJoCo's ``ten_J``): exactly for outside wraps, and to the
+accuracy of the touch point (~1e-7 relative) for inside wraps.
 
-**Smoothness.** The length is continuous where a wrap engages: the straight line then just touches
-the circle, both tangent points coincide with the touch point, ``arc = 0`` and the two straight pieces
-add up to the straight line. Its derivative ``L`` is not continuous there: the directions of the end
-segments turn abruptly as the wrap switches on or off (a kink). With a side point outside, the length
-itself jumps where an end point crosses the ray opposite the side point (see above).
+**Smoothness.** The length is continuous where a wrap engages or disengages: the straight line then
+just touches the circle, both tangent points coincide with the touch point (``arc = 0``) and the two
+straight pieces add up to the straight line. ``L = dl/dq`` is continuous there too (the extra length
+of a path pushed round the circle by a depth ``h`` grows like ``h^(3/2)``; ``h^2`` for the inside
+wrap), but not smooth: ``dL/dq`` jumps (a kink in ``L``), e.g. a cylinder about a hinge axis has a
+constant moment arm ``r`` while wrapped and a changing one while straight. With a side point outside,
+the length itself jumps where an end point crosses the ray opposite the side point (see above).
 """
 
 from __future__ import annotations
