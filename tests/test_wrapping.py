@@ -415,14 +415,16 @@ def _myo():
 
 
 @pytest.fixture(scope="module")
-def myoarm():
+def myoarm(tmp_path_factory):
+    import contextlib
     import warnings
 
     sim = _myo()
-    with warnings.catch_warnings():
+    # composing the arm logs a warning: keep MUJOCO_LOG.TXT in a temporary folder
+    with contextlib.chdir(tmp_path_factory.mktemp("myoarm")), warnings.catch_warnings():
         warnings.simplefilter("ignore")  # "Attaching a spec with an empty prefix ..."
         xml = sim.load_spec("myoarm_r").to_xml()
-    return mujoco.MjModel.from_xml_string(xml)
+        return mujoco.MjModel.from_xml_string(xml)
 
 
 def _check_random_states(m, seed):
