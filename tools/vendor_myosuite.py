@@ -85,8 +85,9 @@ def header(name: str) -> str:
 
     how, key = MODELS[name]
     source = f"myo_sim.get_xml_path({key!r})" if how == "file" else f"myo_sim.load_spec({key!r}).to_xml()"
+    versions = f"myosuite {version('myosuite')}, myo_sim {version('myo_sim')}, mujoco {mujoco.__version__}"
     return (f"<!-- Written by tools/vendor_myosuite.py from MyoSuite's model {source}\n"
-            f"     (myosuite {version('myosuite')}, myo_sim {version('myo_sim')}, mujoco {mujoco.__version__}):\n"
+            f"     ({versions}):\n"
             "     mesh geoms, meshes and file textures removed, every body's compiled inertia explicit.\n"
             "     Copyright the MyoSuite authors (Vikash Kumar, Vittorio Caggiano, Huawei Wang and\n"
             "     contributors). Licensed under the Apache License, Version 2.0\n"
@@ -120,48 +121,56 @@ def _full_precision(root: ET.Element, original: mujoco.MjModel, stripped: mujoco
     bodies = [world] + list(world.iter("body"))
     if len(bodies) != stripped.nbody:
         raise RuntimeError(f"{len(bodies)} bodies in the XML for {stripped.nbody} compiled")
-    obj = mujoco.mjtObj
     for b, body in enumerate(bodies):
         if b > 0:
-            _check_name(stripped, obj.mjOBJ_BODY, b, body)
+            _check_name(stripped, mujoco.mjtObj.mjOBJ_BODY, b, body)
             _set(body, pos=stripped.body_pos[b], quat=stripped.body_quat[b])
             for old in body.findall("inertial"):
                 body.remove(old)
-            inertial = ET.Element("inertial", {
+            body.insert(0, ET.Element("inertial", {
                 "pos": _numbers(original.body_ipos[b]), "quat": _numbers(original.body_iquat[b]),
                 "mass": _numbers([original.body_mass[b]]),
-                "diaginertia": _numbers(original.body_inertia[b])})
-            body.insert(0, inertial)
-        for tag, objtype, ids in (("joint", obj.mjOBJ_JOINT, stripped.jnt_bodyid),
-                                  ("geom", obj.mjOBJ_GEOM, stripped.geom_bodyid),
-                                  ("site", obj.mjOBJ_SITE, stripped.site_bodyid)):
-            elements, numbers = body.findall(tag), np.flatnonzero(ids == b)
-            if len(elements) != len(numbers):
-                raise RuntimeError(f"body {b}: {len(elements)} <{tag}> for {len(numbers)} compiled")
-            for element, i in zip(elements, numbers):
-                _check_name(stripped, objtype, i, element)
-                if tag == "joint":
-                    _set(element, pos=stripped.jnt_pos[i], axis=stripped.jnt_axis[i])
-                elif tag == "geom":
-                    _set(element, pos=stripped.geom_pos[i], quat=stripped.geom_quat[i], size=stripped.geom_size[i])
-                else:
-                    _set(element, pos=stripped.site_pos[i], quat=stripped.site_quat[i], size=stripped.site_size[i])
+                "diaginertia": _numbers(original.body_inertia[b])}))
+        for tag, values in _ELEMENTS.items():
+            _set_children(body, b, tag, stripped, values)
+
+
+#: per element tag: its MuJoCo object type, body-id field, and compiled attribute -> field.
+_ELEMENTS = {
+    "joint": ("mjOBJ_JOINT", "jnt_bodyid", {"pos": "jnt_pos", "axis": "jnt_axis"}),
+    "geom": ("mjOBJ_GEOM", "geom_bodyid", {"pos": "geom_pos", "quat": "geom_quat", "size": "geom_size"}),
+    "site": ("mjOBJ_SITE", "site_bodyid", {"pos": "site_pos", "quat": "site_quat", "size": "site_size"}),
+}
+
+
+def _set_children(body: ET.Element, b: int, tag: str, stripped: mujoco.MjModel, values) -> None:
+    """Write the compiled attributes of body ``b``'s ``<tag>`` children."""
+    objtype, bodyid, fields = values
+    elements, ids = body.findall(tag), np.flatnonzero(getattr(stripped, bodyid) == b)
+    if len(elements) != len(ids):
+        raise RuntimeError(f"body {b}: {len(elements)} <{tag}> for {len(ids)} compiled")
+    for element, i in zip(elements, ids):
+        _check_name(stripped, getattr(mujoco.mjtObj, objtype), i, element)
+        _set(element, **{name: getattr(stripped, field)[i] for name, field in fields.items()})
 
 
 def _check_name(compiled, objtype, i, element) -> None:
     expected = mujoco.mj_id2name(compiled, objtype, int(i)) or ""
     if element.get("name", "") != expected:
-        raise RuntimeError(f"{objtype.name} {i}: XML order gives {element.get('name')!r}, compiled {expected!r}")
+        raise RuntimeError(f"{objtype.name} {i}: XML order gives {element.get('name')!r}, "
+                           f"compiled {expected!r}")
 
 
 def _set(element: ET.Element, **values) -> None:
-    """Set compiled values; a zero ``pos`` or identity ``quat`` is written by omission (MJCF's
-    default, which no default class can change)."""
+    """Set compiled values, dropping the alternative orientation forms. A body's zero ``pos`` and
+    identity ``quat`` are written by omission (no default class reaches bodies; geoms, sites and
+    joints always get theirs, since a default class could change them)."""
     for name in _ORIENTATION:
         element.attrib.pop(name, None)
     for name, value in values.items():
         element.attrib.pop(name, None)
-        if not (name == "pos" and not np.any(value) or name == "quat" and np.array_equal(value, [1, 0, 0, 0])):
+        default = np.zeros(3) if name == "pos" else np.array([1.0, 0, 0, 0]) if name == "quat" else None
+        if element.tag != "body" or default is None or not np.array_equal(value, default):
             element.set(name, _numbers(value))
 
 
@@ -172,7 +181,8 @@ def _numbers(values) -> str:
 
 
 def main(argv: list[str]) -> int:
-    out = Path(argv[1]).resolve() if len(argv) > 1 else Path(__file__).resolve().parents[1] / "robots" / "myosuite"
+    default = Path(__file__).resolve().parents[1] / "robots" / "myosuite"
+    out = Path(argv[1]).resolve() if len(argv) > 1 else default
     out.mkdir(parents=True, exist_ok=True)
     for name in MODELS:
         with tempfile.TemporaryDirectory() as tmp, contextlib.chdir(tmp):  # MuJoCo's log file

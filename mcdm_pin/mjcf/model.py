@@ -11,9 +11,12 @@ anchor, a slide moves by ``qpos - qpos0`` along ``jnt_axis``, and a free joint s
 to ``qpos`` (top-level bodies only). With ``c_0 = 0`` and ``c_k`` the anchor of joint ``k`` (a
 slide keeps the previous anchor), the chain equals
 ``B0 * T(c_1) J_1 T(c_2 - c_1) J_2 ... J_n T(-c_n)``: one Pinocchio joint per body (a
-``JointModelComposite`` when the body has several joints) placed at ``X_p * B0 * T(c_1)`` with
-sub-joint placements ``T(c_k - c_{k-1})``, and the body frame at ``T(-c_n)`` in the joint frame.
-Bodies without joints are welded to their parent's joint. The Pinocchio joint is named after the body.
+``JointModelComposite`` when the body has several joints, placed at ``X_p * B0`` with sub-joint
+placements ``T(c_k - c_{k-1})``; a single joint sits at ``X_p * B0 * T(c_1)``), and the body frame
+at ``T(-c_n)`` in the joint frame. Hinges and slides along a unit axis become ``RX``/``RY``/``RZ``
+(``PX``...), others ``RevoluteUnaligned`` (``PrismaticUnaligned``); balls ``Spherical``; free
+joints ``FreeFlyer``. Bodies without joints are welded to their parent's joint. The Pinocchio joint
+is named after the body (its ``JOINT`` frame too: look frames up with their type).
 
 Frames. Every MuJoCo body gets a ``BODY`` frame named after it (``world`` for body 0); every
 site and geom an ``OP_FRAME`` named ``site:NAME`` / ``geom:NAME``. Unnamed elements are named by
@@ -25,7 +28,8 @@ dynamics ignore).
 
 Coordinates. Pinocchio's ``q``/``v`` differ from MuJoCo's ``qpos``/``qvel`` in three ways, all
 handled by the maps of :class:`MjcfModel`: hinge and slide coordinates are measured from
-``qpos0`` (MuJoCo's ``ref``): ``q = qpos - qpos0``; quaternions are ``w, x, y, z`` in MuJoCo and
+``qpos0`` (MuJoCo's ``ref``, where the body frame is defined): ``q = qpos - qpos0``, and the
+Pinocchio position limits are ``jnt_range - qpos0``; quaternions are ``w, x, y, z`` in MuJoCo and
 ``x, y, z, w`` in Pinocchio; a free joint's linear velocity is in world axes in MuJoCo
 (``v_world``) and in body axes in Pinocchio (``R^T v_world``, ``R`` the body's world rotation).
 Generalized forces map like velocities (the map is orthogonal, power is preserved).
@@ -177,7 +181,8 @@ class MjcfModel:
             out[d:d + k] = x[s:s + k]
             if kind == FREE:
                 a = self.jnt_qposadr[j]
-                rot = rotation_wxyz(qpos[a + 3:a + 7] / self._norm(qpos[a + 3:a + 7], j))
+                self._norm(qpos[a + 3:a + 7], j)
+                rot = rotation_wxyz(qpos[a + 3:a + 7])
                 out[d:d + 3] = (rot.T if to_pin else rot) @ x[s:s + 3]
         return out
 
@@ -248,18 +253,23 @@ def build_model(mj, source: str) -> MjcfModel:
     idx_q, idx_v = _joint_indices(model, mj, body_joint)
     _set_limits_and_armature(model, mj, idx_q, idx_v)
     joint_names = tuple(_name(mj, _obj("mjOBJ_JOINT"), j, "joint") for j in range(mj.njnt))
-    names = [""] * mj.nv
-    for j in range(mj.njnt):
-        k = _NV[int(mj.jnt_type[j])]
-        for e in range(k):
-            names[idx_v[j] + e] = joint_names[j] if k == 1 else f"{joint_names[j]}[{e}]"
     arrays = {key: _frozen(val) for key, val in dict(
         body_frame=body_frame, site_frame=site_frame, geom_frame=geom_frame, body_joint=body_joint,
         jnt_type=mj.jnt_type, jnt_qposadr=mj.jnt_qposadr, jnt_dofadr=mj.jnt_dofadr, jnt_idx_q=idx_q,
         jnt_idx_v=idx_v, qpos0=mj.qpos0, qpos_spring=mj.qpos_spring, jnt_stiffness=mj.jnt_stiffness,
         dof_damping=mj.dof_damping).items()}
-    return MjcfModel(model=model, source=str(source), coordinate_names=tuple(names),
-                     joint_names=joint_names, **arrays)
+    return MjcfModel(model=model, source=str(source), joint_names=joint_names,
+                     coordinate_names=_velocity_names(mj, joint_names, idx_v), **arrays)
+
+
+def _velocity_names(mj, joint_names, idx_v) -> tuple:
+    """MuJoCo joint name per entry of Pinocchio's ``v`` (``NAME[k]`` for ball and free joints)."""
+    names = [""] * mj.nv
+    for j in range(mj.njnt):
+        k = _NV[int(mj.jnt_type[j])]
+        for e in range(k):
+            names[idx_v[j] + e] = joint_names[j] if k == 1 else f"{joint_names[j]}[{e}]"
+    return tuple(names)
 
 
 def _joint_of_body(mj, b, x0, parent_joint, source):
@@ -343,7 +353,8 @@ def _set_limits_and_armature(model, mj, idx_q, idx_v):
     armature = np.zeros(model.nv)
     for j in range(mj.njnt):
         kind = int(mj.jnt_type[j])
-        armature[idx_v[j]:idx_v[j] + _NV[kind]] = mj.dof_armature[mj.jnt_dofadr[j]:mj.jnt_dofadr[j] + _NV[kind]]
+        dof = int(mj.jnt_dofadr[j])
+        armature[idx_v[j]:idx_v[j] + _NV[kind]] = mj.dof_armature[dof:dof + _NV[kind]]
         if kind in (HINGE, SLIDE):
             ref = mj.qpos0[mj.jnt_qposadr[j]]
             limited = bool(mj.jnt_limited[j])
@@ -369,11 +380,9 @@ def _check_supported(mj, source):
         refuse("joint", "mjOBJ_JOINT", mj.dof_jntid[d],
                f"frictionloss={mj.dof_frictionloss[d]} is not mapped (expected 0 on every joint)")
     for field in ("jnt_stiffnesspoly", "jnt_springyield"):
-        values = np.asarray(getattr(mj, field, np.zeros(0))).reshape(mj.njnt, -1)
-        for j in np.flatnonzero(np.any(values != 0, axis=1)):
+        for j in _nonzero_rows(mj, field):
             refuse("joint", "mjOBJ_JOINT", j, f"{field} is not mapped (expected 0)")
-    poly = np.asarray(getattr(mj, "dof_dampingpoly", np.zeros(0))).reshape(mj.nv, -1)
-    for d in np.flatnonzero(np.any(poly != 0, axis=1)):
+    for d in _nonzero_rows(mj, "dof_dampingpoly"):
         refuse("joint", "mjOBJ_JOINT", mj.dof_jntid[d], "dof_dampingpoly is not mapped (expected 0)")
     for j in range(mj.njnt):
         kind = int(mj.jnt_type[j])
@@ -385,6 +394,15 @@ def _check_supported(mj, source):
             refuse("joint", "mjOBJ_JOINT", j, f"armature {mj.dof_armature[d:d + 3]} on the world-axes "
                    f"translations is not mapped (MuJoCo's arm * qacc_world differs from Pinocchio's "
                    f"arm * dv/dt by arm * omega x v; expected 0)")
+
+
+def _nonzero_rows(mj, field: str) -> np.ndarray:
+    """Indices of the rows of the per-joint or per-dof array ``field`` with a nonzero entry (none
+    when this MuJoCo has no such field)."""
+    values = np.asarray(getattr(mj, field, np.zeros(0)))
+    if values.size == 0:
+        return np.zeros(0, dtype=int)
+    return np.flatnonzero(np.any(values.reshape(values.shape[0], -1) != 0, axis=1))
 
 
 def _obj(name: str) -> int:
