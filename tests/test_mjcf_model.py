@@ -16,7 +16,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from mcdm_pin.exceptions import ModelError
+from mcdm_pin.exceptions import ModelError, StateError
 from mcdm_pin.mjcf.model import BALL, FREE, HINGE, SLIDE, build_model
 
 mujoco = pytest.importorskip("mujoco")
@@ -249,10 +249,49 @@ def test_small_model_matches_mujoco():
     assert np.abs(built.joint_passive(built.to_pin_q(mj.qpos0), np.zeros(mj.nv))).max() > 0.1
 
 
+@pytest.mark.parametrize("joints", [
+    '<joint type="hinge" pos="0.1 0 0" axis="0 1 1"/><joint type="ball" pos="0 0.2 0.1"/>',
+    '<joint type="slide" axis="1 1 0"/><joint type="ball" pos="0 0.2 0.1"/>',
+    '<joint type="slide" axis="1 0 0"/><joint type="hinge" pos="0.1 0.1 0" axis="0 0 1" ref="30"/>'
+    '<joint type="slide" axis="0 1 0" pos="3 3 3"/>',
+])
+def test_composites_with_balls_and_slides(joints):
+    """A ball after a hinge or a slide, and slides around a hinge (a slide keeps the anchor)."""
+    xml = f"""<mujoco><worldbody><body pos="0.1 0.2 0.3" euler="10 20 30">{joints}
+              <geom type="box" size=".1 .2 .3" pos="0.1 0 0"/>
+              <body pos="0.2 0 0"><joint type="hinge"/><geom size=".1"/></body>
+              </body></worldbody></mujoco>"""
+    mj = mujoco.MjModel.from_xml_string(xml)
+    built = build_model(mj, "composite")
+    assert built.model.joints[1].shortname() == "JointModelComposite"
+    _check(compare(mj, built, n_states=10), mj, built)
+
+
+def test_static_model_and_bad_states():
+    xml = """<mujoco><worldbody><body pos="0 0 1"><geom size=".1"/><site name="a"/></body>
+             </worldbody></mujoco>"""
+    mj = mujoco.MjModel.from_xml_string(xml)
+    built = build_model(mj, "static")
+    assert built.model.nq == 0 and built.joint_passive([], []).shape == (0,)
+    d = mujoco.MjData(mj)
+    mujoco.mj_kinematics(mj, d)
+    data = built.model.createData()
+    pin.framesForwardKinematics(built.model, data, np.zeros(0))
+    assert np.allclose(data.oMf[int(built.site_frame[0])].translation, d.site_xpos[0], rtol=0, atol=1e-15)
+    assert built.model.inertias[0].mass == pytest.approx(mujoco.mj_getTotalmass(mj))
+    small = build_model(mujoco.MjModel.from_xml_string(SMALL), "SMALL")
+    with pytest.raises(StateError, match="qpos must be 17"):
+        small.to_pin_q(np.zeros(3))
+    with pytest.raises(StateError, match="finite"):
+        small.to_mj_qpos(np.full(17, np.nan))
+    with pytest.raises(StateError, match="'ball' has a zero quaternion"):
+        small.to_pin_q(np.zeros(17))
+
+
 def test_free_velocity_needs_the_orientation():
     mj = mujoco.MjModel.from_xml_string(SMALL)
     built = build_model(mj, "SMALL")
-    with pytest.raises(Exception, match="fj"):
+    with pytest.raises(StateError, match="qpos is needed.*'fj'"):
         built.to_pin_v(np.zeros(mj.nv))
 
 
