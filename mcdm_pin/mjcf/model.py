@@ -78,7 +78,8 @@ class MjcfModel:
     """A Pinocchio model equal to a compiled MuJoCo model, with the coordinate maps between them.
 
     Attributes:
-        model: the Pinocchio model (gravity from ``opt.gravity``, armature from ``dof_armature``).
+        model: the Pinocchio model (gravity from ``opt.gravity``, zero when the model disables
+            gravity; armature from ``dof_armature``; limits of limited hinges and slides).
         source: where the MuJoCo model came from (a path or a label), for messages.
         coordinate_names: MuJoCo joint name per entry of Pinocchio's ``v`` (ball and free joints:
             ``NAME[0]``, ``NAME[1]``, ...).
@@ -86,6 +87,8 @@ class MjcfModel:
         body_frame, site_frame, geom_frame: Pinocchio frame id per MuJoCo body, site and geom id.
         body_joint: Pinocchio joint id carrying each MuJoCo body (0 for bodies welded to the world).
         jnt_idx_q, jnt_idx_v: first index in Pinocchio's ``q`` and ``v`` of each MuJoCo joint.
+        jnt_type, jnt_qposadr, jnt_dofadr, qpos0, qpos_spring, jnt_stiffness, dof_damping: copies of
+            MuJoCo's arrays (read-only) that the maps and :meth:`joint_passive` use.
     """
 
     model: pin.Model
@@ -192,7 +195,8 @@ class MjcfModel:
 
         MuJoCo's ``qfrc_spring + qfrc_damper`` without tendons: a hinge or slide joint with
         stiffness ``k`` gives ``-k (qpos - springref)`` with ``qpos = q + qpos0``; every dof gives
-        ``-dof_damping * qvel`` (MuJoCo axes, then mapped like a velocity).
+        ``-dof_damping * qvel`` (MuJoCo axes, then mapped like a velocity). Tendon springs and
+        dampers, fluid forces and gravity compensation are not joint forces and are not included.
         """
         qpos = self.to_mj_qpos(q)
         qvel = self.to_mj_qvel(v, q)
