@@ -1,0 +1,1 @@
+"""Pinocchio models read from MuJoCo's compiled models (MJCF, MyoSuite)."""
