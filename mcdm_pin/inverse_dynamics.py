@@ -159,7 +159,7 @@ class InverseDynamics:
             interaction_angle_deg=angles, iterations=sol.iterations, rounds=sol.rounds,
             time_model_s=t1 - t0, time_solve_s=t2 - t1, message=message, softened_deg=softened,
             needed_f_max=needed_f_max, needed_cone_deg=needed_cone, unique=bool(sol.unique and sol.found),
-            stage=sol.stage, tau_act=tau_act)
+            stage=sol.stage, tau_act=tau_act, activation=_activations(terms, f if sol.found else None, self.robot.cables))
 
     def solve_trajectory(self, traj, progress: bool | None = None, workers: int = 1) -> TrajectoryResult:
         """Solve every instant of ``traj`` in order, warm-starting each from the previous one.
@@ -364,6 +364,19 @@ def _outputs(terms, f, n_joints: int):
     wrench = terms.wrenches(f) if f is not None else np.full((n_joints, 6), np.nan)
     F_socket = np.einsum("jab,jb->ja", terms.R_socket, wrench[:, :3])
     return wrench, F_socket, interaction_angles(F_socket, terms.socket_axes)
+
+
+def _activations(terms, f, cables) -> np.ndarray:
+    """The muscles' activations at tensions ``f`` ((m,), NaN on other cables and where ``f`` is
+    ``None``); (0,) for a robot without muscles."""
+    if terms.muscles is None:
+        return np.zeros(0)
+    out = np.full(cables.m, np.nan)
+    if f is not None:
+        from .model.muscles import activation
+
+        out[cables.muscle_index] = activation(terms.muscles, f[cables.muscle_index])
+    return out
 
 
 def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None, with_outputs: bool = False):

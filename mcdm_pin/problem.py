@@ -29,7 +29,7 @@ import numpy as np
 from .constraints import (CableForceBounds, ConeData, Constraint, EquationOfMotion, InteractionCone,
                           constraint_from_spec)
 from .exceptions import ProblemError
-from .objectives import MinCableForces, MinInteractions, Objective, Smoothing, Sum, objective_from_spec
+from .objectives import MinActivations, MinCableForces, MinInteractions, Objective, Smoothing, Sum, objective_from_spec
 
 
 @dataclass
@@ -401,7 +401,14 @@ def case_problem(robot, case: int, alpha: dict | None = None, beta: dict | None 
     """
     if case not in (1, 2, 3):
         raise ProblemError(f"case must be 1, 2 or 3, got {case!r}")
-    if case == 1:
+    if case == 1 and getattr(robot.cables, "muscles", None) is not None and cable_weights is None:
+        # muscles: the activations (the biomechanics standard), the other cables' f^T f beside them
+        objective = MinActivations()
+        if len(robot.cables.muscle_index) < robot.m:
+            w = np.ones(robot.m)
+            w[robot.cables.muscle_index] = 0.0
+            objective = objective + MinCableForces(w)
+    elif case == 1:
         objective: Objective = MinCableForces(cable_weights)
     else:
         objective = MinInteractions(alpha=alpha, beta=beta)

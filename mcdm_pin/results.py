@@ -44,6 +44,8 @@ stage                       (N,)          the solver stage that answered (``ipm`
 tau_act                     (N, n_act)    hybrid robots: the actuated joints' torques (N m)
                                           or forces (N), one column per actuator component
                                           (n_act = 0 without actuators)
+activation                  (N, m)        muscles (MJCF): each cable's activation, NaN on cables that are
+                                          not muscles and at instants without an answer; (N, 0) without muscles
 actuator_names              (n_act,)      ``JOINT`` or ``JOINT[i]`` per tau_act column
 robot, problem, solver,     ()            strings describing the run
 trajectory
@@ -86,6 +88,7 @@ class InstantResult:
     unique: bool = False
     stage: str = ""
     tau_act: np.ndarray = field(default_factory=lambda: np.zeros(0))  # actuated joints (hybrid robots)
+    activation: np.ndarray = field(default_factory=lambda: np.zeros(0))  # muscles: (m,), NaN on other cables
 
     @property
     def found(self) -> bool:
@@ -104,15 +107,17 @@ class InstantResult:
 _COLUMN_TYPES = dict(f=float, status=str, message=str, objective=float, eom_residual=float,
                      interaction_wrench=float, interaction_force_socket=float, interaction_angle_deg=float,
                      time_model_s=float, time_solve_s=float, iterations=int, rounds=int, softened_deg=float,
-                     needed_f_max=float, needed_cone_deg=float, unique=bool, stage=str, tau_act=float)
+                     needed_f_max=float, needed_cone_deg=float, unique=bool, stage=str, tau_act=float,
+                     activation=float)
 
 
 def instant_columns(instants: list[InstantResult]) -> dict:
     """The instants' fields stacked into arrays, one per field (the trajectory-result columns)."""
     out = {name: np.array([getattr(r, name) for r in instants], dtype=dtype)
            for name, dtype in _COLUMN_TYPES.items()}
-    if out["tau_act"].ndim == 1:  # no instant, or no actuator: (N, 0)
-        out["tau_act"] = out["tau_act"].reshape(len(instants), -1)
+    for key in ("tau_act", "activation"):
+        if out[key].ndim == 1:  # no instant, or no actuator / muscle: (N, 0)
+            out[key] = out[key].reshape(len(instants), -1)
     return out
 
 
@@ -168,10 +173,13 @@ class TrajectoryResult:
     joint_types: np.ndarray | None = None
     tau_act: np.ndarray | None = None
     actuator_names: np.ndarray | None = None
+    activation: np.ndarray | None = None
 
     def __post_init__(self):
         if self.tau_act is None:
             self.tau_act = np.zeros((len(self.t), 0))
+        if self.activation is None:
+            self.activation = np.zeros((len(self.t), 0))
         if self.actuator_names is None:
             self.actuator_names = np.array([], dtype=str)
         if self.unique is None:
@@ -258,6 +266,7 @@ class TrajectoryResult:
         if self.joint_types is not None:
             data["joint_types"] = np.asarray(self.joint_types, dtype=str)
         data["tau_act"] = np.asarray(self.tau_act, dtype=float)
+        data["activation"] = np.asarray(self.activation, dtype=float)
         data["actuator_names"] = np.asarray(self.actuator_names, dtype=str)
         data.update({k: np.array(getattr(self, k)) for k in META_KEYS})
         np.savez_compressed(path, **data)
@@ -279,7 +288,7 @@ class TrajectoryResult:
                     np.full(len(kw["joint_names"]), np.nan)
                 for k in META_KEYS:
                     kw[k] = str(z[k]) if k in z.files else ""
-                for k in ("configuration", "joint_types", "tau_act", "actuator_names"):
+                for k in ("configuration", "joint_types", "tau_act", "actuator_names", "activation"):
                     if k in z.files:
                         kw[k] = z[k]
         except FileNotFoundError:
@@ -298,6 +307,10 @@ class TrajectoryResult:
             cols[f"f[{name}]"] = self.f[:, i]
         for i, name in enumerate(self.actuator_names):
             cols[f"tau_act[{name}]"] = self.tau_act[:, i]
+        if self.activation.shape[1]:
+            for i, name in enumerate(self.cable_names):
+                if np.isfinite(self.activation[:, i]).any() or not self.found.any():
+                    cols[f"a[{name}]"] = self.activation[:, i]
         cols.update(status=self.status, objective=self.objective, eom_residual=self.eom_residual)
         comps = ("Fx", "Fy", "Fz", "Mx", "My", "Mz")
         for j, name in enumerate(self.joint_names):

@@ -68,11 +68,16 @@ class Robot:
         name: the robot's name; ``sidecar`` and ``urdf_path`` are ``None`` for a robot built in code.
         nq, nv: sizes of the configuration and of the velocity; ``m`` cables; ``n_act`` actuator
             components.
-        coordinate_names (nv), configuration_names (nq): see :mod:`mcdm_pin.model.charts`.
+        coordinate_names (nv), configuration_names (nq): see :mod:`mcdm_pin.model.charts` (a robot
+            loaded from MJCF names its coordinates after MuJoCo's joints).
+        couplings: the :class:`~mcdm_pin.model.couplings.Couplings` of coupled coordinates, or ``None``.
+        source: what a loader keeps of its source format (an MJCF robot's maps), or ``None``.
+        notes: what the loader left out of the source and why (shown by ``mcdm-pin info``).
     """
 
     def __init__(self, model: pin.Model, cables: CableSet, joints, actuators=(), name: str = "robot",
-                 sidecar: Sidecar | None = None, urdf_path: Path | None = None):
+                 sidecar: Sidecar | None = None, urdf_path: Path | None = None, couplings=None,
+                 coordinate_names=None, source=None, notes=()):
         cables.check_model(model)
         self.model = model
         self.cables = cables
@@ -81,9 +86,22 @@ class Robot:
         self.name = name
         self.sidecar = sidecar
         self.urdf_path = urdf_path
+        self.couplings = couplings
+        self.source = source
+        # known joint forces (N, N m) at (q, v): an MJCF model's joint springs and dampers
+        self.passive = getattr(source, "passive", None)
+        self.notes = tuple(notes)
         self.nq, self.nv = model.nq, model.nv
         self._parts = charts.chart_parts(model)
-        self.coordinate_names = charts.coordinate_names(model)
+        self.coordinate_names = (charts.coordinate_names(model) if coordinate_names is None
+                                 else tuple(coordinate_names))
+        if couplings is not None:
+            free = set(couplings.independent.tolist())
+            for a in self.actuators:
+                bad = [self.coordinate_names[i] for i in a.idx_v if int(i) not in free]
+                if bad:
+                    raise ModelError(f"actuator of joint {a.joint!r}: coordinate(s) {bad} follow couplings; an "
+                                     f"actuator drives independent coordinates only")
         self.configuration_names = charts.configuration_names(model)
         self.link_names = tuple(dict.fromkeys(f.name for f in model.frames if f.type == pin.FrameType.BODY))
         self.f_min, self.f_max = cables.f_min, cables.f_max
@@ -110,7 +128,11 @@ class Robot:
     # ----------------------------------------------------------------------------------------- load
     @classmethod
     def load(cls, path) -> "Robot":
-        """Load a robot from a sidecar YAML file (which names its URDF)."""
+        """Load a robot from a sidecar YAML file (which names its URDF) or a MuJoCo MJCF file."""
+        from .mjcf.load import is_mjcf, load_mjcf
+
+        if is_mjcf(path):
+            return load_mjcf(path)
         return cls.from_sidecar(load_sidecar(path))
 
     @classmethod
@@ -125,6 +147,8 @@ class Robot:
     @classmethod
     def from_sidecar(cls, sidecar: Sidecar) -> "Robot":
         sc = sidecar
+        if sc.mjcf_path is not None:
+            return _from_mjcf_sidecar(sc)
         if sc.urdf_path is None:
             urdf_path = resolve_package_uri(sc.urdf, sc.path)
         else:
@@ -164,8 +188,10 @@ class Robot:
 
     @property
     def actuation(self) -> np.ndarray:
-        """(nv, n_act) the actuation matrix ``S`` (:func:`~mcdm_pin.model.actuators.actuation_matrix`)."""
-        return actuation_matrix(self.nv, self.actuators)
+        """(nv, n_act) the actuation matrix ``S`` (:func:`~mcdm_pin.model.actuators.actuation_matrix`); with
+        coupled coordinates, its rows of the independent ones (the equation of motion's rows)."""
+        S = actuation_matrix(self.nv, self.actuators)
+        return S if self.couplings is None else S[self.couplings.independent]
 
     def joint(self, name: str) -> PhysicalJoint:
         for j in self.joints:
@@ -182,7 +208,17 @@ class Robot:
 
     # ---------------------------------------------------------------------------------------- state
     def configuration(self, coords) -> np.ndarray:
-        """Coordinates (nv) -> Pinocchio's configuration (nq)."""
+        """Coordinates (nv) -> Pinocchio's configuration (nq); or ``{name: value}`` in the source's names
+        and units (MJCF: MuJoCo's joint values, all of them or the independent ones only)."""
+        if isinstance(coords, dict):
+            if self.source is None:
+                x = np.zeros(self.nv)
+                for key, value in coords.items():
+                    if key not in self.coordinate_names:
+                        raise StateError(f"unknown coordinate {key!r}; expected one of {_names(self.coordinate_names)}")
+                    x[self.coordinate_names.index(key)] = value
+                return charts.configuration(self.model, x, self._parts)
+            return self.source.configuration(coords)
         return charts.configuration(self.model, coords, self._parts)
 
     def coordinates(self, q) -> np.ndarray:
@@ -247,6 +283,51 @@ class Robot:
 
 
 # ------------------------------------------------------------------------------------ sidecar helpers
+def _from_mjcf_sidecar(sc: Sidecar) -> Robot:
+    """The MJCF file's robot with the sidecar's joint settings and trajectories."""
+    from .mjcf.load import load_mjcf
+
+    if not sc.mjcf_path.is_file():
+        raise sc.error("mjcf", f"MJCF file not found: {sc.mjcf_path}")
+    try:
+        robot = load_mjcf(sc.mjcf_path, sc.name)
+    except ModelError as exc:
+        raise sc.error("mjcf", str(exc)) from None
+    joints = {j.name: j for j in robot.joints}
+    for spec in sc.joints:
+        if spec.name not in joints:
+            raise sc.error(spec.key, f"unknown joint {spec.name!r}; the MJCF's physical joints are its moving "
+                                     f"bodies: {_names(list(joints))}")
+        try:
+            joints[spec.name] = joints[spec.name].with_settings(alpha=spec.alpha, beta=spec.beta,
+                                                                cone_deg=spec.cone_deg,
+                                                                socket_axis=spec.socket_axis)
+        except ModelError as exc:
+            raise sc.error(spec.key, str(exc)) from None
+    try:
+        return Robot(robot.model, robot.cables, tuple(joints.values()), _reserves(sc, robot), name=sc.name,
+                     sidecar=sc, couplings=robot.couplings, coordinate_names=robot.coordinate_names,
+                     source=robot.source, notes=robot.notes)
+    except ModelError as exc:
+        raise sc.error("reserves", str(exc)) from None
+
+
+def _reserves(sc: Sidecar, robot: Robot) -> tuple[Actuator, ...]:
+    """The sidecar's reserve actuators: one per named coordinate, on the physical joint that holds it."""
+    out = []
+    owner = {int(i): j for j in robot.joints for i in j.idx_v}
+    for spec in sc.reserves:
+        for k, name in enumerate(spec.coordinates):
+            if name not in robot.coordinate_names:
+                raise sc.error(f"{spec.key}.coordinates[{k}]", f"unknown coordinate {name!r}; expected one of "
+                                                               f"{_names(robot.coordinate_names)}")
+            i = robot.coordinate_names.index(name)
+            out.append(Actuator(owner[i].name, np.array([i]), np.array([-spec.max]), np.array([spec.max]),
+                                spec.weight, label=name))
+    return tuple(out)
+
+
+
 def _lock_joints(model: pin.Model, sc: Sidecar) -> pin.Model:
     if not sc.locked_joints:
         return model
@@ -339,24 +420,8 @@ def _physical_joints(model: pin.Model, sc: Sidecar, urdf_path) -> tuple[Physical
 
 
 def _cables(model: pin.Model, sc: Sidecar, joints) -> CableSet:
-    from .model.cables import find_frame
-
-    links = {f.name for f in model.frames if f.type == pin.FrameType.BODY}
-    inside = massless_members(joints)
-    cables = []
-    for spec in sc.cables:
-        route = []
-        for p in spec.route:
-            if p.link not in links:
-                raise sc.error(f"{p.key}.link", f"unknown link {p.link!r}; expected one of "
-                                                f"{_names(dict.fromkeys(f.name for f in model.frames if f.type == pin.FrameType.BODY))}")
-            jid = int(model.frames[find_frame(model, p.link)].parentJoint)
-            if jid in inside:
-                raise sc.error(f"{p.key}.link",
-                               f"link {p.link!r} is an intermediate massless link of joint {inside[jid]!r}; "
-                               f"attach cables to the parent or child link")
-            route.append(RoutePoint(p.link, p.point))
-        cables.append(Cable(spec.name, tuple(route), spec.f_min, spec.f_max))
+    cables = [Cable(spec.name, tuple(_route_element(model, sc, joints, p) for p in spec.route), spec.f_min,
+                    spec.f_max) for spec in sc.cables]
     try:
         return CableSet(model, cables)
     except ModelError as exc:
@@ -364,6 +429,37 @@ def _cables(model: pin.Model, sc: Sidecar, joints) -> CableSet:
             if repr(spec.name) in str(exc):
                 raise sc.error(f"{spec.key}.route", str(exc)) from None
         raise sc.error("cables", str(exc)) from None
+
+
+def _route_element(model: pin.Model, sc: Sidecar, joints, p):
+    """A sidecar route element (point, wrap or pulley) as the model layer's, its link checked."""
+    from .model.cables import Pulley, Wrap, find_frame
+    from .sidecar import PulleySpec, WrapSpec
+
+    if isinstance(p, PulleySpec):
+        return Pulley(p.divisor)
+    links = {f.name for f in model.frames if f.type == pin.FrameType.BODY}
+    if p.link not in links:
+        raise sc.error(f"{p.key}.link", f"unknown link {p.link!r}; expected one of "
+                                        f"{_names(dict.fromkeys(f.name for f in model.frames if f.type == pin.FrameType.BODY))}")
+    jid = int(model.frames[find_frame(model, p.link)].parentJoint)
+    inside = massless_members(joints)
+    if jid in inside:
+        raise sc.error(f"{p.key}.link", f"link {p.link!r} is an intermediate massless link of joint "
+                                        f"{inside[jid]!r}; attach cables to the parent or child link")
+    if isinstance(p, WrapSpec):
+        R = _frame_with_z(np.array(p.axis))
+        side = None if p.side is None else RoutePoint(p.link, p.side)
+        return Wrap(p.link, p.kind, p.radius, p.center, tuple(R.reshape(-1)), side, name=p.key)
+    return RoutePoint(p.link, p.point)
+
+
+def _frame_with_z(axis: np.ndarray) -> np.ndarray:
+    """A rotation whose third column is the unit vector ``axis`` (a cylinder's axis)."""
+    helper = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, axis)
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(axis, x), axis])
 
 
 def _actuators(sc: Sidecar, joints) -> tuple[Actuator, ...]:

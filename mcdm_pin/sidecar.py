@@ -66,6 +66,29 @@ class RoutePoint:
 
 
 @dataclass(frozen=True)
+class WrapSpec:
+    """A wrapping surface between two route points: a ``sphere`` or a ``cylinder`` fixed on ``link``
+    (centre, and the cylinder's axis, in the link's frame), ``side`` an optional point of that frame on
+    the side the cable passes."""
+
+    kind: str
+    link: str
+    radius: float
+    center: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    side: tuple[float, float, float] | None = None
+    key: str = ""
+
+
+@dataclass(frozen=True)
+class PulleySpec:
+    """A pulley: the route's next branch counts ``1/divisor`` of its length and tension."""
+
+    divisor: float
+    key: str = ""
+
+
+@dataclass(frozen=True)
 class CableSpec:
     name: str
     f_min: float
@@ -91,6 +114,17 @@ class TrajectorySpec:
 
 
 @dataclass(frozen=True)
+class ReserveSpec:
+    """A group of *reserve* actuators (biomechanics' coordinate actuators): one generalised force per
+    named coordinate, within ``[-max, max]`` (N m or N), weighted ``weight`` in the objective."""
+
+    coordinates: tuple[str, ...]
+    max: float
+    weight: float
+    key: str = ""
+
+
+@dataclass(frozen=True)
 class Sidecar:
     """A validated sidecar. ``path`` is the YAML file (``None`` for data given in code)."""
 
@@ -105,6 +139,9 @@ class Sidecar:
     locked_joints: dict[str, float] = field(default_factory=dict)
     trajectories: dict[str, TrajectorySpec] = field(default_factory=dict)
     description: str = ""
+    mjcf_path: Path | None = None  # a sidecar over an MJCF file (``mjcf:`` instead of ``urdf:``)
+    reserves: tuple = ()  # ReserveSpec: coordinate actuators of an MJCF robot
+
 
     def error(self, key: str, expected: str) -> SidecarError:
         return SidecarError(self.path, key, expected)
@@ -212,6 +249,13 @@ JOINT_KEYS = ("type", "urdf_joints", "parametrization", "socket_axis", "alpha", 
 ACTUATED_KEYS = ("min", "max", "weight")
 CABLE_KEYS = ("name", "f_min", "f_max", "route")
 POINT_KEYS = ("link", "point")
+WRAP_KEYS = ("wrap", "link", "radius", "center", "axis", "side")
+WRAP_KINDS = ("sphere", "cylinder")
+# a sidecar over an MJCF file: the robot (bodies, cables, muscles, couplings) comes from the MJCF; the
+# sidecar adds what MJCF has no words for: joint weights, cones, trajectories
+MJCF_TOP_KEYS = ("version", "name", "description", "mjcf", "joints", "trajectories", "reserves")
+RESERVE_KEYS = ("coordinates", "max", "weight")
+MJCF_JOINT_KEYS = ("socket_axis", "alpha", "beta", "cone_deg")
 QUINTIC_KEYS = ("type", "q_start", "q_end", "duration", "dt", "spherical")
 CSV_KEYS = ("type", "file")
 
@@ -264,6 +308,8 @@ def parse_sidecar(data, path: Path | None = None, base_dir: Path | None = None) 
     r = _Reader(path)
     if base_dir is None:
         base_dir = path.parent if path is not None else Path.cwd()
+    if isinstance(data, dict) and "mjcf" in data:
+        return _parse_mjcf_sidecar(r, data, path, base_dir)
     data = r.mapping(data, "", TOP_KEYS, required=("version", "urdf", "joints", "cables"))
 
     version = data["version"]
@@ -300,6 +346,67 @@ def parse_sidecar(data, path: Path | None = None, base_dir: Path | None = None) 
     return Sidecar(path=path, version=int(version), name=name, urdf=urdf, urdf_path=urdf_path,
                    gravity=gravity, joints=joints, cables=cables, locked_joints=locked,
                    trajectories=trajectories, description=description)
+
+
+def _parse_mjcf_sidecar(r: _Reader, data: dict, path: Path | None, base_dir: Path) -> Sidecar:
+    """A sidecar over an MJCF file (``MJCF_TOP_KEYS``): joints are MuJoCo bodies' physical joints, named
+    after the body, and take weights, a socket axis and a cone only."""
+    data = r.mapping(data, "", MJCF_TOP_KEYS, required=("version", "mjcf"))
+    version = data["version"]
+    if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
+        raise r.fail("version", f"expected one of {list(SUPPORTED_VERSIONS)}, got {version!r}")
+    mjcf = r.string(data["mjcf"], "mjcf")
+    name = r.string(data.get("name", path.stem if path else "robot"), "name")
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        raise r.fail("description", f"expected a string, got {_kind(description)}")
+    joints = []
+    raw = data.get("joints", {}) or {}
+    if not isinstance(raw, dict):
+        raise r.fail("joints", f"expected a mapping body_name: {{alpha, beta, cone_deg, socket_axis}}, got "
+                               f"{_kind(raw)}")
+    for jname, spec in raw.items():
+        key = f"joints.{jname}"
+        r.string(jname, key)
+        spec = r.mapping(spec, key, MJCF_JOINT_KEYS)
+        axis = r.vector(spec.get("socket_axis", [0.0, 0.0, 1.0]), f"{key}.socket_axis")
+        norm = math.sqrt(sum(a * a for a in axis))
+        if abs(norm - 1.0) > 1e-6:
+            raise r.fail(f"{key}.socket_axis", f"expected a unit vector, got norm {norm:.6g}")
+        cone = spec.get("cone_deg")
+        if cone is not None:
+            cone = r.number(cone, f"{key}.cone_deg", lo=0.0, hi=90.0, lo_open=True, hi_open=True)
+        joints.append(JointSpec(name=jname, type="", urdf_joints=(), socket_axis=tuple(a / norm for a in axis),
+                                alpha=r.number(spec.get("alpha", 1.0), f"{key}.alpha", lo=0.0),
+                                beta=r.number(spec.get("beta", 0.0), f"{key}.beta", lo=0.0), cone_deg=cone,
+                                key=key))
+    trajs_raw = data.get("trajectories", {}) or {}
+    if not isinstance(trajs_raw, dict):
+        raise r.fail("trajectories", f"expected a mapping name: trajectory, got {_kind(trajs_raw)}")
+    trajectories = {t: _parse_trajectory(r, t, spec, base_dir) for t, spec in trajs_raw.items()}
+    return Sidecar(path=path, version=int(version), name=name, urdf="", urdf_path=None, gravity=(0.0, 0.0, 0.0),
+                   joints=tuple(joints), cables=(), trajectories=trajectories, description=description,
+                   mjcf_path=(base_dir / mjcf).resolve(), reserves=_parse_reserves(r, data.get("reserves", [])))
+
+
+def _parse_reserves(r: _Reader, raw) -> tuple[ReserveSpec, ...]:
+    if not isinstance(raw, list):
+        raise r.fail("reserves", f"expected a list of {{coordinates: [...], max: N m, weight: w}}, got {_kind(raw)}")
+    out, seen = [], {}
+    for i, item in enumerate(raw):
+        key = f"reserves[{i}]"
+        item = r.mapping(item, key, RESERVE_KEYS, required=("coordinates", "max"))
+        names = item["coordinates"]
+        if not isinstance(names, list) or not names:
+            raise r.fail(f"{key}.coordinates", f"expected a non-empty list of coordinate names, got {_kind(names)}")
+        for k, n in enumerate(names):
+            r.string(n, f"{key}.coordinates[{k}]")
+            if n in seen:
+                raise r.fail(f"{key}.coordinates[{k}]", f"coordinate {n!r} already has a reserve ({seen[n]})")
+            seen[n] = key
+        out.append(ReserveSpec(tuple(names), r.number(item["max"], f"{key}.max", lo=0.0, lo_open=True),
+                               r.number(item.get("weight", 1.0), f"{key}.weight", lo=0.0), key))
+    return tuple(out)
 
 
 def _parse_joints(r: _Reader, raw) -> tuple[JointSpec, ...]:
@@ -394,14 +501,30 @@ def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:
         if not isinstance(route, list) or len(route) < 2:
             got = f"{len(route)} point(s)" if isinstance(route, list) else _kind(route)
             raise r.fail(f"{key}.route", f"expected a list of at least two {{link, point}}, got {got}")
-        points = []
-        for k, p in enumerate(route):
-            pkey = f"{key}.route[{k}]"
-            p = r.mapping(p, pkey, POINT_KEYS, required=POINT_KEYS)
-            points.append(RoutePoint(link=r.string(p["link"], f"{pkey}.link"),
-                                     point=r.vector(p["point"], f"{pkey}.point"), key=pkey))
+        points = [_parse_route_element(r, p, f"{key}.route[{k}]") for k, p in enumerate(route)]
         cables.append(CableSpec(name=name, f_min=f_min, f_max=f_max, route=tuple(points), key=key))
     return tuple(cables)
+
+
+def _parse_route_element(r: _Reader, p, pkey: str):
+    """``{link, point}``, ``{wrap: sphere|cylinder, link, radius, center, axis, side}`` or ``{pulley: d}``."""
+    if isinstance(p, dict) and "pulley" in p:
+        p = r.mapping(p, pkey, ("pulley",), required=("pulley",))
+        return PulleySpec(r.number(p["pulley"], f"{pkey}.pulley", lo=0.0, lo_open=True), key=pkey)
+    if isinstance(p, dict) and "wrap" in p:
+        p = r.mapping(p, pkey, WRAP_KEYS, required=("wrap", "link", "radius"))
+        axis = r.vector(p.get("axis", [0.0, 0.0, 1.0]), f"{pkey}.axis")
+        norm = math.sqrt(sum(a * a for a in axis))
+        if abs(norm - 1.0) > 1e-6:
+            raise r.fail(f"{pkey}.axis", f"expected a unit vector, got norm {norm:.6g}")
+        side = r.vector(p["side"], f"{pkey}.side") if p.get("side") is not None else None
+        return WrapSpec(kind=r.choice(p["wrap"], f"{pkey}.wrap", WRAP_KINDS), link=r.string(p["link"], f"{pkey}.link"),
+                        radius=r.number(p["radius"], f"{pkey}.radius", lo=0.0, lo_open=True),
+                        center=r.vector(p.get("center", [0.0, 0.0, 0.0]), f"{pkey}.center"),
+                        axis=tuple(a / norm for a in axis), side=side, key=pkey)
+    p = r.mapping(p, pkey, POINT_KEYS, required=POINT_KEYS)
+    return RoutePoint(link=r.string(p["link"], f"{pkey}.link"), point=r.vector(p["point"], f"{pkey}.point"),
+                      key=pkey)
 
 
 def _parse_trajectory(r: _Reader, name, spec, base_dir: Path) -> TrajectorySpec:

@@ -38,7 +38,7 @@ from typing import Callable
 import numpy as np
 import pinocchio as pin
 
-from .exceptions import SidecarError, TrajectoryError
+from .exceptions import SidecarError, StateError, TrajectoryError
 from .limits import MAX_CSV_BYTES, MAX_SAMPLES
 from .model import charts
 from .sidecar import TrajectorySpec, _names
@@ -152,7 +152,14 @@ class SphericalKinematics:
 
 
 def resolve_configuration(robot, value, key: str, path=None) -> np.ndarray:
-    """A sidecar configuration (list in coordinate order, or mapping joint -> values) -> coordinates (nv)."""
+    """A sidecar configuration (list in coordinate order, or mapping joint -> values) -> coordinates (nv).
+    A robot loaded from another format reads the mapping in its source's names and units (MJCF:
+    MuJoCo's joint values; coupled joints left out follow their couplings)."""
+    if isinstance(value, dict) and getattr(robot, "source", None) is not None:
+        try:
+            return robot.coordinates(robot.source.configuration(value))
+        except StateError as exc:
+            raise SidecarError(path, key, str(exc)) from None
     if isinstance(value, dict):
         x = np.zeros(robot.nv)
         for jname, vals in value.items():
@@ -366,9 +373,22 @@ def _spline_trajectory(robot, name, t, x) -> Trajectory:
 # ---------------------------------------------------------------------------------------- sidecar
 def trajectory_from_spec(robot, spec: TrajectorySpec) -> Trajectory:
     if spec.type == "csv":
-        return csv_trajectory(robot, spec.file, name=spec.name)
+        return follow_couplings(robot, csv_trajectory(robot, spec.file, name=spec.name))
     x0, x1 = _ends(robot, spec)
-    return quintic_trajectory(robot, x0, x1, spec.duration, spec.dt, spec.spherical, name=spec.name)
+    return follow_couplings(robot, quintic_trajectory(robot, x0, x1, spec.duration, spec.dt, spec.spherical,
+                                                      name=spec.name))
+
+
+def follow_couplings(robot, traj: Trajectory) -> Trajectory:
+    """``traj`` with every coupled coordinate computed from the independent ones at every sample
+    (:mod:`mcdm_pin.model.couplings`: positions, then velocities and accelerations by the chain rule);
+    unchanged for a robot without couplings."""
+    couplings = getattr(robot, "couplings", None)
+    if couplings is None:
+        return traj
+    rows = [couplings.fill(q, v, a) for q, v, a in zip(traj.q, traj.qd, traj.qdd)]
+    return Trajectory(traj.name, traj.t, np.array([r[0] for r in rows]), np.array([r[1] for r in rows]),
+                      np.array([r[2] for r in rows]))
 
 
 def _ends(robot, spec: TrajectorySpec):
@@ -388,7 +408,8 @@ def plan(robot, spec: TrajectorySpec) -> Plan:
         spline = make_interp_spline(t, x, k=5)
 
         def state(tt):
-            return charts.tangent(robot.model, spline(tt), spline(tt, 1), spline(tt, 2), robot._parts)
+            return _coupled(robot, *charts.tangent(robot.model, spline(tt), spline(tt, 1), spline(tt, 2),
+                                                   robot._parts))
 
         return state
     x0, x1 = _ends(robot, spec)
@@ -401,9 +422,14 @@ def plan(robot, spec: TrajectorySpec) -> Plan:
             k = int(np.clip(np.rint(tt / spec.dt), 0, len(samples) - 1))
             guess = robot.coordinates(samples.q[k])
         q, v, a, _ = quintic(tt, guess)
-        return q, v, a
+        return _coupled(robot, q, v, a)
 
     return state
+
+
+def _coupled(robot, q, v, a):
+    couplings = getattr(robot, "couplings", None)
+    return (q, v, a) if couplings is None else couplings.fill(q, v, a)
 
 
 def load_trajectory(robot, name: str) -> Trajectory:

@@ -1,4 +1,5 @@
-"""Cable force bounds ``f_min <= f <= f_max`` (the sidecar's, unless given here)."""
+"""Cable force bounds ``f_min <= f <= f_max``: the model's at each instant (a muscle's follow its length
+and speed, :mod:`mcdm_pin.model.muscles`; the sidecar's otherwise), unless given here."""
 
 from __future__ import annotations
 
@@ -25,8 +26,9 @@ class CableForceBounds(Constraint):
 
     def bounds(self, terms, context):
         r = context.robot
-        return (r.f_min if self.f_min is None else self.f_min,
-                r.f_max if self.f_max is None else self.f_max)
+        lo = terms.f_min if terms.f_min is not None else r.f_min
+        hi = terms.f_max if terms.f_max is not None else r.f_max
+        return (lo if self.f_min is None else self.f_min, hi if self.f_max is None else self.f_max)
 
     def spec(self) -> dict:
         return {"type": "CableForceBounds", "f_min": array_spec(self.f_min), "f_max": array_spec(self.f_max)}

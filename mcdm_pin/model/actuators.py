@@ -36,6 +36,7 @@ class Actuator:
     tau_min: np.ndarray
     tau_max: np.ndarray
     weight: float = 1.0
+    label: str = ""  # the actuator's own name (a reserve names its coordinate); default: the joint's
 
     def __post_init__(self):
         lo, hi = np.asarray(self.tau_min, dtype=float), np.asarray(self.tau_max, dtype=float)
@@ -53,8 +54,8 @@ class Actuator:
 
     @property
     def names(self) -> tuple[str, ...]:
-        k = len(self.idx_v)
-        return (self.joint,) if k == 1 else tuple(f"{self.joint}[{i}]" for i in range(k))
+        k, base = len(self.idx_v), self.label or self.joint
+        return (base,) if k == 1 else tuple(f"{base}[{i}]" for i in range(k))
 
     @classmethod
     def on(cls, joint, tau_min, tau_max, weight: float = 1.0) -> "Actuator":

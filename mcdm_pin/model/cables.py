@@ -1,14 +1,21 @@
-r"""Cables on any ``pin.Model``: routes of points fixed in Pinocchio *frames*.
+r"""Cables on any ``pin.Model``: routes of points fixed in Pinocchio *frames*, over wrapping surfaces
+and pulleys.
 
-A cable runs from its first route point to its last through the others, in straight segments; each
-point is fixed in a frame of the model (a link's body frame, a joint frame, an operational frame, the
-``universe``), so a cable may pass over several links. Cables can only pull:
-``0 <= f_min <= f <= f_max``.
+A cable runs from its first route point to its last through the others; each point is fixed in a frame
+of the model (a link's body frame, a joint frame, an operational frame, the ``universe``), so a cable may
+pass over several links. Between two points a route may pass over a :class:`Wrap` (a sphere or a
+cylinder fixed in a frame: the cable takes the shortest path over it when the straight segment would
+cut through it, MuJoCo's definition, :mod:`mcdm_pin.model.wrapping`); a :class:`Pulley` starts a new
+branch whose length and tension count ``1/divisor`` (MuJoCo's ``pulley divisor``). Such a route
+depends on the configuration; its length, ``L`` and wrenches follow from its path at each instant
+(:mod:`mcdm_pin.model.routes`). Cables can only pull: ``0 <= f_min <= f <= f_max``.
 
 Build one in code::
 
     cables = CableSet(model, [
         Cable("c1", route=[("universe", (0.15, 0, 0)), ("link1", (0.05, 0, 0.1))], f_min=1e-3, f_max=1e3),
+        Cable("c2", route=[("universe", (0, 0.1, 0)), Wrap("link1", "cylinder", 0.02),
+                           ("link2", (0, 0, 0.1))], f_min=0.0, f_max=200.0),
         ...])
 
 A :class:`CableSet` is bound to the model it was built for: the frames are resolved once, into the
@@ -35,24 +42,70 @@ class RoutePoint:
     point: tuple[float, float, float]
 
 
+WRAP_KINDS = ("sphere", "cylinder")
+
+
+@dataclass(frozen=True)
+class Wrap:
+    """A wrapping surface fixed in a frame, between two route points.
+
+    Attributes:
+        frame: the frame it is fixed in.
+        kind: ``sphere`` or ``cylinder`` (infinite, its axis the local z axis of ``rotation``).
+        radius: metres, > 0.
+        center: (3,) its centre in ``frame``, metres.
+        rotation: 3x3 rotation (row-major, 9 numbers) of the surface's frame in ``frame``.
+        side: a :class:`RoutePoint` on the side the cable must pass (MuJoCo's ``sidesite``), or
+            ``None`` (the shorter way round).
+        name: the surface's name (MuJoCo's geom name), for messages.
+    """
+
+    frame: str
+    kind: str
+    radius: float
+    center: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rotation: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+    side: RoutePoint | None = None
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class Pulley:
+    """The start of a new branch of the route: the following segments count ``1/divisor`` of their
+    length and carry ``f/divisor`` (MuJoCo's ``pulley divisor``)."""
+
+    divisor: float
+
+
 @dataclass(frozen=True)
 class Cable:
-    """One cable: a name, an ordered route of at least two points, force bounds in newtons."""
+    """One cable: a name, an ordered route (points, and wraps and pulleys between them) of at least
+    two points, force bounds in newtons."""
 
     name: str
-    route: tuple[RoutePoint, ...]
+    route: tuple
     f_min: float
     f_max: float
 
     @property
+    def route_points(self) -> tuple[RoutePoint, ...]:
+        """The route's fixed points (wraps and pulleys left out)."""
+        return tuple(p for p in self.route if isinstance(p, RoutePoint))
+
+    @property
     def links(self) -> tuple[str, ...]:
         """The frame of each route point."""
-        return tuple(p.frame for p in self.route)
+        return tuple(p.frame for p in self.route_points)
 
     @property
     def points(self) -> np.ndarray:
         """(k, 3) route points, each in its own frame."""
-        return np.array([p.point for p in self.route], dtype=float).reshape(-1, 3)
+        return np.array([p.point for p in self.route_points], dtype=float).reshape(-1, 3)
+
+    @property
+    def configuration_dependent(self) -> bool:
+        """The route holds a wrap or a pulley."""
+        return any(not isinstance(p, RoutePoint) for p in self.route)
 
 
 def find_frame(model: pin.Model, frame) -> int:
@@ -77,7 +130,9 @@ def find_frame(model: pin.Model, frame) -> int:
     raise ModelError(f"frame name {frame!r} is ambiguous ({len(ids)} frames carry it); pass a frame id")
 
 
-def _as_cable(model, item, k: int) -> tuple[Cable, list[int]]:
+def _as_cable(model, item, k: int) -> tuple[Cable, list]:
+    """The checked cable and its resolved route: per element ``("point", fid)``,
+    ``("wrap", fid, side_fid or None)`` or ``("pulley",)``."""
     if isinstance(item, Cable):
         cable = item
     elif isinstance(item, dict):
@@ -88,31 +143,86 @@ def _as_cable(model, item, k: int) -> tuple[Cable, list[int]]:
                       item.get("f_min", 0.0), item.get("f_max", math.inf))
     else:
         raise ModelError(f"cable {k}: expected a Cable or a mapping, got {type(item).__name__}")
-    route, fids = [], []
+    route, resolved = [], []
     for i, p in enumerate(cable.route):
-        if isinstance(p, RoutePoint):
-            frame, point = p.frame, p.point
+        where = f"cable {cable.name!r}: route[{i}]"
+        if isinstance(p, Wrap):
+            w, fid, side_fid = _as_wrap(model, p, where)
+            route.append(w)
+            resolved.append(("wrap", fid, side_fid))
+        elif isinstance(p, Pulley):
+            d = _number(p.divisor, f"{where}: pulley divisor")
+            if not d > 0:
+                raise ModelError(f"{where}: expected a pulley divisor > 0, got {p.divisor!r}")
+            route.append(Pulley(d))
+            resolved.append(("pulley",))
         else:
-            try:
-                frame, point = p
-            except (TypeError, ValueError):
-                raise ModelError(f"cable {cable.name!r}: route[{i}]: expected (frame, (x, y, z)), got {p!r}") from None
-        fid = find_frame(model, frame)
-        try:
-            xyz = tuple(float(v) for v in point)
-        except (TypeError, ValueError):
-            raise ModelError(f"cable {cable.name!r}: route[{i}]: expected 3 numbers, got {point!r}") from None
-        if len(xyz) != 3 or not all(math.isfinite(v) for v in xyz):
-            raise ModelError(f"cable {cable.name!r}: route[{i}]: expected 3 finite numbers, got {point!r}")
-        route.append(RoutePoint(frame if isinstance(frame, str) else model.frames[fid].name, xyz))
-        fids.append(fid)
+            rp, fid = _as_point(model, p, where)
+            route.append(rp)
+            resolved.append(("point", fid))
     f_min, f_max = float(cable.f_min), float(cable.f_max)
     if not (math.isfinite(f_min) and math.isfinite(f_max) and 0.0 <= f_min < f_max):
         raise ModelError(f"cable {cable.name!r}: expected finite bounds with 0 <= f_min < f_max, got "
                          f"f_min={cable.f_min!r}, f_max={cable.f_max!r}")
-    if len(route) < 2:
-        raise ModelError(f"cable {cable.name!r}: expected a route of at least two points, got {len(route)}")
-    return Cable(str(cable.name), tuple(route), f_min, f_max), fids
+    n_points = sum(1 for r in resolved if r[0] == "point")
+    if n_points < 2:
+        raise ModelError(f"cable {cable.name!r}: expected a route of at least two points, got {n_points}")
+    kinds = [r[0] for r in resolved]
+    for i, kind in enumerate(kinds):
+        if kind != "point" and (i == 0 or i == len(kinds) - 1 or kinds[i - 1] != "point"
+                                or kinds[i + 1] != "point"):
+            raise ModelError(f"cable {cable.name!r}: route[{i}]: a {kind} must stand between two route points "
+                             f"(MuJoCo's rule for spatial tendons: site, geom, site; site, pulley, site)")
+    return Cable(str(cable.name), tuple(route), f_min, f_max), resolved
+
+
+def _number(value, what: str) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ModelError(f"{what}: expected a number, got {value!r}") from None
+    if not math.isfinite(x):
+        raise ModelError(f"{what}: expected a finite number, got {value!r}")
+    return x
+
+
+def _as_point(model, p, where: str) -> tuple[RoutePoint, int]:
+    if isinstance(p, RoutePoint):
+        frame, point = p.frame, p.point
+    else:
+        try:
+            frame, point = p
+        except (TypeError, ValueError):
+            raise ModelError(f"{where}: expected (frame, (x, y, z)), a Wrap or a Pulley, got {p!r}") from None
+    fid = find_frame(model, frame)
+    try:
+        xyz = tuple(float(v) for v in point)
+    except (TypeError, ValueError):
+        raise ModelError(f"{where}: expected 3 numbers, got {point!r}") from None
+    if len(xyz) != 3 or not all(math.isfinite(v) for v in xyz):
+        raise ModelError(f"{where}: expected 3 finite numbers, got {point!r}")
+    return RoutePoint(frame if isinstance(frame, str) else model.frames[fid].name, xyz), fid
+
+
+def _as_wrap(model, w: Wrap, where: str) -> tuple[Wrap, int, int | None]:
+    if w.kind not in WRAP_KINDS:
+        raise ModelError(f"{where}: expected a wrap kind in {WRAP_KINDS}, got {w.kind!r}")
+    radius = _number(w.radius, f"{where}: wrap radius")
+    if not radius > 0:
+        raise ModelError(f"{where}: expected a wrap radius > 0, got {w.radius!r}")
+    fid = find_frame(model, w.frame)
+    center = tuple(_number(v, f"{where}: wrap center") for v in w.center)
+    rot = np.array([_number(v, f"{where}: wrap rotation") for v in w.rotation])
+    if center.__len__() != 3 or rot.shape != (9,):
+        raise ModelError(f"{where}: expected a wrap center of 3 numbers and a rotation of 9")
+    R = rot.reshape(3, 3)
+    if not (np.allclose(R @ R.T, np.eye(3), atol=1e-9) and np.linalg.det(R) > 0):
+        raise ModelError(f"{where}: the wrap rotation is not a rotation matrix: {R.tolist()}")
+    side, side_fid = None, None
+    if w.side is not None:
+        side, side_fid = _as_point(model, w.side, f"{where}: side")
+    frame = w.frame if isinstance(w.frame, str) else model.frames[fid].name
+    return Wrap(frame, w.kind, radius, center, tuple(rot), side, str(w.name)), fid, side_fid
 
 
 class CableSet:
@@ -134,9 +244,15 @@ class CableSet:
         point_local: (P, 3) each point in its joint's frame.
         seg_a, seg_b, seg_cable: (S,) each segment's start and end point and its cable.
         seg_active: (S,) the segment spans two bodies (a segment within one body adds length only).
+        seg_scale: (S,) the share of length and tension of each segment (``1/divisor`` past a pulley).
+        wraps: the :class:`ResolvedWrap` of every wrap, in route order; the segment ``seg`` each one
+            sits on is the straight segment its path replaces when it engages (:mod:`.routes`).
+        muscles: the :class:`~mcdm_pin.model.muscles.MuscleParams` of the cables that are muscles
+            (``None``: none), ``muscle_index`` (k,) those cables; a muscle's tension range at an
+            instant follows its length and speed, and its ``f_min``/``f_max`` here only bound it.
     """
 
-    def __init__(self, model: pin.Model, cables: Iterable):
+    def __init__(self, model: pin.Model, cables: Iterable, muscles=None, muscle_cables=()):
         self.model_signature = _signature(model)
         resolved = [_as_cable(model, c, k) for k, c in enumerate(cables)]
         self.cables = tuple(c for c, _ in resolved)
@@ -150,30 +266,60 @@ class CableSet:
         self.names = tuple(c.name for c in self.cables)
         self.f_min = np.array([c.f_min for c in self.cables])
         self.f_max = np.array([c.f_max for c in self.cables])
-        jid, local, seg_a, seg_b, seg_c = [], [], [], [], []
-        for k, (cable, fids) in enumerate(resolved):
+        jid, local, seg_a, seg_b, seg_c, seg_s, fids_all, wraps = [], [], [], [], [], [], [], []
+        for k, (cable, res) in enumerate(resolved):
             start = len(jid)
-            for p, fid in zip(cable.route, fids):
-                frame = model.frames[fid]
-                jid.append(int(frame.parentJoint))
-                local.append(frame.placement.act(np.array(p.point)))
-            if len(set(jid[start:])) < 2:
+            bodies = set()
+            scale = 1.0
+            prev = None  # index of the last point, None right after a pulley
+            for i, (elem, r) in enumerate(zip(cable.route, res)):
+                if r[0] == "point":
+                    frame = model.frames[r[1]]
+                    jid.append(int(frame.parentJoint))
+                    local.append(frame.placement.act(np.array(elem.point)))
+                    fids_all.append(r[1])
+                    bodies.add(jid[-1])
+                    if prev is not None:
+                        seg_a.append(prev)
+                        seg_b.append(len(jid) - 1)
+                        seg_c.append(k)
+                        seg_s.append(scale)
+                    prev = len(jid) - 1
+                elif r[0] == "pulley":
+                    scale = 1.0 / elem.divisor
+                    prev = None
+                else:
+                    wraps.append(_resolve_wrap(model, k, elem, r, len(jid) - 1, len(seg_a), scale))
+                    bodies.add(wraps[-1].joint)
+            if len(bodies) < 2:
                 raise ModelError(f"cable {cable.name!r} has no segment spanning two different bodies (every "
                                  f"point is fixed to the body of joint {model.names[jid[start]]!r}), so it "
                                  f"cannot move anything")
-            n = len(cable.route)
-            seg_a.extend(range(start, start + n - 1))
-            seg_b.extend(range(start + 1, start + n))
-            seg_c.extend([k] * (n - 1))
-        self.point_frame = np.array([f for _, fids in resolved for f in fids], dtype=int)
-        self.point_cable = np.repeat(np.arange(len(resolved)), [len(c.route) for c, _ in resolved])
+        self.point_frame = np.array(fids_all, dtype=int)
+        self.point_cable = np.repeat(np.arange(len(resolved)), [len(c.route_points) for c, _ in resolved])
         self.point_joint = np.array(jid, dtype=int)
         self.point_local = np.array(local, dtype=float).reshape(-1, 3)
         self.seg_a = np.array(seg_a, dtype=int)
         self.seg_b = np.array(seg_b, dtype=int)
         self.seg_cable = np.array(seg_c, dtype=int)
+        self.seg_scale = np.array(seg_s, dtype=float)
         self.seg_active = self.point_joint[self.seg_a] != self.point_joint[self.seg_b]
+        self.wraps = tuple(wraps)
+        self.muscles, self.muscle_index = None, np.zeros(0, dtype=int)
+        if muscles is not None:
+            names = list(muscle_cables)
+            unknown = [n for n in names if n not in self.names]
+            if unknown or len(names) != muscles.size or len(set(names)) != len(names):
+                raise ModelError(f"muscles: expected {muscles.size} distinct cable names of this set, one per "
+                                 f"muscle, got {names!r}" + (f" ({unknown} are not cables)" if unknown else ""))
+            self.muscles = muscles
+            self.muscle_index = np.array([self.names.index(n) for n in names], dtype=int)
         self._evaluators: dict = {}
+
+    @property
+    def configuration_dependent(self) -> bool:
+        """Some route wraps over a surface (its path depends on the configuration)."""
+        return bool(self.wraps)
 
     @property
     def m(self) -> int:
@@ -202,6 +348,40 @@ class CableSet:
 
     def __repr__(self) -> str:
         return f"CableSet({self.m} cables: {', '.join(self.names[:6])}{', ...' if self.m > 6 else ''})"
+
+
+@dataclass(frozen=True)
+class ResolvedWrap:
+    """A wrap bound to the model: on cable ``cable``, between route points ``a`` and ``b`` (indices into
+    the set's points), replacing segment ``seg`` when it engages. ``joint``: the Pinocchio joint
+    carrying the surface; ``placement``: the surface's frame in that joint's frame; ``side_joint``,
+    ``side_local``: the side point's joint and position in its frame (``side_joint`` -1: none);
+    ``scale``: the branch's share (``1/divisor``)."""
+
+    cable: int
+    a: int
+    b: int
+    seg: int
+    joint: int
+    placement: pin.SE3
+    kind: str
+    radius: float
+    side_joint: int
+    side_local: np.ndarray
+    scale: float
+    name: str
+
+
+def _resolve_wrap(model, k: int, w: Wrap, r, a: int, seg: int, scale: float) -> ResolvedWrap:
+    frame = model.frames[r[1]]
+    placement = frame.placement * pin.SE3(np.array(w.rotation).reshape(3, 3), np.array(w.center))
+    side_joint, side_local = -1, np.zeros(3)
+    if w.side is not None:
+        sframe = model.frames[r[2]]
+        side_joint = int(sframe.parentJoint)
+        side_local = sframe.placement.act(np.array(w.side.point))
+    return ResolvedWrap(k, a, a + 1, seg, int(frame.parentJoint), placement, w.kind, float(w.radius),
+                        side_joint, side_local, scale, w.name)
 
 
 def _signature(model: pin.Model) -> tuple:

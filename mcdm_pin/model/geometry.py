@@ -76,8 +76,12 @@ class CableMaps:
         self.act = act
         self.all_active = bool(np.all(act))
         self.point_index = np.arange(len(self.point_body))
+        # each segment counts its share (1/divisor past a pulley) of its cable's length and tension
+        scale = getattr(cables, "seg_scale", np.ones(len(cables.seg_a)))
         self.seg_to_cable = np.zeros((cables.m, len(cables.seg_a)))
-        self.seg_to_cable[cables.seg_cable, np.arange(len(cables.seg_a))] = 1.0
+        self.seg_to_cable[cables.seg_cable, np.arange(len(cables.seg_a))] = scale
+        self.act_scale = scale[act]
+        self.all_active = self.all_active and bool(np.all(self.act_scale == 1.0))
         n_end = len(self.ends)
         # scatter: (body, cable) <- end point
         self.scatter = sparse.csr_matrix(
@@ -113,7 +117,7 @@ def cable_geometry(cables, oR: np.ndarray, op: np.ndarray, maps: CableMaps | Non
         s = int(np.flatnonzero(maps.act)[np.argmin(la)])
         raise StateError(f"cable {cables.cables[cables.seg_cable[s]].name!r}: a segment has zero length "
                          f"at this configuration, so its direction is undefined")
-    u = da / la[:, None]
+    u = da / la[:, None] if maps.all_active else da * (maps.act_scale / la)[:, None]
     n_act = len(u)
     w = np.empty((2 * n_act, 6))
     w[:n_act, :3] = u  # end points B: sign +1

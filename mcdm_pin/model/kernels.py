@@ -19,7 +19,7 @@ from numba import njit
 
 
 @njit(cache=True, nogil=True)
-def cable_terms(oM, Jt, point_local, point_key, seg_a, seg_b, seg_cable, seg_active,
+def cable_terms(oM, Jt, point_local, point_key, seg_a, seg_b, seg_cable, seg_active, seg_scale,
                 v_ptr, v_idx, a_ptr, a_idx, child_key, parent_key, R_sp, n_cables, n_joints):
     """Cable geometry, ``L`` and the cables' part of the interaction wrenches in one pass.
 
@@ -29,6 +29,9 @@ def cable_terms(oM, Jt, point_local, point_key, seg_a, seg_b, seg_cable, seg_act
             world origin (Pinocchio's column-major ``data.J`` transposed: a C-ordered view).
         point_local, point_key: (P, 3) route points in their body's frame, (P,) their body.
         seg_a, seg_b, seg_cable, seg_active: segments (start point, end point, cable, spans bodies).
+        seg_scale: (S,) each segment's share of its cable's length and force: 1 for a plain route,
+            ``1/divisor`` on a pulley's branch, 0 for a slot of a configuration-dependent route that
+            is not part of the path at this instant (it then adds neither length nor wrench).
         v_ptr, v_idx: CSR over key bodies: the velocity columns that move body k.
         a_ptr, a_idx: CSR over key bodies: the physical joints whose subtree holds body k.
         child_key, parent_key: (Jn,) key bodies of each physical joint's child and parent frames.
@@ -57,19 +60,22 @@ def cable_terms(oM, Jt, point_local, point_key, seg_a, seg_b, seg_cable, seg_act
     bad = -1
     for s in range(n_seg):
         a, b, c = seg_a[s], seg_b[s], seg_cable[s]
+        sc = seg_scale[s]
         d0 = X[b, 0] - X[a, 0]
         d1 = X[b, 1] - X[a, 1]
         d2 = X[b, 2] - X[a, 2]
         ln = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         seg_len[s] = ln
-        lengths[c] += ln
+        if sc == 0.0:
+            continue
+        lengths[c] += sc * ln
         if not seg_active[s]:
             continue
         if not ln > 1e-12:
             if bad < 0:
                 bad = s
             continue
-        u0, u1, u2 = d0 / ln, d1 / ln, d2 / ln
+        u0, u1, u2 = sc * d0 / ln, sc * d1 / ln, sc * d2 / ln
         for end in range(2):
             e = b if end == 0 else a
             sg = 1.0 if end == 0 else -1.0
@@ -321,7 +327,7 @@ def warm_calls():
             (needs_scaling, (z((1, 2)), z(1), z(2), z(2), z(2), z((1, 2)), z(2), z((1, 3, 2)), z((1, 3)), 1e3)),
             (cable_terms, (np.tile(np.eye(4), (1, 1, 1)), z((1, 6)), z((2, 3)), z(2, dtype=i64),
                            np.array([0], dtype=i64), np.array([1], dtype=i64), np.array([0], dtype=i64),
-                           np.array([False]), z(2, dtype=i64), z(0, dtype=i64), z(2, dtype=i64),
+                           np.array([False]), np.ones(1), z(2, dtype=i64), z(0, dtype=i64), z(2, dtype=i64),
                            z(0, dtype=i64), z(0, dtype=i64), z(0, dtype=i64), z((0, 3, 3)), 1, 0))]
 
 

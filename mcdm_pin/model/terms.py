@@ -40,6 +40,7 @@ from ..exceptions import ModelError, StateError
 from .cables import CableSet
 from .geometry import CableMaps, cable_geometry
 from .joints import PhysicalJoint, massless_members, resolve_joints
+from .routes import RoutePaths
 
 
 @dataclass
@@ -48,7 +49,8 @@ class Terms:
 
     Attributes:
         q: the configuration (nq); qd, qdd: velocity and acceleration (nv each).
-        tau: (nv,) ``M qdd + h`` (RNEA); the equation of motion is ``L^T f = -tau``.
+        tau: (nv,) ``M qdd + h - tau_passive`` (RNEA, less the known joint forces of springs and
+            dampers, where the model has them); the equation of motion is ``L^T f = -tau``.
         M: (nv, nv) joint-space inertia matrix (property, computed on first use).
         h: (nv,) Coriolis, centrifugal and gravity terms (property, computed on first use).
         lengths: (m,) cable lengths, m.
@@ -57,7 +59,13 @@ class Terms:
         RT: (J, 6, m) their derivative with respect to the cable forces.
         R_socket: (J, 3, 3) rotation from the child frame to the socket frame of each joint.
         socket_axes: (J, 3) unit socket axes (socket frame).
-        points: (P, 3) world position of every route point.
+        points: (P, 3) world position of every route point (then the wraps' tangent points).
+        f_min, f_max: (m,) the cables' tension bounds at this instant (a muscle's follow its length and
+            speed, :mod:`mcdm_pin.model.muscles`; the others' are fixed).
+        muscles: the muscles' :class:`~mcdm_pin.model.muscles.MuscleState` (``None``: no muscles).
+        basis: with coupled coordinates, ``N`` (nv, n) (:mod:`mcdm_pin.model.couplings`): then ``L``
+            is ``d lengths / dz`` (m, n) and ``tau`` is ``N^T (M qdd + h)`` (n,), over the independent
+            coordinates ``z``; ``L_full`` is ``d lengths / dq`` (m, nv) either way.
     """
 
     q: np.ndarray
@@ -74,6 +82,11 @@ class Terms:
     _evaluator: "TermsEvaluator | None" = field(default=None, repr=False, compare=False)
     finite: bool = True  # tau and L are finite (the dynamics did not overflow)
     _M: np.ndarray | None = field(default=None, repr=False, compare=False)
+    f_min: np.ndarray | None = None
+    f_max: np.ndarray | None = None
+    muscles: object = None
+    basis: np.ndarray | None = None
+    L_full: np.ndarray | None = None
 
     # --- M and h on demand: the problem needs only tau = M qdd + h, which RNEA gives directly ----
     @property
@@ -161,8 +174,11 @@ class TermsEvaluator:
     physical joints' child and parent joints).
     """
 
-    def __init__(self, model, cables: CableSet | None = None, joints=None, compiled: bool = True):
+    def __init__(self, model, cables: CableSet | None = None, joints=None, compiled: bool = True,
+                 couplings=None, passive=None):
         if cables is None and hasattr(model, "cables") and hasattr(model, "model"):  # a Robot
+            couplings = getattr(model, "couplings", None)
+            passive = getattr(model, "passive", None)
             model, cables, joints = model.model, model.cables, model.joints
         if not isinstance(cables, CableSet):
             raise ModelError(f"expected a CableSet, got {type(cables).__name__}")
@@ -177,11 +193,14 @@ class TermsEvaluator:
         self.compiled = compiled
         self.model = model
         self.cables = cables
+        self.couplings = couplings if couplings is not None and len(couplings) else None
+        self.passive = passive
         self.joints = js
         self.data = model.createData()
         nj = model.njoints
         keys = sorted({0} | set(cables.point_joint.tolist()) | {j.child_id for j in js}
-                      | {j.parent_id for j in js})
+                      | {j.parent_id for j in js} | {w.joint for w in cables.wraps}
+                      | {w.side_joint for w in cables.wraps if w.side_joint >= 0})
         pos = np.full(nj, -1, dtype=int)
         pos[keys] = np.arange(len(keys))
         self._keys = keys
@@ -206,18 +225,24 @@ class TermsEvaluator:
         self._u_views = [f.vector for f in self._f_refs]
         self._zeros = np.zeros(model.nv)
         self._tril = np.tril_indices(model.nv, -1)
-        if compiled:
+        # wrapped routes: their path arrays are rebuilt at every instant and read by the kernel, run
+        # compiled or, before numba has compiled it, as plain Python (the same code either way)
+        self._routes = RoutePaths(cables, pos) if cables.configuration_dependent else None
+        if compiled or self._routes is not None:
             from .kernels import cable_terms, csr
 
-            self._kernel = cable_terms
+            self._kernel = cable_terms if compiled else cable_terms.py_func
+            self.compiled = True
             K = len(keys)
             self._v_csr = csr([np.flatnonzero(self._sub_v[:, k]).tolist() for k in range(K)], K)
             self._a_csr = csr([np.flatnonzero(self._sub_phys[:, k]).tolist() for k in range(K)], K)
-            self._kernel_args = (
+            self._route_args = (
                 np.ascontiguousarray(cables.point_local, dtype=float),
                 self._point_key.astype(np.int64), cables.seg_a.astype(np.int64),
                 cables.seg_b.astype(np.int64), cables.seg_cable.astype(np.int64),
-                cables.seg_active.astype(np.bool_), *self._v_csr, *self._a_csr,
+                cables.seg_active.astype(np.bool_), np.ascontiguousarray(cables.seg_scale, dtype=float))
+            self._kernel_args = (
+                *self._v_csr, *self._a_csr,
                 self._child_key.astype(np.int64), self._parent_key.astype(np.int64),
                 np.ascontiguousarray(self._R_sp, dtype=float), int(cables.m), len(js))
             return
@@ -241,8 +266,12 @@ class TermsEvaluator:
                                                  shape=(len(js) * m, n_end))
 
     def check_state(self, q, v=None, a=None):
-        """``(q, v, a)`` as float arrays of sizes nq, nv, nv (``None``: zeros), or :class:`StateError`."""
-        return (check_vector(q, "q", self.model.nq), *self.check_motion(v, a))
+        """``(q, v, a)`` as float arrays of sizes nq, nv, nv (``None``: zeros), or :class:`StateError`
+        (also when coupled coordinates do not follow their couplings)."""
+        q, v, a = check_vector(q, "q", self.model.nq), *self.check_motion(v, a)
+        if self.couplings is not None:
+            self.couplings.check(q, v, a)
+        return q, v, a
 
     def check_motion(self, v=None, a=None):
         """``(v, a)`` as float arrays of size nv (``None``: zeros), or :class:`StateError`."""
@@ -269,10 +298,17 @@ class TermsEvaluator:
         cables = self.cables
         if self.compiled:
             # J.T: C-ordered for any nv (one compiled specialisation; a (6, 1) array counts as C)
-            X, _, lengths, L, RT, R_socket, bad = self._kernel(oMi, np.ascontiguousarray(J.T), *self._kernel_args)
+            if self._routes is None:
+                route, arc = self._route_args, None
+            else:
+                *route, arc = self._routes(oMi)
+            X, _, lengths, L, RT, R_socket, bad = self._kernel(oMi, np.ascontiguousarray(J.T), *route,
+                                                               *self._kernel_args)
             if bad >= 0:
-                raise StateError(f"cable {cables.cables[cables.seg_cable[bad]].name!r}: a segment has zero "
+                raise StateError(f"cable {cables.cables[route[4][bad]].name!r}: a segment has zero "
                                  f"length at this configuration, so its direction is undefined")
+            if arc is not None:
+                lengths += arc
         else:
             oR, op = oMi[:, :3, :3], oMi[:, :3, 3]
             geo = cable_geometry(cables, oR, op, self._maps)
@@ -285,9 +321,30 @@ class TermsEvaluator:
             u = np.array(self._u_views).reshape(len(self._child), 6)
         else:
             u = np.array([data.f[c].vector for c in self._child]).reshape(len(self._child), 6)
+        if self.passive is not None:  # known joint forces (springs, dampers) help the cables
+            tau -= self.passive(q, qd)
+        f_min, f_max, state = self._tension_bounds(lengths, L, qd)
+        basis, L_full = None, L
+        if self.couplings is not None:
+            basis = self.couplings.basis(q)
+            L, tau = L @ basis, basis.T @ tau
         return Terms(q=q.copy(), qd=qd.copy(), qdd=qdd.copy(), tau=tau, lengths=lengths, L=L, u=u,
                      RT=RT, R_socket=R_socket, socket_axes=self._axes, points=X, _evaluator=self,
-                     finite=bad != -2 and bool(np.isfinite(tau.sum())))
+                     finite=bad != -2 and bool(np.isfinite(tau.sum())), f_min=f_min, f_max=f_max,
+                     muscles=state, basis=basis, L_full=L_full)
+
+    def _tension_bounds(self, lengths, L, qd):
+        """The cables' bounds at this instant and the muscles' state (``None`` without muscles)."""
+        cables = self.cables
+        if cables.muscles is None:
+            return cables.f_min, cables.f_max, None
+        from .muscles import force_range
+
+        k = cables.muscle_index
+        state = force_range(cables.muscles, lengths[k], L[k] @ qd)
+        f_min, f_max = cables.f_min.copy(), cables.f_max.copy()
+        f_min[k], f_max[k] = state.f_min, state.f_max
+        return f_min, f_max, state
 
     def mass_matrix(self, q) -> np.ndarray:
         """(nv, nv) joint-space inertia matrix at the configuration ``q`` (CRBA, both triangles)."""

@@ -1,13 +1,15 @@
 """Objectives: small composable quadratic terms in the problem's variables (``1/2 x^T P x + c^T x + r``)."""
 
 from ..exceptions import ProblemError
+from .activations import MinActivations
 from .base import Objective, Quadratic, Sum
 from .cable_forces import MinCableForces
 from .cable_sum import MinCableForceSum
 from .interactions import MinInteractions
 from .smoothing import Smoothing
 
-KINDS = {cls.__name__: cls for cls in (MinCableForces, MinCableForceSum, MinInteractions, Smoothing)}
+KINDS = {cls.__name__: cls for cls in (MinCableForces, MinCableForceSum, MinInteractions, Smoothing,
+                                       MinActivations)}
 
 
 def objective_from_spec(spec: dict) -> Objective:
@@ -23,5 +25,5 @@ def objective_from_spec(spec: dict) -> Objective:
     return KINDS[kind].from_spec(spec)
 
 
-__all__ = ["Objective", "Quadratic", "Sum", "MinCableForces", "MinCableForceSum", "MinInteractions",
+__all__ = ["Objective", "Quadratic", "Sum", "MinActivations", "MinCableForces", "MinCableForceSum", "MinInteractions",
            "Smoothing", "objective_from_spec"]

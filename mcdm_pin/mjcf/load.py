@@ -1,0 +1,118 @@
+"""A loader: a MuJoCo MJCF file -> :class:`~mcdm_pin.robot.Robot`, through MuJoCo's own compiler.
+
+MuJoCo (the ``mjcf`` extra) compiles the file: defaults, includes, frames, inertias from geoms are
+resolved exactly as MuJoCo resolves them. The Pinocchio model is built from the compiled arrays
+(:mod:`mcdm_pin.mjcf.model`), the cables, muscles and couplings from its tendons, actuators and
+equalities (:mod:`mcdm_pin.mjcf.tendons`). Nothing is simulated. The robot speaks MuJoCo's names:
+coordinates are its joints, cables its muscles (or tendons), physical joints its bodies.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ..exceptions import ModelError, StateError
+
+MJCF_SUFFIXES = (".xml", ".mjcf")
+
+
+def compile_mjcf(path):
+    """``mujoco.MjModel`` of the MJCF file ``path`` (ModelError naming the file and MuJoCo's reason)."""
+    try:
+        import mujoco
+    except ImportError:
+        raise ModelError(f"{path}: reading MJCF needs MuJoCo: pip install 'mcdm-pin[mjcf]'") from None
+    path = Path(path)
+    if not path.is_file():
+        raise ModelError(f"{path}: MJCF file not found")
+    try:
+        return mujoco.MjModel.from_xml_path(str(path))
+    except ValueError as exc:
+        raise ModelError(f"{path}: MuJoCo cannot compile it: {str(exc).strip()}") from None
+
+
+def is_mjcf(path) -> bool:
+    """Whether ``path`` looks like an MJCF file (an ``.xml``/``.mjcf`` whose root is ``<mujoco``)."""
+    p = Path(path)
+    if p.suffix.lower() not in MJCF_SUFFIXES or not p.is_file():
+        return False
+    with open(p, "rb") as fh:
+        head = fh.read(4096).decode("utf-8", "replace")
+    return re.search(r"<mujoco[\s>]", head) is not None
+
+
+def load_mjcf(path, name: str | None = None):
+    """The :class:`~mcdm_pin.robot.Robot` of an MJCF file (module docstring)."""
+    mj = compile_mjcf(path)
+    return robot_from_mujoco(mj, str(path), name or Path(path).stem)
+
+
+def robot_from_mujoco(mj, source: str, name: str = "robot"):
+    """The :class:`~mcdm_pin.robot.Robot` of a compiled ``mujoco.MjModel`` (``source``: for messages)."""
+    from ..model.cables import CableSet
+    from ..model.couplings import Couplings
+    from ..model.joints import physical_joints
+    from ..robot import Robot
+    from .model import build_model
+    from .tendons import read_couplings, read_tendons
+
+    try:
+        mjm = build_model(mj, source)
+        tendons = read_tendons(mj, mjm, source)
+        if not tendons.cables:
+            raise ModelError(f"{source}: no actuator drives a spatial tendon, so the model has no cable")
+        cables = CableSet(mjm.model, tendons.cables, muscles=tendons.muscles, muscle_cables=tendons.muscle_cables)
+        coupled = read_couplings(mj, mjm, source)
+    except ModelError as exc:
+        msg = str(exc)
+        raise ModelError(msg if msg.startswith(source) else f"{source}: {msg}") from None
+    names = mjm.coordinate_names
+    q_index = np.full(mjm.model.nv, -1, dtype=int)
+    for j, kind in enumerate(mjm.jnt_type):
+        if kind in (2, 3):  # slide, hinge: q is the coordinate
+            q_index[mjm.jnt_idx_v[j]] = mjm.jnt_idx_q[j]
+    couplings = Couplings(q_index, coupled, names) if coupled else None
+    return Robot(mjm.model, cables, physical_joints(mjm.model), name=name, couplings=couplings,
+                 coordinate_names=names, source=MjcfSource(mjm, couplings), notes=tendons.notes)
+
+
+class MjcfSource:
+    """What a robot loaded from MJCF keeps of its source: the Pinocchio-MuJoCo maps (``maps``, an
+    :class:`~mcdm_pin.mjcf.model.MjcfModel`) and the couplings, to read MuJoCo's joint values."""
+
+    kind = "mjcf"
+
+    def __init__(self, maps, couplings):
+        self.maps, self.couplings = maps, couplings
+        has = bool(np.any(maps.jnt_stiffness) or np.any(maps.dof_damping))
+        self.passive = maps.joint_passive if has else None
+
+    def configuration(self, values: dict) -> np.ndarray:
+        """Pinocchio's ``q`` from ``{MuJoCo joint name: qpos value(s)}``: joints not given keep
+        ``qpos0`` (MuJoCo's reference), except coupled ones, which are filled from their couplings when
+        not given and checked when given."""
+        maps = self.maps
+        qpos = np.array(maps.qpos0, dtype=float)
+        given_v = set()
+        index = {n: j for j, n in enumerate(maps.joint_names)}
+        for key, value in values.items():
+            if key not in index:
+                shown = ", ".join(repr(n) for n in maps.joint_names[:12])
+                raise StateError(f"{maps.source}: unknown joint {key!r}; expected MuJoCo joint names, e.g. {shown}")
+            j = index[key]
+            a, k = int(maps.jnt_qposadr[j]), {0: 7, 1: 4}.get(int(maps.jnt_type[j]), 1)
+            v = np.atleast_1d(np.asarray(value, dtype=float))
+            if v.shape != (k,) or not np.all(np.isfinite(v)):
+                raise StateError(f"{maps.source}: joint {key!r}: expected {k} finite number(s), got {value!r}")
+            qpos[a:a + k] = v
+            given_v.add(int(maps.jnt_idx_v[j]))
+        q = maps.to_pin_q(qpos)
+        if self.couplings is not None:
+            dep = [int(d) for d in self.couplings.dependent if int(d) not in given_v]
+            filled, _, _ = self.couplings.fill(q)
+            q[self.couplings.q_index[dep]] = filled[self.couplings.q_index[dep]]
+            self.couplings.check(q)
+        return q

@@ -1,0 +1,163 @@
+"""MuJoCo's spatial tendons, muscles and joint couplings -> our cables, muscles and couplings.
+
+Read from the *compiled* ``mujoco.MjModel`` (MuJoCo resolved defaults, includes and frames), with the
+Pinocchio frames of :func:`mcdm_pin.mjcf.model.build_model`:
+
+- a spatial tendon driven by a muscle actuator becomes a muscle cable named after the actuator; one
+  driven by a ``motor``/``general`` actuator with a control range that only pulls becomes a cable with
+  those bounds (times the gear); a tendon no actuator drives exerts no force of its own (MuJoCo's
+  passive tendon stiffness, damping and limits are refused where set) and is left out, with a note;
+- a route's ``site`` is a :class:`~mcdm_pin.model.cables.RoutePoint` on the site's frame, a ``geom``
+  (sphere or cylinder) a :class:`~mcdm_pin.model.cables.Wrap` on the geom's frame (its ``sidesite`` the
+  wrap's side point), a ``pulley`` a :class:`~mcdm_pin.model.cables.Pulley`;
+- an ``equality joint`` is a :class:`~mcdm_pin.model.couplings.Coupling` of the two joints'
+  coordinates (MuJoCo's ``y - y0 = p(x - x0)`` is ``q_y = p(q_x)`` in Pinocchio's coordinates, which are
+  measured from ``qpos0``).
+
+Everything else that acts on the bodies is refused with the element and the reason: fixed tendons,
+tendons with stiffness, damping or limits, other equality constraints (connect, weld, tendon, flex),
+and actuators that are neither (on joints: a hybrid robot's motors are not read from MJCF yet).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..exceptions import ModelError
+from ..model.cables import Cable, Pulley, RoutePoint, Wrap
+from ..model.couplings import Coupling
+from ..model.muscles import from_mujoco
+
+
+@dataclass(frozen=True)
+class TendonSet:
+    """What :func:`read_tendons` found: ``cables`` (Cable list), the muscles' params and cable names
+    (``None``, () without muscles), ``notes`` (what was left out and why)."""
+
+    cables: list
+    muscles: object
+    muscle_cables: tuple
+    notes: tuple
+
+
+def _refuse(source: str, what: str, why: str):
+    return ModelError(f"{source}: {what}: {why}")
+
+
+def _route(mj, mjm, t: int, source: str, tname: str) -> list:
+    import mujoco
+
+    W = mujoco.mjtWrap
+    route = []
+    for i in range(int(mj.tendon_adr[t]), int(mj.tendon_adr[t] + mj.tendon_num[t])):
+        kind, obj, prm = int(mj.wrap_type[i]), int(mj.wrap_objid[i]), float(mj.wrap_prm[i])
+        if kind == W.mjWRAP_SITE:
+            route.append(RoutePoint(int(mjm.site_frame[obj]), (0.0, 0.0, 0.0)))
+        elif kind in (W.mjWRAP_SPHERE, W.mjWRAP_CYLINDER):
+            gtype = int(mj.geom_type[obj])
+            want = mujoco.mjtGeom.mjGEOM_SPHERE if kind == W.mjWRAP_SPHERE else mujoco.mjtGeom.mjGEOM_CYLINDER
+            if gtype != want:
+                raise _refuse(source, f"tendon {tname!r}", f"wrap geom {obj} is not a sphere or cylinder")
+            side = None if prm < 0 else RoutePoint(int(mjm.site_frame[int(prm)]), (0.0, 0.0, 0.0))
+            gname = mujoco.mj_id2name(mj, mujoco.mjtObj.mjOBJ_GEOM, obj) or f"geom:#{obj}"
+            route.append(Wrap(int(mjm.geom_frame[obj]), "sphere" if kind == W.mjWRAP_SPHERE else "cylinder",
+                              float(mj.geom_size[obj, 0]), side=side, name=gname))
+        elif kind == W.mjWRAP_PULLEY:
+            route.append(Pulley(prm))
+        else:
+            raise _refuse(source, f"tendon {tname!r}", "a fixed tendon (a linear combination of joint "
+                                                       "coordinates) is not a cable; not supported")
+    return route
+
+
+def _check_tendon(mj, t: int, source: str, tname: str, notes: list) -> None:
+    for field, label in (("tendon_stiffness", "stiffness"), ("tendon_damping", "damping"),
+                         ("tendon_frictionloss", "frictionloss")):
+        value = np.atleast_1d(getattr(mj, field)[t])
+        if np.any(value != 0):
+            raise _refuse(source, f"tendon {tname!r}", f"passive tendon {label} {value.tolist()} is not "
+                                                       f"supported (a known force of the tendon)")
+    if int(mj.tendon_limited[t]):
+        lo, hi = (float(x) for x in mj.tendon_range[t])
+        notes.append(f"tendon {tname!r}: its length limit [{lo:.6g}, {hi:.6g}] m is a constraint MuJoCo applies "
+                     f"only at the limit; the inverse dynamics here take it as inactive")
+
+
+def read_tendons(mj, mjm, source: str) -> TendonSet:
+    """Cables, muscles and notes from the compiled model ``mj`` and its Pinocchio frames ``mjm``."""
+    import mujoco
+
+    found = from_mujoco(mj)
+    for name, why in found.skipped:
+        i = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_ACTUATOR, name) if not name.startswith("actuator ") \
+            else int(name.split()[1])
+        raise _refuse(source, f"actuator {name!r}", f"{why}; only muscle actuators on tendons are read "
+                                                    f"from MJCF (transmission {int(mj.actuator_trntype[i])})")
+    by_tendon = {int(t): k for k, t in enumerate(found.tendon_ids)}
+    if len(by_tendon) != len(found.tendon_ids):
+        raise _refuse(source, "actuators", "two muscles drive one tendon; expected one muscle per tendon")
+    cables, names, notes = [], [], []
+    params = found.params
+    for t in range(mj.ntendon):
+        tname = mujoco.mj_id2name(mj, mujoco.mjtObj.mjOBJ_TENDON, t) or f"tendon:#{t}"
+        if t not in by_tendon:
+            _check_tendon(mj, t, source, tname, notes)
+            notes.append(f"tendon {tname!r}: no actuator drives it, so it exerts no force; not a cable")
+            continue
+        _check_tendon(mj, t, source, tname, notes)
+        k = by_tendon[t]
+        route = _route(mj, mjm, t, source, tname)
+        # the static bounds only enclose the tension; each instant's range follows the muscle's state
+        cables.append(Cable(params.names[k], tuple(route), 0.0, _tension_ceiling(params, k)))
+        names.append(params.names[k])
+    order = [params.names.index(n) for n in names]
+    muscles = _subset(params, order) if names else None
+    return TendonSet(cables, muscles, tuple(names), tuple(notes))
+
+
+def _tension_ceiling(params, k: int) -> float:
+    """A tension no state of muscle ``k`` can exceed within its length range (its static upper bound)."""
+    from ..model.muscles import force_range
+
+    lr = params.lengthrange[k] / params.gear[k]
+    lengths = np.linspace(lr[0], lr[1], 5)
+    one = _subset(params, [k])
+    top = max(float(force_range(one, np.array([x]), np.array([1e3]))[3][0]) for x in lengths)
+    return max(1.0, 10.0 * top)
+
+
+def _subset(params, idx):
+    from dataclasses import fields
+
+    idx = np.asarray(idx, dtype=int)
+    kw = {}
+    for f in fields(params):
+        v = getattr(params, f.name)
+        kw[f.name] = tuple(v[i] for i in idx) if f.name == "names" else np.asarray(v)[idx]
+    return type(params)(**kw)
+
+
+def read_couplings(mj, mjm, source: str) -> list:
+    """The ``equality joint`` couplings of ``mj`` (active ones), as :class:`Coupling` over Pinocchio's
+    ``v`` indices; other equality constraints are refused."""
+    import mujoco
+
+    out = []
+    for e in range(mj.neq):
+        ename = mujoco.mj_id2name(mj, mujoco.mjtObj.mjOBJ_EQUALITY, e) or f"equality:#{e}"
+        if not int(mj.eq_active0[e]):
+            continue
+        if int(mj.eq_type[e]) != mujoco.mjtEq.mjEQ_JOINT:
+            kind = mujoco.mjtEq(int(mj.eq_type[e])).name
+            raise _refuse(source, f"equality {ename!r}", f"{kind} constraints (closed loops) are not supported; "
+                                                        f"only joint couplings are")
+        j1, j2 = int(mj.eq_obj1id[e]), int(mj.eq_obj2id[e])
+        for j in (j1, j2):
+            if j >= 0 and int(mj.jnt_type[j]) not in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
+                raise _refuse(source, f"equality {ename!r}", f"joint {mjm.joint_names[j]!r} is not a hinge or "
+                                                            f"slide")
+        coef = tuple(float(x) for x in mj.eq_data[e, :5])
+        out.append(Coupling(int(mjm.jnt_idx_v[j1]), int(mjm.jnt_idx_v[j2]) if j2 >= 0 else -1, coef, ename))
+    return out

@@ -1,0 +1,171 @@
+r"""Coupled coordinates: a coordinate that is a polynomial of another (MuJoCo's ``equality joint``).
+
+A coupling ties a *dependent* coordinate :math:`y` to an *independent* one :math:`x`,
+
+.. math:: y = a_0 + a_1 x + a_2 x^2 + a_3 x^3 + a_4 x^4,
+
+both measured as Pinocchio's configuration entries of one-degree-of-freedom joints (a MuJoCo hinge or
+slide ``q = qpos - qpos0``, so MuJoCo's ``y - y_0 = p(x - x_0)`` is this polynomial unchanged); without an
+independent coordinate :math:`y = a_0` is fixed. Dependents may depend on dependents (evaluated in
+order).
+
+With couplings the configuration is a function :math:`q = \phi(z)` of the independent coordinates
+:math:`z` (n of them), and
+
+.. math:: \dot q = N(q)\,\dot z, \qquad \ddot q = N(q)\,\ddot z + \dot N(q, \dot z)\,\dot z,
+
+with :math:`N = \partial\phi/\partial z` (nv, n). The couplings' constraint forces :math:`G^T\lambda`
+do no work along :math:`N` (:math:`G N = 0`), so the equation of motion the cables must satisfy is the
+projected one, :math:`N^T (M\ddot q + h) = -N^T L^T f`: the cable terms' ``L`` becomes :math:`L N`
+(the derivative of the lengths with respect to :math:`z`) and ``tau`` becomes :math:`N^T\tau`
+(:mod:`mcdm_pin.model.terms`). A constraint force acts inside the coupled joints, as an actuator's
+torque does, so it changes no interaction wrench.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..exceptions import ModelError, StateError
+
+DEPENDENT_TOL = 1e-9  # a given dependent coordinate must match its polynomial to this (rad or m)
+
+
+@dataclass(frozen=True)
+class Coupling:
+    """``q[dependent] = polynomial(q[independent])`` (module docstring).
+
+    Attributes:
+        dependent, independent: indices into ``v`` (coordinates of one-DoF joints); ``independent``
+            -1 for a fixed coordinate.
+        coef: (5,) ``a_0 .. a_4``.
+        name: the source's name of the coupling (MuJoCo's equality name), for messages.
+    """
+
+    dependent: int
+    independent: int
+    coef: tuple
+    name: str = ""
+
+    def value(self, x: float) -> tuple[float, float, float]:
+        """``(p(x), p'(x), p''(x))``."""
+        a0, a1, a2, a3, a4 = self.coef
+        return (a0 + x * (a1 + x * (a2 + x * (a3 + x * a4))),
+                a1 + x * (2 * a2 + x * (3 * a3 + x * 4 * a4)),
+                2 * a2 + x * (6 * a3 + x * 12 * a4))
+
+
+class Couplings:
+    """The couplings of one model, ordered so that every dependent is computed after what it depends on.
+
+    Args:
+        q_index: (nv,) the ``q`` entry of each ``v`` entry of a one-DoF joint whose ``q`` is its
+            coordinate (revolute, prismatic), -1 elsewhere.
+        couplings: :class:`Coupling` objects.
+        names: coordinate names (nv), for messages.
+    """
+
+    def __init__(self, q_index, couplings, names):
+        self.q_index = np.asarray(q_index, dtype=int)
+        self.nv = nv = len(self.q_index)
+        self.names = tuple(names)
+        items = list(couplings)
+        deps = [c.dependent for c in items]
+        if len(set(deps)) != len(deps):
+            twice = sorted({self.names[d] for d in deps if deps.count(d) > 1})
+            raise ModelError(f"coordinate(s) {twice} are coupled twice (two equalities make each dependent)")
+        for c in items:
+            for i in (c.dependent, c.independent):
+                if i >= nv or (i >= 0 and self.q_index[i] < 0) or (i < 0 and i != c.independent):
+                    raise ModelError(f"coupling {c.name!r}: coordinate {i} is not the angle or position of a "
+                                     f"one-degree-of-freedom joint")
+            if len(c.coef) != 5 or not all(math.isfinite(a) for a in c.coef):
+                raise ModelError(f"coupling {c.name!r}: expected 5 finite polynomial coefficients, got {c.coef!r}")
+        self.items = tuple(_ordered(items, self.names))
+        self.dependent = np.array([c.dependent for c in self.items], dtype=int)
+        dep = set(self.dependent.tolist())
+        self.independent = np.array([i for i in range(nv) if i not in dep], dtype=int)
+        self.independent_names = tuple(self.names[i] for i in self.independent)
+
+    @property
+    def n(self) -> int:
+        """Number of independent coordinates."""
+        return len(self.independent)
+
+    def __len__(self) -> int:
+        return len(self.items)
+
+    def fill(self, q, v=None, a=None):
+        """``(q, v, a)`` with every dependent entry computed from the independent ones (copies; ``v``,
+        ``a`` ``None`` stay ``None``)."""
+        q = np.array(q, dtype=float)
+        v = None if v is None else np.array(v, dtype=float)
+        a = None if a is None else np.array(a, dtype=float)
+        qi = self.q_index
+        for c in self.items:
+            if c.independent < 0:
+                q[qi[c.dependent]] = c.coef[0]
+                if v is not None:
+                    v[c.dependent] = 0.0
+                if a is not None:
+                    a[c.dependent] = 0.0
+                continue
+            x = q[qi[c.independent]]
+            p, dp, ddp = c.value(x)
+            q[qi[c.dependent]] = p
+            if v is not None:
+                xd = v[c.independent]
+                v[c.dependent] = dp * xd
+                if a is not None:
+                    a[c.dependent] = ddp * xd * xd + dp * a[c.independent]
+        return q, v, a
+
+    def check(self, q, v=None, a=None, tol: float = DEPENDENT_TOL) -> None:
+        """Raise :class:`StateError` unless the dependent entries of ``(q, v, a)`` follow the couplings."""
+        qf, vf, af = self.fill(q, v, a)
+        for given, filled, what, idx in ((q, qf, "q", self.q_index[self.dependent]), (v, vf, "v", self.dependent),
+                                         (a, af, "a", self.dependent)):
+            if given is None:
+                continue
+            err = np.abs(np.asarray(given, dtype=float)[idx] - filled[idx])
+            scale = 1.0 + np.abs(filled[idx])
+            if np.any(err > tol * scale):
+                k = int(np.argmax(err / scale))
+                c = self.items[k]
+                raise StateError(f"{what}: coordinate {self.names[c.dependent]!r} is {given[idx[k]]!r} but "
+                                 f"coupling {c.name!r} makes it {filled[idx[k]]!r} (give only the "
+                                 f"independent coordinates, or values that follow the couplings)")
+
+    def basis(self, q) -> np.ndarray:
+        """``N`` (nv, n): ``dq/dz`` at ``q`` (module docstring)."""
+        N = np.zeros((self.nv, self.n))
+        N[self.independent, np.arange(self.n)] = 1.0
+        for c in self.items:
+            if c.independent >= 0:
+                N[c.dependent] = c.value(q[self.q_index[c.independent]])[1] * N[c.independent]
+        return N
+
+
+def _ordered(items, names):
+    """Topological order: a coupling after the one that makes its independent coordinate."""
+    by_dep = {c.dependent: c for c in items}
+    out, done, busy = [], set(), set()
+
+    def visit(c):
+        if c.dependent in done:
+            return
+        if c.dependent in busy:
+            raise ModelError(f"couplings form a cycle through coordinate {names[c.dependent]!r}")
+        busy.add(c.dependent)
+        if c.independent in by_dep:
+            visit(by_dep[c.independent])
+        busy.discard(c.dependent)
+        done.add(c.dependent)
+        out.append(c)
+
+    for c in items:
+        visit(c)
+    return out

@@ -1,0 +1,133 @@
+"""MJCF robots against MuJoCo 4.0 itself: tendon lengths and moment arms over wraps and pulleys, muscle
+tensions at given activations, and interaction wrenches with wrapped muscles pressing on bones.
+
+MyoSuite's models come from ``myo_sim`` (the test extra); the arm is composed in code by MyoSuite and
+written out by MuJoCo. Every comparison runs at 50 random states per model.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+mujoco = pytest.importorskip("mujoco")
+myo_sim = pytest.importorskip("myo_sim", reason="MyoSuite's models (pip install myo-sim) are the references")
+
+from mcdm_pin.mjcf.load import robot_from_mujoco  # noqa: E402
+from mcdm_pin.model.terms import TermsEvaluator  # noqa: E402
+
+STATES = 50
+MODELS = ("myoelbow", "myoelbow_2dof", "myofinger", "myoarm_r")
+
+
+def _compile(name):
+    if name == "myoarm_r":
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            xml = myo_sim.load_spec(name).to_xml()
+        return mujoco.MjModel.from_xml_string(xml)
+    return mujoco.MjModel.from_xml_path(str(myo_sim.get_xml_path(name)))
+
+
+@pytest.fixture(scope="module", params=MODELS)
+def case(request, tmp_path_factory):
+    import os
+
+    here = os.getcwd()
+    os.chdir(tmp_path_factory.mktemp("mujoco"))  # MuJoCo writes MUJOCO_LOG.TXT where it runs
+    try:
+        mj = _compile(request.param)
+        mj.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+        robot = robot_from_mujoco(mj, request.param, request.param)
+        yield request.param, mj, robot, TermsEvaluator(robot)
+    finally:
+        os.chdir(here)
+
+
+def _tendon_J(mj, d) -> np.ndarray:
+    """MuJoCo's ``ten_J`` as a dense (ntendon, nv) array (it is stored sparse for large models)."""
+    if d.ten_J.size == mj.ntendon * mj.nv and not mj.ten_J_rownnz.size:
+        return d.ten_J.reshape(mj.ntendon, mj.nv)
+    J = np.zeros((mj.ntendon, mj.nv))
+    for t in range(mj.ntendon):
+        a, n = mj.ten_J_rowadr[t], mj.ten_J_rownnz[t]
+        J[t, mj.ten_J_colind[a:a + n]] = d.ten_J[a:a + n]
+    return J
+
+
+def _states(mj, robot, rng):
+    """Random MuJoCo states within the joint ranges that keep the couplings, with random speeds and
+    activations."""
+    maps = robot.source.maps
+    for _ in range(STATES):
+        qpos = mj.qpos0.copy()
+        for j in range(mj.njnt):
+            lo, hi = mj.jnt_range[j] if mj.jnt_limited[j] else (-1.0, 1.0)
+            qpos[mj.jnt_qposadr[j]] = rng.uniform(lo, hi)
+        q = maps.to_pin_q(qpos)
+        v = rng.normal(0.0, 1.0, mj.nv)
+        if robot.couplings is not None:
+            q, v, _ = robot.couplings.fill(q, v)
+        yield maps.to_mj_qpos(q), maps.to_mj_qvel(v, q), rng.uniform(0.0, 1.0, mj.nu)
+
+
+def _cable_tendons(mj, robot):
+    acts = [mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_ACTUATOR, n) for n in robot.cable_names]
+    return np.array(acts), np.array([int(mj.actuator_trnid[a, 0]) for a in acts])
+
+
+def test_lengths_moment_arms_and_muscle_tensions_equal_mujocos(case):
+    name, mj, robot, ev = case
+    d = mujoco.MjData(mj)
+    acts, tendons = _cable_tendons(mj, robot)
+    maps = robot.source.maps
+    err_l = err_L = err_f = 0.0
+    for qpos, qvel, act in _states(mj, robot, np.random.default_rng(1)):
+        d.qpos[:], d.qvel[:], d.act[:] = qpos, qvel, act
+        mujoco.mj_fwdPosition(mj, d)
+        mujoco.mj_fwdVelocity(mj, d)
+        mujoco.mj_fwdActuation(mj, d)
+        q, v = maps.to_pin_q(qpos), maps.to_pin_v(qvel, qpos)
+        t = ev(q, v)
+        J = _tendon_J(mj, d)[tendons]
+        err_l = max(err_l, np.max(np.abs(t.lengths - d.ten_length[tendons]) / np.abs(d.ten_length[tendons])))
+        err_L = max(err_L, np.max(np.abs(t.L_full - J)) / np.abs(J).max())
+        a = act[acts]
+        f = t.muscles.passive + t.muscles.gain * a
+        f_mj = -d.actuator_force[acts] * mj.actuator_gear[acts, 0]
+        err_f = max(err_f, np.max(np.abs(f - f_mj)) / max(1.0, np.abs(f_mj).max()))
+    assert err_l < 1e-9, (name, err_l)
+    assert err_L < 1e-9, (name, err_L)
+    assert err_f < 1e-9, (name, err_f)
+
+
+def test_interaction_wrenches_with_wrapped_muscles_equal_cfrc_int(case):
+    """MuJoCo's forward dynamics at a random state and activation gives ``qacc``; its ``cfrc_int``
+    (muscle forces included) moved to each joint point and turned into the child frame equals
+    ``u + R^T f`` at that acceleration with the muscles' tensions."""
+    name, mj, robot, ev = case
+    d = mujoco.MjData(mj)
+    acts, _ = _cable_tendons(mj, robot)
+    maps = robot.source.maps
+    body_of_joint = {int(maps.body_joint[b]): b for b in range(1, mj.nbody) if mj.body_jntnum[b]}
+    worst = 0.0
+    for qpos, qvel, act in _states(mj, robot, np.random.default_rng(2)):
+        d.qpos[:], d.qvel[:], d.act[:] = qpos, qvel, act
+        mujoco.mj_forward(mj, d)
+        mujoco.mj_rnePostConstraint(mj, d)
+        q = maps.to_pin_q(qpos)
+        t = ev(q, maps.to_pin_v(qvel, qpos), maps.to_pin_a(d.qacc, qpos, qvel), checked=True)
+        f = -d.actuator_force[acts] * mj.actuator_gear[acts, 0]
+        p = t.wrenches(f)
+        for k, joint in enumerate(robot.joints):
+            b = body_of_joint[joint.child_id]
+            oMi = ev.data.oMi[joint.child_id]
+            c = d.subtree_com[mj.body_rootid[b]]
+            F = d.cfrc_int[b, 3:]
+            M = d.cfrc_int[b, :3] + np.cross(c - oMi.translation, F)
+            ref = np.concatenate([oMi.rotation.T @ F, oMi.rotation.T @ M])
+            scale = max(1.0, np.abs(ref).max())
+            worst = max(worst, np.max(np.abs(p[k] - ref)) / scale)
+    assert worst < 1e-9, (name, worst)
