@@ -39,7 +39,7 @@ import tempfile
 import time
 from pathlib import Path
 
-MODULES = ("mcdm_pin.model.kernels", "mcdm_pin.solvers.ipm")  # modules that register kernels
+MODULES = ("mcdm_pin.model.kernels", "mcdm_pin.model.route_kernels", "mcdm_pin.solvers.ipm")  # modules that register kernels
 POLICIES = ("background", "wait", "off")
 
 _REGISTRY: dict[str, object] = {}  # name -> callable returning [(dispatcher, args), ...]

@@ -23,11 +23,9 @@ does not keeps :math:`AB` and leaves its slot at scale 0 (no length, no wrench).
 
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
-
-from .wrapping import wrap_cylinder, wrap_sphere
-
-_WRAP_FUNCTIONS = {"sphere": wrap_sphere, "cylinder": wrap_cylinder}
 
 
 class RoutePaths:
@@ -37,14 +35,19 @@ class RoutePaths:
         cables: the :class:`~mcdm_pin.model.cables.CableSet`.
         key_of_joint: (njoints,) the position of each Pinocchio joint among the placements the
             evaluator reads (-1: not read).
+        compiled: run the compiled route pass (:func:`mcdm_pin.model.route_kernels.route_pass`);
+            ``False``: the same function uncompiled (its ``py_func``, before numba has compiled it).
 
     Call with the world placements ``oM`` (K, 4, 4) of those joints; returns ``(point_local,
     point_key, seg_a, seg_b, seg_cable, seg_active, seg_scale, arc_length)``, the last (m,) the arc
     lengths (branch-scaled) to add to each cable's length. The arrays are owned by this object and
-    rewritten at every call.
+    rewritten at every call; ``engaged`` (W,) says which wraps engaged.
     """
 
-    def __init__(self, cables, key_of_joint: np.ndarray):
+    def __init__(self, cables, key_of_joint: np.ndarray, compiled: bool = True):
+        # imported here: the kernels import numba, which ``import mcdm_pin`` does not
+        rk = importlib.import_module("mcdm_pin.model.route_kernels")
+        self._pass = rk.route_pass if compiled else rk.route_pass.py_func
         wraps = cables.wraps
         self.cables = cables
         n_p, n_s, n_w = len(cables.point_local), len(cables.seg_a), len(wraps)
@@ -53,68 +56,45 @@ class RoutePaths:
         base_key = key[cables.point_joint]
         wkey = np.array([key[w.joint] for w in wraps], dtype=np.int64)
         self.point_key = np.concatenate([base_key, np.repeat(wkey, 2)]).astype(np.int64)
-        self._base_local = np.concatenate([cables.point_local, np.zeros((2 * n_w, 3))])
-        self.point_local = self._base_local.copy()
+        self.point_local = np.concatenate([cables.point_local, np.zeros((2 * n_w, 3))])
         slot_t0 = n_p + 2 * np.arange(n_w)
-        self._slot_t0, self._slot_t1 = slot_t0, slot_t0 + 1
-        self._seg = np.array([w.seg for w in wraps], dtype=np.int64)
-        self._wrap_b = np.array([w.b for w in wraps], dtype=np.int64)
         self.seg_a = np.concatenate([cables.seg_a, slot_t0 + 1]).astype(np.int64)
-        self._base_b = np.concatenate([cables.seg_b, self._wrap_b]).astype(np.int64)
-        self.seg_b = self._base_b.copy()
+        wrap_b = np.array([w.b for w in wraps], dtype=np.int64)
+        self.seg_b = np.concatenate([cables.seg_b, wrap_b]).astype(np.int64)
         self.seg_cable = np.concatenate([cables.seg_cable, [w.cable for w in wraps]]).astype(np.int64)
-        self._base_active = np.concatenate([cables.seg_active, base_key[self._wrap_b] != wkey])
-        self._active_a_t0 = base_key[np.array([w.a for w in wraps], dtype=np.int64)] != wkey
-        self.seg_active = self._base_active.copy()
-        self._base_scale = np.concatenate([cables.seg_scale, np.zeros(n_w)])
-        self.seg_scale = self._base_scale.copy()
-        self._scale = np.array([w.scale for w in wraps])
+        self.seg_active = np.concatenate([cables.seg_active, base_key[wrap_b] != wkey]).astype(np.bool_)
+        self.seg_scale = np.concatenate([cables.seg_scale, np.zeros(n_w)])
         self.arc_length = np.zeros(cables.m)
-        self.engaged = np.zeros(n_w, dtype=bool)
-        # what each wrap needs at every instant, stacked for one vectorised pass
-        self._a_key, self._b_key = base_key[[w.a for w in wraps]], base_key[[w.b for w in wraps]]
-        self._a_local = cables.point_local[[w.a for w in wraps]]
-        self._b_local = cables.point_local[[w.b for w in wraps]]
-        self._w_key = wkey
-        self._w_R = np.array([w.placement.rotation for w in wraps]).reshape(n_w, 3, 3)
-        self._w_p = np.array([w.placement.translation for w in wraps]).reshape(n_w, 3)
-        self._has_side = np.array([w.side_joint >= 0 for w in wraps], dtype=bool)
-        self._side_key = np.array([key[w.side_joint] if w.side_joint >= 0 else 0 for w in wraps], dtype=np.int64)
-        self._side_local = np.array([w.side_local for w in wraps]).reshape(n_w, 3)
-        self._fn = [_WRAP_FUNCTIONS[w.kind] for w in wraps]
-        self._radius = [w.radius for w in wraps]
+        self.engaged = np.zeros(n_w, dtype=np.bool_)
+        self._wrap_int, self._wrap_float = _tables(rk, cables, key, base_key, wkey, slot_t0)
 
     def __call__(self, oM: np.ndarray):
-        oR, op = oM[:, :3, :3], oM[:, :3, 3]
-        # the wrap's end points and side point in the surface's frame
-        Rg = oR[self._w_key] @ self._w_R  # (W, 3, 3) surface -> world
-        pg = np.einsum("wij,wj->wi", oR[self._w_key], self._w_p) + op[self._w_key]
-        pa = np.einsum("wij,wj->wi", oR[self._a_key], self._a_local) + op[self._a_key]
-        pb = np.einsum("wij,wj->wi", oR[self._b_key], self._b_local) + op[self._b_key]
-        ps = np.einsum("wij,wj->wi", oR[self._side_key], self._side_local) + op[self._side_key]
-        ga = np.einsum("wji,wj->wi", Rg, pa - pg)
-        gb = np.einsum("wji,wj->wi", Rg, pb - pg)
-        gs = np.einsum("wji,wj->wi", Rg, ps - pg)
-        self.point_local[:] = self._base_local
-        self.seg_b[:] = self._base_b
-        self.seg_active[:] = self._base_active
-        self.seg_scale[:] = self._base_scale
-        self.arc_length[:] = 0.0
-        n_s = self.n_segments
-        for w, fn in enumerate(self._fn):
-            side = gs[w] if self._has_side[w] else None
-            res = fn(ga[w], gb[w], self._radius[w], side)
-            self.engaged[w] = res.engaged
-            if not res.engaged:
-                continue
-            t0, t1 = self._slot_t0[w], self._slot_t1[w]
-            # tangent points from the surface's frame to the frame of the joint carrying it
-            self.point_local[t0] = self._w_R[w] @ res.t0 + self._w_p[w]
-            self.point_local[t1] = self._w_R[w] @ res.t1 + self._w_p[w]
-            s = self._seg[w]
-            self.seg_b[s] = t0
-            self.seg_active[s] = self._active_a_t0[w]
-            self.seg_scale[n_s + w] = self._scale[w]
-            self.arc_length[self.cables.wraps[w].cable] += self._scale[w] * res.arc
+        self._pass(oM, self._wrap_int, self._wrap_float, self.point_local, self.seg_b, self.seg_active,
+                   self.seg_scale, self.arc_length, self.engaged, self.n_segments)
         return (self.point_local, self.point_key, self.seg_a, self.seg_b, self.seg_cable, self.seg_active,
                 self.seg_scale, self.arc_length)
+
+
+def _tables(rk, cables, key, base_key, wkey, slot_t0):
+    """The route pass's packed per-wrap tables ``(wrap_int, wrap_float)`` (columns: route_kernels)."""
+    wraps = cables.wraps
+    n_w = len(wraps)
+    wi = np.zeros((n_w, rk.N_INT), dtype=np.int64)
+    wf = np.zeros((n_w, rk.N_FLOAT))
+    for w, wr in enumerate(wraps):
+        wi[w, rk.W_KEY] = wkey[w]
+        wi[w, rk.A_KEY], wi[w, rk.B_KEY] = base_key[wr.a], base_key[wr.b]
+        wi[w, rk.S_KEY] = key[wr.side_joint] if wr.side_joint >= 0 else 0
+        wi[w, rk.HAS_SIDE] = wr.side_joint >= 0
+        wi[w, rk.CYLINDER] = {"cylinder": 1, "sphere": 0}[wr.kind]
+        wi[w, rk.SLOT], wi[w, rk.SEG], wi[w, rk.CABLE] = slot_t0[w], wr.seg, wr.cable
+        wi[w, rk.B_POINT] = cables.seg_b[wr.seg]  # B, the end of AB
+        wi[w, rk.ACTIVE_AT0] = base_key[wr.a] != wkey[w]
+        wi[w, rk.ACTIVE_AB] = bool(cables.seg_active[wr.seg])
+        wf[w, rk.A_LOCAL:rk.A_LOCAL + 3] = cables.point_local[wr.a]
+        wf[w, rk.B_LOCAL:rk.B_LOCAL + 3] = cables.point_local[wr.b]
+        wf[w, rk.S_LOCAL:rk.S_LOCAL + 3] = np.asarray(wr.side_local, dtype=float).reshape(3)
+        wf[w, rk.R_W:rk.R_W + 9] = np.asarray(wr.placement.rotation).reshape(9)
+        wf[w, rk.P_W:rk.P_W + 3] = np.asarray(wr.placement.translation).reshape(3)
+        wf[w, rk.RADIUS], wf[w, rk.SCALE] = wr.radius, wr.scale
+    return wi, wf

@@ -227,7 +227,7 @@ class TermsEvaluator:
         self._tril = np.tril_indices(model.nv, -1)
         # wrapped routes: their path arrays are rebuilt at every instant and read by the kernel, run
         # compiled or, before numba has compiled it, as plain Python (the same code either way)
-        self._routes = RoutePaths(cables, pos) if cables.configuration_dependent else None
+        self._routes = RoutePaths(cables, pos, compiled) if cables.configuration_dependent else None
         if compiled or self._routes is not None:
             from .kernels import cable_terms, csr
 

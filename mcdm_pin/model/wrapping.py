@@ -73,6 +73,13 @@ of a path pushed round the circle by a depth ``h`` grows like ``h^(3/2)``; ``h^2
 wrap), but not smooth: ``dL/dq`` jumps (a kink in ``L``), e.g. a cylinder about a hinge axis has a
 constant moment arm ``r`` while wrapped and a changing one while straight. With a side point outside,
 the length itself jumps where an end point crosses the ray opposite the side point (see above).
+
+**One implementation, compiled or not.** The maths are plain functions on floats and tuples marked
+``register_jitable``: called from Python (:func:`wrap_sphere`, :func:`wrap_cylinder`,
+:func:`tendon_path`, the route kernel's uncompiled path) they run as Python; called from the njit
+route kernel (:mod:`mcdm_pin.model.route_kernels`: every wrap of a cable set in one pass) numba
+compiles them inline. So this file imports numba (and :mod:`mcdm_pin.jit` counts it among the kernel
+sources whose digest stamps the compiled cache); only the route machinery imports it.
 """
 
 from __future__ import annotations
@@ -82,8 +89,11 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
+from numba import extending  # register_jitable: compiled inline into the njit route kernel
 
 from ..exceptions import ModelError
+
+register_jitable = extending.register_jitable
 
 MINVAL = 1e-15
 """MuJoCo's ``mjMINVAL``: the smallest value it accepts in a denominator."""
@@ -127,7 +137,13 @@ class Path:
     wrap_elems: list
 
 
-def _normalize2(x: float, y: float) -> tuple[float, float]:
+# --- the maths: plain Python on floats and tuples, written so that numba compiles the same functions
+# inline into the route kernel (mcdm_pin/model/route_kernels.py); a wrap that does not engage is
+# ``ok = False`` with zeros in place of the points (numba types both branches alike).
+
+
+@register_jitable
+def _normalize2(x, y):
     """MuJoCo's ``mju_normalize`` in 2-D: a vector shorter than MINVAL becomes ``(1, 0)``."""
     n = math.sqrt(x * x + y * y)
     if n < MINVAL:
@@ -135,7 +151,8 @@ def _normalize2(x: float, y: float) -> tuple[float, float]:
     return x / n, y / n
 
 
-def _normalize3(v) -> tuple[tuple[float, float, float], float]:
+@register_jitable
+def _normalize3(v):
     """MuJoCo's ``mju_normalize3``: the unit vector (``(1, 0, 0)`` below MINVAL) and the norm."""
     n = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
     if n < MINVAL:
@@ -143,15 +160,18 @@ def _normalize3(v) -> tuple[tuple[float, float, float], float]:
     return (v[0] / n, v[1] / n, v[2] / n), n
 
 
-def _cross(a, b) -> tuple[float, float, float]:
+@register_jitable
+def _cross(a, b):
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-def _dot3(a, b) -> float:
+@register_jitable
+def _dot3(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-def _segments_cross(p1, p2, p3, p4) -> bool:
+@register_jitable
+def _segments_cross(p1, p2, p3, p4):
     """Whether the 2-D segments ``p1 -> p2`` and ``p3 -> p4`` intersect (ends included); parallel
     segments (determinant below MINVAL) do not."""
     det = (p4[1] - p3[1]) * (p2[0] - p1[0]) - (p4[0] - p3[0]) * (p2[1] - p1[1])
@@ -162,7 +182,8 @@ def _segments_cross(p1, p2, p3, p4) -> bool:
     return 0.0 <= a <= 1.0 and 0.0 <= b <= 1.0
 
 
-def _arc_circle(s0, s1, second: bool, radius: float) -> float:
+@register_jitable
+def _arc_circle(s0, s1, second, radius):
     """Arc length from ``s0`` to ``s1`` on the circle, the way round given by the solution index
     (the angle from ``atan2``, exact also for the short arcs at wrap onset)."""
     cross = s0[1] * s1[0] - s0[0] * s1[1]
@@ -172,69 +193,88 @@ def _arc_circle(s0, s1, second: bool, radius: float) -> float:
     return radius * angle
 
 
+@register_jitable
+def _no_wrap2():
+    """A 2-D wrap that does not engage: ``(False, 0.0, (0, 0), (0, 0))``."""
+    return False, 0.0, (0.0, 0.0), (0.0, 0.0)
+
+
+@register_jitable
+def _circle_candidate(e0, e1, sgn, sqrad, r0, r1):
+    """One of the two tangent solutions (``sgn`` +1 or -1) of the wrap without side point: ``(s0,
+    s1, goodness)``, goodness minus the squared chord, -10000 when the straight pieces cross."""
+    sqlen0 = e0[0] * e0[0] + e0[1] * e0[1]
+    sqlen1 = e1[0] * e1[0] + e1[1] * e1[1]
+    s0 = ((e0[0] * sqrad + sgn * e0[1] * r0) / sqlen0, (e0[1] * sqrad - sgn * e0[0] * r0) / sqlen0)
+    s1 = ((e1[0] * sqrad - sgn * e1[1] * r1) / sqlen1, (e1[1] * sqrad + sgn * e1[0] * r1) / sqlen1)
+    g = -((s0[0] - s1[0]) ** 2 + (s0[1] - s1[1]) ** 2)
+    if _segments_cross(e0, s0, e1, s1):
+        g = -10000.0
+    return s0, s1, g
+
+
+@register_jitable
 def _wrap_circle(e0, e1, radius):
     """2-D wrap of the segment ``e0 -> e1`` round the circle of ``radius`` at the origin, without a
-    side point: ``(arc, t0, t1)`` or None (no wrap)."""
+    side point: ``(ok, arc, t0, t1)``."""
     sqlen0 = e0[0] * e0[0] + e0[1] * e0[1]
     sqlen1 = e1[0] * e1[0] + e1[1] * e1[1]
     sqrad = radius * radius
     if sqlen0 < sqrad or sqlen1 < sqrad or radius < MINVAL:
-        return None
+        return _no_wrap2()
     dx, dy = e1[0] - e0[0], e1[1] - e0[1]
     dd = dx * dx + dy * dy
     if dd < MINVAL:
-        return None
+        return _no_wrap2()
     a = min(1.0, max(0.0, -(dx * e0[0] + dy * e0[1]) / dd))
     cx, cy = e0[0] + a * dx, e0[1] + a * dy
     if cx * cx + cy * cy > sqrad:
-        return None
+        return _no_wrap2()
     r0 = radius * math.sqrt(sqlen0 - sqrad)
     r1 = radius * math.sqrt(sqlen1 - sqrad)
-    sols, good = [], []
-    for sgn in (1.0, -1.0):
-        s0 = ((e0[0] * sqrad + sgn * e0[1] * r0) / sqlen0, (e0[1] * sqrad - sgn * e0[0] * r0) / sqlen0)
-        s1 = ((e1[0] * sqrad - sgn * e1[1] * r1) / sqlen1, (e1[1] * sqrad + sgn * e1[0] * r1) / sqlen1)
-        g = -((s0[0] - s1[0]) ** 2 + (s0[1] - s1[1]) ** 2)
-        if _segments_cross(e0, s0, e1, s1):
-            g = -10000.0
-        sols.append((s0, s1))
-        good.append(g)
-    i = 0 if good[0] > good[1] else 1
-    s0, s1 = sols[i]
+    s0, s1, g0 = _circle_candidate(e0, e1, 1.0, sqrad, r0, r1)
+    u0, u1, g1 = _circle_candidate(e0, e1, -1.0, sqrad, r0, r1)
+    second = not g0 > g1
+    if second:
+        s0, s1 = u0, u1
     if _segments_cross(e0, s0, e1, s1):
-        return None
-    return _arc_circle(s0, s1, i == 1, radius), s0, s1
+        return _no_wrap2()
+    return True, _arc_circle(s0, s1, second, radius), s0, s1
 
 
-def _signed_angle(a, b) -> float:
+@register_jitable
+def _signed_angle(a, b):
     """The angle from 2-D vector ``a`` to ``b`` in ``[-pi, pi]``, counter-clockwise positive."""
     return math.atan2(a[0] * b[1] - a[1] * b[0], a[0] * b[0] + a[1] * b[1])
 
 
+@register_jitable
 def _wrap_side(e0, e1, side, radius):
     """2-D wrap with a side point outside the geom (``side`` on the circle): the shortest path from
     ``e0`` to ``e1`` with the winding angle of the polyline ``e0 -> side -> e1`` about the centre.
-    ``(arc, t0, t1)`` or None (the straight segment already has that winding and misses the circle)."""
+    ``(ok, arc, t0, t1)``; not ok when the straight segment already has that winding and misses the
+    circle."""
     sqlen0 = e0[0] * e0[0] + e0[1] * e0[1]
     sqlen1 = e1[0] * e1[0] + e1[1] * e1[1]
     if sqlen0 < radius * radius or sqlen1 < radius * radius or radius < MINVAL:
-        return None
+        return _no_wrap2()
     winding = _signed_angle(e0, side) + _signed_angle(side, e1)
     len0, len1 = math.sqrt(sqlen0), math.sqrt(sqlen1)
     a0, a1 = math.acos(radius / len0), math.acos(radius / len1)
     turn = abs(winding) - a0 - a1
     if turn <= 0:
-        return None
+        return _no_wrap2()
     sgn = 1.0 if winding > 0 else -1.0
     c0, s0 = math.cos(a0), sgn * math.sin(a0)
     c1, s1 = math.cos(a1), -sgn * math.sin(a1)
     k0, k1 = radius / len0, radius / len1
     t0 = (k0 * (c0 * e0[0] - s0 * e0[1]), k0 * (s0 * e0[0] + c0 * e0[1]))
     t1 = (k1 * (c1 * e1[0] - s1 * e1[1]), k1 * (s1 * e1[0] + c1 * e1[1]))
-    return radius * turn, t0, t1
+    return True, radius * turn, t0, t1
 
 
-def _inside_angle(A: float, B: float, G: float) -> float:
+@register_jitable
+def _inside_angle(A, B, G):
     """The root ``beta`` in ``[0, pi/2]`` of ``F(b) = asin(A sin b) + asin(B sin b) - 2 b + G``
     (``A, B < 1``, ``G`` the angle between the end points): the angle between each straight piece
     and the normal where the path touches the circle. ``F`` falls strictly (slope in
@@ -255,20 +295,21 @@ def _inside_angle(A: float, B: float, G: float) -> float:
     return b
 
 
+@register_jitable
 def _wrap_inside(e0, e1, radius):
-    """2-D inside wrap (side point inside the geom): ``(0.0, t, t)`` with the single point where the
-    shortest path from ``e0`` to ``e1`` through the closed disc touches the circle (equal angles to
-    the normal), or None (an end inside, or the straight segment already crosses the disc)."""
+    """2-D inside wrap (side point inside the geom): ``(ok, 0.0, t, t)`` with the single point where
+    the shortest path from ``e0`` to ``e1`` through the closed disc touches the circle (equal angles
+    to the normal); not ok when an end is inside or the straight segment already crosses the disc."""
     len0 = math.sqrt(e0[0] * e0[0] + e0[1] * e0[1])
     len1 = math.sqrt(e1[0] * e1[0] + e1[1] * e1[1])
     if len0 <= radius or len1 <= radius or radius < MINVAL:
-        return None
+        return _no_wrap2()
     dx, dy = e1[0] - e0[0], e1[1] - e0[1]
     dd = dx * dx + dy * dy
     if dd > MINVAL:
         a = -(dx * e0[0] + dy * e0[1]) / dd
         if 0 < a < 1 and math.hypot(e0[0] + a * dx, e0[1] + a * dy) <= radius:
-            return None
+            return _no_wrap2()
     A, B = radius / len0, radius / len1
     beta = _inside_angle(A, B, abs(_signed_angle(e0, e1)))
     sb = math.sin(beta)
@@ -278,9 +319,10 @@ def _wrap_inside(e0, e1, radius):
         vx, vy, ang = e1[0] / len1, e1[1] / len1, beta - math.asin(B * sb)
     c, s = math.cos(ang), math.sin(ang)
     t = (radius * (c * vx - s * vy), radius * (s * vx + c * vy))
-    return 0.0, t, t
+    return True, 0.0, t, t
 
 
+@register_jitable
 def _plane_axes(p0, p1):
     """The sphere's 2-D frame: ``e1`` along ``p0``, ``e2`` in the plane of ``p0``, ``p1``."""
     e1, _ = _normalize3(p0)
@@ -291,44 +333,71 @@ def _plane_axes(p0, p1):
             i = 1
         if abs(e1[2]) > abs(e1[0]) and abs(e1[2]) > abs(e1[1]):
             i = 2
-        other = [1.0, 1.0, 1.0]
-        other[i] = 0.0
+        other = (0.0 if i == 0 else 1.0, 0.0 if i == 1 else 1.0, 0.0 if i == 2 else 1.0)
         normal, _ = _normalize3(_cross(e1, other))
     e2, _ = _normalize3(_cross(normal, e1))
     return e1, e2
 
 
-_X_AXES = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
-
-
-def _wrap_local(cylinder: bool, p0, p1, radius: float, side):
-    """One wrap on tuples of floats in the geom frame: ``(arc, t0, t1)`` (tuples) or None."""
+@register_jitable
+def _wrap_local(cylinder, p0, p1, radius, has_side, side):
+    """One wrap on tuples of floats in the geom frame (``side`` read only when ``has_side``):
+    ``(ok, arc, t0, t1)``, the tangent points (3-tuples) zero when not ok."""
+    zero = (0.0, 0.0, 0.0)
     if math.sqrt(_dot3(p0, p0)) < MINVAL or math.sqrt(_dot3(p1, p1)) < MINVAL:
-        return None
-    e1, e2 = _X_AXES if cylinder else _plane_axes(p0, p1)
+        return False, 0.0, zero, zero
+    if cylinder:
+        e1, e2 = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)
+    else:
+        e1, e2 = _plane_axes(p0, p1)
     d0 = (_dot3(p0, e1), _dot3(p0, e2))
     d1 = (_dot3(p1, e1), _dot3(p1, e2))
-    if side is not None and math.sqrt(_dot3(side, side)) < radius:
-        res = _wrap_inside(d0, d1, radius)
-    elif side is not None:
+    if has_side and math.sqrt(_dot3(side, side)) < radius:
+        ok, arc, s0, s1 = _wrap_inside(d0, d1, radius)
+    elif has_side:
         sx, sy = _normalize2(_dot3(side, e1), _dot3(side, e2))
-        res = _wrap_side(d0, d1, (radius * sx, radius * sy), radius)
+        ok, arc, s0, s1 = _wrap_side(d0, d1, (radius * sx, radius * sy), radius)
     else:
-        res = _wrap_circle(d0, d1, radius)
-    if res is None:
-        return None
-    arc, s0, s1 = res
-    t0 = [e1[k] * s0[0] + e2[k] * s0[1] for k in range(3)]
-    t1 = [e1[k] * s1[0] + e2[k] * s1[1] for k in range(3)]
+        ok, arc, s0, s1 = _wrap_circle(d0, d1, radius)
+    if not ok:
+        return False, 0.0, zero, zero
+    t0 = (e1[0] * s0[0] + e2[0] * s0[1], e1[1] * s0[0] + e2[1] * s0[1], e1[2] * s0[0] + e2[2] * s0[1])
+    t1 = (e1[0] * s1[0] + e2[0] * s1[1], e1[1] * s1[0] + e2[1] * s1[1], e1[2] * s1[0] + e2[2] * s1[1])
     if cylinder:
         l0 = math.sqrt((p0[0] - t0[0]) ** 2 + (p0[1] - t0[1]) ** 2)
         l1 = math.sqrt((p1[0] - t1[0]) ** 2 + (p1[1] - t1[1]) ** 2)
         total = l0 + arc + l1
-        t0[2] = p0[2] + (p1[2] - p0[2]) * l0 / total
-        t1[2] = p0[2] + (p1[2] - p0[2]) * (l0 + arc) / total
+        t0 = (t0[0], t0[1], p0[2] + (p1[2] - p0[2]) * l0 / total)
+        t1 = (t1[0], t1[1], p0[2] + (p1[2] - p0[2]) * (l0 + arc) / total)
         height = abs(t1[2] - t0[2])
         arc = math.sqrt(arc * arc + height * height)
-    return arc, t0, t1
+    return True, arc, t0, t1
+
+
+@register_jitable
+def to_frame(R, p, x):
+    """``R^T (x - p)``: a world point ``x`` in the frame of orientation ``R`` (3x3 nested tuple,
+    columns the frame's axes) and origin ``p``."""
+    dx, dy, dz = x[0] - p[0], x[1] - p[1], x[2] - p[2]
+    return (R[0][0] * dx + R[1][0] * dy + R[2][0] * dz, R[0][1] * dx + R[1][1] * dy + R[2][1] * dz,
+            R[0][2] * dx + R[1][2] * dy + R[2][2] * dz)
+
+
+@register_jitable
+def from_frame(R, p, t):
+    """``R t + p``: a point ``t`` of the frame ``(R, p)`` in its parent's frame."""
+    return (R[0][0] * t[0] + R[0][1] * t[1] + R[0][2] * t[2] + p[0],
+            R[1][0] * t[0] + R[1][1] * t[1] + R[1][2] * t[2] + p[1],
+            R[2][0] * t[0] + R[2][1] * t[1] + R[2][2] * t[2] + p[2])
+
+
+@register_jitable
+def wrap_in_frame(cylinder, R, p, x0, x1, radius, has_side, side):
+    """The wrap of ``x0 -> x1`` over the geom of orientation ``R`` and centre ``p`` (all in one
+    frame, e.g. world; ``side`` read only when ``has_side``): ``(ok, arc, t0, t1)`` with the tangent
+    points in the geom's own frame."""
+    s = to_frame(R, p, side) if has_side else side
+    return _wrap_local(cylinder, to_frame(R, p, x0), to_frame(R, p, x1), radius, has_side, s)
 
 
 def _point(x, what: str) -> tuple[float, float, float]:
@@ -348,11 +417,12 @@ def _radius(radius, what: str) -> float:
 def _wrap(cylinder: bool, p0, p1, radius, side) -> Wrap:
     kind = "wrap_cylinder" if cylinder else "wrap_sphere"
     r = _radius(radius, kind)
-    s = None if side is None else _point(side, f"{kind} side")
-    res = _wrap_local(cylinder, _point(p0, f"{kind} p0"), _point(p1, f"{kind} p1"), r, s)
-    if res is None:
+    s = (0.0, 0.0, 0.0) if side is None else _point(side, f"{kind} side")
+    ok, arc, t0, t1 = _wrap_local(cylinder, _point(p0, f"{kind} p0"), _point(p1, f"{kind} p1"), r,
+                                  side is not None, s)
+    if not ok:
         return Wrap(False, None, None, 0.0)
-    return Wrap(True, np.array(res[1]), np.array(res[2]), float(res[0]))
+    return Wrap(True, np.array(t0), np.array(t1), float(arc))
 
 
 def wrap_sphere(p0, p1, radius: float, side=None) -> Wrap:
@@ -412,23 +482,14 @@ def _wrap_world(element, k: int, x0, x1):
     rot = np.asarray(rot, dtype=float)
     if rot.shape != (3, 3):
         raise ModelError(f"tendon element {k} (geom): expected R of shape (3, 3), got {rot.shape}")
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rot.tolist()
-    px, py, pz = _vec3(pos, f"tendon element {k} (geom) p")
+    R = tuple(tuple(row) for row in rot.tolist())
+    p = _vec3(pos, f"tendon element {k} (geom) p")
     r = _radius(radius, f"tendon element {k} (geom) radius")
-
-    def local(x):  # R^T (x - p)
-        dx, dy, dz = x[0] - px, x[1] - py, x[2] - pz
-        return (r00 * dx + r10 * dy + r20 * dz, r01 * dx + r11 * dy + r21 * dz, r02 * dx + r12 * dy + r22 * dz)
-
-    def world(t):  # R t + p
-        return (r00 * t[0] + r01 * t[1] + r02 * t[2] + px, r10 * t[0] + r11 * t[1] + r12 * t[2] + py,
-                r20 * t[0] + r21 * t[1] + r22 * t[2] + pz)
-
-    s = None if side is None else local(_vec3(side, f"tendon element {k} (geom) side"))
-    res = _wrap_local(kind == "cylinder", local(x0), local(x1), r, s)
-    if res is None:
+    s = (0.0, 0.0, 0.0) if side is None else _vec3(side, f"tendon element {k} (geom) side")
+    ok, arc, t0, t1 = wrap_in_frame(kind == "cylinder", R, p, x0, x1, r, side is not None, s)
+    if not ok:
         return None
-    return res[0], world(res[1]), world(res[2])
+    return arc, from_frame(R, p, t0), from_frame(R, p, t1)
 
 
 def _dist(a, b) -> float:

@@ -1,0 +1,145 @@
+r"""The compiled route pass: every wrap of a cable set at one instant in one call.
+
+:class:`mcdm_pin.model.routes.RoutePaths` keeps the path arrays the cable-terms kernel reads (its module
+docstring gives the layout); :func:`route_pass` rewrites them from the key bodies' world placements.
+For wrap ``w`` between route points :math:`A` (on key body ``a``) and :math:`B` (on ``b``), over a
+surface fixed on key body ``g`` at placement :math:`(R_w, p_w)` in that body's frame:
+
+.. math::
+
+    R_g = {}^0R_g R_w, \quad p_g = {}^0R_g p_w + {}^0p_g, \qquad
+    A = {}^0R_a A_a + {}^0p_a \ (\text{likewise } B \text{ and the side point}),
+
+the wrap itself is :func:`mcdm_pin.model.wrapping.wrap_in_frame` (MuJoCo 4.0's rule: the points taken
+to the surface's frame, :math:`R_g^T (x - p_g)`, then the sphere or cylinder wrap with its side-point
+winding or inside wrap), and an engaged wrap's tangent points go into their slots in the frame of
+the surface's body, :math:`R_w t + p_w` (metres). The wrap maths is ``wrapping.py``'s own functions,
+compiled inline here: one implementation (the helpers below are ``register_jitable`` too, so
+the uncompiled path is Python throughout).
+
+Compiled once per machine and cached on disk (``cache=True``), registered with :mod:`mcdm_pin.jit`
+like :mod:`mcdm_pin.model.kernels`; before it is compiled, ``route_pass.py_func`` runs the same code
+as Python.
+
+Packed per-wrap tables (one array each, so that a call passes few arguments: numba's dispatch costs
+about a microsecond per argument):
+
+- ``wrap_int`` (W, 12) int64: key bodies of the surface, ``A``, ``B`` and the side point; has a side
+  point (0/1); cylinder (0/1, else sphere); the slot of ``T_0`` (``T_1`` is the next); the segment
+  ``AB`` it replaces; ``B``'s point index; the cable; whether ``A T_0`` spans two bodies; whether
+  ``AB`` does.
+- ``wrap_float`` (W, 23): ``A``, ``B`` and the side point in their bodies' frames; ``R_w``
+  (row-major), ``p_w``; the radius; the branch's scale ``1/divisor``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .wrapping import from_frame, register_jitable, wrap_in_frame
+
+# columns of wrap_int
+W_KEY, A_KEY, B_KEY, S_KEY, HAS_SIDE, CYLINDER, SLOT, SEG, B_POINT, CABLE, ACTIVE_AT0, ACTIVE_AB = range(12)
+N_INT = 12
+# columns of wrap_float
+A_LOCAL, B_LOCAL, S_LOCAL, R_W, P_W, RADIUS, SCALE = 0, 3, 6, 9, 18, 21, 22
+N_FLOAT = 23
+
+
+@register_jitable
+def _rotation(oM, k):
+    """Key body ``k``'s world rotation as a nested tuple (rows)."""
+    return ((oM[k, 0, 0], oM[k, 0, 1], oM[k, 0, 2]), (oM[k, 1, 0], oM[k, 1, 1], oM[k, 1, 2]),
+            (oM[k, 2, 0], oM[k, 2, 1], oM[k, 2, 2]))
+
+
+@register_jitable
+def _world(oM, k, f, c):
+    """The point ``f[c:c+3]`` of key body ``k``'s frame in world: ``R x + p``."""
+    x0, x1, x2 = f[c], f[c + 1], f[c + 2]
+    return (oM[k, 0, 0] * x0 + oM[k, 0, 1] * x1 + oM[k, 0, 2] * x2 + oM[k, 0, 3],
+            oM[k, 1, 0] * x0 + oM[k, 1, 1] * x1 + oM[k, 1, 2] * x2 + oM[k, 1, 3],
+            oM[k, 2, 0] * x0 + oM[k, 2, 1] * x1 + oM[k, 2, 2] * x2 + oM[k, 2, 3])
+
+
+@register_jitable
+def _surface(oM, k, f):
+    """The surface's world frame ``(R_g, p_g)`` (nested tuple, tuple) and its placement ``(R_w, p_w)``
+    in key body ``k``'s frame, from the wrap's row ``f`` of ``wrap_float``."""
+    Rw = ((f[R_W], f[R_W + 1], f[R_W + 2]), (f[R_W + 3], f[R_W + 4], f[R_W + 5]),
+          (f[R_W + 6], f[R_W + 7], f[R_W + 8]))
+    pw = (f[P_W], f[P_W + 1], f[P_W + 2])
+    oR = _rotation(oM, k)
+    Rg = ((oR[0][0] * Rw[0][0] + oR[0][1] * Rw[1][0] + oR[0][2] * Rw[2][0],
+           oR[0][0] * Rw[0][1] + oR[0][1] * Rw[1][1] + oR[0][2] * Rw[2][1],
+           oR[0][0] * Rw[0][2] + oR[0][1] * Rw[1][2] + oR[0][2] * Rw[2][2]),
+          (oR[1][0] * Rw[0][0] + oR[1][1] * Rw[1][0] + oR[1][2] * Rw[2][0],
+           oR[1][0] * Rw[0][1] + oR[1][1] * Rw[1][1] + oR[1][2] * Rw[2][1],
+           oR[1][0] * Rw[0][2] + oR[1][1] * Rw[1][2] + oR[1][2] * Rw[2][2]),
+          (oR[2][0] * Rw[0][0] + oR[2][1] * Rw[1][0] + oR[2][2] * Rw[2][0],
+           oR[2][0] * Rw[0][1] + oR[2][1] * Rw[1][1] + oR[2][2] * Rw[2][1],
+           oR[2][0] * Rw[0][2] + oR[2][1] * Rw[1][2] + oR[2][2] * Rw[2][2]))
+    pg = _world(oM, k, f, P_W)
+    return Rg, pg, Rw, pw
+
+
+@njit(cache=True, nogil=True)
+def route_pass(oM, wrap_int, wrap_float, point_local, seg_b, seg_active, seg_scale, arc_length, engaged,
+               n_segments):
+    """Rewrite the path arrays for the placements ``oM`` (K, 4, 4) (module docstring), in place:
+    ``point_local`` (P + 2W, 3) the tangent slots (zeros when not engaged), ``seg_b`` and
+    ``seg_active`` of each wrap's segment (``T_0`` and ``A T_0`` when engaged, else ``B`` and
+    ``AB``), ``seg_scale`` of the slot segments ``T_1 B`` (index ``n_segments + w``: the branch's
+    scale when engaged, else 0), ``arc_length`` (m,) each cable's arcs times their scales and
+    ``engaged`` (W,)."""
+    arc_length[:] = 0.0
+    for w in range(wrap_int.shape[0]):
+        wi = wrap_int[w]
+        f = wrap_float[w]
+        Rg, pg, Rw, pw = _surface(oM, wi[W_KEY], f)
+        pa = _world(oM, wi[A_KEY], f, A_LOCAL)
+        pb = _world(oM, wi[B_KEY], f, B_LOCAL)
+        has_side = wi[HAS_SIDE] != 0
+        ps = _world(oM, wi[S_KEY], f, S_LOCAL) if has_side else (0.0, 0.0, 0.0)
+        ok, arc, t0, t1 = wrap_in_frame(wi[CYLINDER] != 0, Rg, pg, pa, pb, f[RADIUS], has_side, ps)
+        engaged[w] = ok
+        slot, seg = wi[SLOT], wi[SEG]
+        if ok:  # tangent points from the surface's frame to the frame of the body carrying it
+            t0 = from_frame(Rw, pw, t0)
+            t1 = from_frame(Rw, pw, t1)
+        for i in range(3):
+            point_local[slot, i] = t0[i]
+            point_local[slot + 1, i] = t1[i]
+        if ok:
+            seg_b[seg] = slot
+            seg_active[seg] = wi[ACTIVE_AT0] != 0
+            seg_scale[n_segments + w] = f[SCALE]
+            arc_length[wi[CABLE]] += f[SCALE] * arc
+        else:
+            seg_b[seg] = wi[B_POINT]
+            seg_active[seg] = wi[ACTIVE_AB] != 0
+            seg_scale[n_segments + w] = 0.0
+
+
+def warm_calls():
+    """This module's kernel with example arguments of the types :class:`~mcdm_pin.model.routes.RoutePaths`
+    passes (registered with :mod:`mcdm_pin.jit`)."""
+    i64 = np.int64
+    oM = np.tile(np.eye(4), (1, 1, 1))
+    wi = np.zeros((1, N_INT), dtype=i64)
+    wi[0, SLOT], wi[0, B_POINT] = 2, 1
+    wf = np.zeros((1, N_FLOAT))
+    wf[0, R_W:R_W + 9] = np.eye(3).ravel()
+    wf[0, A_LOCAL], wf[0, B_LOCAL + 1], wf[0, RADIUS], wf[0, SCALE] = 1.0, 1.0, 0.1, 1.0
+    return [(route_pass, (oM, wi, wf, np.zeros((4, 3)), np.array([1], dtype=i64), np.array([False]),
+                          np.zeros(2), np.zeros(1), np.zeros(1, dtype=np.bool_), 1))]
+
+
+def _register() -> None:
+    from .. import jit
+
+    jit.register("mcdm_pin.model.route_kernels", warm_calls)
+
+
+_register()
