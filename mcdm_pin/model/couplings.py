@@ -89,6 +89,7 @@ class Couplings:
         dep = set(self.dependent.tolist())
         self.independent = np.array([i for i in range(nv) if i not in dep], dtype=int)
         self.independent_names = tuple(self.names[i] for i in self.independent)
+        self._chain = None  # basis()'s index lists, made on first use
 
     @property
     def n(self) -> int:
@@ -140,13 +141,47 @@ class Couplings:
                                  f"independent coordinates, or values that follow the couplings)")
 
     def basis(self, q) -> np.ndarray:
-        """``N`` (nv, n): ``dq/dz`` at ``q`` (module docstring)."""
+        """``N`` (nv, n): ``dq/dz`` at ``q`` (module docstring).
+
+        Every row has one entry at most: an independent coordinate's 1 in its own column; a
+        dependent's ``p'(x)`` times its independent coordinate's entry, in that one's column (none for
+        a fixed coordinate). So the rows are products of scalars along each chain of couplings,
+        taken in order, and written in one assignment."""
+        if self._chain is None:
+            self._chain = _chain(self)
+        dep_rows, dep_cols, src, coef = self._chain
+        qv = np.asarray(q, dtype=float)[self.q_index[self._x_of]].tolist() if len(dep_rows) else []
+        value = [1.0] * self.nv  # each row's entry (1 for the independent rows)
+        for k, (d, i, x) in enumerate(zip(dep_rows, src, qv)):
+            a0, a1, a2, a3, a4 = coef[k]
+            value[d] = (a1 + x * (2 * a2 + x * (3 * a3 + x * 4 * a4))) * value[i]  # Coupling.value's p'
         N = np.zeros((self.nv, self.n))
         N[self.independent, np.arange(self.n)] = 1.0
-        for c in self.items:
-            if c.independent >= 0:
-                N[c.dependent] = c.value(q[self.q_index[c.independent]])[1] * N[c.independent]
+        if len(dep_rows):
+            N[dep_rows, dep_cols] = [value[d] for d in dep_rows]
         return N
+
+
+def _chain(cs: Couplings):
+    """:meth:`Couplings.basis`'s lists, in the couplings' order, for those with an independent
+    coordinate at the root of its chain (not a fixed one): ``(rows, columns, sources, coefficients)``:
+    each dependent's row, the column of that independent coordinate, the row it multiplies and its
+    polynomial; and ``cs._x_of`` the ``v`` index whose ``q`` entry is each one's ``x``."""
+    col = {int(i): k for k, i in enumerate(cs.independent)}
+    rows, cols, src, coef, x_of = [], [], [], [], []
+    for c in cs.items:
+        root = col.get(c.independent) if c.independent >= 0 else None
+        if root is None:  # a fixed coordinate, or one coupled to a fixed one: a zero row
+            col[c.dependent] = None
+            continue
+        col[c.dependent] = root
+        rows.append(c.dependent)
+        cols.append(root)
+        src.append(c.independent)
+        coef.append(tuple(float(a) for a in c.coef))
+        x_of.append(c.independent)
+    cs._x_of = np.array(x_of, dtype=int)
+    return rows, cols, src, coef
 
 
 def _ordered(items, names):

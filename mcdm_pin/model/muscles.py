@@ -60,6 +60,7 @@ This follows ``mju_muscleGainLength``, ``mju_muscleGain``, ``mju_muscleBias`` an
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
+from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
@@ -148,6 +149,12 @@ class MuscleParams:
         """``L_opt`` (m,), actuator units (m times the gear): the length one normalised unit spans."""
         return _optimal_length(self.lengthrange, self.range)
 
+    @cached_property
+    def _curves(self) -> "_Curves":
+        """The curves' constants (:class:`_Curves`), computed once: the per-instant functions below
+        are numpy calls on (m,) arrays whose cost is per call, not per element."""
+        return _curves(self)
+
     def length_at(self, l) -> np.ndarray:
         """Tendon lengths (m) at normalised lengths ``l`` (broadcast over muscles; inverse of the map)."""
         return (self.lengthrange[:, 0] + (np.asarray(l, dtype=float) - self.range[:, 0])
@@ -192,19 +199,55 @@ def _optimal_length(lengthrange, rng):
     return (lengthrange[:, 1] - lengthrange[:, 0]) / np.maximum(MINVAL, rng[:, 1] - rng[:, 0])
 
 
+class _Curves(NamedTuple):
+    """Constants of the curves of m muscles, each (m,) and computed with the very expressions the
+    curves used per call (so every result is the same to the bit)."""
+
+    r0: np.ndarray  # range[:, 0]
+    bias_r0: np.ndarray  # bias_range[:, 0]
+    lr0: np.ndarray  # lengthrange[:, 0]
+    lopt: np.ndarray  # max(eps, L_opt)
+    bias_lopt: np.ndarray  # max(eps, L_opt^p)
+    vden: np.ndarray  # max(eps, L_opt vmax)
+    fl_a: np.ndarray  # (lmin + 1) / 2
+    fl_b: np.ndarray  # (1 + lmax) / 2
+    fl_d: tuple  # the four denominators of F_L's pieces
+    fv_y: np.ndarray  # fvmax - 1
+    fv_d: np.ndarray  # max(eps, fvmax - 1)
+    fp_b: np.ndarray  # (1 + bias_lmax) / 2
+    fp_w: np.ndarray  # max(eps, fp_b - 1)
+    fp_half: np.ndarray  # fpmax * 0.5
+    passive_scale: np.ndarray  # gear * bias_force
+    gain_scale: np.ndarray  # gear * force
+
+
+def _curves(p: MuscleParams) -> _Curves:
+    a = 0.5 * (p.lmin + 1)
+    b = 0.5 * (1 + p.lmax)
+    y = p.fvmax - 1
+    fp_b = 0.5 * (1 + p.bias_lmax)
+    out = _Curves(
+        r0=p.range[:, 0].copy(), bias_r0=p.bias_range[:, 0].copy(), lr0=p.lengthrange[:, 0].copy(),
+        lopt=np.maximum(MINVAL, _optimal_length(p.lengthrange, p.range)),
+        bias_lopt=np.maximum(MINVAL, _optimal_length(p.lengthrange, p.bias_range)),
+        vden=np.maximum(MINVAL, p.optimal_length * p.vmax), fl_a=a, fl_b=b,
+        fl_d=(np.maximum(MINVAL, a - p.lmin), np.maximum(MINVAL, 1 - a), np.maximum(MINVAL, b - 1),
+              np.maximum(MINVAL, p.lmax - b)),
+        fv_y=y, fv_d=np.maximum(MINVAL, y), fp_b=fp_b, fp_w=np.maximum(MINVAL, fp_b - 1),
+        fp_half=p.fpmax * 0.5, passive_scale=p.gear * p.bias_force, gain_scale=p.gear * p.force)
+    for arr in (*out[:8], *out.fl_d, *out[9:]):
+        arr.setflags(write=False)
+    return out
+
+
 def _lengths(params: MuscleParams, tendon_lengths, what: str) -> np.ndarray:
     x = np.asarray(tendon_lengths, dtype=float)
     if x.shape[-1:] != (params.size,):
         raise StateError(f"muscles: {what} must have last axis of size {params.size} (one per muscle), "
                          f"got shape {x.shape}")
-    if not np.all(np.isfinite(x)):
+    if not np.isfinite(x).all():
         raise StateError(f"muscles: {what} must be finite, got {np.count_nonzero(~np.isfinite(x))} non-finite")
     return x
-
-
-def _normalise_length(tendon_lengths, gear, lengthrange, rng):
-    L0 = _optimal_length(lengthrange, rng)
-    return rng[:, 0] + (gear * tendon_lengths - lengthrange[:, 0]) / np.maximum(MINVAL, L0)
 
 
 def normalised(params: MuscleParams, tendon_lengths, tendon_velocities):
@@ -219,8 +262,9 @@ def normalised(params: MuscleParams, tendon_lengths, tendon_velocities):
     """
     ell = _lengths(params, tendon_lengths, "tendon_lengths")
     ell_dot = _lengths(params, tendon_velocities, "tendon_velocities")
-    l = _normalise_length(ell, params.gear, params.lengthrange, params.range)
-    v = params.gear * ell_dot / np.maximum(MINVAL, params.optimal_length * params.vmax)
+    k = params._curves
+    l = k.r0 + (params.gear * ell - k.lr0) / k.lopt
+    v = params.gear * ell_dot / k.vden
     return l, v
 
 
@@ -228,31 +272,33 @@ def normalised_passive(params: MuscleParams, tendon_lengths) -> np.ndarray:
     """Normalised length ``l^p`` of the passive term (with ``bias_range``; equals ``l`` of
     :func:`normalised` when ``bias_range == range``)."""
     ell = _lengths(params, tendon_lengths, "tendon_lengths")
-    return _normalise_length(ell, params.gear, params.lengthrange, params.bias_range)
+    k = params._curves
+    return k.bias_r0 + (params.gear * ell - k.lr0) / k.bias_lopt
 
 
 def fl(params: MuscleParams, l) -> np.ndarray:
     """Active force-length curve ``F_L(l)`` in [0, 1] (``mju_muscleGainLength``)."""
     l = np.asarray(l, dtype=float)
-    lmin, lmax = params.lmin, params.lmax
-    a = 0.5 * (lmin + 1)
-    b = 0.5 * (1 + lmax)
-    x1 = (l - lmin) / np.maximum(MINVAL, a - lmin)
-    x2 = (1 - l) / np.maximum(MINVAL, 1 - a)
-    x3 = (l - 1) / np.maximum(MINVAL, b - 1)
-    x4 = (lmax - l) / np.maximum(MINVAL, lmax - b)
+    k = params._curves
+    lmin, lmax, a, b = params.lmin, params.lmax, k.fl_a, k.fl_b
+    d1, d2, d3, d4 = k.fl_d
+    x1 = (l - lmin) / d1
+    x2 = (1 - l) / d2
+    x3 = (l - 1) / d3
+    x4 = (lmax - l) / d4
     inside = (lmin <= l) & (l <= lmax)
-    return np.select([~inside, l <= a, l <= 1, l <= b],
-                     [0.0, 0.5 * x1 * x1, 1 - 0.5 * x2 * x2, 1 - 0.5 * x3 * x3], 0.5 * x4 * x4)
+    # the first piece whose condition holds (np.select's rule, as nested np.where: cheaper)
+    return np.where(~inside, 0.0, np.where(l <= a, 0.5 * x1 * x1, np.where(
+        l <= 1, 1 - 0.5 * x2 * x2, np.where(l <= b, 1 - 0.5 * x3 * x3, 0.5 * x4 * x4))))
 
 
 def fv(params: MuscleParams, v) -> np.ndarray:
     """Force-velocity curve ``F_V(v)`` in [0, fvmax] (the velocity curve of ``mju_muscleGain``)."""
     v = np.asarray(v, dtype=float)
-    y = params.fvmax - 1
-    return np.select([v <= -1, v <= 0, v <= y],
-                     [0.0, (v + 1) * (v + 1), params.fvmax - (y - v) * (y - v) / np.maximum(MINVAL, y)],
-                     params.fvmax)
+    k = params._curves
+    y = k.fv_y
+    return np.where(v <= -1, 0.0, np.where(v <= 0, (v + 1) * (v + 1), np.where(
+        v <= y, params.fvmax - (y - v) * (y - v) / k.fv_d, params.fvmax)))
 
 
 def fp(params: MuscleParams, l) -> np.ndarray:
@@ -260,11 +306,11 @@ def fp(params: MuscleParams, l) -> np.ndarray:
 
     ``l`` is the passive normalised length (:func:`normalised_passive`)."""
     l = np.asarray(l, dtype=float)
-    b = 0.5 * (1 + params.bias_lmax)
-    w = np.maximum(MINVAL, b - 1)
-    x_quad = (l - 1) / w
-    x_lin = (l - b) / w
-    return np.select([l <= 1, l <= b], [0.0, params.fpmax * 0.5 * x_quad * x_quad], params.fpmax * (0.5 + x_lin))
+    k = params._curves
+    x_quad = (l - 1) / k.fp_w
+    x_lin = (l - k.fp_b) / k.fp_w
+    return np.where(l <= 1, 0.0, np.where(l <= k.fp_b, k.fp_half * x_quad * x_quad,
+                                          params.fpmax * (0.5 + x_lin)))
 
 
 def force_range(params: MuscleParams, tendon_lengths, tendon_velocities) -> MuscleState:
@@ -274,10 +320,15 @@ def force_range(params: MuscleParams, tendon_lengths, tendon_velocities) -> Musc
     ``f_max = passive + gain * act_max``. Where ``gain`` is 0 the range collapses to the passive force
     (``f_min == f_max``): the muscle can neither add nor withhold tension there.
     """
-    l, v = normalised(params, tendon_lengths, tendon_velocities)
-    lp = normalised_passive(params, tendon_lengths)
-    passive = params.gear * params.bias_force * fp(params, lp)
-    gain = params.gear * params.force * fl(params, l) * fv(params, v)
+    ell = _lengths(params, tendon_lengths, "tendon_lengths")
+    ell_dot = _lengths(params, tendon_velocities, "tendon_velocities")
+    k = params._curves
+    g_ell = params.gear * ell  # (normalised and normalised_passive, the inputs checked once)
+    l = k.r0 + (g_ell - k.lr0) / k.lopt
+    v = params.gear * ell_dot / k.vden
+    lp = k.bias_r0 + (g_ell - k.lr0) / k.bias_lopt
+    passive = k.passive_scale * fp(params, lp)
+    gain = k.gain_scale * fl(params, l) * fv(params, v)
     a_min = np.broadcast_to(params.act_min, gain.shape)
     a_max = np.broadcast_to(params.act_max, gain.shape)
     return MuscleState(passive, gain, passive + gain * a_min, passive + gain * a_max, a_min, a_max)

@@ -1,0 +1,37 @@
+"""Coupled coordinates: the basis ``N = dq/dz`` against central finite differences of the couplings'
+own map ``z -> q`` (``Couplings.fill``), on chains of couplings with a fixed coordinate among them."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mcdm_pin.model.couplings import Coupling, Couplings
+
+
+def _couplings():
+    """Eight hinge coordinates: 1 <- 0, 2 <- 1 (a chain), 3 fixed, 4 <- 3 (coupled to a fixed one),
+    6 <- 2 (a chain of three); 0, 5 and 7 independent."""
+    items = [Coupling(6, 2, (0.3, -1.2, 0.0, 0.7, 0.0), "e"), Coupling(1, 0, (0.1, -0.5, 0.3, 0.2, -0.1), "a"),
+             Coupling(2, 1, (0.0, 2.0, -0.3, 0.1, 0.05), "b"), Coupling(3, -1, (0.4, 0, 0, 0, 0), "c"),
+             Coupling(4, 3, (0.0, 1.0, 0.5, 0, 0), "d")]
+    return Couplings(np.arange(8), items, [f"x{i}" for i in range(8)])
+
+
+def test_basis_equals_finite_differences_of_the_coupled_map():
+    cs = _couplings()
+    assert cs.independent.tolist() == [0, 5, 7]
+    rng = np.random.default_rng(5)
+
+    def q_of(z):
+        q = np.zeros(8)
+        q[cs.independent] = z
+        return cs.fill(q)[0]
+
+    for _ in range(20):
+        z = rng.uniform(-1.0, 1.0, cs.n)
+        N = cs.basis(q_of(z))
+        h = 1e-6
+        fd = np.column_stack([(q_of(z + h * e) - q_of(z - h * e)) / (2 * h) for e in np.eye(cs.n)])
+        assert np.abs(N - fd).max() < 1e-8 * max(1.0, np.abs(fd).max())
+        assert not N[3].any() and not N[4].any()  # a fixed coordinate and the one coupled to it
+        assert np.count_nonzero(N[6]) == 1 and N[6, 0] != 0.0
