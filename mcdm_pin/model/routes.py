@@ -19,6 +19,9 @@ Layout (fixed for a cable set, so the kernel's arrays keep their sizes): the set
 two tangent-point slots per wrap; the set's segments, then one slot per wrap (``T_1 -> B``). At each
 instant a wrap that engages turns its segment :math:`AB` into :math:`A T_0` and fills its slot; one that
 does not keeps :math:`AB` and leaves its slot at scale 0 (no length, no wrench).
+
+At each instant one call of :func:`mcdm_pin.model.route_kernels.route_pass` (compiled, or the same
+function as Python before numba has compiled it) does every wrap and rewrites these arrays in place.
 """
 
 from __future__ import annotations
