@@ -13,6 +13,7 @@ pytest.importorskip("mujoco")
 
 from mcdm_pin import InverseDynamics  # noqa: E402
 from mcdm_pin.constraints import InteractionCone  # noqa: E402
+from mcdm_pin.model.terms import TermsEvaluator  # noqa: E402
 from mcdm_pin.objectives import MinActivations  # noqa: E402
 from mcdm_pin.problem import Problem, case_problem  # noqa: E402
 from mcdm_pin.robot import Robot  # noqa: E402
@@ -34,9 +35,17 @@ def _same_answer(ours, ref):
     assert np.all(np.isfinite(ours.activation[:, np.isfinite(ours.activation).any(axis=0)]))
 
 
-def test_elbow_flexion_case_1_is_minimum_activation():
+def test_elbow_flexion_case_1_is_minimum_activation_through_wrap_switches():
+    """The flexion engages and releases wraps (where ``L`` has a kink): warm starts carry through."""
     robot = Robot.load(ROBOTS / "myoelbow.yaml")
-    traj = load_trajectory(robot, "flexion").subsample(21)
+    traj = load_trajectory(robot, "flexion")
+    ev = TermsEvaluator(robot)
+    engaged = []
+    for q in traj.q:
+        ev(q)
+        engaged.append(ev._routes.engaged.copy())
+    engaged = np.array(engaged)
+    assert (np.diff(engaged.astype(int), axis=0) != 0).any(axis=1).sum() >= 2
     problem = case_problem(robot, 1)
     assert "MinActivations" in problem.describe()
     ours, ref = _both(robot, problem, traj)

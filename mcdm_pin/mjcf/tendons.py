@@ -93,8 +93,10 @@ def read_tendons(mj, mjm, source: str) -> TendonSet:
     for name, why in found.skipped:
         i = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_ACTUATOR, name) if not name.startswith("actuator ") \
             else int(name.split()[1])
-        raise _refuse(source, f"actuator {name!r}", f"{why}; only muscle actuators on tendons are read "
-                                                    f"from MJCF (transmission {int(mj.actuator_trntype[i])})")
+        trn = mujoco.mjtTrn(int(mj.actuator_trntype[i])).name.removeprefix("mjTRN_").lower()
+        raise _refuse(source, f"actuator {name!r}", f"{why}, on a {trn}; only muscle actuators on tendons are "
+                                                    f"read from MJCF (a motor is not read yet: give it as a "
+                                                    f"sidecar reserve)")
     by_tendon = {int(t): k for k, t in enumerate(found.tendon_ids)}
     if len(by_tendon) != len(found.tendon_ids):
         raise _refuse(source, "actuators", "two muscles drive one tendon; expected one muscle per tendon")
