@@ -76,8 +76,26 @@ def robot_from_mujoco(mj, source: str, name: str = "robot"):
         if kind in (2, 3):  # slide, hinge: q is the coordinate
             q_index[mjm.jnt_idx_v[j]] = mjm.jnt_idx_q[j]
     couplings = Couplings(q_index, coupled, names) if coupled else None
-    return Robot(mjm.model, cables, physical_joints(mjm.model), name=name, couplings=couplings,
-                 coordinate_names=names, source=MjcfSource(mjm, couplings), notes=tendons.notes)
+    joints = physical_joints(mjm.model)
+    try:
+        return Robot(mjm.model, cables, joints, _joint_motors(mjm, joints, tendons.joint_motors), name=name,
+                     couplings=couplings, coordinate_names=names, source=MjcfSource(mjm, couplings),
+                     notes=tendons.notes)
+    except ModelError as exc:
+        raise ModelError(f"{source}: {exc}") from None
+
+
+def _joint_motors(mjm, joints, motors) -> tuple:
+    """Bounded motors on hinge and slide joints as actuators of the physical joint (MuJoCo body) holding
+    the joint, named after the MuJoCo actuator."""
+    from ..model.actuators import Actuator
+
+    owner = {int(i): j for j in joints for i in j.idx_v}
+    out = []
+    for name, jnt, lo, hi in motors:
+        i = int(mjm.jnt_idx_v[jnt])
+        out.append(Actuator(owner[i].name, np.array([i]), np.array([lo]), np.array([hi]), 1.0, label=name))
+    return tuple(out)
 
 
 def _line_of(source: str, message: str) -> str:
