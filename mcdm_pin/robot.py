@@ -264,6 +264,13 @@ class Robot:
                 out[s:s + 2] /= norm
         return out
 
+    def reference_coordinates(self) -> np.ndarray:
+        """(nv,) the source's reference pose as coordinates: zeros, or an MJCF model's ``qpos0`` with
+        its coupled coordinates following their couplings."""
+        if self.source is None:
+            return np.zeros(self.nv)
+        return self.coordinates(self.source.configuration({}))
+
     def follow_couplings(self, x: np.ndarray) -> np.ndarray:
         """Coordinates ``x`` ((nv,) or (n, nv)) with every coupled coordinate computed from the
         independent ones (:mod:`mcdm_pin.model.couplings`); unchanged without couplings."""
