@@ -14,7 +14,8 @@ def validation_report(robot) -> list[tuple[str, str]]:
 
     mjcf = getattr(robot.source, "kind", None) == "mjcf"
     loaded = "MJCF compiled by MuJoCo; every moving body's joints" if mjcf else "URDF loaded; every movable URDF joint"
-    out = [("ok", f"sidecar valid; {loaded} ({robot.model.njoints - 1}, {robot.nv} DoF) belongs to one of "
+    valid = "sidecar valid; " if robot.sidecar is not None else ""
+    out = [("ok", f"{valid}{loaded} ({robot.model.njoints - 1}, {robot.nv} DoF) belongs to one of "
                   f"{len(robot.joints)} physical joints")]
     q0 = robot.reference_coordinates()
     n = robot.nv if robot.couplings is None else robot.couplings.n  # the coordinates the cables must move
