@@ -207,9 +207,10 @@ class TermsEvaluator:
         self._zeros = np.zeros(model.nv)
         self._tril = np.tril_indices(model.nv, -1)
         if compiled:
-            from .kernels import cable_terms, csr
+            from .. import jit
+            from .kernels import csr
 
-            self._kernel = cable_terms
+            self._kernel = jit.kernels("model.kernels").cable_terms  # compiled or not (mcdm_pin/jit.py)
             K = len(keys)
             self._v_csr = csr([np.flatnonzero(self._sub_v[:, k]).tolist() for k in range(K)], K)
             self._a_csr = csr([np.flatnonzero(self._sub_phys[:, k]).tolist() for k in range(K)], K)

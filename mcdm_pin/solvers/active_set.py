@@ -143,7 +143,8 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     cact, cdir = guess.cone_guess(qp)
     # C-ordered float arrays and Python scalars: one compiled specialisation serves every call
     c_ = np.ascontiguousarray
-    code, x, y, z, zc, objective, held, mus, dirs, nxt_state, solves, unique = _fast.active_set_answer(
+    answer = jit.kernels("solvers._fast").active_set_answer
+    code, x, y, z, zc, objective, held, mus, dirs, nxt_state, solves, unique = answer(
         c_(qp.P, dtype=float), c, qp.r, A, b, lb, ub, c_(state, dtype=np.int8), G, gc, ax, tn, basis0,
         c_(cact, dtype=np.bool_), c_(cdir, dtype=float), cosr, basis, int(max_pivots), int(max_newton), *_AS_TOLS,
         *unique_args(qp))
