@@ -37,6 +37,7 @@ tests and benchmarks use it), ``off`` (uncompiled, even when stamped).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib
 import os
@@ -98,14 +99,15 @@ def kernels(module: str):
     return ns
 
 
-def kernel_sources() -> list[Path]:
+@functools.lru_cache(maxsize=None)
+def kernel_sources() -> tuple[Path, ...]:
     """The package's source files that define numba kernels (those that import numba's ``njit``),
     and ``tolerances.py``: kernels read some of its constants when they are compiled
     (``UNIQUE_PENALTY``, ``IPM_START_BOX_WEIGHT``), so a changed constant must recompile them too."""
     root = Path(__file__).resolve().parent
     pattern = re.compile(r"^from numba import .*\bnjit\b", re.M)
     found = {p for p in root.rglob("*.py") if pattern.search(p.read_text(encoding="utf-8"))}
-    return sorted(found | {root / "tolerances.py"})
+    return tuple(sorted(found | {root / "tolerances.py"}))
 
 
 def sources_digest(paths=None) -> str:
@@ -173,8 +175,6 @@ def _quiet(f):
     """``f`` called under ``np.errstate(all="ignore")``: the compiled kernels use numba's
     ``error_model="numpy"`` (a division by zero gives inf or nan, silently), and so do their
     uncompiled copies (the calls between kernels stay direct)."""
-    import functools
-
     import numpy as np
 
     @functools.wraps(f)

@@ -300,12 +300,9 @@ def numpy_polish(qp: QPData, sol: Solution) -> Solution | None:
 
 
 def warm_calls():
-    """This module's kernels with example arguments of the types :func:`try_active_set` passes, and
-    the warm path's compiled decisions (:mod:`._fast`)."""
-    n, z = 2, np.zeros
-    args = (z((n, n)), z(n), z((1, n)), z(1), z(n), z(n), z(n, dtype=np.int8), z((1, 3, n)), z((1, 3)), z((1, 3)),
-            z(1), z((1, 3)), z(1, dtype=np.bool_), z((1, 3)), 2, 2, *(float(v) for v in _AS_TOLS))
-    return [(K.active_set_run, args)] + _fast.warm_calls()
+    """The warm path's compiled entry points (:mod:`._fast`: the active-set answer and the answer's
+    checks), with example arguments of the types the library passes."""
+    return _fast.warm_calls()
 
 
 def _register() -> None:

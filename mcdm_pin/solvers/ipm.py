@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import jit
 from .. import tolerances as tol
-from . import _fast, _ipm, _kkt
+from . import _fast, _ipm
 from .active_set import _AS_TOLS, compiled_answer, unique_args
 from .base import INACCURATE, INFEASIBLE, OPTIMAL, Solution, Stage, failure
 
@@ -90,7 +90,9 @@ class IPMStage(Stage):
 
 def warm_calls():
     """The solvers' kernels with example arguments of the types the library passes (registered
-    with :mod:`mcdm_pin.jit`)."""
+    with :mod:`mcdm_pin.jit`): the Python code calls :func:`._fast.ipm_answer`; the active-set kernel
+    it calls is compiled with it, for the argument types the kernel passes (a specialisation for
+    Python's arrays would compile the same code again, unused)."""
     from ..problem import QPData
     from ..constraints import ConeData, perpendicular_basis
 
@@ -98,11 +100,7 @@ def warm_calls():
     axis = np.array([0.0, 0.0, 1.0])
     cone = ConeData("j", np.ones((3, n)), np.zeros(3), axis, 30.0, perpendicular_basis(axis))
     qp = QPData(np.eye(n), np.zeros(n), 0.0, np.ones((1, n)), np.ones(1), np.zeros(n), np.ones(n), [cone])
-    args = ipm_arguments(qp)
-    H, _, _, c, _, A, b, lb, ub, G, gc, ax, tn, basis0, cosr, basis = args[:16]
-    as_args = (H, c, A, b, lb, ub, np.zeros(n, dtype=np.int8), G, gc, ax, tn, basis0, np.zeros(1, dtype=np.bool_),
-               np.zeros((1, 3)), 2, 2, *(float(v) for v in _AS_TOLS))
-    return [(_fast.ipm_answer, args), (_kkt.active_set_solve, as_args)]
+    return [(_fast.ipm_answer, ipm_arguments(qp))]
 
 
 jit.register("mcdm_pin.solvers", warm_calls)
