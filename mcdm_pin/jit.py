@@ -232,8 +232,11 @@ def stamp_current() -> bool:
 
 def _write_stamp(folder: Path) -> None:
     tmp = folder / f"{STAMP}.{os.getpid()}.tmp"
-    tmp.write_text(stamp_text())
-    os.replace(tmp, folder / STAMP)  # atomic: a reader sees no stamp or the whole one
+    try:
+        tmp.write_text(stamp_text())
+        os.replace(tmp, folder / STAMP)  # atomic: a reader sees no stamp or the whole one
+    except OSError:
+        pass  # an unwritable cache folder: numba caches nothing there either
 
 
 def load() -> bool:
@@ -262,8 +265,11 @@ class _Lock:
     def __enter__(self):
         if self.path is None:
             return self
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.fh = open(self.path, "a")
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.fh = open(self.path, "a")
+        except OSError:  # an unwritable cache folder: numba compiles in memory there, nothing to guard
+            return self
         try:
             fcntl.flock(self.fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
@@ -292,10 +298,12 @@ def compile_now(quiet: bool = False) -> float:
             print("mcdm-pin: compiling the numba kernels (once per install, 2-3 minutes on two cores)...",
                   file=sys.stderr, flush=True)
         if folder is not None:
-            (folder / STAMP).unlink(missing_ok=True)
-            for d in _dispatchers():
-                if not d.overloads:
-                    d.recompile()  # no overloads yet: flushes this kernel's cache, compiles nothing
+            try:
+                (folder / STAMP).unlink(missing_ok=True)
+            except OSError:
+                folder = None  # an unwritable cache: numba compiles in memory, nothing to stamp
+        for d in _dispatchers():
+            d.recompile()  # flushes the kernel's cache (and recompiles what this process loaded from it)
         for disp, args in _all_calls():
             disp(*args)
         if folder is not None:

@@ -2,9 +2,10 @@
 (mcdm_pin/jit.py), and every status and force equals the compiled kernels' (forces to 1e-6 of the
 largest, the tolerance of tests/test_one_answer.py; the KKT check itself holds to 1e-9).
 
-The cases: the 2-link arm's two trajectories in cases 1-3 (t = 0.5 s of traj1: the arm at rest, the
-equation of motion of rank 3 of 4; traj2: an instant infeasible by 6e-6 deg), its infeasible-cone
-instant, and the interior-point method's hard problems of tests/test_solvers.py."""
+The cases: the 2-link arm's two trajectories in cases 1-3 (traj1 at t = 0.5 s: the arm at rest, the
+equation of motion of rank 3 of 4; traj2 at t = 0: infeasible), its infeasible and softened 5 deg
+cone, the human arm (a flat optimal face: the least-norm stage), the CASPR neck (cones held), and the
+interior-point method's hard problems of tests/test_solvers.py."""
 
 from __future__ import annotations
 
@@ -39,7 +40,8 @@ def _same_x(x_plain, x_compiled, what):
 @pytest.mark.parametrize("case", [1, 2, 3])
 def test_trajectories_answer_alike_compiled_or_not(two_link, traj_name, case):
     traj = load_trajectory(two_link, traj_name).subsample(51)
-    compiled, plain = _both(lambda: InverseDynamics.for_case(two_link, case).solve_trajectory(traj, progress=False))
+    compiled, plain = _both(lambda: InverseDynamics.for_case(two_link, case).solve_trajectory(
+        traj, progress=False))
     assert list(plain.status) == list(compiled.status)
     _same_x(plain.f, compiled.f, (traj_name, case))
     # the same chain answers; the stage may differ where rounding decides (fastmath reassociates the
@@ -52,7 +54,8 @@ def test_trajectories_answer_alike_compiled_or_not(two_link, traj_name, case):
 NECK = "caspr/8S_neck/8S_neck.yaml"
 
 
-@pytest.mark.parametrize("robot_file, traj_name, case", [("human_arm.yaml", "abduct", 2), ("human_arm.yaml", "abduct", 3),
+@pytest.mark.parametrize("robot_file, traj_name, case", [("human_arm.yaml", "abduct", 2),
+                                                         ("human_arm.yaml", "abduct", 3),
                                                          (NECK, "roll", 1), (NECK, "roll", 3)])
 def test_larger_robots_answer_alike(robot_file, traj_name, case):
     """The human arm (a flat optimal face: the least-norm stage) and the CASPR neck with the paper's
@@ -108,7 +111,8 @@ def test_uncompiled_kernels_call_no_dispatcher(monkeypatch):
     for module in ("model.kernels", "solvers._fast", "solvers._kkt", "solvers._ipm", "solvers._ipm_linalg"):
         real = importlib.import_module(f"mcdm_pin.{module}")
         plain = jit.kernels(module)
-        names = [k for k, v in vars(real).items() if jit._is_kernel(v) and v.py_func.__module__ == real.__name__]
+        names = [k for k, v in vars(real).items()
+                 if jit._is_kernel(v) and v.py_func.__module__ == real.__name__]
         assert names, module
         for name in names:
             f = getattr(plain, name)
