@@ -247,7 +247,7 @@ class Polish(Stage):
     def run(self, qp, sol, deadline):
         if sol.active is not None:  # an active-set stage's answer is exact already
             return sol
-        if not jit.ready():  # the uncompiled path (first run on a machine): bounds-only polish in numpy
+        if not jit.ready():  # kernels switched off (a test's numpy reference): bounds-only polish in numpy
             hit = numpy_polish(qp, sol)
             return sol if hit is None else hit.but(stage=f"{sol.stage}>{self.name}", iterations=sol.iterations,
                                                     rounds=sol.rounds, message=sol.message)
