@@ -1,8 +1,8 @@
 r"""One execution path: the library's numba kernels run compiled when an explicit compile has cached
 them, and as the very same Python functions (their ``py_func``) until then.
 
-numba compiles a kernel on its first call with given argument types (2-3 minutes for all of this
-library's kernels on two cores) and caches it on disk (``__pycache__`` beside the module, or under
+numba compiles a kernel on its first call with given argument types (about 160 s of CPU for all
+of this library's kernels) and caches it on disk (``__pycache__`` beside the module, or under
 ``NUMBA_CACHE_DIR``). Nothing here compiles behind the user's back:
 
 - every module with kernels registers the calls that use them (:func:`register`: a function
@@ -10,7 +10,7 @@ library's kernels on two cores) and caches it on disk (``__pycache__`` beside th
 - :func:`compile_now` (the ``mcdm-pin compile`` command, or ``MCDM_PIN_JIT=compile``) compiles every
   registered kernel in the calling process, with a note on stderr, and then writes a *stamp*;
 - :func:`prepare` (called when an :class:`~mcdm_pin.inverse_dynamics.InverseDynamics` is created)
-  loads the compiled kernels from numba's cache when the stamp is current (about a second), and
+  loads the compiled kernels from numba's cache when the stamp is current (1.5 s here), and
   otherwise leaves them uncompiled, with one note on stderr saying how to compile them.
 
 Either way :func:`kernels` hands out the same functions: the numba dispatchers once compiled, else
@@ -295,8 +295,8 @@ def compile_now(quiet: bool = False) -> float:
         if load():
             return time.perf_counter() - t0
         if not quiet:
-            print("mcdm-pin: compiling the numba kernels (once per install, 2-3 minutes on two cores)...",
-                  file=sys.stderr, flush=True)
+            print("mcdm-pin: compiling the numba kernels (once per install, about 3 minutes on a quiet "
+                  "machine)...", file=sys.stderr, flush=True)
         if folder is not None:
             try:
                 (folder / STAMP).unlink(missing_ok=True)
@@ -332,6 +332,6 @@ def prepare(policy: str | None = None, quiet: bool = False) -> bool:
     if not (quiet or _NOTED):
         _NOTED = True
         print("mcdm-pin: the numba kernels are not compiled on this install: they run as plain Python "
-              "(the same answers, slower); `mcdm-pin compile` compiles them once (2-3 minutes)",
+              "(the same answers, slower); `mcdm-pin compile` compiles them once (about 3 minutes)",
               file=sys.stderr, flush=True)
     return False

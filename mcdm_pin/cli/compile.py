@@ -1,4 +1,4 @@
-"""``mcdm-pin compile``: compile the numba kernels once per install (2-3 minutes on two cores) and
+"""``mcdm-pin compile``: compile the numba kernels once per install (about 160 s of CPU, one core) and
 cache them; until then every run executes the same kernels as plain Python (mcdm_pin/jit.py,
 docs/speed.md). A CI caches the kernels' cache folder, printed here (``--where``)."""
 
