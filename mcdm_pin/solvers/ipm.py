@@ -90,9 +90,8 @@ class IPMStage(Stage):
 
 def warm_calls():
     """The solvers' kernels with example arguments of the types the library passes (registered
-    with :mod:`mcdm_pin.jit`): the Python code calls :func:`._fast.ipm_answer`; the active-set kernel
-    it calls is compiled with it, for the argument types the kernel passes (a specialisation for
-    Python's arrays would compile the same code again, unused)."""
+    with :mod:`mcdm_pin.jit`): the Python code calls :func:`._fast.ipm_answer`, and the kernels it
+    calls are compiled with it."""
     from ..problem import QPData
     from ..constraints import ConeData, perpendicular_basis
 
