@@ -10,6 +10,8 @@ import subprocess
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
+# benchmarks time the compiled kernels: compile them first when they are not (mcdm_pin/jit.py)
+os.environ.setdefault("MCDM_PIN_JIT", "compile")
 DEFAULT_CASPR = REPO / "robots" / "caspr"  # the committed conversions; or a folder of CASPR's XML files
 
 

@@ -6,10 +6,9 @@ Runs the README's first command, ``mcdm-pin solve robots/two_link_sr.yaml --traj
 (as ``python -m mcdm_pin``), with an empty numba cache (``NUMBA_CACHE_DIR`` pointed at a new temporary
 folder), as on a machine where mcdm-pin was just installed:
 
-1. the first run: the kernels are not compiled; the run says so on stderr, starts one detached
-   process that compiles them, and answers on the uncompiled path (numpy terms, Clarabel);
-2. the wait for that background compile (polled with ``python -m mcdm_pin.jit --list``), which
-   nobody has to sit through;
+1. the first run: the kernels are not compiled; the run says so in one line on stderr and runs them
+   as their Python code (the same kernels, the same chain of stages);
+2. ``mcdm-pin compile`` (the explicit compile, as a user or a CI runs it);
 3. the second run, on the compiled kernels.
 
 Prints a table of wall times and the stderr lines of each run. The answers of both runs are the same
@@ -39,12 +38,6 @@ def _run(env) -> tuple[float, str, str]:
     return wall, out.stdout, out.stderr
 
 
-def _cached(env) -> bool:
-    out = subprocess.run([sys.executable, "-m", "mcdm_pin.jit", "--list"], cwd=REPO, env=env, capture_output=True,
-                         text=True, timeout=120)
-    return "cached: True" in out.stdout
-
-
 def _peaks(text: str) -> list[str]:
     """The answer's lines with the peak values only (ties at a bound or a cone may be reported at
     another instant of the tie)."""
@@ -59,15 +52,15 @@ def _peaks(text: str) -> list[str]:
 
 def main() -> int:
     with tempfile.TemporaryDirectory() as cache:
-        env = dict(os.environ, NUMBA_CACHE_DIR=cache, MCDM_PIN_JIT="background")
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache, MCDM_PIN_JIT="auto")
         load0 = os.getloadavg()[0]
         wall1, out1, err1 = _run(env)
         t0 = time.perf_counter()
-        while not _cached(env):
-            if time.perf_counter() - t0 > 900:
-                raise SystemExit("first_run: the background compile did not finish within 15 minutes")
-            time.sleep(2.0)
-        compile_wait = time.perf_counter() - t0
+        done = subprocess.run([sys.executable, "-m", "mcdm_pin", "compile"], cwd=REPO, env=env, capture_output=True,
+                              text=True, timeout=1800)
+        compile_wall = time.perf_counter() - t0
+        if done.returncode != 0:
+            raise SystemExit(f"first_run: mcdm-pin compile failed: {done.stderr}")
         wall2, out2, err2 = _run(env)
         load1 = os.getloadavg()[0]
     same = _peaks(out1) == _peaks(out2)
@@ -75,8 +68,8 @@ def main() -> int:
           f"{load1:.2f} after\n")
     print("| run | wall, s | stderr |")
     print("|---|---|---|")
-    print(f"| first (kernels not compiled: uncompiled path) | {wall1:.2f} | {err1.strip() or '-'} |")
-    print(f"| background compile, after the first run ended | {compile_wait:.1f} | (nobody waits for it) |")
+    print(f"| first (kernels not compiled: they run as Python) | {wall1:.2f} | {err1.strip() or '-'} |")
+    print(f"| `mcdm-pin compile` | {compile_wall:.1f} | {done.stdout.strip()} |")
     print(f"| second (compiled kernels) | {wall2:.2f} | {err2.strip() or '-'} |")
     print(f"\nthe two runs' answers are {'the same' if same else 'DIFFERENT'}")
     print("\nfirst run's last line:  " + out1.strip().splitlines()[-1])

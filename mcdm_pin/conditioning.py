@@ -83,7 +83,10 @@ def wrench_closure(robot, q, L: np.ndarray | None = None) -> Closure:
     if y[np.argmax(np.abs(y))] < 0:
         y = -y
     top = np.argsort(-np.abs(y))[:3]
-    names = ", ".join(f"{y[i]:+.2g} {robot.coordinate_names[i]}" for i in top if abs(y[i]) > 1e-6)
-    joints = sorted({j.name for j in robot.joints for i in top if abs(y[i]) > 1e-6 and i in j.idx_v})
+    # L's columns: the coordinates, or with couplings the independent ones
+    couplings = getattr(robot, "couplings", None)
+    column = np.arange(robot.nv) if couplings is None or len(y) == robot.nv else couplings.independent
+    names = ", ".join(f"{y[i]:+.2g} {robot.coordinate_names[column[i]]}" for i in top if abs(y[i]) > 1e-6)
+    joints = sorted({j.name for j in robot.joints for i in top if abs(y[i]) > 1e-6 and column[i] in j.idx_v})
     return Closure(rank, False, y, f"wrench closure lost: {why} the motion direction ({names}) of joint(s) "
                                    f"{', '.join(joints)}; add or re-route cables there")

@@ -48,7 +48,8 @@ class InverseDynamics:
             would make them feasible (:func:`diagnose_infeasible`: an LP and a few cone programs).
             Off: the message only says that the instant is infeasible.
         budget_s: per-instant time budget of the solver chain, seconds (``None``: none): a solve
-            that has not answered by then is reported with status ``budget``.
+            that has not answered by then is reported with status ``budget``. While the kernels run
+            uncompiled it is multiplied by :data:`mcdm_pin.jit.UNCOMPILED_SLOWDOWN`.
         blas_threads: threads the BLAS library may use while solving (default 1; ``None``: leave
             it alone). The matrices of one instant are small, and waking BLAS worker threads cost
             milliseconds on a loaded machine: with them the model of a 16-link chain's case 3 took
@@ -64,14 +65,16 @@ class InverseDynamics:
         self._blas = _BlasLimit()
         self.diagnose = diagnose
         self.problem = problem
+        # the kernels run compiled when `mcdm-pin compile` has cached them, else as the same Python
+        # functions (mcdm_pin/jit.py): one path, one answer. Uncompiled they take longer, and the
+        # time budget grows by the same factor, so that an instant answers alike on both
+        if not jit.prepare() and budget_s is not None:
+            budget_s = budget_s * jit.UNCOMPILED_SLOWDOWN
         # every back-end solves a copy scaled to magnitudes of order one (mcdm_pin/scaling.py);
         # well-scaled problems pass straight through
         self.solver = ScaledSolver(get_solver(solver, budget_s=budget_s) if isinstance(solver, str) else solver)
         self.soften = soften
-        # the compiled kernels, loaded from numba's cache or compiled in the background: this run
-        # uses the uncompiled path meanwhile (mcdm_pin/jit.py)
-        compiled = jit.prepare()
-        self.evaluate = TermsEvaluator(robot, compiled=compiled)
+        self.evaluate = TermsEvaluator(robot)
 
     @classmethod
     def for_case(cls, robot, case: int, solver="default", soften: bool = False, diagnose: bool = True,
@@ -83,8 +86,6 @@ class InverseDynamics:
     def reset(self) -> None:
         """Forget every warm start (the next instant is solved cold, as if it were the first)."""
         self.solver.reset()
-        if not self.evaluate.compiled and jit.ready():
-            self.evaluate = TermsEvaluator(self.robot, compiled=True)
 
     def blas_limit(self) -> "_BlasLimit":
         """A context in which BLAS runs ``blas_threads`` threads (once, when entries nest): :meth:`solve`

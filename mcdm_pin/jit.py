@@ -1,50 +1,72 @@
-r"""No silent wait for numba: the compiled kernels are loaded from numba's cache, or compiled in a
-detached background process while this run uses the uncompiled path.
+r"""One execution path: the library's numba kernels run compiled when an explicit compile has cached
+them, and as the very same Python functions (their ``py_func``) until then.
 
-numba compiles a kernel on its first call with given argument types (about a minute for all of this
-library's kernels on 2 cores) and caches it on disk (``__pycache__`` beside the module, or
-``NUMBA_CACHE_DIR``). So that nobody waits for that without being told:
+numba compiles a kernel on its first call with given argument types (about 160 s of CPU for all
+of this library's kernels) and caches it on disk (``__pycache__`` beside the module, or under
+``NUMBA_CACHE_DIR``). Nothing here compiles behind the user's back:
 
 - every module with kernels registers the calls that use them (:func:`register`: a function
   returning ``(kernel, example_args)`` pairs with the argument types the library passes);
+- :func:`compile_now` (the ``mcdm-pin compile`` command, or ``MCDM_PIN_JIT=compile``) compiles every
+  registered kernel in the calling process, with a note on stderr, and then writes a *stamp*;
 - :func:`prepare` (called when an :class:`~mcdm_pin.inverse_dynamics.InverseDynamics` is created)
-  loads every registered kernel from the cache when all are there (about a second: docs/speed.md, "First run") and reports
-  :func:`ready`; when one is missing, it starts **one** detached background process
-  (``python -m mcdm_pin.jit``, a lock file makes a second one wait and then find the cache filled)
-  that compiles and caches them, prints one line on stderr saying so, and this run uses the
-  uncompiled path: the numpy cable terms and the ProxQP/Clarabel stages (the compiled stages skip
-  themselves while :func:`ready` is false). Later runs load the cache.
+  loads the compiled kernels from numba's cache when the stamp is current (1.5 s here), and
+  otherwise leaves them uncompiled, with one note on stderr saying how to compile them.
 
-numba invalidates a cached kernel when *its own* source file changes, not when a kernel it calls
-in another module does (``_fast.py``'s kernels call ``_kkt.py``'s): after such an edit (a ``git
-pull``, an upgrade in place) the cache would serve the old code. So the cache carries a stamp, the
-digest of every kernel module's source and of ``tolerances.py``, whose constants some kernels read
-when compiled (:func:`sources_digest`); a cache whose stamp differs is flushed (numba's own ``flush``
-of every kernel's index) and compiled again.
+Either way :func:`kernels` hands out the same functions: the numba dispatchers once compiled, else
+copies of their Python functions whose globals name the other kernels' Python functions (so an
+uncompiled kernel never triggers a compile of the kernels it calls). The answers are those of the
+same code, to rounding (``fastmath`` reassociation in two modules, docs/speed.md).
 
-The policy is ``MCDM_PIN_JIT`` (or ``prepare(policy=...)``): ``background`` (default), ``wait``
-(compile in this process, with a note: tests and benchmarks use it), ``off`` (never compile here:
-uncompiled path only, the cache is used when complete).
+The stamp (:data:`STAMP`, in the cache folder of the kernels) holds the digest of every kernel
+module's source and of ``tolerances.py`` (some kernels read its constants when compiled), the
+``(mtime, size)`` of each kernel source (numba's own cache key: a touched file would make numba
+recompile on load), and the numba and Python versions. It is removed before a compile starts and
+written, by an atomic rename, only after every kernel is compiled and cached: a compile that is
+interrupted, or still running, leaves no stamp, and runs meanwhile stay uncompiled. numba
+invalidates a cached kernel only when *its own* file changes, not a kernel it calls in another module,
+so a compile whose stamp is stale first flushes every kernel's cache (``Dispatcher.recompile`` on
+dispatchers without overloads: numba's public flush). Concurrent compiles of one install take a lock
+file in that same cache folder (``fcntl``, where the platform has it): another install, with its
+own cache folder, never waits on it.
+
+The policy is ``MCDM_PIN_JIT`` (or ``prepare(policy=...)``): ``auto`` (default: load when stamped,
+else uncompiled), ``compile`` (``wait`` is a synonym: compile in this process when not stamped;
+tests and benchmarks use it), ``off`` (uncompiled, even when stamped).
 """
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib
 import os
+import platform
 import re
-import subprocess
 import sys
-import tempfile
 import time
+import types
 from pathlib import Path
 
+try:  # POSIX: the compile lock; elsewhere concurrent compiles each write numba's files atomically
+    import fcntl
+except ImportError:  # pragma: no cover - Windows
+    fcntl = None
+
 MODULES = ("mcdm_pin.model.kernels", "mcdm_pin.model.route_kernels", "mcdm_pin.solvers.ipm")  # modules that register kernels
-POLICIES = ("background", "wait", "off")
+POLICIES = ("auto", "compile", "wait", "off")
+STAMP = "mcdm_pin_kernels.stamp"  # the stamp's file name, in the kernels' cache folder
+LOCK = "mcdm_pin_kernels.lock"  # the compile lock's file name, beside the stamp
+UNCOMPILED_SLOWDOWN = 1000.0
+"""How many times longer the uncompiled kernels may take than the compiled ones: the factor by which
+:class:`~mcdm_pin.inverse_dynamics.InverseDynamics` stretches a solver's time budget while they run
+(the measured ratios are in docs/speed.md, "Before `mcdm-pin compile`")."""
 
 _REGISTRY: dict[str, object] = {}  # name -> callable returning [(dispatcher, args), ...]
-_READY = False
-_STARTED = False
+_READY = True  # the kernels answer (tests set it False to reach the numpy references they check against)
+_COMPILED = False  # the compiled kernels are loaded in this process
+_NOTED = False  # the "uncompiled" note was printed
+_PURE: dict[str, types.ModuleType] = {}  # "model.kernels" -> the module's uncompiled twin namespace
 
 
 def register(name: str, calls) -> None:
@@ -54,58 +76,38 @@ def register(name: str, calls) -> None:
 
 
 def ready() -> bool:
-    """Whether the compiled kernels are available in this process."""
+    """Whether the kernels answer (compiled or not: :func:`compiled`). Always, except where a test
+    switches them off to compare them with the numpy references."""
     return _READY
 
 
-_KERNEL_MODULES: dict = {}
+def compiled() -> bool:
+    """Whether the compiled kernels are loaded in this process."""
+    return _COMPILED
 
 
 def kernels(module: str):
-    """The kernels' module ``mcdm_pin.<module>`` (``"model.kernels"``, ``"solvers._fast"``), imported
-    on first use (they import numba, which ``import mcdm_pin`` does not) and then looked up: an
-    ``import`` inside a function costs ~1 us on every call, and the per-instant hot path calls
-    several."""
-    mod = _KERNEL_MODULES.get(module)
-    if mod is None:
-        mod = _KERNEL_MODULES[module] = importlib.import_module(f"mcdm_pin.{module}")
-    return mod
+    """The kernels of ``mcdm_pin.<module>`` (``"model.kernels"``, ``"solvers._fast"``): the module
+    itself when the compiled kernels are loaded, else its uncompiled namespace (the same functions'
+    Python code, :func:`_pure_modules`)."""
+    if _COMPILED:
+        return sys.modules.get(f"mcdm_pin.{module}") or importlib.import_module(f"mcdm_pin.{module}")
+    ns = _PURE.get(module)
+    if ns is None:
+        _pure_modules()
+        ns = _PURE[module]
+    return ns
 
 
-def _lock_path() -> Path:
-    return Path(tempfile.gettempdir()) / f"mcdm_pin_jit_{os.getuid() if hasattr(os, 'getuid') else 0}.lock"
-
-
-def _all_calls():
-    for mod in MODULES:
-        importlib.import_module(mod)
-    return [call for name in sorted(_REGISTRY) for call in _REGISTRY[name]()]
-
-
-def _load_cached(disp, args) -> bool:
-    """Load ``disp``'s specialisation for ``args`` from numba's cache without compiling; whether it
-    is available (numba's own ``Dispatcher.compile`` cache branch)."""
-    argtypes = tuple(disp.typeof_pyval(a) for a in args)
-    if argtypes in disp.overloads:
-        return True
-    cres = disp._cache.load_overload(argtypes, disp.targetctx)
-    if cres is None:
-        return False
-    disp._cache_hits[argtypes] += 1
-    if not cres.objectmode:
-        disp.targetctx.insert_user_function(cres.entry_point, cres.fndesc, [cres.library])
-    disp.add_overload(cres)
-    return True
-
-
-def kernel_sources() -> list[Path]:
+@functools.lru_cache(maxsize=None)
+def kernel_sources() -> tuple[Path, ...]:
     """The package's source files that define numba kernels (those that import numba's ``njit``),
     and ``tolerances.py``: kernels read some of its constants when they are compiled
     (``UNIQUE_PENALTY``, ``IPM_START_BOX_WEIGHT``), so a changed constant must recompile them too."""
     root = Path(__file__).resolve().parent
     pattern = re.compile(r"^from numba import .*\bnjit\b", re.M)
     found = {p for p in root.rglob("*.py") if pattern.search(p.read_text(encoding="utf-8"))}
-    return sorted(found | {root / "tolerances.py"})
+    return tuple(sorted(found | {root / "tolerances.py"}))
 
 
 def sources_digest(paths=None) -> str:
@@ -116,166 +118,220 @@ def sources_digest(paths=None) -> str:
     return h.hexdigest()
 
 
-STAMP = "mcdm_pin_kernels.sha256"  # the stamp's file name, in the kernels' cache folder
+def _kernel_modules() -> dict[str, types.ModuleType]:
+    """The imported modules that define kernels, by name (importing the registering ones first)."""
+    for mod in MODULES:
+        importlib.import_module(mod)
+    sources = set(kernel_sources())
+    return {name: mod for name, mod in list(sys.modules.items())
+            if name.startswith("mcdm_pin.") and getattr(mod, "__file__", None)
+            and Path(mod.__file__).resolve() in sources and name != "mcdm_pin.tolerances"}
 
 
-def _dispatchers():
-    """Every numba dispatcher of the kernel modules (registered or called by registered ones)."""
-    _all_calls()
-    sources = set(kernel_sources())  # (reads the package's files: once, not per module)
-    out = []
-    for name, mod in list(sys.modules.items()):
-        path = getattr(mod, "__file__", None)
-        if not (name.startswith("mcdm_pin.") and path and Path(path).resolve() in sources):
-            continue
-        out += [v for v in vars(mod).values() if getattr(v, "_cache", None) is not None
-                and hasattr(v, "py_func") and v.py_func.__module__ == name]
-    return out
+def _is_kernel(v) -> bool:
+    return hasattr(v, "py_func") and hasattr(v, "recompile") and hasattr(v, "stats")
 
 
-def _stamp_path(disps) -> Path | None:
-    for d in disps:
+def _dispatchers() -> list:
+    """Every numba dispatcher defined in the kernel modules."""
+    return [v for name, mod in _kernel_modules().items() for v in vars(mod).values()
+            if _is_kernel(v) and v.py_func.__module__ == name]
+
+
+def _pure_modules() -> None:
+    """Fill :data:`_PURE`: for each kernel module, a namespace where every kernel is a copy of its
+    Python function (``py_func``) whose globals name the other kernels' copies (and the other kernel
+    modules' namespaces): the uncompiled path calls no dispatcher, so it compiles nothing."""
+    mods = _kernel_modules()
+    globs = {name: dict(vars(mod)) for name, mod in mods.items()}
+    copies = {}
+    for name, mod in mods.items():
+        for v in vars(mod).values():
+            if _is_kernel(v) and v.py_func.__module__ == name:
+                f = v.py_func
+                copies[id(v)] = types.FunctionType(f.__code__, globs[name], f.__name__, f.__defaults__,
+                                                   f.__closure__)
+    for g in globs.values():
+        for key, v in list(g.items()):
+            if _is_kernel(v) and id(v) in copies:
+                g[key] = copies[id(v)]
+    spaces = {}
+    for name, g in globs.items():
+        spaces[name] = types.ModuleType(name, f"uncompiled kernels of {name}")
+        vars(spaces[name]).update(g)
+    for name, g in globs.items():
+        for key, v in list(g.items()):
+            if isinstance(v, types.ModuleType) and v.__name__ in spaces:
+                g[key] = spaces[v.__name__]
+                setattr(spaces[name], key, spaces[v.__name__])
+    quiet = {id(f): _quiet(f) for f in copies.values()}
+    for name, ns in spaces.items():
+        public = types.ModuleType(name, f"uncompiled kernels of {name}")
+        vars(public).update({k: quiet.get(id(v), v) for k, v in vars(ns).items()})
+        _PURE[name[len("mcdm_pin."):]] = public
+
+
+def _quiet(f):
+    """``f`` called under ``np.errstate(all="ignore")``: the compiled kernels use numba's
+    ``error_model="numpy"`` (a division by zero gives inf or nan, silently), and so do their
+    uncompiled copies (the calls between kernels stay direct)."""
+    import numpy as np
+
+    @functools.wraps(f)
+    def call(*args):
+        with np.errstate(all="ignore"):
+            return f(*args)
+
+    return call
+
+
+def _all_calls():
+    _kernel_modules()
+    return [call for name in sorted(_REGISTRY) for call in _REGISTRY[name]()]
+
+
+def entry_points() -> list[str]:
+    """The registered kernels' names (``module.function``), one per compiled specialisation."""
+    return [f"{d.py_func.__module__}.{d.py_func.__name__}" for d, _ in _all_calls()]
+
+
+def cache_dir() -> Path | None:
+    """The folder of numba's cache of this install's kernels (``Dispatcher.stats.cache_path``), where
+    the stamp and the lock live; ``None`` when numba has no writable cache for them."""
+    for d in _dispatchers():
         try:
-            return Path(d._cache.cache_path) / STAMP
-        except Exception:  # noqa: BLE001 - no cache folder for this kernel: try the next
+            path = d.stats.cache_path
+        except Exception:  # noqa: BLE001 - a dispatcher without a cache: try the next
             continue
+        if path:
+            return Path(path)
     return None
 
 
+def stamp_text() -> str:
+    """What the stamp of a complete compile of the current sources holds (see the module docstring)."""
+    import numba
+
+    lines = [f"digest {sources_digest()}", f"numba {numba.__version__}",
+             f"python {sys.version_info[0]}.{sys.version_info[1]} {platform.machine()}"]
+    for p in kernel_sources():
+        st = p.stat()
+        lines.append(f"source {p.name} {st.st_mtime!r} {st.st_size}")
+    return "\n".join(lines) + "\n"
+
+
 def stamp_current() -> bool:
-    """Whether the cache's stamp equals the sources' digest; if not, flush every kernel's cache
-    index (the next load finds nothing and the kernels are compiled again)."""
-    disps = _dispatchers()
-    path = _stamp_path(disps)
-    if path is None:
-        return True  # no cache at all: numba compiles in memory, nothing can be stale
+    """Whether the cache holds a complete compile of the current sources (its stamp equals
+    :func:`stamp_text`)."""
+    folder = cache_dir()
     try:
-        if path.is_file() and path.read_text().strip() == sources_digest():
-            return True
+        return folder is not None and (folder / STAMP).read_text() == stamp_text()
     except OSError:
-        pass
-    for d in disps:
-        try:
-            d._cache.flush()
-        except Exception:  # noqa: BLE001 - an unwritable cache: numba then compiles in memory
-            pass
-    return False
-
-
-def _write_stamp() -> None:
-    path = _stamp_path(_dispatchers())
-    if path is None:
-        return
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(sources_digest() + "\n")
-    except OSError:
-        pass  # an unwritable cache folder: nothing is cached there either
-
-
-def cached() -> bool:
-    """Whether every registered kernel can be loaded from the cache (loads those that can); a cache
-    stamped for other kernel sources is flushed first and is not."""
-    try:
-        calls = _all_calls()
-        if not stamp_current():
-            return False
-        return bool(calls) and all([_load_cached(disp, args) for disp, args in calls])
-    except Exception:  # noqa: BLE001 - numba internals changed: treat as not cached
         return False
 
 
-def compile_now() -> None:
-    """Compile (or load) every registered kernel in this process, blocking, and stamp the cache."""
-    global _READY
+def _write_stamp(folder: Path) -> None:
+    tmp = folder / f"{STAMP}.{os.getpid()}.tmp"
+    try:
+        tmp.write_text(stamp_text())
+        os.replace(tmp, folder / STAMP)  # atomic: a reader sees no stamp or the whole one
+    except OSError:
+        pass  # an unwritable cache folder: numba caches nothing there either
+
+
+def load() -> bool:
+    """Load the compiled kernels from the cache when the stamp is current (each registered kernel
+    called once on its example arguments: numba's cache then serves it); whether they are loaded."""
+    global _COMPILED
+    if _COMPILED:
+        return True
+    if not stamp_current():
+        return False
     for disp, args in _all_calls():
         disp(*args)
-    _write_stamp()
-    _READY = True
-
-
-def _background_running() -> bool:
-    import fcntl
-
-    path = _lock_path()
-    try:
-        with open(path, "a") as fh:
-            try:
-                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError:
-                return True
-            fcntl.flock(fh, fcntl.LOCK_UN)
-    except OSError:
-        return False
-    return False
-
-
-def _start_background() -> bool:
-    """Start the detached compiling process unless one runs already; whether one runs now."""
-    global _STARTED
-    if _STARTED or _background_running():
-        return True
-    log = Path(tempfile.gettempdir()) / "mcdm_pin_jit.log"
-    try:
-        with open(log, "a") as out:
-            subprocess.Popen([sys.executable, "-c", "import sys; from mcdm_pin import jit; sys.exit(jit._main())"],
-                             stdin=subprocess.DEVNULL, stdout=out,
-                             stderr=out, start_new_session=True, env=dict(os.environ), close_fds=True)
-    except OSError:
-        return False
-    _STARTED = True
+    _COMPILED = True
     return True
 
 
-def prepare(policy: str | None = None, quiet: bool = False) -> bool:
-    """Make the compiled kernels available if they can be without waiting (see the module
-    docstring); returns :func:`ready`."""
-    global _READY
-    if _READY:
-        return True
-    policy = policy or os.environ.get("MCDM_PIN_JIT", "background")
-    if policy not in POLICIES:
-        policy = "background"
-    if cached():
-        _READY = True
-        return True
-    if policy == "wait":
+class _Lock:
+    """An exclusive lock on ``folder / LOCK`` (none where ``fcntl`` is missing); says so when it
+    waits."""
+
+    def __init__(self, folder: Path | None, quiet: bool):
+        self.path = None if folder is None or fcntl is None else folder / LOCK
+        self.quiet = quiet
+        self.fh = None
+
+    def __enter__(self):
+        if self.path is None:
+            return self
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.fh = open(self.path, "a")
+        except OSError:  # an unwritable cache folder: numba compiles in memory there, nothing to guard
+            return self
+        try:
+            fcntl.flock(self.fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            if not self.quiet:
+                print(f"mcdm-pin: another process compiles this install's kernels; waiting for it "
+                      f"(lock: {self.path})", file=sys.stderr, flush=True)
+            fcntl.flock(self.fh, fcntl.LOCK_EX)
+        return self
+
+    def __exit__(self, *exc):
+        if self.fh is not None:
+            fcntl.flock(self.fh, fcntl.LOCK_UN)
+            self.fh.close()
+
+
+def compile_now(quiet: bool = False) -> float:
+    """Compile every registered kernel in this process (blocking) and stamp the cache; loads them
+    instead when a complete compile is stamped already. Returns the seconds it took."""
+    global _COMPILED
+    t0 = time.perf_counter()
+    folder = cache_dir()
+    with _Lock(folder, quiet):
+        if load():
+            return time.perf_counter() - t0
         if not quiet:
-            print("mcdm-pin: compiling the numba kernels (once per machine, about a minute)...",
-                  file=sys.stderr, flush=True)
-        compile_now()
+            print("mcdm-pin: compiling the numba kernels (once per install, about 3 minutes on a quiet "
+                  "machine)...", file=sys.stderr, flush=True)
+        if folder is not None:
+            try:
+                (folder / STAMP).unlink(missing_ok=True)
+            except OSError:
+                folder = None  # an unwritable cache: numba compiles in memory, nothing to stamp
+        for d in _dispatchers():
+            d.recompile()  # flushes the kernel's cache (and recompiles what this process loaded from it)
+        for disp, args in _all_calls():
+            disp(*args)
+        if folder is not None:
+            _write_stamp(folder)
+        _COMPILED = True
+    if not quiet:
+        print(f"mcdm-pin: kernels compiled in {time.perf_counter() - t0:.0f} s", file=sys.stderr, flush=True)
+    return time.perf_counter() - t0
+
+
+def prepare(policy: str | None = None, quiet: bool = False) -> bool:
+    """Load the compiled kernels when they are stamped (policy ``auto``), compile them (``compile``,
+    ``wait``) or leave them uncompiled (``off``; see the module docstring); returns :func:`compiled`.
+    Starts no process and, under ``auto``, compiles nothing."""
+    global _NOTED
+    if _COMPILED:
         return True
-    if policy == "background" and _start_background() and not quiet:
-        print("mcdm-pin: compiling the numba kernels in the background (once per machine, about a "
-              "minute; log: " + str(Path(tempfile.gettempdir()) / "mcdm_pin_jit.log") + "); this run "
-              "uses the uncompiled path", file=sys.stderr, flush=True)
+    policy = policy or os.environ.get("MCDM_PIN_JIT", "auto")
+    if policy == "off":
+        return False
+    if policy in ("compile", "wait"):
+        compile_now(quiet=quiet)
+        return True
+    if load():
+        return True
+    if not (quiet or _NOTED):
+        _NOTED = True
+        print("mcdm-pin: the numba kernels are not compiled on this install: they run as plain Python "
+              "(the same answers, slower); `mcdm-pin compile` compiles them once (about 3 minutes)",
+              file=sys.stderr, flush=True)
     return False
-
-
-def _main(argv=None) -> int:
-    """The background process: compile under the lock, then exit (``--list``: print how many kernel
-    specialisations are registered and whether the cache holds them all, compile nothing)."""
-    import fcntl
-
-    if "--list" in (sys.argv[1:] if argv is None else argv):
-        print(f"{len(_all_calls())} kernel specialisations registered; cached: {cached()}", flush=True)
-        return 0
-
-    with open(_lock_path(), "a") as fh:
-        fcntl.flock(fh, fcntl.LOCK_EX)
-        t0 = time.perf_counter()
-        if not cached():
-            compile_now()
-        print(f"mcdm-pin: kernels ready in {time.perf_counter() - t0:.1f} s (pid {os.getpid()})", flush=True)
-        fcntl.flock(fh, fcntl.LOCK_UN)
-    return 0
-
-
-if __name__ == "__main__":
-    # run the package's module, not this __main__ copy: the kernel modules register into
-    # mcdm_pin.jit's registry, which this copy does not see (with its own empty registry the
-    # background process found "everything cached" and compiled nothing: every later run on a new
-    # machine stayed on the uncompiled path)
-    from mcdm_pin import jit as _jit
-
-    sys.exit(_jit._main())

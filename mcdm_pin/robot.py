@@ -264,6 +264,22 @@ class Robot:
                 out[s:s + 2] /= norm
         return out
 
+    def reference_coordinates(self) -> np.ndarray:
+        """(nv,) the source's reference pose as coordinates: zeros, or an MJCF model's ``qpos0`` with
+        its coupled coordinates following their couplings."""
+        if self.source is None:
+            return np.zeros(self.nv)
+        return self.coordinates(self.source.configuration({}))
+
+    def follow_couplings(self, x: np.ndarray) -> np.ndarray:
+        """Coordinates ``x`` ((nv,) or (n, nv)) with every coupled coordinate computed from the
+        independent ones (:mod:`mcdm_pin.model.couplings`); unchanged without couplings."""
+        if self.couplings is None:
+            return x
+        rows = np.atleast_2d(x)
+        out = np.array([self.coordinates(self.couplings.fill(self.configuration(r))[0]) for r in rows])
+        return out.reshape(np.shape(x))
+
     def check_vector(self, x, name: str, n: int | None = None) -> np.ndarray:
         """Return ``x`` as a float array of length ``n`` (default: nv), or raise :class:`StateError`."""
         return check_vector(x, name, self.nv if n is None else n)

@@ -74,8 +74,7 @@ def spread(A: np.ndarray) -> float:
     (The right-hand side is left out: an equation whose torque happens to be near zero is not badly
     scaled.) Compiled when the kernels are (:func:`mcdm_pin.model.kernels.spread`)."""
     if jit.ready():
-        from .model.kernels import spread as compiled
-
+        compiled = jit.kernels("model.kernels").spread  # (compiled or not: mcdm_pin/jit.py)
         # C order: one compiled specialisation (qp.A is often the transposed view L.T)
         return compiled(np.ascontiguousarray(A, dtype=float), np.zeros(0))
     B = np.abs(A)

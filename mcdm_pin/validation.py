@@ -12,13 +12,20 @@ def validation_report(robot) -> list[tuple[str, str]]:
     from .inverse_dynamics import InverseDynamics
     from .model.terms import compute_terms
 
-    out = [("ok", f"sidecar valid; URDF loaded; every movable URDF joint ({robot.model.njoints - 1}, "
-                  f"{robot.nv} DoF) belongs to one of {len(robot.joints)} physical joints")]
-    q0 = np.zeros(robot.nv)
+    mjcf = getattr(robot.source, "kind", None) == "mjcf"
+    loaded = "MJCF compiled by MuJoCo; every moving body's joints" if mjcf else "URDF loaded; every movable URDF joint"
+    valid = "sidecar valid; " if robot.sidecar is not None else ""
+    out = [("ok", f"{valid}{loaded} ({robot.model.njoints - 1}, {robot.nv} DoF) belongs to one of "
+                  f"{len(robot.joints)} physical joints")]
+    q0 = robot.reference_coordinates()
+    n = robot.nv if robot.couplings is None else robot.couplings.n  # the coordinates the cables must move
+    if robot.couplings is not None:
+        out.append(("ok", f"{len(robot.couplings)} coupled coordinates follow {n} independent ones"))
+    pose = "the reference pose" if mjcf else "q = 0"
     try:
         terms = compute_terms(robot, q0)
     except McdmError as exc:
-        return out + [("fail", f"cannot evaluate the model at q = 0: {exc}")]
+        return out + [("fail", f"cannot evaluate the model at {pose}: {exc}")]
     eig = np.linalg.eigvalsh(terms.M)
     tol = 1e-12 * max(1.0, float(np.abs(eig).max()))
     empty = _massless_subtrees(robot.model)
@@ -27,37 +34,38 @@ def validation_report(robot) -> list[tuple[str, str]]:
                             f"no inertia: the mass matrix is singular there and its motion has no dynamics "
                             f"(give the child link an <inertial>)"))
     elif eig.min() > tol:
-        out.append(("ok", f"mass matrix positive definite at q = 0 (eigenvalues {eig.min():.3g} .. "
+        out.append(("ok", f"mass matrix positive definite at {pose} (eigenvalues {eig.min():.3g} .. "
                           f"{eig.max():.3g})"))
     elif eig.min() >= -tol:
-        out.append(("warn", f"mass matrix singular at q = 0 (smallest eigenvalue {eig.min():.3g}): some body "
+        out.append(("warn", f"mass matrix singular at {pose} (smallest eigenvalue {eig.min():.3g}): some body "
                             f"has no inertia about an axis it turns about; inverse dynamics is still defined "
                             f"(forward dynamics, e.g. mcdm-pin verify, is not)"))
     else:
-        out.append(("fail", f"mass matrix indefinite at q = 0 (smallest eigenvalue {eig.min():.3g}): some "
+        out.append(("fail", f"mass matrix indefinite at {pose} (smallest eigenvalue {eig.min():.3g}): some "
                             f"body's inertia is not physical"))
     rank = np.linalg.matrix_rank(terms.L, tol=1e-9 * max(1.0, np.abs(terms.L).max()))
-    if rank == robot.nv:
+    if rank == n:
         sv = np.linalg.svd(terms.L, compute_uv=False)
-        out.append(("ok", f"cables span all {robot.nv} DoF at q = 0 (rank L = {rank}, condition "
+        out.append(("ok", f"cables span all {n} DoF at {pose} (rank L = {rank}, condition "
                           f"{sv[0] / sv[-1]:.3g})"))
     else:
-        out.append(("warn", f"cables span only {rank} of {robot.nv} DoF at q = 0 (rank L = {rank}): "
+        out.append(("warn", f"cables span only {rank} of {n} DoF at {pose} (rank L = {rank}): "
                             f"a singular pose, where some accelerations cannot be produced; check the "
                             f"poses your trajectories visit"))
     from .conditioning import wrench_closure
 
     closure = wrench_closure(robot, q0, terms.L)
-    out.append(("ok" if closure.closed else "warn", f"at q = 0: {closure.message}"))
-    if robot.m <= robot.nv:
-        out.append(("warn", f"{robot.m} cables for {robot.nv} DoF: a cable robot needs more cables "
+    out.append(("ok" if closure.closed else "warn", f"at {pose}: {closure.message}"))
+    if robot.m <= n:
+        out.append(("warn", f"{robot.m} cables for {n} DoF: a cable robot needs more cables "
                             f"than DoF to keep every cable in tension"))
     res = InverseDynamics.for_case(robot, 1).solve(q0)
+    name = "the reference pose" if mjcf else "the zero pose"
     if res.found:
-        out.append(("ok", f"holds the zero pose against gravity with forces in bounds "
-                          f"(min f^T f: peak {np.max(res.f):.4g} N)"))
+        out.append(("ok", f"holds {name} against gravity with forces in bounds "
+                          f"(case 1: peak {np.max(res.f):.4g} N)"))
     else:
-        out.append(("warn", f"cannot hold the zero pose against gravity within the cable bounds "
+        out.append(("warn", f"cannot hold {name} against gravity within the cable bounds "
                             f"({res.status}: {res.message})"))
     for j in robot.joints:
         if j.cone_deg is not None:

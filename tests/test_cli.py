@@ -148,7 +148,7 @@ def test_no_library_module_imports_the_command_line():
     assert not offenders, offenders
 
 
-@pytest.mark.parametrize("command", ["info", "solve", "import-caspr", "view", "plot", "verify"])
+@pytest.mark.parametrize("command", ["info", "solve", "import-caspr", "view", "plot", "verify", "compile"])
 def test_every_command_has_help(command, capsys):
     with pytest.raises(SystemExit) as exc:
         main([command, "--help"])

@@ -9,6 +9,7 @@
 from __future__ import annotations
 
 import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -110,35 +111,59 @@ def test_spread_matches_numpy():
         assert spread(A, b) == pytest.approx(want, rel=1e-15)
 
 
-def test_background_compiler_sees_every_kernel():
-    """``python -m mcdm_pin.jit`` (the detached process that compiles the kernels on a new machine)
-    must see the kernels the library registers: run as ``__main__`` it once had its own, empty
-    registry, found "everything cached", compiled nothing, and every later run stayed uncompiled."""
-    import subprocess
-    import sys
+def test_compile_command_sees_every_kernel(capsys):
+    """``mcdm-pin compile --where`` names the cache folder and says it holds a complete compile (this
+    session's conftest compiled); the registry holds every entry point the library calls."""
+    from mcdm_pin import jit
+    from mcdm_pin.cli import main
+
+    jit.prepare(policy="wait")
+    names = jit.entry_points()
+    assert len(names) >= 10 and "mcdm_pin.solvers._fast.ipm_answer" in names
+    assert main(["compile", "--where"]) == 0
+    out = capsys.readouterr().out
+    assert out.strip() == f"{jit.cache_dir()}: compiled", out
+
+
+def test_jit_uses_numba_public_api_only_and_starts_no_process():
+    """No private numba attribute (``_cache``, ``_cache_hits``, ``insert_user_function``, ...), no
+    subprocess, ``fcntl`` imported only where the platform has it."""
+    import ast
 
     from mcdm_pin import jit
 
-    expected = len(jit._all_calls())
-    out = subprocess.run([sys.executable, "-m", "mcdm_pin.jit", "--list"], capture_output=True, text=True,
-                         timeout=120, check=True).stdout
-    assert expected >= 4 and out.startswith(f"{expected} kernel specialisations registered"), out
+    source = Path(jit.__file__).read_text()
+    tree = ast.parse(source)
+    private = {n.attr for n in ast.walk(tree) if isinstance(n, ast.Attribute) and n.attr.startswith("_")
+               and not n.attr.startswith("__")}
+    assert not private & {"_cache", "_cache_hits", "_cache_misses", "_can_compile", "_reset_overloads"}, private
+    assert "insert_user_function" not in source and "load_overload" not in source
+    assert "subprocess" not in source and "Popen" not in source
+    guarded = [n for n in ast.walk(tree) if isinstance(n, ast.Try)
+               and any(isinstance(m, ast.Import) and m.names[0].name == "fcntl" for m in n.body)]
+    assert guarded
 
 
-def test_cache_stamped_with_every_kernel_source(tmp_path, monkeypatch):
+def _stand_in_cache(monkeypatch, tmp_path, calls):
+    """Point jit's stamp and lock at ``tmp_path`` and its registry at ``calls`` (the real cache stays)."""
+    from mcdm_pin import jit
+
+    monkeypatch.setattr(jit, "cache_dir", lambda: tmp_path)
+    monkeypatch.setattr(jit, "_all_calls", lambda: calls)
+    monkeypatch.setattr(jit, "_dispatchers", lambda: [])
+    monkeypatch.setattr(jit, "_COMPILED", False)
+    return jit
+
+
+def test_stamp_covers_every_kernel_source(tmp_path, monkeypatch):
     """numba invalidates a cached kernel when its own file changes, not when a kernel it calls in
-    another module does (``_fast.py`` calls ``_kkt.py``): the cache's stamp is the digest of every
-    kernel module, and a stamp that differs flushes every kernel's cache (here on stand-ins, so that
-    the real cache stays)."""
+    another module does (``_fast.py`` calls ``_kkt.py``): the stamp is the digest of every kernel module
+    and of tolerances.py, with each file's (mtime, size), numba's own key of its index."""
     from mcdm_pin import jit
 
     names = {p.name for p in jit.kernel_sources()}
-    assert {"kernels.py", "_kkt.py", "_fast.py", "_ipm.py", "_ipm_linalg.py"} <= names and "jit.py" not in names
-    # and the tolerances some kernels read when compiled (a changed constant must recompile them)
-    assert "tolerances.py" in names
-    # the real cache, compiled by this session's conftest, carries the current stamp
-    assert (jit._stamp_path(jit._dispatchers()).read_text().strip() == jit.sources_digest())
-    # one changed byte in any kernel module changes the digest
+    assert {"kernels.py", "_kkt.py", "_fast.py", "_ipm.py", "_ipm_linalg.py", "tolerances.py"} <= names
+    assert "jit.py" not in names
     files = []
     for p in jit.kernel_sources():
         files.append(tmp_path / p.name)
@@ -146,24 +171,77 @@ def test_cache_stamped_with_every_kernel_source(tmp_path, monkeypatch):
     before = jit.sources_digest(files)
     files[1].write_bytes(files[1].read_bytes() + b"#")
     assert jit.sources_digest(files) != before
-
-    flushed = []
-
-    class Cache:
-        cache_path = str(tmp_path / "cache")
-
-        def flush(self):
-            flushed.append(1)
-
-    class Kernel:
-        _cache = Cache()
-
-    monkeypatch.setattr(jit, "_dispatchers", lambda: [Kernel(), Kernel()])
-    assert not jit.stamp_current() and len(flushed) == 2  # no stamp yet: flushed
-    jit._write_stamp()
-    assert jit.stamp_current() and len(flushed) == 2  # stamped: kept
+    text = jit.stamp_text()
+    assert all(f"source {n} " in text for n in names) and "numba " in text
+    jit = _stand_in_cache(monkeypatch, tmp_path, [])
+    assert not jit.stamp_current()  # no stamp
+    jit._write_stamp(tmp_path)
+    assert jit.stamp_current()
     monkeypatch.setattr(jit, "sources_digest", lambda paths=None: "another source")
-    assert not jit.stamp_current() and len(flushed) == 4  # a kernel module changed: flushed
+    assert not jit.stamp_current()  # a kernel module changed
+
+
+def test_interrupted_compile_leaves_no_stamp(tmp_path, monkeypatch):
+    """The stamp goes before a compile starts and comes back, whole, only after it ends: a compile
+    interrupted (or still running) leaves the cache unstamped, and runs stay uncompiled."""
+    seen = []
+
+    class Interrupted(Exception):
+        pass
+
+    def kernel(*args):
+        seen.append(jit.stamp_current())
+        raise Interrupted
+
+    jit = _stand_in_cache(monkeypatch, tmp_path, [(kernel, ())])
+    (tmp_path / jit.STAMP).write_text("an old compile's stamp\n")
+    with pytest.raises(Interrupted):
+        jit.compile_now(quiet=True)
+    assert seen == [False] and not (tmp_path / jit.STAMP).exists() and not jit.compiled()
+    assert not jit.prepare(policy="auto", quiet=True)
+    # a complete compile stamps
+    monkeypatch.setattr(jit, "_all_calls", lambda: [(lambda: None, ())])
+    jit.compile_now(quiet=True)
+    assert jit.stamp_current() and jit.compiled() and not list(tmp_path.glob("*.tmp"))
+
+
+def test_compile_lock_is_per_install(tmp_path, monkeypatch):
+    """The lock lives in the install's cache folder: a compile of another install (another folder)
+    never waits on it."""
+    from mcdm_pin import jit
+
+    if jit.fcntl is None:
+        pytest.skip("no fcntl on this platform: no lock")
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    with jit._Lock(tmp_path / "a", quiet=True) as held:
+        assert held.path == tmp_path / "a" / jit.LOCK
+        with open(tmp_path / "a" / jit.LOCK, "a") as fh:  # the same install: taken
+            with pytest.raises(OSError):
+                jit.fcntl.flock(fh, jit.fcntl.LOCK_EX | jit.fcntl.LOCK_NB)
+        with jit._Lock(tmp_path / "b", quiet=True):  # another install: free
+            pass
+
+
+def test_constructor_starts_no_process_and_compiles_nothing(monkeypatch, two_link):
+    """Under the default policy, an unstamped cache leaves the kernels uncompiled (a note says how to
+    compile them) and nothing is started or compiled."""
+    import subprocess
+
+    from mcdm_pin import InverseDynamics, jit
+    from mcdm_pin import tolerances as tol
+
+    def no_process(*a, **k):
+        raise AssertionError("a library constructor started a process")
+
+    monkeypatch.setattr(subprocess, "Popen", no_process)
+    monkeypatch.setattr(jit, "_COMPILED", False)
+    monkeypatch.setattr(jit, "stamp_current", lambda: False)
+    monkeypatch.setenv("MCDM_PIN_JIT", "auto")
+    ident = InverseDynamics.for_case(two_link, 3)
+    assert not jit.compiled()
+    assert ident.solver.inner.budget_s == pytest.approx(tol.BUDGET_S * jit.UNCOMPILED_SLOWDOWN)
+    assert ident.solve(np.zeros(two_link.nq)).status in ("optimal", "infeasible")
 
 
 def test_compiled_scaling_check_agrees_with_scaling_factors(tmp_path):

@@ -19,15 +19,19 @@ from mcdm_pin.mjcf.load import robot_from_mujoco  # noqa: E402
 from mcdm_pin.model.terms import TermsEvaluator  # noqa: E402
 
 STATES = 50
-MODELS = ("myoelbow", "myoelbow_2dof", "myofinger", "myoarm_r")
+# every kind of model that loads: elbows, a finger with pulleys and one with motors on its tendons,
+# the arm (couplings), a hand, the legs (a free root, couplings), the torso (208 muscles)
+MODELS = ("myoelbow", "myoelbow_2dof", "myofinger", "motorfinger", "myoarm_r", "myohand", "myolegs", "myotorso")
 
 
 def _compile(name):
-    if name == "myoarm_r":
+    if name == "motorfinger":
+        return mujoco.MjModel.from_xml_path(str(myo_sim.get_xml_path("myofinger")).replace("myofinger_v0",
+                                                                                          "motorfinger_v0"))
+    if name in ("myoarm_r", "myohand", "myolegs", "myotorso"):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            xml = myo_sim.load_spec(name).to_xml()
-        return mujoco.MjModel.from_xml_string(xml)
+            return myo_sim.load_spec(name).compile()
     return mujoco.MjModel.from_xml_path(str(myo_sim.get_xml_path(name)))
 
 
@@ -64,13 +68,31 @@ def _states(mj, robot, rng):
     for _ in range(STATES):
         qpos = mj.qpos0.copy()
         for j in range(mj.njnt):
+            a = mj.jnt_qposadr[j]
+            if mj.jnt_type[j] in (mujoco.mjtJoint.mjJNT_FREE, mujoco.mjtJoint.mjJNT_BALL):
+                k = 3 if mj.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE else 0
+                qpos[a:a + k] += rng.normal(0.0, 0.1, k)
+                quat = rng.normal(size=4)
+                qpos[a + k:a + k + 4] = quat / np.linalg.norm(quat)
+                continue
             lo, hi = mj.jnt_range[j] if mj.jnt_limited[j] else (-1.0, 1.0)
-            qpos[mj.jnt_qposadr[j]] = rng.uniform(lo, hi)
+            qpos[a] = rng.uniform(lo, hi)
         q = maps.to_pin_q(qpos)
         v = rng.normal(0.0, 1.0, mj.nv)
         if robot.couplings is not None:
             q, v, _ = robot.couplings.fill(q, v)
         yield maps.to_mj_qpos(q), maps.to_mj_qvel(v, q), rng.uniform(0.0, 1.0, mj.nu)
+
+
+def _set_controls(mj, d, act):
+    """``act`` (nu,) in [0, 1]: each muscle's activation, each other actuator's control as that share of
+    its control range."""
+    for i in range(mj.nu):
+        if mj.actuator_actadr[i] >= 0:
+            d.act[mj.actuator_actadr[i]] = act[i]
+        else:
+            lo, hi = mj.actuator_ctrlrange[i]
+            d.ctrl[i] = lo + act[i] * (hi - lo)
 
 
 def _cable_tendons(mj, robot):
@@ -85,19 +107,22 @@ def test_lengths_moment_arms_and_muscle_tensions_equal_mujocos(case):
     maps = robot.source.maps
     err_l = err_L = err_f = 0.0
     for qpos, qvel, act in _states(mj, robot, np.random.default_rng(1)):
-        d.qpos[:], d.qvel[:], d.act[:] = qpos, qvel, act
+        d.qpos[:], d.qvel[:] = qpos, qvel
+        _set_controls(mj, d, act)
         mujoco.mj_fwdPosition(mj, d)
         mujoco.mj_fwdVelocity(mj, d)
         mujoco.mj_fwdActuation(mj, d)
         q, v = maps.to_pin_q(qpos), maps.to_pin_v(qvel, qpos)
-        t = ev(q, v)
+        a = None if robot.couplings is None else robot.couplings.fill(q, v, np.zeros(robot.nv))[2]
+        t = ev(q, v, a)  # accelerations that keep the couplings
         J = _tendon_J(mj, d)[tendons]
         err_l = max(err_l, np.max(np.abs(t.lengths - d.ten_length[tendons]) / np.abs(d.ten_length[tendons])))
         err_L = max(err_L, np.max(np.abs(t.L_full - J)) / np.abs(J).max())
-        a = act[acts]
-        f = t.muscles.passive + t.muscles.gain * a
         f_mj = -d.actuator_force[acts] * mj.actuator_gear[acts, 0]
-        err_f = max(err_f, np.max(np.abs(f - f_mj)) / max(1.0, np.abs(f_mj).max()))
+        if t.muscles is not None:
+            k = robot.cables.muscle_index
+            f = t.muscles.passive + t.muscles.gain * act[acts[k]]
+            err_f = max(err_f, np.max(np.abs(f - f_mj[k])) / max(1.0, np.abs(f_mj[k]).max()))
     assert err_l < 1e-9, (name, err_l)
     assert err_L < 1e-9, (name, err_L)
     assert err_f < 1e-9, (name, err_f)
@@ -114,7 +139,8 @@ def test_interaction_wrenches_with_wrapped_muscles_equal_cfrc_int(case):
     body_of_joint = {int(maps.body_joint[b]): b for b in range(1, mj.nbody) if mj.body_jntnum[b]}
     worst = 0.0
     for qpos, qvel, act in _states(mj, robot, np.random.default_rng(2)):
-        d.qpos[:], d.qvel[:], d.act[:] = qpos, qvel, act
+        d.qpos[:], d.qvel[:] = qpos, qvel
+        _set_controls(mj, d, act)
         mujoco.mj_forward(mj, d)
         mujoco.mj_rnePostConstraint(mj, d)
         q = maps.to_pin_q(qpos)

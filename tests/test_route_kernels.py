@@ -1,7 +1,8 @@
 """The compiled route pass (``route_kernels.route_pass``) against the same function uncompiled (its
-``py_func``: ``wrapping.py``'s maths run as Python), on MyoSuite's arm (101 wraps over spheres and
-cylinders, with side points outside and inside) at 50 states; and both against the public wrap
-functions (``wrap_sphere``, ``wrap_cylinder``) one wrap at a time."""
+Python code, as ``jit.kernels`` hands it out before ``mcdm-pin compile``: ``wrapping.py``'s maths run
+as Python), on MyoSuite's arm (97 wraps over spheres and cylinders, with side points outside and
+inside) at 50 states, alone and through the whole terms; and against the public wrap functions
+(``wrap_sphere``, ``wrap_cylinder``) one wrap at a time."""
 
 from __future__ import annotations
 
@@ -10,7 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mcdm_pin import Robot
+from mcdm_pin import Robot, jit
+from mcdm_pin.model import route_kernels
 from mcdm_pin.model.routes import RoutePaths
 from mcdm_pin.model.terms import TermsEvaluator
 from mcdm_pin.model.wrapping import wrap_cylinder, wrap_sphere
@@ -48,11 +50,15 @@ def _placements(ev, q):
 
 def test_compiled_route_pass_equals_the_uncompiled_one(arm):
     robot, states = arm
-    ev = TermsEvaluator(robot, compiled=False)
+    ev = TermsEvaluator(robot)
     key = np.full(robot.model.njoints, -1)
     key[ev._keys] = np.arange(len(ev._keys))
-    fast, slow = RoutePaths(robot.cables, key, compiled=True), RoutePaths(robot.cables, key, compiled=False)
-    assert slow._pass is fast._pass.py_func
+    fast, slow = RoutePaths(robot.cables, key), RoutePaths(robot.cables, key)
+    fast._pass = route_kernels.route_pass  # the dispatcher (compiles on its first call when not cached)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(jit, "_COMPILED", False)
+        slow._pass = jit.kernels("model.route_kernels").route_pass
+    assert not hasattr(slow._pass, "overloads")  # plain Python
     engaged = np.zeros(len(robot.cables.wraps), dtype=int)
     for q, _, _ in states:
         oM = _placements(ev, q)
@@ -67,7 +73,12 @@ def test_compiled_route_pass_equals_the_uncompiled_one(arm):
 
 def test_compiled_terms_equal_the_uncompiled_ones(arm):
     robot, states = arm
-    fast, slow = TermsEvaluator(robot, compiled=True), TermsEvaluator(robot, compiled=False)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(jit, "_COMPILED", True)  # the dispatchers (each compiles on its first call when not cached)
+        fast = TermsEvaluator(robot)
+        mp.setattr(jit, "_COMPILED", False)
+        slow = TermsEvaluator(robot)
+    assert hasattr(fast._routes._pass, "overloads") and not hasattr(slow._routes._pass, "overloads")
     for q, v, a in states:
         s, f = slow(q, v, a), fast(q, v, a)
         for name in ("lengths", "L_full", "RT", "points", "f_min", "f_max"):
@@ -79,7 +90,7 @@ def test_route_pass_tangent_points_equal_the_public_wrap_functions(arm):
     """Each engaged wrap's tangent points and arc (through the cable's length) from the route pass
     equal ``wrap_sphere``/``wrap_cylinder`` on the same end points in the surface's frame."""
     robot, states = arm
-    ev = TermsEvaluator(robot, compiled=True)
+    ev = TermsEvaluator(robot)
     cables = robot.cables
     for q, _, _ in states[:10]:
         oM = _placements(ev, q)

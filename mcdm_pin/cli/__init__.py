@@ -10,10 +10,10 @@ import argparse
 import sys
 
 from ..exceptions import McdmError
-from . import export_opensim, import_caspr, info, plot, solve, verify, view, workspace
+from . import compile, export_opensim, import_caspr, info, plot, solve, verify, view, workspace
 from ._common import Parser, UsageError
 
-COMMANDS = [info, solve, import_caspr, view, plot, verify, export_opensim, workspace]
+COMMANDS = [info, solve, import_caspr, view, plot, verify, export_opensim, workspace, compile]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -7,6 +7,7 @@ import argparse
 import numpy as np
 
 from ..exceptions import McdmError
+from ..model.joints import CONE_TYPES
 
 
 class UsageError(McdmError):
@@ -83,8 +84,9 @@ def parse_cones(robot, text: str | None):
                 raise UsageError("--cone all: the robot has no spherical joint")
         else:
             _check_joint(robot, name, "--cone")
-            if robot.joint(name).type != "spherical":
-                raise UsageError(f"--cone {name}: cones apply to spherical joints only")
+            if robot.joint(name).type not in CONE_TYPES:
+                raise UsageError(f"--cone {name}: cones apply to spherical joints only (and to MJCF composite "
+                                 f"joints)")
             out[name] = deg
     return out
 

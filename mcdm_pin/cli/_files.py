@@ -4,6 +4,7 @@ names each file and what to pass instead."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from ._common import UsageError
@@ -12,6 +13,7 @@ WHAT = {
     "results": "a results file (.npz, from mcdm-pin solve --out)",
     "sidecar": "a cable sidecar (YAML)",
     "urdf": "a URDF (XML robot description)",
+    "mjcf": "a MuJoCo MJCF file",
     "xml": "an XML file",
     "csv": "a CSV file",
     "binary": "a binary file",
@@ -20,7 +22,7 @@ WHAT = {
 
 
 def file_kind(path) -> str:
-    """``results``, ``sidecar``, ``urdf``, ``xml``, ``csv``, ``binary`` or ``missing``: read from the
+    """``results``, ``sidecar``, ``urdf``, ``mjcf``, ``xml``, ``csv``, ``binary`` or ``missing``: read from the
     first bytes of the file (a ``.npz`` is a zip archive; a URDF is XML with a ``<robot`` element),
     then from its extension. Text that is none of these counts as a sidecar (the YAML loader then
     says what is wrong with it)."""
@@ -41,7 +43,9 @@ def file_kind(path) -> str:
     if "\x00" in text:
         return "binary"
     stripped = text.lstrip("\ufeff \t\r\n")
-    if stripped.startswith("<") or suffix in (".urdf", ".xml"):
+    if stripped.startswith("<") or suffix in (".urdf", ".xml", ".mjcf"):
+        if re.search(r"<mujoco[\s>]", text):
+            return "mjcf"
         return "urdf" if "<robot" in text or suffix == ".urdf" else "xml"
     if suffix == ".csv":
         return "csv"
@@ -67,7 +71,7 @@ def robot_file(path, where: str = "ROBOT") -> str:
     """``path`` if it can be a robot's sidecar; otherwise a :class:`UsageError` saying what it is and
     what to pass instead."""
     kind = file_kind(path)
-    if kind in ("sidecar", "missing"):  # missing: the loader's own message names the file
+    if kind in ("sidecar", "missing", "mjcf"):  # missing: the loader's own message names the file
         return str(path)
     if kind == "urdf":
         near = _sidecars_naming(Path(path))

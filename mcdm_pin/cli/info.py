@@ -28,37 +28,46 @@ def run(args) -> int:
         raise UsageError(f"--samples: expected a number >= 0, got {args.samples}")
     robot = Robot.load(robot_file(args.robot))
     sc = robot.sidecar
-    print(f"robot {robot.name}: {len(robot.joints)} joints, {robot.nv} DoF, {robot.m} cables")
-    print(f"  sidecar  {sc.path}")
-    print(f"  urdf     {robot.urdf_path}" + (f"  ({sc.urdf})" if sc.urdf.startswith("package://") else ""))
-    print(f"  gravity  {list(sc.gravity)} m/s^2")
-    if sc.locked_joints:
+    print(f"robot {robot.name}: {len(robot.joints)} joints, {robot.nv} DoF, {robot.m} cables"
+          + (f" ({len(robot.cables.muscle_index)} muscles)" if robot.cables.muscles is not None else ""))
+    if sc is not None:
+        print(f"  sidecar  {sc.path}")
+    if getattr(robot.source, "kind", None) == "mjcf":
+        print(f"  mjcf     {robot.source.maps.source}")
+    else:
+        print(f"  urdf     {robot.urdf_path}" + (f"  ({sc.urdf})" if sc.urdf.startswith("package://") else ""))
+    print(f"  gravity  {np.round(robot.model.gravity.linear, 6).tolist()} m/s^2")
+    for note in robot.notes:
+        print(f"  note     {note}")
+    if sc is not None and sc.locked_joints:
         print(f"  locked   {len(sc.locked_joints)} URDF joints: "
               + ", ".join(f"{k}={v:g}" for k, v in sc.locked_joints.items()))
-    print("\nlinks (URDF frames):")
+    print("\nlinks (MJCF bodies):" if sc is None or sc.mjcf_path is not None else "\nlinks (URDF frames):")
     print("  " + ", ".join(robot.link_names))
     print("\njoints:")
     rows = []
     for j in robot.joints:
         coords = ", ".join(robot.coordinate_names[i] for i in j.idx_v)
-        axis = np.round(j.socket_axis, 6).tolist() if j.type == "spherical" else "-"
+        axis = np.round(j.socket_axis, 6).tolist() if j.type == "spherical" or j.cone_deg is not None else "-"
         rows.append([j.name, j.type, j.nv, coords, axis, f"{j.alpha:g}",
                      f"{j.beta:g}", "-" if j.cone_deg is None else f"{j.cone_deg:g}"])
-    print(table(["joint", "type", "DoF", "coordinates (URDF joints)", "socket axis", "alpha", "beta",
+    source = "MJCF joints" if getattr(robot.source, "kind", None) == "mjcf" else "URDF joints"
+    print(table(["joint", "type", "DoF", f"coordinates ({source})", "socket axis", "alpha", "beta",
                   "cone deg"], rows))
     print("\ncables:")
     rows = []
-    for c in robot.cables:
-        route = " -> ".join(f"{link}{np.round(p, 4).tolist()}" for link, p in zip(c.links, c.points))
-        rows.append([c.name, f"{c.f_min:g}", f"{c.f_max:g}", route])
-    print(table(["cable", "f_min N", "f_max N", "route (link[point m])"], rows))
-    if sc.trajectories:
+    muscles = set(robot.cables.muscle_index.tolist())
+    for k, c in enumerate(robot.cables):
+        bounds = ["muscle", "(FLV)"] if k in muscles else [f"{c.f_min:g}", f"{c.f_max:g}"]
+        rows.append([c.name, *bounds, _route_text(c)])
+    print(table(["cable", "f_min N", "f_max N", "route (link[point m], ~wrap~, |pulley|)"], rows))
+    if sc is not None and sc.trajectories:
         print("\ntrajectories: " + ", ".join(
             f"{n} ({t.type}{'' if t.type == 'csv' else f', {t.duration:g} s, dt {t.dt:g}'})"
             for n, t in sc.trajectories.items()))
     print("\nvalidation:")
     report = validation_report(robot)
-    if sc.trajectories:
+    if sc is not None and sc.trajectories:
         checks = check_trajectories(robot, samples=args.samples)
         report += [(c.level, c.text()) for c in checks]
     ok = True
@@ -66,3 +75,19 @@ def run(args) -> int:
         print(f"  [{level}] {text}")
         ok &= level != "fail"
     return 0 if ok else 1
+
+
+def _route_text(cable) -> str:
+    """A route in one line: points as ``frame[x, y, z]``, wraps as ``~kind name r=radius~``, pulleys as
+    ``|/divisor|``."""
+    from ..model.cables import Pulley, Wrap
+
+    parts = []
+    for e in cable.route:
+        if isinstance(e, Wrap):
+            parts.append(f"~{e.kind} {e.name or e.frame} r={e.radius:g}~")
+        elif isinstance(e, Pulley):
+            parts.append(f"|/{e.divisor:g}|")
+        else:
+            parts.append(f"{e.frame}{np.round(e.point, 4).tolist()}")
+    return " -> ".join(parts)

@@ -13,6 +13,7 @@ import numpy as np
 
 from .. import jit
 from ..exceptions import ProblemError
+from ..model.joints import CONE_TYPES
 from .base import ConeData, Constraint, perpendicular_basis
 
 FRAMES = ("socket", "child")
@@ -37,9 +38,9 @@ class InteractionCone(Constraint):
 
     def bind(self, robot) -> "InteractionCone":
         joint = robot.joint(self.joint)
-        if joint.type != "spherical":
+        if joint.type not in CONE_TYPES:
             raise ProblemError(f"InteractionCone: joint {self.joint!r} is {joint.type}; cones apply to "
-                               f"spherical joints")
+                               f"spherical (and composite) joints")
         angle = self.angle_deg
         if angle is None:
             if joint.cone_deg is None:

@@ -68,15 +68,50 @@ def robot_from_mujoco(mj, source: str, name: str = "robot"):
         coupled = read_couplings(mj, mjm, source)
     except ModelError as exc:
         msg = str(exc)
-        raise ModelError(msg if msg.startswith(source) else f"{source}: {msg}") from None
+        msg = msg if msg.startswith(source) else f"{source}: {msg}"
+        raise ModelError(msg + _line_of(source, msg)) from None
     names = mjm.coordinate_names
     q_index = np.full(mjm.model.nv, -1, dtype=int)
     for j, kind in enumerate(mjm.jnt_type):
         if kind in (2, 3):  # slide, hinge: q is the coordinate
             q_index[mjm.jnt_idx_v[j]] = mjm.jnt_idx_q[j]
     couplings = Couplings(q_index, coupled, names) if coupled else None
-    return Robot(mjm.model, cables, physical_joints(mjm.model), name=name, couplings=couplings,
-                 coordinate_names=names, source=MjcfSource(mjm, couplings), notes=tendons.notes)
+    joints = physical_joints(mjm.model)
+    try:
+        return Robot(mjm.model, cables, joints, _joint_motors(mjm, joints, tendons.joint_motors), name=name,
+                     couplings=couplings, coordinate_names=names, source=MjcfSource(mjm, couplings),
+                     notes=tendons.notes)
+    except ModelError as exc:
+        raise ModelError(f"{source}: {exc}") from None
+
+
+def _joint_motors(mjm, joints, motors) -> tuple:
+    """Bounded motors on hinge and slide joints as actuators of the physical joint (MuJoCo body) holding
+    the joint, named after the MuJoCo actuator."""
+    from ..model.actuators import Actuator
+
+    owner = {int(i): j for j in joints for i in j.idx_v}
+    out = []
+    for name, jnt, lo, hi in motors:
+        i = int(mjm.jnt_idx_v[jnt])
+        out.append(Actuator(owner[i].name, np.array([i]), np.array([lo]), np.array([hi]), 1.0, label=name))
+    return tuple(out)
+
+
+def _line_of(source: str, message: str) -> str:
+    """`` (line N)`` of the element a message names (``kind 'name'``) in the MJCF file ``source``, when
+    the file holds it (an element from an included file or a model built in code has no line here)."""
+    m = re.search(r"\b(body|joint|site|geom|tendon|actuator|equality|spatial|muscle|connect|weld) '([^']+)'",
+                  message[len(source):])
+    path = Path(source)
+    if m is None or not path.is_file():
+        return ""
+    pattern = re.compile(r'name\s*=\s*"' + re.escape(m.group(2)) + '"')
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for n, line in enumerate(fh, 1):
+            if pattern.search(line):
+                return f" (line {n})"
+    return ""
 
 
 class MjcfSource:

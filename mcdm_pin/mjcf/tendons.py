@@ -4,9 +4,11 @@ Read from the *compiled* ``mujoco.MjModel`` (MuJoCo resolved defaults, includes 
 Pinocchio frames of :func:`mcdm_pin.mjcf.model.build_model`:
 
 - a spatial tendon driven by a muscle actuator becomes a muscle cable named after the actuator; one
-  driven by a ``motor``/``general`` actuator with a control range that only pulls becomes a cable with
-  those bounds (times the gear); a tendon no actuator drives exerts no force of its own (MuJoCo's
-  passive tendon stiffness, damping and limits are refused where set) and is left out, with a note;
+  driven by a plain ``motor``/``general`` actuator with a control range that only pulls becomes a cable
+  with those bounds (times gain and gear); a bounded plain motor on a hinge or slide joint becomes an
+  actuator of that joint (a hybrid robot's motor); a tendon no actuator drives exerts no force of its
+  own (MuJoCo's passive tendon stiffness and damping are refused where set) and is left out, with a
+  note, as is a muscle whose whole path lies on one body;
 - a route's ``site`` is a :class:`~mcdm_pin.model.cables.RoutePoint` on the site's frame, a ``geom``
   (sphere or cylinder) a :class:`~mcdm_pin.model.cables.Wrap` on the geom's frame (its ``sidesite`` the
   wrap's side point), a ``pulley`` a :class:`~mcdm_pin.model.cables.Pulley`;
@@ -15,8 +17,8 @@ Pinocchio frames of :func:`mcdm_pin.mjcf.model.build_model`:
   measured from ``qpos0``).
 
 Everything else that acts on the bodies is refused with the element and the reason: fixed tendons,
-tendons with stiffness, damping or limits, other equality constraints (connect, weld, tendon, flex),
-and actuators that are neither (on joints: a hybrid robot's motors are not read from MJCF yet).
+tendons with stiffness or damping, other equality constraints (connect, weld, tendon, flex), and other
+actuators (dynamics, bias, unbounded, on sites or bodies, on ball or free joints).
 """
 
 from __future__ import annotations
@@ -34,12 +36,14 @@ from ..model.muscles import from_mujoco
 @dataclass(frozen=True)
 class TendonSet:
     """What :func:`read_tendons` found: ``cables`` (Cable list), the muscles' params and cable names
-    (``None``, () without muscles), ``notes`` (what was left out and why)."""
+    (``None``, () without muscles), ``notes`` (what was left out and why), ``joint_motors``
+    ``(name, MuJoCo joint id, lo, hi)`` of the bounded motors on hinge and slide joints."""
 
     cables: list
     muscles: object
     muscle_cables: tuple
     notes: tuple
+    joint_motors: tuple = ()
 
 
 def _refuse(source: str, what: str, why: str):
@@ -86,35 +90,115 @@ def _check_tendon(mj, t: int, source: str, tname: str, notes: list) -> None:
 
 
 def read_tendons(mj, mjm, source: str) -> TendonSet:
-    """Cables, muscles and notes from the compiled model ``mj`` and its Pinocchio frames ``mjm``."""
+    """Cables, muscles, joint motors and notes from the compiled model ``mj`` and its Pinocchio frames
+    ``mjm``."""
     import mujoco
 
     found = from_mujoco(mj)
-    for name, why in found.skipped:
-        i = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_ACTUATOR, name) if not name.startswith("actuator ") \
-            else int(name.split()[1])
-        raise _refuse(source, f"actuator {name!r}", f"{why}; only muscle actuators on tendons are read "
-                                                    f"from MJCF (transmission {int(mj.actuator_trntype[i])})")
-    by_tendon = {int(t): k for k, t in enumerate(found.tendon_ids)}
-    if len(by_tendon) != len(found.tendon_ids):
+    motors = _motors(mj, source, found.skipped)
+    by_tendon = {int(t): ("muscle", k) for k, t in enumerate(found.tendon_ids)}
+    for i, (kind, lo, hi) in motors.items():
+        if kind == "tendon":
+            t = int(mj.actuator_trnid[i, 0])
+            if t in by_tendon:
+                raise _refuse(source, f"actuator {_actuator_name(mj, i)!r}", "a second actuator on a tendon; "
+                                                                             "expected one actuator per tendon")
+            by_tendon[t] = ("motor", i)
+    if len(by_tendon) != len(found.tendon_ids) + sum(1 for k, _, _ in motors.values() if k == "tendon"):
         raise _refuse(source, "actuators", "two muscles drive one tendon; expected one muscle per tendon")
     cables, names, notes = [], [], []
     params = found.params
     for t in range(mj.ntendon):
         tname = mujoco.mj_id2name(mj, mujoco.mjtObj.mjOBJ_TENDON, t) or f"tendon:#{t}"
+        _check_tendon(mj, t, source, tname, notes)
         if t not in by_tendon:
-            _check_tendon(mj, t, source, tname, notes)
             notes.append(f"tendon {tname!r}: no actuator drives it, so it exerts no force; not a cable")
             continue
-        _check_tendon(mj, t, source, tname, notes)
-        k = by_tendon[t]
         route = _route(mj, mjm, t, source, tname)
-        # the static bounds only enclose the tension; each instant's range follows the muscle's state
-        cables.append(Cable(params.names[k], tuple(route), 0.0, _tension_ceiling(params, k)))
-        names.append(params.names[k])
+        kind, k = by_tendon[t]
+        cname = params.names[k] if kind == "muscle" else _actuator_name(mj, k)
+        if len(_route_bodies(mj, mjm, t)) < 2:
+            notes.append(f"{'muscle' if kind == 'muscle' else 'actuator'} {cname!r}: its whole path (tendon "
+                         f"{tname!r}) lies on one body, so it moves nothing and its pull cancels inside that "
+                         f"body; left out")
+            continue
+        if kind == "muscle":
+            # the static bounds only enclose the tension; each instant's range follows the muscle's state
+            cables.append(Cable(cname, tuple(route), 0.0, _tension_ceiling(params, k)))
+            names.append(cname)
+        else:
+            cables.append(Cable(cname, tuple(route), *motors[k][1:]))
     order = [params.names.index(n) for n in names]
     muscles = _subset(params, order) if names else None
-    return TendonSet(cables, muscles, tuple(names), tuple(notes))
+    joint_motors = tuple((_actuator_name(mj, i), int(mj.actuator_trnid[i, 0]), lo, hi)
+                         for i, (kind, lo, hi) in motors.items() if kind == "joint")
+    return TendonSet(cables, muscles, tuple(names), tuple(notes), joint_motors)
+
+
+def _actuator_name(mj, i: int) -> str:
+    return mj.actuator(int(i)).name or f"actuator {int(i)}"
+
+
+def _route_bodies(mj, mjm, t: int) -> set:
+    """The Pinocchio joints carrying tendon ``t``'s sites and wrap geoms."""
+    import mujoco
+
+    W = mujoco.mjtWrap
+    out = set()
+    for i in range(int(mj.tendon_adr[t]), int(mj.tendon_adr[t] + mj.tendon_num[t])):
+        kind, obj = int(mj.wrap_type[i]), int(mj.wrap_objid[i])
+        if kind == W.mjWRAP_SITE:
+            out.add(int(mjm.body_joint[mj.site_bodyid[obj]]))
+        elif kind in (W.mjWRAP_SPHERE, W.mjWRAP_CYLINDER):
+            out.add(int(mjm.body_joint[mj.geom_bodyid[obj]]))
+    return out
+
+
+def _motors(mj, source: str, skipped) -> dict:
+    """The non-muscle actuators this loader reads: ``{actuator id: (kind, lo, hi)}`` with ``kind``
+    ``tendon`` (a cable pulling with tension in ``[lo, hi]`` N) or ``joint`` (a hinge or slide motor with
+    generalised force in ``[lo, hi]``): a ``motor``/``general`` actuator without dynamics, with a fixed
+    gain ``k``, no bias and a control range ``[c0, c1]`` (and ``forcerange`` when limited). Its force on
+    the transmission is ``g k c`` (gear ``g``), so a tendon's tension is ``-g k c``: read only when it can
+    only pull. Every other actuator is refused, naming it and why."""
+    import mujoco
+
+    out = {}
+    for name, why in skipped:
+        i = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_ACTUATOR, name) if not name.startswith("actuator ") \
+            else int(name.split()[1])
+        trn = mujoco.mjtTrn(int(mj.actuator_trntype[i])).name.removeprefix("mjTRN_").lower()
+        fail = None
+        if trn not in ("tendon", "joint"):
+            fail = f"on a {trn}"
+        elif int(mj.actuator_dyntype[i]) != mujoco.mjtDyn.mjDYN_NONE:
+            fail = "has activation dynamics (only a muscle's are read)"
+        elif int(mj.actuator_gaintype[i]) != mujoco.mjtGain.mjGAIN_FIXED or \
+                int(mj.actuator_biastype[i]) != mujoco.mjtBias.mjBIAS_NONE:
+            fail = "is not a plain motor (a fixed gain, no bias)"
+        elif not int(mj.actuator_ctrllimited[i]):
+            fail = "has no control range, so its force is unbounded"
+        if fail is None and trn == "joint":
+            j = int(mj.actuator_trnid[i, 0])
+            if int(mj.jnt_type[j]) not in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
+                fail = "drives a ball or free joint"
+        if fail is not None:
+            raise _refuse(source, f"actuator {name!r}", f"{why}; it {fail} ({trn} transmission): only muscles, "
+                                                        f"and bounded plain motors on tendons or hinge/slide "
+                                                        f"joints, are read from MJCF")
+        g, k = float(mj.actuator_gear[i, 0]), float(mj.actuator_gainprm[i, 0])
+        lo, hi = sorted(g * k * float(c) for c in mj.actuator_ctrlrange[i])
+        if int(mj.actuator_forcelimited[i]):
+            flo, fhi = (g * float(x) for x in sorted(mj.actuator_forcerange[i]))
+            lo, hi = max(lo, min(flo, fhi)), min(hi, max(flo, fhi))
+        if trn == "tendon":
+            lo, hi = -hi, -lo  # tension pulls: the tendon's force is minus the actuator's
+            if lo < 0 or not hi > lo:
+                raise _refuse(source, f"actuator {name!r}", f"a motor on a tendon whose tension range "
+                                                            f"[{lo:.6g}, {hi:.6g}] N is not within [0, inf) with "
+                                                            f"width: a cable only pulls")
+        out[i] = (trn, lo, hi)
+    return out
 
 
 def _tension_ceiling(params, k: int) -> float:

@@ -33,6 +33,9 @@ from ..exceptions import ModelError
 JOINT_TYPES = ("spherical", "revolute", "prismatic", "universal", "planar", "translation", "free",
                "helical", "ellipsoid", "composite")
 PARAMETRIZATIONS = ("euler-xyz", "quaternion", "zyx")
+# joints a stability cone may bound: ball joints, and composite joints (an MJCF body's several joints,
+# e.g. a shoulder's rotations about one point, where the cone bounds the reaction force's direction)
+CONE_TYPES = ("spherical", "composite")
 GEOM_TOL = 1e-9  # m and rad: members "meet" and axes are "orthogonal" within this
 _MASS_TOL = 0.0  # intermediate bodies of a group must be exactly massless
 
@@ -94,9 +97,9 @@ class PhysicalJoint:
                     raise ModelError(f"joint {self.name!r}: {key} must be finite and >= 0, got {value!r}")
                 changes[key] = value
         if cone_deg is not None:
-            if self.type != "spherical":
+            if self.type not in CONE_TYPES:
                 raise ModelError(f"joint {self.name!r} is {self.type}: a stability cone applies to spherical "
-                                 f"joints only")
+                                 f"joints only (or a composite joint: a body's several joints in MJCF)")
             cone_deg = float(cone_deg)
             if not 0.0 < cone_deg < 90.0:
                 raise ModelError(f"joint {self.name!r}: cone_deg must be in (0, 90) degrees, got {cone_deg!r}")

@@ -7,9 +7,9 @@ elements: its cost is numpy's per-call overhead, not arithmetic (0.13 ms of the 
 route points and segments. It is the only place with explicit loops over cables; the numpy path
 stays as the reference it is tested against (``tests/test_kernels.py``).
 
-Compiled once per machine and cached on disk (numba ``cache=True``: ``__pycache__`` beside this
-file, or ``NUMBA_CACHE_DIR``); :mod:`mcdm_pin.jit` loads the cache or compiles in the background, so
-no run waits for it.
+Compiled once per install by ``mcdm-pin compile`` and cached on disk (numba ``cache=True``:
+``__pycache__`` beside this file, or ``NUMBA_CACHE_DIR``); until then the same functions run as plain
+Python (:mod:`mcdm_pin.jit`), so every run gives the same answers.
 """
 
 from __future__ import annotations
@@ -332,8 +332,8 @@ def warm_calls():
 
 
 def warm_up() -> None:
-    """Load every registered kernel from numba's cache, or start compiling them without waiting
-    (:func:`mcdm_pin.jit.prepare`)."""
+    """Load every registered kernel from numba's cache when the compile step has stamped it
+    (:func:`mcdm_pin.jit.prepare`); otherwise the kernels run uncompiled."""
     from .. import jit
 
     jit.prepare()

@@ -17,9 +17,9 @@ the surface's body, :math:`R_w t + p_w` (metres). The wrap maths is ``wrapping.p
 compiled inline here: one implementation (the helpers below are ``register_jitable`` too, so
 the uncompiled path is Python throughout).
 
-Compiled once per machine and cached on disk (``cache=True``), registered with :mod:`mcdm_pin.jit`
-like :mod:`mcdm_pin.model.kernels`; before it is compiled, ``route_pass.py_func`` runs the same code
-as Python.
+Compiled by ``mcdm-pin compile`` with the other kernels and cached on disk (``cache=True``),
+registered with :mod:`mcdm_pin.jit` like :mod:`mcdm_pin.model.kernels`; until then the same code runs
+as Python (``jit.kernels("model.route_kernels").route_pass``).
 
 Packed per-wrap tables (one array each, so that a call passes few arguments: numba's dispatch costs
 about a microsecond per argument):

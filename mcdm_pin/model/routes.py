@@ -21,7 +21,8 @@ instant a wrap that engages turns its segment :math:`AB` into :math:`A T_0` and 
 does not keeps :math:`AB` and leaves its slot at scale 0 (no length, no wrench).
 
 At each instant one call of :func:`mcdm_pin.model.route_kernels.route_pass` (compiled, or the same
-function as Python before numba has compiled it) does every wrap and rewrites these arrays in place.
+function as Python before ``mcdm-pin compile``: :mod:`mcdm_pin.jit`) does every wrap and rewrites
+these arrays in place.
 """
 
 from __future__ import annotations
@@ -38,8 +39,6 @@ class RoutePaths:
         cables: the :class:`~mcdm_pin.model.cables.CableSet`.
         key_of_joint: (njoints,) the position of each Pinocchio joint among the placements the
             evaluator reads (-1: not read).
-        compiled: run the compiled route pass (:func:`mcdm_pin.model.route_kernels.route_pass`);
-            ``False``: the same function uncompiled (its ``py_func``, before numba has compiled it).
 
     Call with the world placements ``oM`` (K, 4, 4) of those joints; returns ``(point_local,
     point_key, seg_a, seg_b, seg_cable, seg_active, seg_scale, arc_length)``, the last (m,) the arc
@@ -47,10 +46,12 @@ class RoutePaths:
     rewritten at every call; ``engaged`` (W,) says which wraps engaged.
     """
 
-    def __init__(self, cables, key_of_joint: np.ndarray, compiled: bool = True):
+    def __init__(self, cables, key_of_joint: np.ndarray):
+        from .. import jit
+
         # imported here: the kernels import numba, which ``import mcdm_pin`` does not
         rk = importlib.import_module("mcdm_pin.model.route_kernels")
-        self._pass = rk.route_pass if compiled else rk.route_pass.py_func
+        self._pass = jit.kernels("model.route_kernels").route_pass  # compiled or not (mcdm_pin/jit.py)
         wraps = cables.wraps
         self.cables = cables
         n_p, n_s, n_w = len(cables.point_local), len(cables.seg_a), len(wraps)

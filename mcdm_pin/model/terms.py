@@ -225,13 +225,14 @@ class TermsEvaluator:
         self._u_views = [f.vector for f in self._f_refs]
         self._zeros = np.zeros(model.nv)
         self._tril = np.tril_indices(model.nv, -1)
-        # wrapped routes: their path arrays are rebuilt at every instant and read by the kernel, run
-        # compiled or, before numba has compiled it, as plain Python (the same code either way)
-        self._routes = RoutePaths(cables, pos, compiled) if cables.configuration_dependent else None
+        # wrapped routes: their path arrays are rebuilt at every instant and read by the kernel (the
+        # numpy reference formulation covers fixed routes only)
+        self._routes = RoutePaths(cables, pos) if cables.configuration_dependent else None
         if compiled or self._routes is not None:
-            from .kernels import cable_terms, csr
+            from .. import jit
+            from .kernels import csr
 
-            self._kernel = cable_terms if compiled else cable_terms.py_func
+            self._kernel = jit.kernels("model.kernels").cable_terms  # compiled or not (mcdm_pin/jit.py)
             self.compiled = True
             K = len(keys)
             self._v_csr = csr([np.flatnonzero(self._sub_v[:, k]).tolist() for k in range(K)], K)

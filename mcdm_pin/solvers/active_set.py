@@ -143,7 +143,8 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     cact, cdir = guess.cone_guess(qp)
     # C-ordered float arrays and Python scalars: one compiled specialisation serves every call
     c_ = np.ascontiguousarray
-    code, x, y, z, zc, objective, held, mus, dirs, nxt_state, solves, unique = _fast.active_set_answer(
+    answer = jit.kernels("solvers._fast").active_set_answer
+    code, x, y, z, zc, objective, held, mus, dirs, nxt_state, solves, unique = answer(
         c_(qp.P, dtype=float), c, qp.r, A, b, lb, ub, c_(state, dtype=np.int8), G, gc, ax, tn, basis0,
         c_(cact, dtype=np.bool_), c_(cdir, dtype=float), cosr, basis, int(max_pivots), int(max_newton), *_AS_TOLS,
         *unique_args(qp))
@@ -246,7 +247,7 @@ class Polish(Stage):
     def run(self, qp, sol, deadline):
         if sol.active is not None:  # an active-set stage's answer is exact already
             return sol
-        if not jit.ready():  # the uncompiled path (first run on a machine): bounds-only polish in numpy
+        if not jit.ready():  # kernels switched off (a test's numpy reference): bounds-only polish in numpy
             hit = numpy_polish(qp, sol)
             return sol if hit is None else hit.but(stage=f"{sol.stage}>{self.name}", iterations=sol.iterations,
                                                     rounds=sol.rounds, message=sol.message)
@@ -299,12 +300,9 @@ def numpy_polish(qp: QPData, sol: Solution) -> Solution | None:
 
 
 def warm_calls():
-    """This module's kernels with example arguments of the types :func:`try_active_set` passes, and
-    the warm path's compiled decisions (:mod:`._fast`)."""
-    n, z = 2, np.zeros
-    args = (z((n, n)), z(n), z((1, n)), z(1), z(n), z(n), z(n, dtype=np.int8), z((1, 3, n)), z((1, 3)), z((1, 3)),
-            z(1), z((1, 3)), z(1, dtype=np.bool_), z((1, 3)), 2, 2, *(float(v) for v in _AS_TOLS))
-    return [(K.active_set_run, args)] + _fast.warm_calls()
+    """The warm path's compiled entry points (:mod:`._fast`: the active-set answer and the answer's
+    checks), with example arguments of the types the library passes."""
+    return _fast.warm_calls()
 
 
 def _register() -> None:

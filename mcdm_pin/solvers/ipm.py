@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import jit
 from .. import tolerances as tol
-from . import _fast, _ipm, _kkt
+from . import _fast, _ipm
 from .active_set import _AS_TOLS, compiled_answer, unique_args
 from .base import INACCURATE, INFEASIBLE, OPTIMAL, Solution, Stage, failure
 
@@ -55,7 +55,8 @@ def ipm_solve(qp, **options) -> Solution:
     compiled call (:func:`._fast.ipm_answer`) makes the cone rows, solves, and after a crossover
     computes the answer's duals, the next guess (:func:`.active_set.active_solution` in numpy) and
     whether the optimum is provably unique (:func:`.least_norm.is_unique`)."""
-    code, x, y, z, zc, obj, it, held, mus, dirs, nxt, unique = _fast.ipm_answer(*ipm_arguments(qp, **options))
+    code, x, y, z, zc, obj, it, held, mus, dirs, nxt, unique = jit.kernels("solvers._fast").ipm_answer(
+        *ipm_arguments(qp, **options))
     n = qp.n
     if code == _ipm.CROSSOVER:
         return compiled_answer(qp, x, y, z, zc, obj, held, mus, dirs, nxt, unique, iterations=int(it), stage="ipm")
@@ -71,7 +72,7 @@ def ipm_solve(qp, **options) -> Solution:
 
 
 class IPMStage(Stage):
-    """Answering stage: :func:`ipm_solve` (skipped while the kernels are not compiled)."""
+    """Answering stage: :func:`ipm_solve` (skipped only where a test switches the kernels off)."""
 
     name = "ipm"
 
@@ -89,7 +90,8 @@ class IPMStage(Stage):
 
 def warm_calls():
     """The solvers' kernels with example arguments of the types the library passes (registered
-    with :mod:`mcdm_pin.jit`)."""
+    with :mod:`mcdm_pin.jit`): the Python code calls :func:`._fast.ipm_answer`, and the kernels it
+    calls are compiled with it."""
     from ..problem import QPData
     from ..constraints import ConeData, perpendicular_basis
 
@@ -97,11 +99,7 @@ def warm_calls():
     axis = np.array([0.0, 0.0, 1.0])
     cone = ConeData("j", np.ones((3, n)), np.zeros(3), axis, 30.0, perpendicular_basis(axis))
     qp = QPData(np.eye(n), np.zeros(n), 0.0, np.ones((1, n)), np.ones(1), np.zeros(n), np.ones(n), [cone])
-    args = ipm_arguments(qp)
-    H, _, _, c, _, A, b, lb, ub, G, gc, ax, tn, basis0, cosr, basis = args[:16]
-    as_args = (H, c, A, b, lb, ub, np.zeros(n, dtype=np.int8), G, gc, ax, tn, basis0, np.zeros(1, dtype=np.bool_),
-               np.zeros((1, 3)), 2, 2, *(float(v) for v in _AS_TOLS))
-    return [(_fast.ipm_answer, args), (_kkt.active_set_solve, as_args)]
+    return [(_fast.ipm_answer, ipm_arguments(qp))]
 
 
 jit.register("mcdm_pin.solvers", warm_calls)

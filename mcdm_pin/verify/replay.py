@@ -111,16 +111,33 @@ def _num(x, fmt: str) -> str:
 
 
 class _Dynamics:
-    """``a = ABA(q, v, -L(q)^T f)`` for one robot (reuses Pinocchio data). ``L`` comes from the numpy
-    reference of the cable geometry (:mod:`mcdm_pin.model.geometry`), not from the compiled kernels
-    that computed the forces: the replay checks them independently."""
+    """``a = ABA(q, v, -L(q)^T f + tau_passive(q, v))`` for one robot (reuses Pinocchio data). ``L``
+    comes from the numpy reference of the cable geometry (:mod:`mcdm_pin.model.geometry`), not from the
+    compiled kernels that computed the forces: the replay checks them independently. Routes over wraps
+    take their path from :mod:`mcdm_pin.model.routes` (checked against MuJoCo on its own). A robot
+    with coupled coordinates is refused: its replay needs the couplings' constraint forces."""
 
     def __init__(self, robot):
+        from ..exceptions import ModelError
+
+        if getattr(robot, "couplings", None) is not None:
+            raise ModelError(f"robot {robot.name!r} couples coordinates ({len(robot.couplings)} couplings): "
+                             f"verify does not replay coupled coordinates (their constraint forces are "
+                             f"not integrated)")
         self.robot = robot
         self.model = robot.model
         self.data = robot.model.createData()
+        self.passive = getattr(robot, "passive", None)
+        self._routed = None
+        if robot.cables.configuration_dependent:
+            from ..model.terms import TermsEvaluator
+
+            self._routed = TermsEvaluator(robot, compiled=False)
 
     def generalised_cable_force(self, q, f) -> np.ndarray:
+        if self._routed is not None:
+            zero = np.zeros(self.model.nv)
+            return -self._routed(q, zero, zero, checked=True).L_full.T @ f
         model, data = self.model, self.data
         pin.computeJointJacobians(model, data, q)
         nj = model.njoints
@@ -134,6 +151,8 @@ class _Dynamics:
 
     def __call__(self, q, v, f) -> np.ndarray:
         tau = self.generalised_cable_force(q, f)
+        if self.passive is not None:
+            tau = tau + self.passive(q, v)
         return np.array(pin.aba(self.model, self.data, q, v, tau))
 
     def growth_rate(self, q, v, f, eps: float = 1e-6) -> float:

@@ -60,17 +60,19 @@ def _segment_poses(a: np.ndarray, b: np.ndarray):
     return T, scale
 
 
-def draw_cables(scene, robot, points: np.ndarray, f: np.ndarray, fmax: float, extent: float) -> None:
-    """Every route segment a thin unlit cylinder, coloured by its cable's tension at each instant."""
+def draw_cables(scene, robot, segments: np.ndarray, seg_cable: np.ndarray, f: np.ndarray, fmax: float,
+                extent: float) -> None:
+    """Every route segment (``segments`` (N, S, 2, 3) its ends at each instant, ``seg_cable`` (S,) its
+    cable) a thin unlit cylinder, coloured by its cable's tension at each instant."""
     radius = 0.004 * extent
     colors = tension_rgb(f, fmax)  # (N, m, 3)
     cables = robot.cables
     count: dict[int, int] = {}
-    for a, b, c in zip(cables.seg_a, cables.seg_b, cables.seg_cable):
+    for s, c in enumerate(seg_cable):
         k = count.get(int(c), 0)
         count[int(c)] = k + 1
         path = f"/meshcat/mcdm/cables/{safe(cables.names[c])}/s{k}"
-        T, scale = _segment_poses(points[:, a], points[:, b])
+        T, scale = _segment_poses(segments[:, s, 0], segments[:, s, 1])
         scene.set_object(path, three.obj(three.cylinder(1.0, radius, radius, 12),
                                          three.material(colors[0, c], "MeshBasicMaterial")))
         scene.set_transform(path, T[0] @ three.T(scale=scale[0]))

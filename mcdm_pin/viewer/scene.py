@@ -158,11 +158,15 @@ def check_results(robot, result, source: str = "results") -> None:
 @dataclass
 class Kinematics:
     """World placements over the instants: ``link_T`` {link: (N, 4, 4)}, ``joint_T`` (N, nj, 4, 4)
-    of the Pinocchio joints, ``points`` (N, P, 3) of the cable route points."""
+    of the Pinocchio joints, ``points`` (N, P, 3) of the cable route points; ``segments`` (N, S, 2, 3)
+    the ends of every drawn cable segment and ``seg_cable`` (S,) its cable (a segment not on the path
+    at an instant has both ends at one point)."""
 
     link_T: dict
     joint_T: np.ndarray
     points: np.ndarray
+    segments: np.ndarray | None = None
+    seg_cable: np.ndarray | None = None
 
 
 def kinematics(robot, result) -> Kinematics:
@@ -182,7 +186,34 @@ def kinematics(robot, result) -> Kinematics:
             links[name][k] = data.oMf[fid].homogeneous
     Tp = joint_T[:, robot.cables.point_joint]
     points = np.einsum("npij,pj->npi", Tp[:, :, :3, :3], robot.cables.point_local) + Tp[:, :, :3, 3]
-    return Kinematics(links, joint_T, points)
+    cables = robot.cables
+    if not cables.configuration_dependent:
+        ends = np.stack([points[:, cables.seg_a], points[:, cables.seg_b]], axis=2)
+        return Kinematics(links, joint_T, points, ends, cables.seg_cable)
+    segments, seg_cable = _routed_segments(robot, conf)
+    return Kinematics(links, joint_T, points, segments, seg_cable)
+
+
+def _routed_segments(robot, conf) -> tuple[np.ndarray, np.ndarray]:
+    """The drawn segments of wrapped routes at every instant: the path's straight pieces, and each
+    engaged wrap's arc as the chord between its tangent points (:mod:`mcdm_pin.model.routes`)."""
+    from ..model.terms import TermsEvaluator
+
+    ev = TermsEvaluator(robot, compiled=False)
+    routes = ev._routes
+    wraps = robot.cables.wraps
+    zero = np.zeros(robot.nv)
+    n_seg = len(routes.seg_a) + len(wraps)
+    out = np.empty((len(conf), n_seg, 2, 3))
+    for k, q in enumerate(conf):
+        X = ev(robot.check_configuration(q), zero, zero, checked=True).points
+        a = X[routes.seg_a]
+        b = np.where((routes.seg_scale > 0)[:, None], X[routes.seg_b], a)
+        t0, t1 = X[routes._slot_t0], X[routes._slot_t1]
+        on = routes.engaged[:, None]
+        out[k, :len(a), 0], out[k, :len(a), 1] = a, b
+        out[k, len(a):, 0], out[k, len(a):, 1] = t0, np.where(on, t1, t0)
+    return out, np.concatenate([routes.seg_cable, [w.cable for w in wraps]]).astype(int)
 
 
 # ----------------------------------------------------------------------------------------- build
@@ -239,7 +270,7 @@ def build_scene(robot, result, fmax: float | None = None, arrow_scale: float | N
     _place_camera(scene, box, arrows, tags, offsets, direction, aspect)
     environment(scene)
     _draw_links(scene, robot, kin, visuals, links)
-    draw_cables(scene, robot, kin.points, f, fmax, scene.extent)
+    draw_cables(scene, robot, kin.segments, kin.seg_cable, f, fmax, scene.extent)
     draw_forces(scene, robot, arrows, scene.extent)
     draw_labels(scene, robot, tags, arrows, offsets @ scene.up)
     draw_cones(scene, robot, kin.joint_T, kin.points, result, scene.extent)

@@ -116,7 +116,7 @@ class PoseSolver:
         """Results of poses ``q`` (n, nv): the store's per-pose variables."""
         robot = self.robot
         n, J, m = len(q), len(robot.joints), robot.m
-        out = dict(q=np.asarray(q, dtype=float), status=np.empty(n, dtype=STATUS_DTYPE),
+        out = dict(q=robot.follow_couplings(np.asarray(q, dtype=float)), status=np.empty(n, dtype=STATUS_DTYPE),
                    objective=np.full(n, np.nan), f=np.full((n, m), np.nan),
                    interaction_wrench=np.full((n, J, 6), np.nan),
                    interaction_angle_deg=np.full((n, J), np.nan),

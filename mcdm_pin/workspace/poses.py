@@ -30,7 +30,12 @@ def coordinate_index(robot, name: str, what: str) -> int:
     if name not in names:
         raise WorkspaceError(f"{what}: unknown coordinate {name!r}; expected one of {', '.join(names)} "
                              f"(see mcdm-pin info)")
-    return names.index(name)
+    i = names.index(name)
+    couplings = getattr(robot, "couplings", None)
+    if couplings is not None and i in set(couplings.dependent.tolist()):
+        raise WorkspaceError(f"{what}: coordinate {name!r} follows a coupling; vary the independent "
+                             f"coordinates ({', '.join(couplings.independent_names)})")
+    return i
 
 
 def coordinate_units(robot) -> list[str]:
