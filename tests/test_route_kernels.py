@@ -117,3 +117,10 @@ def test_route_pass_tangent_points_equal_the_public_wrap_functions(arm):
                 for t_ref, t in ((ref.t0, routes.point_local[slot]), (ref.t1, routes.point_local[slot + 1])):
                     mine = wr.placement.rotation.T @ (t - wr.placement.translation)
                     assert np.abs(mine - t_ref).max() < 1e-14
+
+
+def test_the_route_pass_is_registered_and_its_sources_stamp_the_cache():
+    """``mcdm-pin compile`` compiles the route pass with the other kernels, and a change to the wrap
+    maths (``wrapping.py``, compiled inline into it) or to the pass itself invalidates the cache."""
+    assert "mcdm_pin.model.route_kernels.route_pass" in jit.entry_points()
+    assert {"wrapping.py", "route_kernels.py"} <= {p.name for p in jit.kernel_sources()}
