@@ -101,11 +101,13 @@ def kernels(module: str):
 
 @functools.lru_cache(maxsize=None)
 def kernel_sources() -> tuple[Path, ...]:
-    """The package's source files that define numba kernels (those that import numba's ``njit``),
+    """The package's source files that define numba kernels (those that import numba's ``njit``, or
+    ``extending`` for functions compiled inline into kernels),
     and ``tolerances.py``: kernels read some of its constants when they are compiled
     (``UNIQUE_PENALTY``, ``IPM_START_BOX_WEIGHT``), so a changed constant must recompile them too."""
     root = Path(__file__).resolve().parent
-    pattern = re.compile(r"^from numba import .*\bnjit\b", re.M)
+    # njit kernels, and register_jitable functions compiled inline into them (numba.extending)
+    pattern = re.compile(r"^from numba(\.\w+)? import .*\b(njit|extending|register_jitable)\b", re.M)
     found = {p for p in root.rglob("*.py") if pattern.search(p.read_text(encoding="utf-8"))}
     return tuple(sorted(found | {root / "tolerances.py"}))
 

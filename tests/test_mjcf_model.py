@@ -388,3 +388,26 @@ def test_vendored_file_equals_original(file, vendor_tool, myoarm, tmp_path):
         assert np.abs(m1 - m0).max() <= 1e-12 * np.abs(m0).max()
         assert np.abs(d1.ten_length - d0.ten_length).max() <= 1e-12
         assert np.abs(d1.site_xpos - d0.site_xpos).max() <= 1e-12
+
+
+def test_joint_passive_of_hinges_and_slides_equals_mujocos():
+    """The hinge-and-slide fast path of joint_passive (springs with springref on ref-shifted joints,
+    dampers) against MuJoCo's qfrc_spring + qfrc_damper."""
+    xml = """<mujoco><worldbody><body name="a"><geom size="0.1" mass="1"/>
+      <joint name="h1" type="hinge" axis="0 1 0" ref="0.3" springref="0.7" stiffness="4" damping="0.5"/>
+      <body name="b" pos="0 0 0.3"><geom size="0.1" mass="1"/>
+        <joint name="s1" type="slide" axis="1 0 0" stiffness="2" springref="-0.1" damping="0.2"/>
+        <joint name="h2" type="hinge" axis="0 0 1" pos="0.1 0 0" damping="1.5"/></body></body>
+      </worldbody></mujoco>"""
+    mj = mujoco.MjModel.from_xml_string(xml)
+    built = build_model(mj, "springs")
+    assert built._hinges_and_slides
+    d = mujoco.MjData(mj)
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        d.qpos[:] = rng.uniform(-1, 1, mj.nq)
+        d.qvel[:] = rng.normal(size=mj.nv)
+        mujoco.mj_forward(mj, d)
+        ours = built.joint_passive(built.to_pin_q(d.qpos), built.to_pin_v(d.qvel))
+        ref = built.to_pin_v(d.qfrc_spring + d.qfrc_damper)
+        assert np.abs(ours - ref).max() < 1e-12

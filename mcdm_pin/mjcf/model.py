@@ -41,6 +41,7 @@ gravity compensation, flexes, and armature on a free joint's translations.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -198,6 +199,14 @@ class MjcfModel:
         ``-dof_damping * qvel`` (MuJoCo axes, then mapped like a velocity). Tendon springs and
         dampers, fluid forces and gravity compensation are not joint forces and are not included.
         """
+        if self._hinges_and_slides:  # every coordinate is a hinge or slide: index arrays, no maps
+            q = self._vector(q, self.model.nq, "q")
+            v = self._vector(v, self.model.nv, "v")
+            iq, iv, damping, stiff = self._passive_tables
+            out = -damping * v
+            k, jq, jv, rest = stiff
+            out[jv] -= k * (q[jq] - rest)
+            return out
         qpos = self.to_mj_qpos(q)
         qvel = self.to_mj_qvel(v, q)
         qfrc = -self.dof_damping * qvel
@@ -205,6 +214,22 @@ class MjcfModel:
             a, d = self.jnt_qposadr[j], self.jnt_dofadr[j]
             qfrc[d] -= self.jnt_stiffness[j] * (qpos[a] - self.qpos_spring[a])
         return self.to_pin_v(qfrc, qpos)
+
+    @functools.cached_property
+    def _hinges_and_slides(self) -> bool:
+        return bool(np.all(np.isin(self.jnt_type, (HINGE, SLIDE))))
+
+    @functools.cached_property
+    def _passive_tables(self):
+        """Pinocchio-ordered damping (nv,) and the springs ``(k, q index, v index, rest)``, where
+        ``rest = springref - qpos0`` (Pinocchio's ``q`` is measured from ``qpos0``)."""
+        iq, iv = np.asarray(self.jnt_idx_q), np.asarray(self.jnt_idx_v)
+        damping = np.empty(self.model.nv)
+        damping[iv] = self.dof_damping[self.jnt_dofadr]
+        sj = np.flatnonzero(self.jnt_stiffness)
+        a = self.jnt_qposadr[sj]
+        rest = self.qpos_spring[a] - self.qpos0[a]
+        return iq, iv, damping, (self.jnt_stiffness[sj], iq[sj], iv[sj], rest)
 
     # ----------------------------------------------------------------- helpers
     def _vector(self, x, n, name) -> np.ndarray:
