@@ -1,0 +1,142 @@
+"""Issue 27: workspace stores that are verified before they are trusted, created once, interrupted
+cleanly; OpenSim names made legal and files read back; the time budget inside a back-end call; one
+clear line instead of a traceback."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from mcdm_pin.cli import main
+from mcdm_pin.workspace import Grid, Setup, WorkspaceError, compute_workspace, open_workspace
+
+from .conftest import REPO, TWO_LINK
+
+ENV = dict(os.environ, PYTHONPATH=str(REPO) + os.pathsep + os.environ.get("PYTHONPATH", ""),
+           MCDM_PIN_JIT="off")
+
+
+# ------------------------------------------------------------------------------- workspace stores
+@pytest.fixture(scope="module")
+def store(tmp_path_factory, two_link):
+    """A complete store of 4 chunks (case 1, so needed_cone_deg is NaN throughout)."""
+    path = tmp_path_factory.mktemp("ws") / "arm.zarr"
+    poses = Grid(two_link, {"q1_x": (-1.2, 1.2, 5), "q4_x": (-1.5, 1.5, 4)}, at={"q2_y": 0.1})
+    compute_workspace(two_link, poses, path, Setup(case=1), chunk=6, scheduler="inline", progress=False)
+    return path, poses
+
+
+def _copy(store, tmp_path, name="copy.zarr"):
+    path, poses = store
+    copy = tmp_path / name
+    shutil.copytree(path, copy)
+    return copy, poses
+
+
+def test_resume_recomputes_a_chunk_flagged_done_whose_data_is_missing(store, two_link, tmp_path):
+    copy, poses = _copy(store, tmp_path)
+    (copy / "f" / "1.0").unlink()  # chunk 1's forces lost; its flag still says done
+    report = compute_workspace(two_link, poses, copy, Setup(case=1), chunk=6, scheduler="inline",
+                               resume=True, progress=False)
+    assert report.computed_chunks == 1 and list(report.recomputed) == [1]
+    assert "f: its data is missing" in report.recomputed[1]
+    f = open_workspace(copy)["f"].values
+    np.testing.assert_array_equal(f, open_workspace(store[0])["f"].values)  # one process: bit for bit
+    assert not np.isnan(f[open_workspace(copy)["status"].values == "optimal"]).any()
+
+
+def test_a_corrupted_chunk_is_named_on_reading_and_recomputed_on_resume(store, two_link, tmp_path, capsys):
+    copy, poses = _copy(store, tmp_path)
+    (copy / "status" / "2").write_bytes(b"\x02\x01torn chunk" * 4)
+    with pytest.raises(WorkspaceError, match=r"copy\.zarr: chunk 2 is flagged done but status: unreadable"):
+        open_workspace(copy)
+    code = main(["plot", str(copy), "--out", str(tmp_path / "figs")])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "copy.zarr: chunk 2 is flagged done but status: unreadable" in err and "--resume" in err
+    code = main(["workspace", str(TWO_LINK), "--grid", "q1_x=-1.2:1.2:5", "--grid", "q4_x=-1.5:1.5:4",
+                 "--at", "q2_y=0.1", "--scheduler", "inline", "--chunk", "6", "--out", str(copy),
+                 "--resume", "-q"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert "chunk 2 was flagged done but status: unreadable" in err and "computed 1 of 4 chunks" in out
+    assert (open_workspace(copy)["status"].values == open_workspace(store[0])["status"].values).all()
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_an_unreachable_scheduler_leaves_no_store_behind(two_link, tmp_path, monkeypatch):
+    from mcdm_pin.workspace import schedule
+
+    monkeypatch.setattr(schedule, "CONNECT_TIMEOUT_S", 1, raising=False)
+    path = tmp_path / "arm.zarr"
+    poses = Grid(two_link, {"q1_x": (-1.0, 1.0, 3)})
+    with pytest.raises(WorkspaceError, match=r"cannot connect"):
+        compute_workspace(two_link, poses, path, scheduler=f"tcp://127.0.0.1:{_free_port()}", progress=False)
+    assert not path.exists() and not list(tmp_path.iterdir())
+    compute_workspace(two_link, poses, path, scheduler="inline", progress=False)  # the rerun works
+
+
+def test_two_runs_creating_one_store_end_in_one_store_and_a_clear_error(store, two_link, tmp_path,
+                                                                        monkeypatch):
+    """The other run finishes creating the store between this run's check and its rename."""
+    import zarr
+
+    winner, poses = _copy(store, tmp_path, "winner.zarr")
+    path = tmp_path / "arm.zarr"
+    real = zarr.consolidate_metadata
+
+    def meanwhile(where, *a, **k):
+        result = real(where, *a, **k)
+        if not path.exists():
+            shutil.copytree(winner, path)
+        return result
+
+    monkeypatch.setattr(zarr, "consolidate_metadata", meanwhile)
+    with pytest.raises(WorkspaceError, match=r"arm\.zarr: created by another run meanwhile"):
+        compute_workspace(two_link, poses, path, Setup(case=1), chunk=6, scheduler="inline", progress=False)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["arm.zarr", "winner.zarr"]  # no leftovers
+    np.testing.assert_array_equal(open_workspace(path)["f"].values, open_workspace(winner)["f"].values)
+
+
+def test_ctrl_c_on_a_dask_workspace_is_one_line_that_says_what_was_kept(tmp_path):
+    out = tmp_path / "arm.zarr"
+    args = [sys.executable, "-m", "mcdm_pin", "workspace", str(TWO_LINK), "--random", "3000",
+            "--chunk", "30", "--scheduler", "local", "--workers", "2", "--out", str(out), "-q"]
+    proc = subprocess.Popen(args, cwd=tmp_path, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and proc.poll() is None:
+            flags = out / "chunk_done"
+            if flags.is_dir() and len([p for p in flags.iterdir() if p.name.isdigit()]) >= 2:
+                break
+            time.sleep(0.05)
+        assert proc.poll() is None, proc.communicate()
+        os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group
+        _, err = proc.communicate(timeout=60)
+    finally:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        proc.wait(timeout=30)
+    assert proc.returncode == 130
+    assert len(err.strip().splitlines()) == 1, err
+    m = re.fullmatch(r"mcdm-pin: workspace interrupted: (.*) keeps (\d+) of 100 chunks; give --resume to "
+                     r"complete it", err.strip())
+    assert m and m.group(1) == str(out), err
+    assert int(m.group(2)) == int((open_workspace(out)["chunk_done"].values == 1).sum()) >= 2
