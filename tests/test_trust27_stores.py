@@ -140,3 +140,57 @@ def test_ctrl_c_on_a_dask_workspace_is_one_line_that_says_what_was_kept(tmp_path
                      r"complete it", err.strip())
     assert m and m.group(1) == str(out), err
     assert int(m.group(2)) == int((open_workspace(out)["chunk_done"].values == 1).sum()) >= 2
+
+
+# ---------------------------------------------------------------------------------- OpenSim export
+def _hostile_names_robot(tmp_path):
+    """The 2-link arm with a link and a joint named with spaces and non-ASCII letters, a joint (ours)
+    with a slash, and cable names with NUL and an XML markup character."""
+    import yaml
+
+    urdf = (REPO / "urdf" / "two_link_sr.urdf").read_text()
+    urdf = urdf.replace('"link2"', '"Unterarm ä"').replace('"q4_x"', '"Ellbogen beugen"')
+    (tmp_path / "arm.urdf").write_text(urdf, encoding="utf-8")
+    sc = yaml.safe_load(TWO_LINK.read_text())
+    sc["urdf"] = "arm.urdf"
+    sc.pop("trajectories", None)
+    sc["joints"] = {("elbow/ö" if k == "elbow" else k): v for k, v in sc["joints"].items()}
+    sc["joints"]["elbow/ö"]["urdf_joints"] = ["Ellbogen beugen"]
+    for c in sc["cables"]:
+        for p in c["route"]:
+            p["link"] = "Unterarm ä" if p["link"] == "link2" else p["link"]
+    sc["cables"][0]["name"] = "c\x00one"
+    sc["cables"][1]["name"] = "c<two>&"
+    sc["cables"][2]["name"] = "c_one"  # what the first one would become: kept, the first gets #2
+    (tmp_path / "arm.yaml").write_text(yaml.safe_dump(sc, sort_keys=False, allow_unicode=True),
+                                       encoding="utf-8")
+    return tmp_path / "arm.yaml"
+
+
+def test_export_opensim_makes_every_name_legal_and_reads_the_file_back(tmp_path):
+    from xml.etree import ElementTree
+
+    pytest.importorskip("opensim", reason="OpenSim not installed (optional)")
+    sidecar = _hostile_names_robot(tmp_path)
+    out = tmp_path / "arm.osim"
+    run = subprocess.run([sys.executable, "-m", "mcdm_pin", "export-opensim", str(sidecar), str(out),
+                          "--check", "3"], cwd=tmp_path, env=ENV, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stdout + run.stderr
+    for line in ["body 'Unterarm ä' -> Unterarm_a", "joint 'elbow/ö' -> elbow_o",
+                 "coordinate 'Ellbogen beugen' -> Ellbogen_beugen", "cable 'c\\x00one' -> c_one#2",
+                 "cable 'c<two>&' -> c_two__"]:
+        assert line in run.stdout, run.stdout
+    assert "moment arms" in run.stdout and "warning" not in run.stdout
+    model = ElementTree.parse(out).getroot().find("Model")  # XML, read back
+    names = {tag: [e.get("name") for e in model.find(f"{tag}/objects")] for tag in ("BodySet", "JointSet", "ForceSet")}
+    assert names["BodySet"] == ["link1", "Unterarm_a"] and names["JointSet"] == ["shoulder", "elbow_o"]
+    assert names["ForceSet"][:3] == ["c_one#2", "c_two__", "c_one"]
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []  # no temporary left
+
+
+def test_names_made_legal_are_unique_and_keep_legal_spellings():
+    from mcdm_pin.export.osim_names import legal_names
+
+    m = legal_names(["a b", "a_b", "a/b", "", "..", "ﬁx\x00", "ground"], taken={"ground"})
+    assert m == {"a b": "a_b#2", "a_b": "a_b", "a/b": "a_b#3", "": "_", "..": "_..", "ﬁx\x00": "fix_",
+                 "ground": "ground#2"}
