@@ -194,3 +194,38 @@ def test_names_made_legal_are_unique_and_keep_legal_spellings():
     m = legal_names(["a b", "a_b", "a/b", "", "..", "ﬁx\x00", "ground"], taken={"ground"})
     assert m == {"a b": "a_b#2", "a_b": "a_b", "a/b": "a_b#3", "": "_", "..": "_..", "ﬁx\x00": "fix_",
                  "ground": "ground#2"}
+
+
+# ------------------------------------------------------------------------------ the time budget
+def _tiny_bounds_robot(tmp_path):
+    """The 2-link arm without gravity, every cable bounded to 1e-300..1e-290 N."""
+    import yaml
+
+    from mcdm_pin import Robot
+
+    sc = yaml.safe_load(TWO_LINK.read_text())
+    sc["urdf"] = str((TWO_LINK.parent / sc["urdf"]).resolve())
+    sc["gravity"] = [0.0, 0.0, 0.0]
+    for c in sc["cables"]:
+        c["f_min"], c["f_max"] = 1e-300, 1e-290
+    (tmp_path / "tiny.yaml").write_text(yaml.safe_dump(sc, sort_keys=False))
+    return Robot.load(tmp_path / "tiny.yaml")
+
+
+@pytest.mark.parametrize("solver", ["proxqp", "default"])
+def test_the_budget_holds_inside_a_proxqp_call(tmp_path, solver):
+    """At t = 0.25 s of traj1 the forces cannot move the arm; ProxQP's one call ran 1.5 million inner
+    iterations (58 s) past a 1 s budget before it stopped at its iteration limit."""
+    from mcdm_pin import InverseDynamics
+    from mcdm_pin.problem import case_problem
+    from mcdm_pin.trajectory import load_trajectory
+
+    robot = _tiny_bounds_robot(tmp_path)
+    k = 1
+    traj = load_trajectory(robot, "traj1").subsample(5)
+    solve = InverseDynamics(robot, case_problem(robot, 1), solver=solver, diagnose=False, budget_s=0.3)
+    t0 = time.perf_counter()
+    r = solve.solve(traj.q[k], traj.qd[k], traj.qdd[k])
+    elapsed = time.perf_counter() - t0
+    assert elapsed < 0.3 + 0.5, (elapsed, r.status, r.message)
+    assert r.status in ("budget", "infeasible"), (r.status, r.message)
