@@ -229,3 +229,39 @@ def test_the_budget_holds_inside_a_proxqp_call(tmp_path, solver):
     elapsed = time.perf_counter() - t0
     assert elapsed < 0.3 + 0.5, (elapsed, r.status, r.message)
     assert r.status in ("budget", "infeasible"), (r.status, r.message)
+
+
+# ------------------------------------------------------------------------------------ clean words
+CASPR = REPO / "tests" / "data" / "caspr" / "SR_model"
+
+
+def _one_error_line(capsys, argv) -> str:
+    code = main(argv)
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+    return err.strip()
+
+
+@pytest.mark.parametrize("out, match", [
+    ("afile/sub", r"--out: afile/sub: cannot be made, .*afile is a file"),
+    ("/proc/mcdm_pin_out", r"--out: /proc/mcdm_pin_out: cannot be written"),
+])
+def test_import_caspr_into_an_unwritable_place_is_one_line(tmp_path, capsys, monkeypatch, out, match):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "afile").write_text("a file, not a folder")
+    err = _one_error_line(capsys, ["import-caspr", str(CASPR / "SR_model_bodies.xml"),
+                                   str(CASPR / "SR_model_cables.xml"), "--out", out])
+    assert re.search(match, err), err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
+
+
+def test_import_caspr_errors_name_the_caspr_element_not_a_temporary_file(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    cables = (CASPR / "SR_model_cables.xml").read_text()
+    (tmp_path / "c.xml").write_text(cables.replace("<location>0.05 0 0</location>",
+                                                   "<location>1e300 0 0</location>", 1))
+    err = _one_error_line(capsys, ["import-caspr", str(CASPR / "SR_model_bodies.xml"), "c.xml", "--out", "out"])
+    assert ".import-caspr" not in err and ".yaml" not in err, err
+    assert err.startswith("mcdm-pin: error: c.xml: cable_set[id='SR_8_cables_2']/cable_ideal[1, name='cable 1']"
+                          "/attachments/attachment[2]: expected a number of magnitude at most 1e+100"), err
+    assert not (tmp_path / "out").exists()
