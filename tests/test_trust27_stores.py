@@ -265,3 +265,36 @@ def test_import_caspr_errors_name_the_caspr_element_not_a_temporary_file(tmp_pat
     assert err.startswith("mcdm-pin: error: c.xml: cable_set[id='SR_8_cables_2']/cable_ideal[1, name='cable 1']"
                           "/attachments/attachment[2]: expected a number of magnitude at most 1e+100"), err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.fixture(scope="module")
+def run_npz(tmp_path_factory, two_link):
+    """A small solved run of the 2-link arm (5 instants of traj1, case 1)."""
+    from mcdm_pin import InverseDynamics, load_trajectory
+
+    path = tmp_path_factory.mktemp("run") / "run.npz"
+    traj = load_trajectory(two_link, "traj1").subsample(5)
+    InverseDynamics.for_case(two_link, 1, solver="clarabel").solve_trajectory(traj, progress=False).save(path)
+    return path
+
+
+def test_verify_with_the_wrong_robot_names_the_file_in_plain_words(run_npz, capsys):
+    err = _one_error_line(capsys, ["verify", str(REPO / "robots" / "two_link_sr_ball.yaml"), str(run_npz)])
+    assert "np.str_" not in err and "''s" not in err, err
+    assert (f"mcdm-pin: error: {run_npz}: the results file's coordinates ['q1_x', 'q2_y', 'q3_z', 'q4_x'] do "
+            f"not match those of robot two_link_sr_ball") in err and err.endswith("wrong robot?"), err
+
+
+@pytest.mark.parametrize("argv, expected", [
+    (["bogus"], "mcdm-pin: error: argument COMMAND: invalid choice: 'bogus'"),
+    (["solve", str(TWO_LINK), "--case", "7"], "mcdm-pin: error: solve: argument --case: invalid choice: 7"),
+])
+def test_argument_errors_say_mcdm_pin_once(capsys, argv, expected):
+    err = _one_error_line(capsys, argv)
+    assert err.startswith(expected) and err.count("mcdm-pin") == 1, err
+
+
+def test_view_given_a_results_file_as_the_robot_says_so(run_npz, capsys):
+    err = _one_error_line(capsys, ["view", str(run_npz)])
+    assert err == (f"mcdm-pin: error: ROBOT: {run_npz} is a results file, not a robot; give the robot's "
+                   f"sidecar and the results with --results: mcdm-pin view ROBOT.yaml --results {run_npz}")
