@@ -11,6 +11,11 @@
 The client holds a few chunks per worker thread in flight (not the whole run), writes each chunk's
 results as it arrives and submits the next; the robot goes to every worker once (scattered, as
 pickled data). A progress bar (``tqdm``) shows the poses done, the rate and the time left.
+
+The scheduler is reached before the store is created, so an unreachable one leaves nothing behind.
+Ctrl-C: local workers are started with SIGINT ignored (a terminal sends it to the whole process
+group), this process closes the cluster and raises :class:`WorkspaceInterrupted`, whose message says
+how many chunks the store keeps (``--resume`` completes it).
 """
 
 from __future__ import annotations
@@ -29,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import WorkspaceError
+from .errors import WorkspaceError, WorkspaceInterrupted
 from .evaluate import PoseSolver, RobotBlob, Setup, robot_digest, solve_chunk
 from .store import FORMAT, Writer, create_store, open_for_resume, open_workspace
 
@@ -156,19 +161,6 @@ def compute_workspace(robot, poses, out, setup: Setup | None = None, chunk: int 
         _close(client, cluster)
     return RunReport(out, len(poses), nchunks, len(todo), sum(sizes.values()), threads, scheduler,
                      startup, elapsed, damaged)
-
-
-class WorkspaceInterrupted(KeyboardInterrupt):
-    """Ctrl-C during a run; the message says what the store keeps (``path``, ``done``, ``chunks``)."""
-
-    def __init__(self, path: Path, done: int, chunks: int):
-        self.path, self.done, self.chunks = path, done, chunks
-        if done < 0:
-            what = f"{path} was not created"
-        else:
-            what = (f"{path} keeps {done} of {chunks} chunks"
-                    + ("; give --resume to complete it" if done < chunks else ""))
-        super().__init__(f"workspace interrupted: {what}")
 
 
 def _interrupted(out: Path, nchunks: int) -> WorkspaceInterrupted:
