@@ -50,6 +50,7 @@ from .evaluate import COMPONENTS, STATUS_DTYPE
 from .poses import coordinate_units
 
 FORMAT = 1  # version of this layout, in the attributes
+READ_BYTES = 1 << 26  # what damaged_chunks reads at once (64 MB)
 
 UNITS = dict(q="rad or m (per coordinate)", objective="as the case's objective", f="N",
              interaction_wrench="N (F), N m (M)", interaction_angle_deg="deg", needed_f_max="N",
@@ -207,18 +208,22 @@ def damaged_chunks(path, group=None) -> dict[int, str]:
             for k in done:
                 if k not in bad and not (path / name / f"{k}{tail}").is_file():
                     bad[int(k)] = f"{name}: its data is missing"
-        try:
-            array[:]  # the common case, in one read
-            continue
-        except Exception:  # noqa: BLE001 - find the chunk that does not decode
-            pass
-        for k in done:
-            if k in bad:
+        per_chunk = max(array.nbytes // max(array.shape[0], 1) * size, 1)
+        step = max(1, READ_BYTES // per_chunk)  # chunks per read: memory stays bounded
+        for first in range(0, len(done), step):
+            block = [int(k) for k in done[first:first + step] if int(k) not in bad]
+            if not block:
                 continue
-            try:
-                array[k * size:(k + 1) * size]
-            except Exception as exc:  # noqa: BLE001
-                bad[int(k)] = f"{name}: unreadable ({type(exc).__name__}: {exc})"
+            try:  # the common case: the block decodes in one read
+                array[block[0] * size:(block[-1] + 1) * size]
+                continue
+            except Exception:  # noqa: BLE001 - find the chunk that does not decode
+                pass
+            for k in block:
+                try:
+                    array[k * size:(k + 1) * size]
+                except Exception as exc:  # noqa: BLE001 - numcodecs, zarr and OSError alike
+                    bad[k] = f"{name}: unreadable ({type(exc).__name__}: {exc})"
     return dict(sorted(bad.items()))
 
 
