@@ -112,6 +112,17 @@ def test_two_runs_creating_one_store_end_in_one_store_and_a_clear_error(store, t
     np.testing.assert_array_equal(open_workspace(path)["f"].values, open_workspace(winner)["f"].values)
 
 
+def _group_ends(pgid: int, within_s: float) -> bool:
+    deadline = time.monotonic() + within_s
+    while time.monotonic() < deadline:
+        try:
+            os.killpg(pgid, 0)
+        except ProcessLookupError:
+            return True
+        time.sleep(0.1)
+    return False
+
+
 def test_ctrl_c_on_a_dask_workspace_is_one_line_that_says_what_was_kept(tmp_path):
     out = tmp_path / "arm.zarr"
     args = [sys.executable, "-m", "mcdm_pin", "workspace", str(TWO_LINK), "--random", "3000",
@@ -128,6 +139,7 @@ def test_ctrl_c_on_a_dask_workspace_is_one_line_that_says_what_was_kept(tmp_path
         assert proc.poll() is None, proc.communicate()
         os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group
         _, err = proc.communicate(timeout=60)
+        assert _group_ends(proc.pid, 20.0), "worker processes outlived the interrupted run"
     finally:
         try:
             os.killpg(proc.pid, signal.SIGKILL)
