@@ -136,7 +136,12 @@ def import_caspr(bodies_xml, cables_xml, out_dir, trajectories_xml=None, cable_s
     data = {"version": 1, "name": name, "description": "", "urdf": f"{urdf_name}.urdf", "gravity": list(GRAVITY),
             "joints": sidecar_joints(chs, cone_deg, actuator_limit), "cables": sidecar_cables(bodies, cset)}
     parent = _existing_parent(out_dir)
-    tmp = Path(tempfile.mkdtemp(prefix=".import-caspr-", dir=parent))
+    for key, folder in (("--out", out_dir), ("--urdf-dir", urdf_dir)):
+        _check_writable(folder, key)
+    try:
+        tmp = Path(tempfile.mkdtemp(prefix=".import-caspr-", dir=parent))
+    except OSError as exc:
+        raise CasprError(None, "--out", f"{out_dir}: cannot be written ({exc.strerror or exc})") from None
     try:
         (tmp / f"{urdf_name}.urdf").write_text(urdf_text(bodies, chs, urdf_name, Path(bodies_xml).name),
                                                encoding="utf-8")
@@ -156,9 +161,43 @@ def import_caspr(bodies_xml, cables_xml, out_dir, trajectories_xml=None, cable_s
         data["urdf"] = os.path.relpath(urdf_dir / f"{urdf_name}.urdf", out_dir).replace(os.sep, "/")
         (tmp / f"{name}.yaml").write_text(sidecar_text(data, source), encoding="utf-8")
         _move(tmp, result)
+    except McdmError as exc:
+        if isinstance(exc, CasprError) and str(tmp) not in str(exc):
+            raise
+        raise _caspr_error(exc, tmp, bodies, cset) from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return result
+
+
+def _check_writable(folder: Path, key: str) -> None:
+    """``folder`` exists or can be made, and files can be written there: the nearest existing
+    ancestor is a folder this process may write into."""
+    path = folder.resolve()
+    while not path.exists():
+        path = path.parent
+    if not path.is_dir():
+        raise CasprError(None, key, f"{folder}: cannot be made, {path} is a file")
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise CasprError(None, key, f"{folder}: cannot be written (no permission in {path})")
+
+
+def _caspr_error(exc: McdmError, tmp: Path, bodies: CasprBodies, cset) -> CasprError:
+    """An error met while loading the converted robot, named by the CASPR file and element it comes
+    from (the converted files live in a temporary folder that is gone when the user reads this)."""
+    text = str(exc).replace(str(tmp) + os.sep, "").replace(str(tmp), "")
+    key = getattr(exc, "key", "") or ""
+    detail = getattr(exc, "expected", None) or text
+    m = re.match(r"cables\[(\d+)\](?:\.route\[(\d+)\])?", key)
+    if m and int(m.group(1)) < len(cset.cables):
+        cable = cset.cables[int(m.group(1))]
+        element = cable.element + (f"/attachments/attachment[{int(m.group(2)) + 1}]" if m.group(2) else "")
+        return CasprError(cset.path, element, f"{detail} (converted: {key})")
+    m = re.match(r"joints\.([^.\[]+)", key)
+    links = {link.ident: link for link in bodies.links}
+    if m and m.group(1) in links:
+        return CasprError(bodies.path, links[m.group(1)].element, f"{detail} (converted: {key})")
+    return CasprError(bodies.path, "", f"the converted model is refused: {text}")
 
 
 def _check_options(bodies, bodies_xml, name, cone_deg, actuator_limit) -> str:
@@ -266,8 +305,12 @@ def _description(result: CasprImport, source: str, cset) -> str:
 
 def _move(tmp: Path, result: CasprImport) -> None:
     """Put the checked files in place (the URDF into its folder, the rest beside the sidecar)."""
-    result.sidecar.parent.mkdir(parents=True, exist_ok=True)
-    result.urdf.parent.mkdir(parents=True, exist_ok=True)
-    for f in sorted(tmp.iterdir()):
-        dest = result.urdf if f.suffix == ".urdf" else result.sidecar.parent / f.name
-        shutil.move(str(f), str(dest))
+    try:
+        result.sidecar.parent.mkdir(parents=True, exist_ok=True)
+        result.urdf.parent.mkdir(parents=True, exist_ok=True)
+        for f in sorted(tmp.iterdir()):
+            dest = result.urdf if f.suffix == ".urdf" else result.sidecar.parent / f.name
+            shutil.move(str(f), str(dest))
+    except OSError as exc:
+        where = exc.filename or result.sidecar.parent
+        raise CasprError(None, "--out", f"{where}: cannot be written ({exc.strerror or exc})") from None

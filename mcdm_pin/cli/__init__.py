@@ -39,8 +39,8 @@ def main(argv=None) -> int:
     except McdmError as exc:
         print(f"mcdm-pin: error: {exc}".replace("\n", " "), file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("mcdm-pin: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:  # the message, if any, says what was kept
+        print(f"mcdm-pin: {exc}" if str(exc) else "mcdm-pin: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:  # the reader of our output went away (e.g. `| head`): not an error of ours
         import os

@@ -15,8 +15,9 @@ class UsageError(McdmError):
 
 
 class Parser(argparse.ArgumentParser):
-    def error(self, message):  # one line, no usage block
-        raise UsageError(f"{self.prog}: {message} (see --help)")
+    def error(self, message):  # one line, no usage block; "mcdm-pin: error: " is printed by main
+        command = self.prog.partition(" ")[2]  # "mcdm-pin solve" -> "solve"; "mcdm-pin" -> ""
+        raise UsageError(f"{command + ': ' if command else ''}{message} (see --help)")
 
 
 # ---------------------------------------------------------------------------------------- helpers

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._common import UsageError, check_outputs, parse_float
+from ._common import UsageError, check_outputs, parse_float, printable
 from ._files import robot_file
 
 
@@ -34,10 +34,14 @@ def run(args) -> int:
     f0 = None if args.optimal_force is None else parse_float(args.optimal_force, "--optimal-force")
     if f0 is not None and f0 <= 0:
         raise UsageError(f"--optimal-force: expected a force > 0 N, got {args.optimal_force!r}")
-    path = export_opensim(robot, args.out, f0)
     spec = describe(robot)
+    path = export_opensim(spec, args.out, f0)
     kinds = ", ".join(f"{j.name} ({j.kind})" for j in spec.joints)
     print(f"wrote {path}: {len(spec.bodies)} bodies, joints {kinds}, {len(spec.cables)} PathActuators")
+    if spec.renamed:
+        print(f"renamed for OpenSim ({len(spec.renamed)}; names keep A-Z a-z 0-9 _-.()[]#, see docs/opensim.md):")
+        for kind, ours, theirs in spec.renamed:
+            print(f"  {kind} {printable(repr(ours))} -> {theirs}")
     if args.check > 0:
         from ..export.opensim_eval import OpenSimModel, compare_with_pinocchio
 

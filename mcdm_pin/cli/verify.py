@@ -50,6 +50,7 @@ def _resolved(robot, result, robot_path):
 
 
 def run(args) -> int:
+    from ..exceptions import ResultsError
     from ..results import TrajectoryResult
     from ..robot import Robot
 
@@ -65,7 +66,10 @@ def run(args) -> int:
     forces = _resolved(robot, result, robot_path) if args.resolve else None
     options = dict(integrator=args.integrator, substeps=args.substeps, hold=args.hold, forces=forces,
                    window=args.window)
-    conv = convergence(robot, result, levels=args.levels, **options)
+    try:
+        conv = convergence(robot, result, levels=args.levels, **options)
+    except ResultsError as exc:  # name the file: the library's message cannot
+        raise ResultsError(f"{run_path}: {exc}") from None
     r0 = conv.reports[0]
     how = ("re-solved on the plan at every stage time" if forces is not None
            else f"{args.hold} between instants")

@@ -84,6 +84,9 @@ def run(args) -> int:
         assert len(size) == 2 and min(size) > 0
     except (ValueError, AssertionError):
         raise UsageError(f"--size: expected WIDTHxHEIGHT in pixels, got {args.size!r}") from None
+    if args.results is None and args.workspace is None and file_kind(args.robot) == "results":
+        raise UsageError(f"ROBOT: {args.robot} is a results file, not a robot; give the robot's sidecar and "
+                         f"the results with --results: mcdm-pin view ROBOT.yaml --results {args.robot}")
     if (args.results is None) == (args.workspace is None):
         raise UsageError("give --results FILE.npz or --workspace STORE.zarr (one of them)")
     if args.workspace and not args.frame:

@@ -3,6 +3,8 @@ random sample or a file of poses, on this machine's cores or a Dask cluster, int
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 
 from ._files import robot_file
@@ -139,6 +141,9 @@ def run(args) -> int:
     report = compute_workspace(robot, poses, args.out, setup, chunk=args.chunk,
                                scheduler=args.scheduler, workers=args.workers, resume=args.resume,
                                progress=False if args.quiet else None)
+    for k, why in report.recomputed.items():
+        print(f"mcdm-pin: warning: {report.path}: chunk {k} was flagged done but {why}; computed it again",
+              file=sys.stderr)
     print(summary(report.open()))
     rate = report.poses_per_s
     print(f"wrote {report.path}: computed {report.computed_chunks} of {report.chunks} chunks "

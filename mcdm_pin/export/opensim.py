@@ -35,13 +35,16 @@ dynamics, cable lengths and moment arms) for the tests and the benchmark peer.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import os
+import tempfile
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
 from ..exceptions import MissingPackageError, ModelError
+from .osim_names import check_written, legal_names
 
 INSTALL_HINT = "pip install 'mcdm-pin[opensim]'  (or: pip install opensim)"
 GROUND = "ground"
@@ -121,6 +124,7 @@ class RobotSpec:
     joints: tuple[JointSpec, ...]
     cables: tuple[CableSpec, ...]
     coordinate_names: tuple[str, ...]
+    renamed: tuple[tuple[str, str, str], ...] = ()  # (kind, our name, OpenSim's) where they differ
 
 
 # ------------------------------------------------------------------------------ reading the robot
@@ -155,24 +159,29 @@ def describe(robot) -> RobotSpec:
     for k, cable in enumerate(cs.cables):
         rows = np.flatnonzero(cs.point_cable == k)
         pts = tuple((names[int(cs.point_joint[r])], tuple(float(x) for x in cs.point_local[r])) for r in rows)
-        cables.append(CableSpec(osim_name(cable.name, taken), pts, float(cable.f_min), float(cable.f_max)))
-    return RobotSpec(str(robot.name), np.array(model.gravity.linear), tuple(bodies), joints, tuple(cables),
-                     tuple(robot.coordinate_names))
+        cables.append(CableSpec(str(cable.name), pts, float(cable.f_min), float(cable.f_max)))
+    raw = RobotSpec(str(robot.name), np.array(model.gravity.linear), tuple(bodies), joints, tuple(cables),
+                    tuple(robot.coordinate_names))
+    return _legal_spec(raw)
 
 
-_OSIM_INVALID = "\\*+ \t\n/"  # characters OpenSim refuses in a component's name
-
-
-def osim_name(name: str, taken: set) -> str:
-    """``name`` as OpenSim accepts it: each character OpenSim refuses in a component name (space, tab,
-    newline, ``\\ * + /``) becomes ``_``, and ``#2``, ``#3``, ... keeps it unique among ``taken``
-    (updated). The neck's cables are named like ``cleid-mast (right)``: ``cleid-mast_(right)``."""
-    out = "".join("_" if ch in _OSIM_INVALID else ch for ch in str(name)) or "_"
-    base, k = out, 2
-    while out in taken:
-        out, k = f"{base}#{k}", k + 1
-    taken.add(out)
-    return out
+def _legal_spec(spec: RobotSpec) -> RobotSpec:
+    """``spec`` with every name OpenSim will see made legal (:mod:`.osim_names`), the changes listed."""
+    body = legal_names([b.name for b in spec.bodies], taken={GROUND})  # no link is named ground
+    body[GROUND] = GROUND
+    joint = legal_names([j.name for j in spec.joints])
+    coord = legal_names(spec.coordinate_names)
+    cable = legal_names([c.name for c in spec.cables])  # unique: the cable model refuses duplicates
+    renamed = [(kind, a, b) for kind, m in (("body", body), ("joint", joint), ("coordinate", coord),
+                                            ("cable", cable)) for a, b in m.items() if a != b]
+    cables = [replace(c, name=cable[c.name], points=tuple((body[b], p) for b, p in c.points))
+              for c in spec.cables]
+    joints = [replace(j, name=joint[j.name], parent=body[j.parent], child=body[j.child],
+                      coordinates=tuple(coord[c] for c in j.coordinates)) for j in spec.joints]
+    bodies = [replace(b, name=body[b.name]) for b in spec.bodies]
+    return replace(spec, name=legal_names([spec.name])[spec.name], bodies=tuple(bodies), joints=tuple(joints),
+                   cables=tuple(cables), coordinate_names=tuple(coord[c] for c in spec.coordinate_names),
+                   renamed=tuple(renamed))
 
 
 def _body_names(model: pin.Model) -> dict[int, str]:
@@ -344,10 +353,22 @@ def _spatial_transform(osim, j: JointSpec):
 
 
 def export_opensim(robot, path, optimal_force: float | None = None) -> Path:
-    """Write ``robot`` as an OpenSim model file (``.osim``); returns the path (module docstring)."""
+    """Write ``robot`` as an OpenSim model file (``.osim``); returns the path (module docstring). The
+    file is written beside ``path`` under a temporary name, read back as XML with the names it must
+    hold (:func:`~.osim_names.check_written`), and only then renamed to ``path``."""
     path = Path(path)
-    model = opensim_model(robot, optimal_force)
+    spec = robot if isinstance(robot, RobotSpec) else describe(robot)
+    model = opensim_model(spec, optimal_force)
     model.initSystem()  # let OpenSim check the model before it is written
     path.parent.mkdir(parents=True, exist_ok=True)
-    model.printToXML(str(path))
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".osim", dir=path.parent)
+    os.close(fd)
+    try:
+        model.printToXML(tmp)
+        check_written(tmp, dict(BodySet=[b.name for b in spec.bodies], JointSet=[j.name for j in spec.joints],
+                                ForceSet=[c.name for c in spec.cables]), shown=path)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
     return path

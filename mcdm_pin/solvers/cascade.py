@@ -55,9 +55,12 @@ class Cascade(Solver):
                 return s
         raise KeyError(name)
 
-    def solve(self, qp, hint: Solution | None = None) -> Solution:
+    def solve(self, qp, hint: Solution | None = None, deadline: float | None = None) -> Solution:
+        """``deadline`` (:func:`~.base.now`): an outer chain's, passed to an inner one (the least-norm
+        stage's) so that the budget holds across both; the earlier of it and this chain's own."""
         start = now()
-        deadline = start + self.budget_s if self.budget_s is not None else float("inf")
+        own = start + self.budget_s if self.budget_s is not None else float("inf")
+        deadline = own if deadline is None else min(own, deadline)
         if hint is not None:
             for s in self.stages:
                 s.seed(hint)
@@ -67,7 +70,8 @@ class Cascade(Solver):
             if not s.applies(sol):
                 continue
             if not s.refines and now() > deadline:
-                return failure(qp.n, BUDGET, f"no answer within the budget of {self.budget_s:g} s "
+                budget = "the budget" if self.budget_s is None else f"the budget of {self.budget_s:g} s"
+                return failure(qp.n, BUDGET, f"no answer within {budget} "
                                              f"(last: {sol.message if sol else 'none'})", iterations,
                                stage=s.name)
             out = s(qp, sol, deadline)

@@ -225,7 +225,7 @@ class LeastNorm(Stage):
         if sol.active is None:
             from .active_set import ActiveSet
             sol = sol.but(active=ActiveSet.from_duals(qp, sol))
-        out = self.inner.solve(stage2, hint=sol)
+        out = self.inner.solve(stage2, hint=sol, deadline=deadline)
         if out.status != OPTIMAL:
             note = (f"least-norm stage failed ({out.status}: {out.message}); the answer is optimal but "
                     f"may not be the least-norm one")

@@ -68,29 +68,63 @@ class ProxQPRunner:
         qp.init(H, g, A, b, C, l, u)
         return qp
 
-    def solve(self, H, g, A, b, C, l, u, warm=None):
-        """Returns ``(x, y, z, status, iterations)``; ``status`` ``None``: proven infeasible (HiGHS)."""
+    def solve(self, H, g, A, b, C, l, u, warm=None, deadline: float = float("inf")):
+        """Returns ``(x, y, z, status, iterations)``; ``status`` ``None``: proven infeasible (HiGHS);
+        :data:`OUT_OF_TIME`: ``deadline`` (:func:`~.base.now`) passed inside the solve."""
         qp = self._new_qp(H, g, A, b, C, l, u, self.eps_infeasible, self.max_iter)
         n = H.shape[0]
+        start = None
         if warm is not None and warm[0].shape == (n,) and warm[1].shape == (A.shape[0],):
             z = warm[2]
             if z.shape != (C.shape[0],):  # cut rows changed: keep the bounds' multipliers only
                 z0 = np.zeros(C.shape[0])
                 z0[:n] = z[:n] if z.shape[0] >= n else 0.0
                 z = z0
-            qp.solve(warm[0], warm[1], z)
-        else:
-            qp.solve()
-        iterations = int(qp.results.info.iter)
-        if qp.results.info.status != _STATUS.PROXQP_SOLVED:
+            start = (warm[0], warm[1], z)
+        status, iterations = _solve_until(qp, start, self.max_iter, deadline)
+        if status == _STATUS.PROXQP_MAX_ITER_REACHED and now() > deadline:
+            return None, None, None, OUT_OF_TIME, iterations
+        if status != _STATUS.PROXQP_SOLVED:
             x0 = feasible_point(A, b, C, l, u)
             if x0 is None:
                 return None, None, None, None, iterations
             qp = self._new_qp(H, g, A, b, C, l, u, 0.0, self.max_iter_retry)
-            qp.solve(x0, np.zeros(A.shape[0]), np.zeros(C.shape[0]))
-            iterations += int(qp.results.info.iter)
+            start = (x0, np.zeros(A.shape[0]), np.zeros(C.shape[0]))
+            status, it = _solve_until(qp, start, self.max_iter_retry, deadline)
+            iterations += it
+            if status == _STATUS.PROXQP_MAX_ITER_REACHED and now() > deadline:
+                return None, None, None, OUT_OF_TIME, iterations
         res = qp.results
         return res.x.copy(), res.y.copy(), res.z.copy(), res.info.status, iterations
+
+
+OUT_OF_TIME = "out of time"  # ProxQPRunner.solve's status when the deadline passed inside a solve
+SLICE_OUTER = 25  # outer ProxQP iterations between two looks at the clock (seen: at most 19 per solve)
+SLICE_INNER = 100  # inner iterations per outer one under a deadline (ProxQP: 1500; seen: at most 3)
+
+
+def _solve_until(qp, start, max_iter: int, deadline: float):
+    """``qp.solve`` in slices of :data:`SLICE_OUTER` outer iterations, each continuing from the last
+    (x, y, z), until solved, ``max_iter`` outer iterations in all, or ``deadline``: ProxQP has no
+    time limit of its own, and bounds of 1e-300..1e-290 N took 1.5 million inner iterations (58 s)
+    in one call. A slice costs at most ``SLICE_OUTER * SLICE_INNER`` inner iterations (~0.1 s at
+    n = 8). Without a deadline: one call, as ProxQP runs it. Returns (status, inner iterations)."""
+    s = qp.settings
+    if not np.isfinite(deadline):
+        qp.solve(*start) if start is not None else qp.solve()
+        return qp.results.info.status, int(qp.results.info.iter)
+    s.max_iter_in = min(int(s.max_iter_in), SLICE_INNER)
+    outer = iterations = 0
+    while True:
+        s.max_iter = min(SLICE_OUTER, max_iter - outer)
+        qp.solve(*start) if start is not None else qp.solve()
+        info = qp.results.info
+        outer += max(int(info.iter_ext), 1)
+        iterations += int(info.iter)
+        if info.status != _STATUS.PROXQP_MAX_ITER_REACHED or outer >= max_iter or now() > deadline:
+            return info.status, iterations
+        res = qp.results
+        start = (res.x.copy(), res.y.copy(), res.z.copy())
 
 
 def _cone_dual(cone, dirs, mults) -> np.ndarray:
@@ -168,8 +202,11 @@ class ProxQPStage(Stage):
                 return failure(n, BUDGET, f"ProxQP cutting planes: budget exhausted after {rounds - 1} "
                                           f"rounds", iterations, rounds - 1, self.name)
             C, l, u, owner = cut_rows(qp, list(enumerate(cuts)))
-            x, y, z, status, it = self.runner.solve(qp.P, qp.c, qp.A, qp.b, C, l, u, warm)
+            x, y, z, status, it = self.runner.solve(qp.P, qp.c, qp.A, qp.b, C, l, u, warm, deadline)
             iterations += it
+            if status is OUT_OF_TIME:
+                return failure(n, BUDGET, f"ProxQP: budget exhausted inside round {rounds}", iterations,
+                               rounds, self.name)
             if status is None:
                 what = "the cones' outer approximation" if cones else "the bounds"
                 return failure(n, INFEASIBLE, f"no point satisfies the equation of motion and {what} "
@@ -254,8 +291,11 @@ class SQPPolish(Stage):
                     gk -= D @ x_prev
             rows = [(k, [dirs[k]] if dirs[k] is not None else []) for k in range(len(cones))]
             C, l, u, owner = cut_rows(qp, rows)
-            x, y, z, status, it = self.runner.solve(Hk, gk, qp.A, qp.b, C, l, u, warm)
+            x, y, z, status, it = self.runner.solve(Hk, gk, qp.A, qp.b, C, l, u, warm, deadline)
             iterations += it
+            if status is OUT_OF_TIME:
+                return failure(n, BUDGET, "SQP polish: budget exhausted inside a subproblem", iterations,
+                               sol.rounds + rounds, self.name)
             if status != _STATUS.PROXQP_SOLVED:
                 return failure(n, INACCURATE, "SQP polish: a subproblem failed", iterations,
                                sol.rounds + rounds, self.name)

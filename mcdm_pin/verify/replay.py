@@ -171,12 +171,14 @@ class _Dynamics:
 
 
 def _check_result(robot, result) -> None:
-    if list(result.cable_names) != list(robot.cable_names):
-        raise ResultsError(f"the results file's cables {list(result.cable_names)[:5]}... do not match "
-                           f"robot {robot.name!r}'s {list(robot.cable_names)[:5]}...: wrong robot?")
-    if list(result.coordinate_names) != list(robot.coordinate_names):
-        raise ResultsError(f"the results file's coordinates {list(result.coordinate_names)} do not match "
-                           f"robot {robot.name!r}'s {list(robot.coordinate_names)}: wrong robot?")
+    where = f" ({robot.sidecar.path})" if getattr(robot, "sidecar", None) is not None else ""
+    for what, key, cut in (("cables", "cable_names", 5), ("coordinates", "coordinate_names", None)):
+        got = [str(s) for s in getattr(result, key)]  # plain text, not numpy's np.str_('...')
+        want = [str(s) for s in getattr(robot, key)]
+        if got != want:
+            more = "..." if cut is not None and max(len(got), len(want)) > cut else ""
+            raise ResultsError(f"the results file's {what} {got[:cut]}{more} do not match those of robot "
+                               f"{robot.name}{where}: {want[:cut]}{more}; wrong robot?")
 
 
 def _configurations(robot, result) -> np.ndarray:

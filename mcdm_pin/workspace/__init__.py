@@ -17,13 +17,13 @@ Use::
     ds = as_grid(run.open())          # xarray, dims (q1_x, q4_x, ...)
 """
 
-from .errors import WorkspaceError
+from .errors import WorkspaceError, WorkspaceInterrupted
 from .evaluate import PoseSolver, Setup
 from .poses import Grid, PoseSet, PosesFile, RandomPoses, coordinate_limits
 from .schedule import DEFAULT_CHUNK, RunReport, compute_workspace
 from .store import as_grid, is_complete, open_workspace
 from .summary import summary
 
-__all__ = ["WorkspaceError", "Setup", "PoseSolver", "PoseSet", "Grid", "RandomPoses", "PosesFile",
+__all__ = ["WorkspaceError", "WorkspaceInterrupted", "Setup", "PoseSolver", "PoseSet", "Grid", "RandomPoses", "PosesFile",
            "coordinate_limits", "compute_workspace", "RunReport", "DEFAULT_CHUNK", "open_workspace",
            "as_grid", "is_complete", "summary"]

@@ -11,6 +11,11 @@
 The client holds a few chunks per worker thread in flight (not the whole run), writes each chunk's
 results as it arrives and submits the next; the robot goes to every worker once (scattered, as
 pickled data). A progress bar (``tqdm``) shows the poses done, the rate and the time left.
+
+The scheduler is reached before the store is created, so an unreachable one leaves nothing behind.
+Ctrl-C: local workers are started with SIGINT ignored (a terminal sends it to the whole process
+group), this process closes the cluster and raises :class:`WorkspaceInterrupted`, whose message says
+how many chunks the store keeps (``--resume`` completes it).
 """
 
 from __future__ import annotations
@@ -18,18 +23,24 @@ from __future__ import annotations
 import json
 import logging
 import os
+import signal
 import sys
+import threading
 import time
 from collections import deque
-from dataclasses import dataclass
+from contextlib import contextmanager
+from dataclasses import dataclass, field
 from pathlib import Path
 
-from .errors import WorkspaceError
+import numpy as np
+
+from .errors import WorkspaceError, WorkspaceInterrupted
 from .evaluate import PoseSolver, RobotBlob, Setup, robot_digest, solve_chunk
 from .store import FORMAT, Writer, create_store, open_for_resume, open_workspace
 
 DEFAULT_CHUNK = 256  # poses per task (docs/workspace.md: a few hundred ms of work per task)
 IN_FLIGHT_PER_THREAD = 2  # chunks queued per worker thread, so that none waits for the client
+CONNECT_TIMEOUT_S = 20  # to reach a tcp:// scheduler
 
 
 @dataclass
@@ -45,6 +56,7 @@ class RunReport:
     scheduler: str
     startup_s: float  # starting or reaching the cluster
     compute_s: float  # from the first task submitted to the last chunk written
+    recomputed: dict = field(default_factory=dict)  # chunk -> why its done flag was not trusted
 
     @property
     def poses_per_s(self) -> float:
@@ -108,19 +120,28 @@ def compute_workspace(robot, poses, out, setup: Setup | None = None, chunk: int 
     out = Path(out)
     wanted = settings(robot, poses, setup, chunk)
     nchunks = -(-len(poses) // chunk)
-    if resume and out.exists():
-        todo = open_for_resume(out, wanted)
+    resuming = resume and out.exists()
+    damaged: dict[int, str] = {}
+    if resuming:
+        todo, damaged = open_for_resume(out, wanted)
+    elif out.exists():
+        raise WorkspaceError(f"{out}: already exists; give --resume to complete it, or another --out")
     else:
-        create_store(out, robot, poses, chunk, wanted)
         todo = list(range(nchunks))
     if progress is None:
         progress = sys.stderr.isatty()
-    writer = Writer(out, chunk)
     sizes = {k: min(chunk, len(poses) - k * chunk) for k in todo}
-    bar = _bar(len(poses), len(poses) - sum(sizes.values())) if progress else None
-    try:
-        if scheduler == "inline":
-            t0 = time.perf_counter()
+    t0 = time.perf_counter()
+    client = cluster = bar = None
+    try:  # the scheduler is reached before the store is made: an unreachable one leaves nothing
+        if scheduler != "inline":
+            client, cluster = _connect(scheduler, workers)
+        if not resuming:
+            create_store(out, robot, poses, chunk, wanted)
+        writer = Writer(out, chunk)
+        if progress:
+            bar = _bar(len(poses), len(poses) - sum(sizes.values()))
+        if client is None:
             solver = PoseSolver(robot, setup)
             startup, t0 = time.perf_counter() - t0, time.perf_counter()
             for k in todo:
@@ -129,14 +150,37 @@ def compute_workspace(robot, poses, out, setup: Setup | None = None, chunk: int 
                     bar.update(sizes[k])
             threads = 1
         else:
-            startup, t0, threads = _run_dask(robot, poses, setup, chunk, todo, sizes, writer, bar,
-                                             scheduler, workers)
+            startup, t0, threads = _run_dask(client, robot, poses, setup, chunk, todo, sizes, writer,
+                                             bar, scheduler, t0)
         elapsed = time.perf_counter() - t0
+    except KeyboardInterrupt:
+        raise _interrupted(out, nchunks) from None
     finally:
         if bar is not None:
             bar.close()
+        _close(client, cluster)
     return RunReport(out, len(poses), nchunks, len(todo), sum(sizes.values()), threads, scheduler,
-                     startup, elapsed)
+                     startup, elapsed, damaged)
+
+
+def _interrupted(out: Path, nchunks: int) -> WorkspaceInterrupted:
+    try:
+        import zarr
+
+        done = int(np.sum(zarr.open_group(str(out), mode="r", zarr_format=2)["chunk_done"][:] == 1))
+    except Exception:  # noqa: BLE001 - no store yet (interrupted while starting)
+        done = -1
+    return WorkspaceInterrupted(out, done, nchunks)
+
+
+def _close(client, cluster) -> None:
+    """Close the Dask client and local cluster, quietly (also after Ctrl-C)."""
+    for thing in (client, cluster):
+        if thing is not None:
+            try:
+                thing.close()
+            except (Exception, KeyboardInterrupt):  # noqa: BLE001 - best effort on the way out
+                pass
 
 
 def _bar(total: int, initial: int):
@@ -146,36 +190,45 @@ def _bar(total: int, initial: int):
                 desc="workspace", dynamic_ncols=True)
 
 
-def _run_dask(robot, poses, setup, chunk, todo, sizes, writer, bar, scheduler, workers):
+def _run_dask(client, robot, poses, setup, chunk, todo, sizes, writer, bar, scheduler, t0):
+    threads = sum(client.nthreads().values())
+    if threads < 1:
+        raise WorkspaceError(f"scheduler {scheduler}: no worker is connected (start some with "
+                             f"dask worker {scheduler} --nthreads 1)")
+    robot_future = client.scatter(RobotBlob(robot), broadcast=True)
+    startup = time.perf_counter() - t0
     t0 = time.perf_counter()
-    client, cluster = _connect(scheduler, workers)
+    _pump(client, robot_future, poses, setup, chunk, todo, sizes, writer, bar,
+          IN_FLIGHT_PER_THREAD * threads)
+    return startup, t0, threads
+
+
+@contextmanager
+def _workers_ignore_ctrl_c():
+    """Start local worker processes with SIGINT ignored (a disposition a child inherits, and Python
+    keeps at start-up): Ctrl-C in a terminal reaches the whole process group, and only this process,
+    which then closes the cluster, should act on it."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
-        threads = sum(client.nthreads().values())
-        if threads < 1:
-            raise WorkspaceError(f"scheduler {scheduler}: no worker is connected (start some with "
-                                 f"dask worker {scheduler} --nthreads 1)")
-        robot_future = client.scatter(RobotBlob(robot), broadcast=True)
-        startup = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        _pump(client, robot_future, poses, setup, chunk, todo, sizes, writer, bar,
-              IN_FLIGHT_PER_THREAD * threads)
-        return startup, t0, threads
+        yield
     finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        signal.signal(signal.SIGINT, old)
 
 
 def _connect(scheduler: str, workers: int | None):
     from dask.distributed import Client, LocalCluster
 
     if scheduler == "local":
-        cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                               processes=True, host="127.0.0.1", dashboard_address="127.0.0.1:0",
-                               silence_logs=logging.ERROR)
+        with _workers_ignore_ctrl_c():
+            cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                                   processes=True, host="127.0.0.1", dashboard_address="127.0.0.1:0",
+                                   silence_logs=logging.ERROR)
         return Client(cluster), cluster
     try:
-        client = Client(scheduler, timeout="20s")
+        client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT_S}s")
     except OSError as exc:
         raise WorkspaceError(f"scheduler {scheduler}: cannot connect ({exc}); start one with "
                              f"dask scheduler, and workers with dask worker {scheduler}") from None

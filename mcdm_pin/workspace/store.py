@@ -25,13 +25,21 @@ run's settings (robot, problem, poses, chunk size, margins); it is written once,
 **Crash safety.** The store is created in a temporary folder and renamed into place; each chunk's
 variables are written (each file atomically, by Zarr) before its ``chunk_done`` flag, so a run killed
 at any moment leaves flags only on complete chunks; :func:`open_for_resume` drops Zarr's unfinished
-temporary files and returns the chunks still to do.
+temporary files and returns the chunks still to do. Two runs creating one store: the second rename
+finds the folder taken and that run stops with a :class:`WorkspaceError`.
+
+**Trust, verified.** Every chunk is written whole, even where all its values equal the fill value
+(NaN), so a flagged chunk has one file per variable (the group attribute ``chunk_files`` says so).
+Before a flag is trusted (:func:`damaged_chunks`: on resume, and whenever :func:`open_workspace`
+opens a store) each variable of each flagged chunk must exist and decode; resume recomputes a
+damaged chunk, reading names the store, the chunk and the variable.
 """
 
 from __future__ import annotations
 
 import os
 import shutil
+import tempfile
 import warnings
 from pathlib import Path
 
@@ -42,6 +50,7 @@ from .evaluate import COMPONENTS, STATUS_DTYPE
 from .poses import coordinate_units
 
 FORMAT = 1  # version of this layout, in the attributes
+READ_BYTES = 1 << 26  # what damaged_chunks reads at once (64 MB)
 
 UNITS = dict(q="rad or m (per coordinate)", objective="as the case's objective", f="N",
              interaction_wrench="N (F), N m (M)", interaction_angle_deg="deg", needed_f_max="N",
@@ -98,11 +107,13 @@ def create_store(path, robot, poses, chunk: int, settings: dict) -> None:
     path = Path(path)
     if path.exists():
         raise WorkspaceError(f"{path}: already exists; give --resume to complete it, or another --out")
-    tmp = path.with_name(f".{path.name}.creating-{os.getpid()}")
-    shutil.rmtree(tmp, ignore_errors=True)
+    try:  # a folder of this run's own, beside the store (rename does not cross file systems)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.creating-", dir=path.parent))
+    except OSError as exc:
+        raise WorkspaceError(f"{path}: cannot create the store ({exc.strerror or exc})") from None
     n, nchunks = len(poses), -(-len(poses) // chunk)
     try:
-        g = zarr.open_group(str(tmp), mode="w", zarr_format=2)
+        g = zarr.open_group(str(tmp), mode="a", zarr_format=2)
         for name, (shape, dims, dtype, fill) in _variables(n, robot.nv, robot.m, len(robot.joints)).items():
             chunks = (chunk,) + shape[1:]
             _array(g, name, shape, dims, dtype, chunks, fill,
@@ -122,16 +133,32 @@ def create_store(path, robot, poses, chunk: int, settings: dict) -> None:
             _array(g, name, np.asarray(values, float), (name,), "f8", (len(values),), None,
                    dict(units=unit, description=f"grid axis: coordinate {coordinate}"))
         g.attrs["workspace"] = settings
+        g.attrs["chunk_files"] = "every flagged chunk has one file per variable"
         zarr.consolidate_metadata(str(tmp))
-        os.replace(tmp, path)
+        _rename_new(tmp, path)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
 
 
-def open_for_resume(path, settings: dict) -> list[int]:
-    """The chunks of the store at ``path`` still to compute; the store's settings must equal
-    ``settings`` (same robot, problem, poses and chunk size)."""
+def _rename_new(tmp: Path, path: Path) -> None:
+    """Move the finished store ``tmp`` to ``path``, which must not exist: a rename, atomic; where
+    another run got there first, ``rename`` meets its non-empty folder and fails."""
+    try:
+        if path.exists():
+            raise FileExistsError(path)
+        os.rename(tmp, path)
+    except OSError as exc:
+        if path.exists():
+            raise WorkspaceError(f"{path}: created by another run meanwhile; let that run finish, or give "
+                                 f"--resume to complete its store, or another --out") from None
+        raise WorkspaceError(f"{path}: cannot create the store ({exc.strerror or exc})") from None
+
+
+def open_for_resume(path, settings: dict) -> tuple[list[int], dict[int, str]]:
+    """The chunks of the store at ``path`` still to compute, and those among them that were flagged
+    done but are damaged (:func:`damaged_chunks`; their flags are cleared); the store's settings must
+    equal ``settings`` (same robot, problem, poses and chunk size)."""
     import zarr
 
     path = Path(path)
@@ -148,8 +175,56 @@ def open_for_resume(path, settings: dict) -> list[int]:
                              f"the command that created it, or write to another --out")
     for leftover in path.rglob("*.partial"):  # Zarr's temporary files of a write that was killed
         leftover.unlink(missing_ok=True)
+    damaged = damaged_chunks(path, g)
+    for k in damaged:
+        g["chunk_done"][k] = 0  # computed again below
     done = g["chunk_done"][:]
-    return [int(k) for k in np.flatnonzero(done == 0)]
+    return [int(k) for k in np.flatnonzero(done == 0)], damaged
+
+
+def _flags(path: Path, group) -> np.ndarray:
+    try:
+        return np.asarray(group["chunk_done"][:])
+    except Exception as exc:  # noqa: BLE001 - a torn file: numcodecs, zarr and OSError alike
+        raise WorkspaceError(f"{path}: the chunk_done flags cannot be read ({type(exc).__name__}: {exc}); "
+                             f"the store is damaged") from None
+
+
+def damaged_chunks(path, group=None) -> dict[int, str]:
+    """The chunks flagged done that cannot be trusted: ``{chunk: what is wrong}``, where a variable's
+    file is missing (stores that record ``chunk_files``) or does not decode."""
+    import zarr
+
+    path = Path(path)
+    group = zarr.open_group(str(path), mode="r", zarr_format=2) if group is None else group
+    done = np.flatnonzero(_flags(path, group) == 1)
+    whole = "chunk_files" in group.attrs
+    bad: dict[int, str] = {}
+    for name in RESULT_VARIABLES:
+        array = group[name]
+        size = array.chunks[0]
+        if whole:
+            tail = ".0" * (array.ndim - 1)
+            for k in done:
+                if k not in bad and not (path / name / f"{k}{tail}").is_file():
+                    bad[int(k)] = f"{name}: its data is missing"
+        per_chunk = max(array.nbytes // max(array.shape[0], 1) * size, 1)
+        step = max(1, READ_BYTES // per_chunk)  # chunks per read: memory stays bounded
+        for first in range(0, len(done), step):
+            block = [int(k) for k in done[first:first + step] if int(k) not in bad]
+            if not block:
+                continue
+            try:  # the common case: the block decodes in one read
+                array[block[0] * size:(block[-1] + 1) * size]
+                continue
+            except Exception:  # noqa: BLE001 - find the chunk that does not decode
+                pass
+            for k in block:
+                try:
+                    array[k * size:(k + 1) * size]
+                except Exception as exc:  # noqa: BLE001 - numcodecs, zarr and OSError alike
+                    bad[k] = f"{name}: unreadable ({type(exc).__name__}: {exc})"
+    return dict(sorted(bad.items()))
 
 
 class Writer:
@@ -159,7 +234,8 @@ class Writer:
         import zarr
 
         self.group = zarr.open_group(str(path), mode="r+", zarr_format=2)
-        self.arrays = {name: self.group[name] for name in RESULT_VARIABLES}
+        whole = {"write_empty_chunks": True}  # a file per chunk, even of fill values: see damaged_chunks
+        self.arrays = {name: self.group[name].with_config(whole) for name in RESULT_VARIABLES}
         self.done = self.group["chunk_done"]
         self.chunk = chunk
 
@@ -171,13 +247,22 @@ class Writer:
         self.done[k] = 1  # last: the chunk is complete
 
 
-def open_workspace(path):
-    """The store as an ``xarray.Dataset`` (lazy, backed by Dask arrays)."""
+def open_workspace(path, check: bool = True):
+    """The store as an ``xarray.Dataset`` (lazy, backed by Dask arrays). ``check``: first read every
+    chunk flagged done (:func:`damaged_chunks`); an error names the store, chunk and variable that
+    cannot be trusted."""
     import xarray as xr
 
     path = Path(path)
     if not (path / ".zgroup").is_file():
         raise WorkspaceError(f"{path}: not a workspace store (no Zarr group there)")
+    if check:
+        bad = damaged_chunks(path)
+        if bad:
+            k, why = next(iter(bad.items()))
+            more = f" (and {len(bad) - 1} more chunks)" if len(bad) > 1 else ""
+            raise WorkspaceError(f"{path}: chunk {k} is flagged done but {why}{more}; run the "
+                                 f"workspace command again with --resume to recompute it")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         ds = xr.open_zarr(str(path))
