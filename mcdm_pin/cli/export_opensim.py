@@ -11,7 +11,7 @@ from ._files import robot_file
 def add(sub):
     p = sub.add_parser("export-opensim", help="write a robot as an OpenSim model (.osim; needs the optional "
                                               "package opensim)")
-    p.add_argument("robot", help="cable sidecar (YAML)")
+    p.add_argument("robot", help="cable sidecar (YAML) or MuJoCo MJCF file")
     p.add_argument("out", help="the OpenSim model file to write (.osim)")
     p.add_argument("--optimal-force", metavar="F0",
                    help="optimal force of every cable's PathActuator, N (default: the largest f_max); a "

@@ -12,7 +12,7 @@ from ._files import robot_file
 def add(sub):
     p = sub.add_parser("info", help="show a robot's links, joints, cables, a validation report and a "
                                     "check of every trajectory")
-    p.add_argument("robot", help="cable sidecar (YAML)")
+    p.add_argument("robot", help="cable sidecar (YAML) or MuJoCo MJCF file")
     p.add_argument("--samples", type=int, default=11,
                    help="instants of each trajectory at which the problem is solved (default 11, spread "
                         "evenly, first and last included; 0: only build the trajectories)")

@@ -13,7 +13,7 @@ from .view import html_file, solve_html_hook
 
 def add(sub):
     p = sub.add_parser("solve", help="cable forces along a trajectory (cases 1-3)")
-    p.add_argument("robot", help="cable sidecar (YAML)")
+    p.add_argument("robot", help="cable sidecar (YAML) or MuJoCo MJCF file")
     p.add_argument("--trajectory", "-t", required=True, help="a trajectory named in the sidecar")
     p.add_argument("--case", type=int, choices=(1, 2, 3), default=1,
                    help="1: min f^T f; 2: min interactions; 3: case 2 + stability cones (default 1)")

@@ -52,7 +52,7 @@ def _add_scene_options(p) -> None:
 # ------------------------------------------------------------------------------------------- view
 def add(sub):
     p = sub.add_parser("view", help="3-D view of a solved trajectory (Meshcat: live, or one HTML file)")
-    p.add_argument("robot", help="cable sidecar (YAML)")
+    p.add_argument("robot", help="cable sidecar (YAML) or MuJoCo MJCF file")
     p.add_argument("--results", help="results file written by solve --out (.npz)")
     p.add_argument("--workspace", metavar="STORE.zarr",
                    help="instead of --results: a workspace store, its poses as a point cloud of "

@@ -14,7 +14,7 @@ from ._common import UsageError, parse_cones, parse_float, parse_pairs, parse_we
 def add(sub):
     p = sub.add_parser("workspace", help="where the robot can hold itself: many poses into a Zarr store "
                                          "(this machine's cores or a Dask cluster)")
-    p.add_argument("robot", help="cable sidecar (YAML)")
+    p.add_argument("robot", help="cable sidecar (YAML) or MuJoCo MJCF file")
     p.add_argument("--case", type=int, choices=(1, 2, 3), default=1,
                    help="1: min f^T f; 2: min interactions; 3: case 2 + stability cones (default 1)")
     p.add_argument("--cone", help="cone half-angle per joint: JOINT=DEG,... or all=DEG (case 3)")

@@ -136,6 +136,15 @@ def describe(robot) -> RobotSpec:
         ModelError: a joint type without an OpenSim counterpart here (module docstring).
     """
     model = robot.model
+    cables = robot.cables
+    unsupported = [what for what, present in (
+        ("routes over wrapping surfaces", cables.configuration_dependent),
+        ("pulleys", bool(np.any(cables.seg_scale != 1.0))), ("muscles", cables.muscles is not None),
+        ("coupled coordinates", getattr(robot, "couplings", None) is not None)) if present]
+    if unsupported:
+        raise ModelError(f"robot {robot.name!r} has {', '.join(unsupported)}: the OpenSim export writes "
+                         f"straight cables between fixed points only (a PathWrap and muscle export is not "
+                         f"written yet); nothing was exported")
     names = _body_names(model)
     joints = []
     for j in robot.joints:
