@@ -25,6 +25,7 @@ from .results import InstantResult, TrajectoryResult, concat_columns, instant_co
 from .scaling import ScaledSolver
 from .solvers import INACCURATE, INFEASIBLE, OPTIMAL, SOFTENED, Solution, get_solver
 from .solvers.base import cone_violation_deg
+from .model import charts
 from .model.actuators import actuator_names
 from .model.terms import TermsEvaluator, interaction_angles
 
@@ -177,7 +178,7 @@ class InverseDynamics:
             raise ProblemError(f"workers must be a positive integer, got {workers!r}")
         if progress is None:
             progress = sys.stderr.isatty()
-        _check_trajectory(self.robot, traj)  # once, not per instant or per batch piece
+        traj = _check_trajectory(self.robot, traj)  # once, not per instant or per batch piece
         if workers > 1 and len(traj) > 1:
             if any(isinstance(t, Smoothing) for t in _terms_of(self.problem.objective)):
                 raise ProblemError("batch mode (workers > 1) cannot be used with smoothing: each "
@@ -319,9 +320,11 @@ def _blas_controller():
     return _CONTROLLER
 
 
-def _check_trajectory(robot, traj) -> None:
-    """Every state of ``traj`` is finite, with configurations of length nq and rates of length nv
-    (checked once, not per instant)."""
+def _check_trajectory(robot, traj):
+    """Every state of ``traj`` is finite, with configurations of length nq and rates of length nv,
+    and every configuration passes :func:`~mcdm_pin.model.charts.check_configuration` (unit
+    quaternions), as :meth:`InverseDynamics.solve` checks one (checked once, not per instant).
+    Returns ``traj``, or a copy whose quaternions are normalised."""
     for name, n in (("q", robot.nq), ("qd", robot.nv), ("qdd", robot.nv)):
         x = getattr(traj, name)
         if not (isinstance(x, np.ndarray) and x.dtype == np.float64 and x.ndim == 2
@@ -333,6 +336,10 @@ def _check_trajectory(robot, traj) -> None:
         if not np.all(np.isfinite(x)):
             k = int(np.flatnonzero(~np.all(np.isfinite(x), axis=1))[0])
             robot.check_vector(x[k], f"{name}[{k}]", n)
+    q = charts.check_configurations(robot.model, traj.q, f"trajectory {traj.name!r}: q", robot._parts)
+    if q is traj.q:
+        return traj
+    return type(traj)(traj.name, traj.t, q, traj.qd, traj.qdd)
 
 
 _OVERLAP = 3  # instants a batch piece solves before its own first one, to warm its solver up

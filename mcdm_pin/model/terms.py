@@ -38,6 +38,7 @@ import pinocchio as pin
 
 from ..exceptions import ModelError, StateError
 from .cables import CableSet
+from .charts import check_configuration
 from .geometry import CableMaps, cable_geometry
 from .joints import PhysicalJoint, massless_members, resolve_joints
 
@@ -242,7 +243,7 @@ class TermsEvaluator:
 
     def check_state(self, q, v=None, a=None):
         """``(q, v, a)`` as float arrays of sizes nq, nv, nv (``None``: zeros), or :class:`StateError`."""
-        return (check_vector(q, "q", self.model.nq), *self.check_motion(v, a))
+        return (check_configuration(self.model, q), *self.check_motion(v, a))
 
     def check_motion(self, v=None, a=None):
         """``(v, a)`` as float arrays of size nv (``None``: zeros), or :class:`StateError`."""
