@@ -24,8 +24,10 @@ columns ``qdd:NAME``: Pinocchio's velocity and acceleration (tangent space), tak
 Without them the rates are the derivatives of the interpolating quintic B-spline through the samples
 (``scipy.interpolate.make_interp_spline(k=5)``, not-a-knot ends), mapped to the tangent space exactly
 (:func:`mcdm_pin.model.charts.tangent`); at least 6 samples with strictly increasing times. The first
-row may be a header: a row of names (no cell a number); any other row that does not parse is an error
-naming its row and column.
+row may be a header: a row of names (no cell a number), matched by name in any order; it must name
+``t`` and every coordinate (and every ``qd:``/``qdd:`` column or none), each once, and nothing else,
+and every row must have as many cells as it has names. Without a header the columns are read in the
+order above. Any row that does not parse is an error naming its row and column.
 """
 
 from __future__ import annotations
@@ -292,22 +294,49 @@ def _is_number(cell: str) -> bool:
         return False
 
 
+def _header_columns(path: Path, header: list[str], robot) -> list[int]:
+    """The file column of each canonical column (``t``, the coordinates, then ``qd:``/``qdd:`` when
+    the header names them), matched by name; :class:`TrajectoryError` naming the column otherwise."""
+    import difflib
+
+    coords = list(robot.coordinate_names)
+    rates = [f"{k}:{c}" for k in ("qd", "qdd") for c in coords]
+    known = ["t", *coords, *rates]
+    for k, name in enumerate(header):
+        if name not in known:
+            near = difflib.get_close_matches(name, known, n=1)
+            hint = f" (did you mean {near[0]!r}?)" if near else ""
+            raise TrajectoryError(f"{path}: row 1, column {k + 1}: header {name!r} names no column{hint}; "
+                                  f"expected t, the coordinates {', '.join(coords)} and optionally qd:NAME "
+                                  f"and qdd:NAME for each (in any order)")
+        if header.index(name) != k:
+            raise TrajectoryError(f"{path}: row 1: the header names {name!r} twice (columns "
+                                  f"{header.index(name) + 1} and {k + 1})")
+    missing = [n for n in ("t", *coords) if n not in header]
+    if missing:
+        raise TrajectoryError(f"{path}: row 1: the header has no column {', '.join(map(repr, missing))}; "
+                              f"expected t and every coordinate ({', '.join(coords)})")
+    given = [n for n in rates if n in header]
+    if given and len(given) != len(rates):
+        absent = [n for n in rates if n not in header]
+        raise TrajectoryError(f"{path}: row 1: the header names some rate columns but not "
+                              f"{', '.join(map(repr, absent[:6]))}{', ...' if len(absent) > 6 else ''}; "
+                              f"rates are given for every coordinate (qd: and qdd:) or for none")
+    return [header.index(n) for n in known if n in header]
+
+
 def read_csv(robot, path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
-    """``(t, coordinates, qd, qdd)`` of a trajectory CSV (``qd``, ``qdd`` ``None`` when absent)."""
+    """``(t, coordinates, qd, qdd)`` of a trajectory CSV (``qd``, ``qdd`` ``None`` when absent). A
+    header's columns are matched by name (any order); without a header, columns are ``t``, the
+    coordinates (and the rates) in order."""
     path = Path(path)
     rows = _csv_rows(path)
     nv = robot.nv
-    names = ["t", *robot.coordinate_names]
-    full = names + [f"qd:{c}" for c in robot.coordinate_names] + [f"qdd:{c}" for c in robot.coordinate_names]
-    first = 0
+    first, order = 0, None
     if rows and not any(_is_number(c) for c in rows[0]):
-        header = [c.strip() for c in rows[0]]
-        if len(header) == len(full) and header != full:
-            k = next(i for i, (a, b) in enumerate(zip(header, full)) if a != b)
-            raise TrajectoryError(f"{path}: row 1, column {k + 1}: header {header[k]!r}; with qd/qdd columns "
-                                  f"the header must name them, expected {full[k]!r}")
+        order = _header_columns(path, [c.strip() for c in rows[0]], robot)
         first = 1
-    width = len(rows[first]) if len(rows) > first else 0
+    width = len(order) if order is not None else len(rows[first]) if len(rows) > first else 0
     if width not in (1 + nv, 1 + 3 * nv):
         raise TrajectoryError(f"{path}: row {first + 1}: expected {1 + nv} columns (t, "
                               f"{', '.join(robot.coordinate_names)}) or {1 + 3 * nv} (with qd:/qdd: columns), "
@@ -316,7 +345,8 @@ def read_csv(robot, path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np
     for i in range(first, len(rows)):
         row = rows[i]
         if len(row) != width:
-            raise TrajectoryError(f"{path}: row {i + 1}: expected {width} columns, got {len(row)}")
+            what = f"the header's {width}" if order is not None else f"{width}"
+            raise TrajectoryError(f"{path}: row {i + 1}: expected {what} columns, got {len(row)}")
         try:
             values.append([float(c) for c in row])
         except ValueError:
@@ -327,6 +357,8 @@ def read_csv(robot, path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np
     if not np.all(np.isfinite(data)):
         i, j = np.argwhere(~np.isfinite(data))[0]
         raise TrajectoryError(f"{path}: row {i + first + 1}, column {j + 1}: expected a finite number")
+    if order is not None:
+        data = data[:, order]  # canonical order: t, coordinates, qd:, qdd:
     t = data[:, 0]
     if len(t) and np.any(np.diff(t) <= 0):
         k = int(np.flatnonzero(np.diff(t) <= 0)[0])

@@ -49,3 +49,54 @@ def test_every_entry_point_refuses_a_quaternion_of_norm_2(ball):
     near = Trajectory("near", [0.0], q_near[None], np.zeros((1, 4)), np.zeros((1, 4)))
     f_traj = ident.solve_trajectory(near).f[0]
     assert np.abs(f_traj - ident.solve(q).f).max() < 1e-6
+
+
+# ------------------------------------------------------------------ 2. CSV headers by name
+def _quintic_csv(robot, path, order=None, rates=False):
+    from mcdm_pin import load_trajectory
+
+    tr = load_trajectory(robot, "traj2")
+    names = ["t", *robot.coordinate_names]
+    cols = [tr.t[:, None], tr.q]
+    if rates:
+        names += [f"qd:{c}" for c in robot.coordinate_names] + [f"qdd:{c}" for c in robot.coordinate_names]
+        cols += [tr.qd, tr.qdd]
+    data = np.hstack(cols)
+    order = list(range(len(names))) if order is None else order
+    np.savetxt(path, data[:, order], delimiter=",", header=",".join(names[i] for i in order), comments="")
+    return tr
+
+
+@pytest.mark.parametrize("rates", [False, True])
+def test_csv_header_in_another_order_reads_the_same(two_link, tmp_path, rates):
+    from mcdm_pin import csv_trajectory
+
+    _quintic_csv(two_link, tmp_path / "a.csv", rates=rates)
+    n = 1 + (3 if rates else 1) * two_link.nv
+    order = list(np.random.default_rng(3).permutation(n))
+    assert order != sorted(order)
+    _quintic_csv(two_link, tmp_path / "b.csv", order=order, rates=rates)
+    a, b = csv_trajectory(two_link, tmp_path / "a.csv"), csv_trajectory(two_link, tmp_path / "b.csv")
+    for key in ("t", "q", "qd", "qdd"):
+        assert np.array_equal(getattr(a, key), getattr(b, key)), key
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda h, r: (h.replace("q2_y", "q2_z"), r), r"column 3: header 'q2_z' names no column \(did you mean"),
+    (lambda h, r: (h.replace("q2_y", "q1_x"), r), "names 'q1_x' twice"),
+    (lambda h, r: (",".join(h.split(",")[:5]), r), r"row 2: expected the header's 5 columns, got 13"),
+    (lambda h, r: (",".join(h.split(",")[:7]), [",".join(x.split(",")[:7]) for x in r]),
+     "names some rate columns but not 'qd:q3_z'"),
+    (lambda h, r: (",".join(h.split(",")[:4]), [",".join(x.split(",")[:4]) for x in r]), "no column 'q4_x'"),
+])
+def test_csv_header_that_does_not_match_is_refused(two_link, tmp_path, edit, message):
+    from mcdm_pin import TrajectoryError, csv_trajectory
+
+    path = tmp_path / "x.csv"
+    _quintic_csv(two_link, path, rates=True)
+    head, *rows = path.read_text().splitlines()
+    head, rows = edit(head, rows)
+    path.write_text("\n".join([head, *rows]) + "\n")
+    with pytest.raises(TrajectoryError, match=message) as info:
+        csv_trajectory(two_link, path)
+    assert str(path) in str(info.value)
