@@ -23,7 +23,7 @@ from .objectives import Smoothing, Sum
 from .problem import Context, Problem, QPData, case_problem
 from .results import InstantResult, TrajectoryResult, concat_columns, instant_columns
 from .scaling import ScaledSolver
-from .solvers import INACCURATE, INFEASIBLE, OPTIMAL, SOFTENED, Solution, get_solver
+from .solvers import ERROR, INACCURATE, INFEASIBLE, OPTIMAL, SOFTENED, Solution, get_solver
 from .solvers.base import cone_violation_deg
 from .model import charts
 from .model.actuators import actuator_names
@@ -163,7 +163,9 @@ class InverseDynamics:
             stage=sol.stage, tau_act=tau_act)
 
     def solve_trajectory(self, traj, progress: bool | None = None, workers: int = 1) -> TrajectoryResult:
-        """Solve every instant of ``traj`` in order, warm-starting each from the previous one.
+        """Solve every instant of ``traj`` in order, warm-starting each from the previous one. An
+        instant at which the model is undefined (a cable segment of zero length) gets status
+        ``error`` and the reason with its time in ``message``; the others are solved.
 
         Args:
             progress: show a progress bar (after 1.5 s) on a terminal; ``None``: when stderr is a tty.
@@ -206,7 +208,10 @@ class InverseDynamics:
         try:
             for k in indices:
                 # the trajectory was checked as a whole (solve_trajectory) and BLAS is limited here
-                res = self._solve(traj.q[k], traj.qd[k], traj.qdd[k], f_prev, checked=True)
+                try:
+                    res = self._solve(traj.q[k], traj.qd[k], traj.qdd[k], f_prev, checked=True)
+                except StateError as exc:  # the model is undefined at this instant alone
+                    res = self._undefined(f"at t = {float(traj.t[k]):g} s (instant {k}): {exc}")
                 instants.append(res)
                 if res.found:
                     f_prev = res.f
@@ -216,6 +221,18 @@ class InverseDynamics:
             if bar is not None:
                 bar.close()
         return instants
+
+    def _undefined(self, message: str) -> InstantResult:
+        """The result of an instant of a trajectory at which the model is undefined (a cable
+        segment of zero length: the cable passes through its anchor; dynamics that overflow): status
+        ``error``, the reason in ``message``, no forces (NaN rows); the other instants are solved."""
+        nan = float("nan")
+        J = len(self.robot.joints)
+        return InstantResult(
+            f=np.full(self.robot.m, nan), status=ERROR, objective=nan, eom_residual=nan,
+            interaction_wrench=np.full((J, 6), nan), interaction_force_socket=np.full((J, 3), nan),
+            interaction_angle_deg=np.full(J, nan), iterations=0, rounds=0, time_model_s=0.0,
+            time_solve_s=0.0, message=message, tau_act=np.full(self.problem.n_variables - self.robot.m, nan))
 
     def _solve_parallel(self, traj, workers: int, progress: bool) -> dict:
         import multiprocessing as mp

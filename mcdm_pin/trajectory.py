@@ -126,7 +126,7 @@ class SphericalKinematics:
         if abs(det) < SINGULAR_DET:
             raise TrajectoryError(
                 f"joint {self.name!r}: the Euler angles {np.round(th, 6).tolist()} rad are "
-                f"{np.degrees(np.arccos(min(abs(det), 1.0))):.4g} deg from 90 deg, at the singularity "
+                f"{np.degrees(np.arcsin(min(abs(det), 1.0))):.4g} deg from +-90 deg, at the singularity "
                 f"of the Euler angles (gimbal lock: |det S| = |cos q2| = {abs(det):.2e} < {SINGULAR_DET:g}); "
                 f"the angle rates of this motion are undefined or amplified by 1/|det S| there. Keep "
                 f"the middle angle away from +-90 deg (e.g. turn the joint's socket frame), or declare the "
@@ -251,7 +251,10 @@ def quintic_trajectory(robot, q_start, q_end, duration: float, dt: float,
     Q, V, A = np.empty((n, robot.nq)), np.empty((n, robot.nv)), np.empty((n, robot.nv))
     guess = plan_.x0
     for k in range(n):
-        Q[k], V[k], A[k], guess = plan_(t[k], guess)
+        try:
+            Q[k], V[k], A[k], guess = plan_(t[k], guess)
+        except TrajectoryError as exc:  # (gimbal lock: the instant where it is met)
+            raise TrajectoryError(f"trajectory {name!r} at t = {t[k]:g} s (sample {k}): {exc}") from None
     if abs(t[-1] - duration) <= 1e-9 * duration and plan_.rotations:  # the last sample is the end pose
         for joint, kind, iv, kin, R0, phi in plan_.rotations:
             if kin is not None:
@@ -397,10 +400,16 @@ def _spline_trajectory(robot, name, t, x) -> Trajectory:
 
 # ---------------------------------------------------------------------------------------- sidecar
 def trajectory_from_spec(robot, spec: TrajectorySpec) -> Trajectory:
+    """The sidecar's trajectory ``spec``, sampled; an error in a quintic names the sidecar file and
+    the trajectory's key (a CSV's names its file)."""
     if spec.type == "csv":
         return csv_trajectory(robot, spec.file, name=spec.name)
     x0, x1 = _ends(robot, spec)
-    return quintic_trajectory(robot, x0, x1, spec.duration, spec.dt, spec.spherical, name=spec.name)
+    try:
+        return quintic_trajectory(robot, x0, x1, spec.duration, spec.dt, spec.spherical, name=spec.name)
+    except TrajectoryError as exc:
+        where = robot.sidecar.path if robot.sidecar is not None else robot.name
+        raise TrajectoryError(f"{where}: {spec.key}: {exc}") from None
 
 
 def _ends(robot, spec: TrajectorySpec):
