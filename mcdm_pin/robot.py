@@ -25,7 +25,7 @@ from .model.cables import Cable, CableSet, RoutePoint
 from .model.joints import PhysicalJoint, group, massless_members, physical_joints
 from .model.terms import check_vector
 from .sidecar import Sidecar, _names, load_sidecar
-from .urdf import load_model, package_share_dirs, replace_joints, urdf_joint_axes
+from .urdf import check_model_inertias, load_model, package_share_dirs, replace_joints, urdf_joint_axes
 
 __all__ = ["Robot", "package_share_dirs", "resolve_package_uri"]
 
@@ -117,7 +117,9 @@ class Robot:
     def from_model(cls, model: pin.Model, cables, joints=None, actuators=(), name: str = "robot") -> "Robot":
         """A robot from a model built in code. ``cables``: a :class:`CableSet` or what its constructor
         takes; ``joints``: physical joints (default: every Pinocchio joint on its own,
-        :func:`~mcdm_pin.model.joints.physical_joints`)."""
+        :func:`~mcdm_pin.model.joints.physical_joints`). Bodies whose inertia no body can have are
+        refused (:func:`~mcdm_pin.urdf.check_model_inertias`)."""
+        check_model_inertias(model)
         if not isinstance(cables, CableSet):
             cables = CableSet(model, cables)
         return cls(model, cables, physical_joints(model) if joints is None else joints, actuators, name)

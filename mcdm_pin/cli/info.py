@@ -57,7 +57,7 @@ def run(args) -> int:
             f"{n} ({t.type}{'' if t.type == 'csv' else f', {t.duration:g} s, dt {t.dt:g}'})"
             for n, t in sc.trajectories.items()))
     print("\nvalidation:")
-    report = validation_report(robot)
+    report = _inertia_report(robot) + validation_report(robot)
     if sc.trajectories:
         checks = check_trajectories(robot, samples=args.samples)
         report += [(c.level, c.text()) for c in checks]
@@ -66,3 +66,17 @@ def run(args) -> int:
         print(f"  [{level}] {text}")
         ok &= level != "fail"
     return 0 if ok else 1
+
+
+def _inertia_report(robot) -> list[tuple[str, str]]:
+    """A warning line when the robot's URDF carries inertias no body can have (accepted because its
+    source, CASPR, ships them: :func:`mcdm_pin.urdf.check_urdf_inertias`)."""
+    from ..urdf import _moments_text, urdf_impossible_inertias
+
+    bad = urdf_impossible_inertias(robot.urdf_path) if robot.urdf_path is not None else []
+    if not bad:
+        return []
+    return [("warn", f"inertias as CASPR ships them: {len(bad)} link(s) have principal moments (kg m^2) that "
+                     f"no body can have, breaking A + B >= C: {_moments_text(bad)}; the answers are those of "
+                     f"these numbers, not of physical bodies (docs/limits.md)")]
+
