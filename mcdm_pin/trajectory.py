@@ -308,7 +308,10 @@ def _header_columns(path: Path, header: list[str], robot) -> list[int]:
     for k, name in enumerate(header):
         if name not in known:
             near = difflib.get_close_matches(name, known, n=1)
-            hint = f" (did you mean {near[0]!r}?)" if near else ""
+            absent = [n for n in (known if len(header) > 1 + len(coords) else known[:1 + len(coords)])
+                      if n not in header]
+            hint = (f" (did you mean {near[0]!r}?)" if near else
+                    f" (the header does not name {', '.join(map(repr, absent[:3]))})" if absent else "")
             raise TrajectoryError(f"{path}: row 1, column {k + 1}: header {name!r} names no column{hint}; "
                                   f"expected t, the coordinates {', '.join(coords)} and optionally qd:NAME "
                                   f"and qdd:NAME for each (in any order)")

@@ -164,10 +164,13 @@ def breaks_triangle(moments) -> bool:
     return a + b < c - TRIANGLE_REL * abs(c) - TRIANGLE_ABS
 
 
-def _moments_text(items) -> str:
+def moments_text(items) -> str:
     """``'link' [A, B, C]`` for the first few of ``items`` (link name, moments) and how many in all
     (a name given as ``(label,)`` is shown as it is)."""
-    shown = "; ".join(f"{name[0] if isinstance(name, tuple) else repr(name)} [{', '.join(f'{x:.9g}' for x in mom)}]" for name, mom in items[:4])
+    def one(name, mom) -> str:
+        return f"{name[0] if isinstance(name, tuple) else repr(name)} [{', '.join(f'{x:.9g}' for x in mom)}]"
+
+    shown = "; ".join(one(name, mom) for name, mom in items[:4])
     return shown + (f"; ... ({len(items)} in all)" if len(items) > 4 else "")
 
 
@@ -218,7 +221,7 @@ def check_urdf_inertias(path) -> None:
     if not bad:
         return
     what = (f"{len(bad)} link(s) have principal moments of inertia (kg m^2, about the centre of mass) that "
-            f"no body can have, breaking A + B >= C: {_moments_text(bad)}")
+            f"no body can have, breaking A + B >= C: {moments_text(bad)}")
     if not shipped_by_caspr(path):
         raise ModelError(f"{path}: {what}; expected moments with A + B >= C (a body's inertia; docs/limits.md)")
     warnings.warn(f"{path}: {what}; accepted as CASPR ships them (the dynamics are those of these numbers, not "
@@ -235,7 +238,7 @@ def check_model_inertias(model: pin.Model, source="pin.Model") -> None:
             bad.append(((f"the body of joint {model.names[j]!r}",), moments))
     if bad:
         raise ModelError(f"{source}: {len(bad)} body(ies) have principal moments of inertia (kg m^2, about the "
-                         f"centre of mass) that no body can have, breaking A + B >= C: {_moments_text(bad)}; "
+                         f"centre of mass) that no body can have, breaking A + B >= C: {moments_text(bad)}; "
                          f"expected moments with A + B >= C (docs/limits.md)")
 
 

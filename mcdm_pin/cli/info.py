@@ -71,12 +71,12 @@ def run(args) -> int:
 def _inertia_report(robot) -> list[tuple[str, str]]:
     """A warning line when the robot's URDF carries inertias no body can have (accepted because its
     source, CASPR, ships them: :func:`mcdm_pin.urdf.check_urdf_inertias`)."""
-    from ..urdf import _moments_text, urdf_impossible_inertias
+    from ..urdf import moments_text, urdf_impossible_inertias
 
     bad = urdf_impossible_inertias(robot.urdf_path) if robot.urdf_path is not None else []
     if not bad:
         return []
     return [("warn", f"inertias as CASPR ships them: {len(bad)} link(s) have principal moments (kg m^2) that "
-                     f"no body can have, breaking A + B >= C: {_moments_text(bad)}; the answers are those of "
+                     f"no body can have, breaking A + B >= C: {moments_text(bad)}; the answers are those of "
                      f"these numbers, not of physical bodies (docs/limits.md)")]
 
