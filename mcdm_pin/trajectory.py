@@ -305,6 +305,10 @@ def _header_columns(path: Path, header: list[str], robot) -> list[int]:
     coords = list(robot.coordinate_names)
     rates = [f"{k}:{c}" for k in ("qd", "qdd") for c in coords]
     known = ["t", *coords, *rates]
+    for sep in (";", "\t"):
+        if len(header) == 1 and sep in header[0]:
+            raise TrajectoryError(f"{path}: row 1: one cell {header[0][:80]!r}, whose columns are separated by "
+                                  f"{sep!r}; expected commas (t,{','.join(coords)})")
     for k, name in enumerate(header):
         if name not in known:
             near = difflib.get_close_matches(name, known, n=1)
