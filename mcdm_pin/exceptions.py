@@ -75,3 +75,13 @@ class CasprError(McdmError, ValueError):
         where = f"{self.path}: " if self.path else ""
         at = f"{element}: " if element else ""
         super().__init__(f"{where}{at}{expected}")
+
+
+class McdmWarning(UserWarning):
+    """Base class of every warning mcdm-pin gives on purpose."""
+
+
+class InertiaWarning(McdmWarning):
+    """A model is used with inertias that no body can have (principal moments breaking the triangle
+    inequality), because its source ships them (a CASPR import): its answers are those of the source's
+    numbers, not of a physical body (docs/limits.md)."""

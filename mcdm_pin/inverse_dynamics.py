@@ -23,8 +23,9 @@ from .objectives import Smoothing, Sum
 from .problem import Context, Problem, QPData, case_problem
 from .results import InstantResult, TrajectoryResult, concat_columns, instant_columns
 from .scaling import ScaledSolver
-from .solvers import INACCURATE, INFEASIBLE, OPTIMAL, SOFTENED, Solution, get_solver
+from .solvers import ERROR, INACCURATE, INFEASIBLE, OPTIMAL, SOFTENED, Solution, get_solver
 from .solvers.base import cone_violation_deg
+from .model import charts
 from .model.actuators import actuator_names
 from .model.terms import TermsEvaluator, interaction_angles
 
@@ -163,7 +164,9 @@ class InverseDynamics:
             stage=sol.stage, tau_act=tau_act, activation=_activations(terms, f if sol.found else None, self.robot.cables))
 
     def solve_trajectory(self, traj, progress: bool | None = None, workers: int = 1) -> TrajectoryResult:
-        """Solve every instant of ``traj`` in order, warm-starting each from the previous one.
+        """Solve every instant of ``traj`` in order, warm-starting each from the previous one. An
+        instant at which the model is undefined (a cable segment of zero length) gets status
+        ``error`` and the reason with its time in ``message``; the others are solved.
 
         Args:
             progress: show a progress bar (after 1.5 s) on a terminal; ``None``: when stderr is a tty.
@@ -178,7 +181,7 @@ class InverseDynamics:
             raise ProblemError(f"workers must be a positive integer, got {workers!r}")
         if progress is None:
             progress = sys.stderr.isatty()
-        _check_trajectory(self.robot, traj)  # once, not per instant or per batch piece
+        traj = _check_trajectory(self.robot, traj)  # once, not per instant or per batch piece
         if workers > 1 and len(traj) > 1:
             if any(isinstance(t, Smoothing) for t in _terms_of(self.problem.objective)):
                 raise ProblemError("batch mode (workers > 1) cannot be used with smoothing: each "
@@ -206,7 +209,10 @@ class InverseDynamics:
         try:
             for k in indices:
                 # the trajectory was checked as a whole (solve_trajectory) and BLAS is limited here
-                res = self._solve(traj.q[k], traj.qd[k], traj.qdd[k], f_prev, checked=True)
+                try:
+                    res = self._solve(traj.q[k], traj.qd[k], traj.qdd[k], f_prev, checked=True)
+                except StateError as exc:  # the model is undefined at this instant alone
+                    res = self._undefined(f"at t = {float(traj.t[k]):g} s (instant {k}): {exc}")
                 instants.append(res)
                 if res.found:
                     f_prev = res.f
@@ -216,6 +222,18 @@ class InverseDynamics:
             if bar is not None:
                 bar.close()
         return instants
+
+    def _undefined(self, message: str) -> InstantResult:
+        """The result of an instant of a trajectory at which the model is undefined (a cable
+        segment of zero length: the cable passes through its anchor; dynamics that overflow): status
+        ``error``, the reason in ``message``, no forces (NaN rows); the other instants are solved."""
+        nan = float("nan")
+        J = len(self.robot.joints)
+        return InstantResult(
+            f=np.full(self.robot.m, nan), status=ERROR, objective=nan, eom_residual=nan,
+            interaction_wrench=np.full((J, 6), nan), interaction_force_socket=np.full((J, 3), nan),
+            interaction_angle_deg=np.full(J, nan), iterations=0, rounds=0, time_model_s=0.0,
+            time_solve_s=0.0, message=message, tau_act=np.full(self.problem.n_variables - self.robot.m, nan))
 
     def _solve_parallel(self, traj, workers: int, progress: bool) -> dict:
         import multiprocessing as mp
@@ -320,9 +338,12 @@ def _blas_controller():
     return _CONTROLLER
 
 
-def _check_trajectory(robot, traj) -> None:
-    """Every state of ``traj`` is finite, with configurations of length nq and rates of length nv
-    (checked once, not per instant)."""
+def _check_trajectory(robot, traj):
+    """Every state of ``traj`` is finite, with configurations of length nq and rates of length nv,
+    and every configuration passes :func:`~mcdm_pin.model.charts.check_configuration` (unit
+    quaternions) and follows the robot's couplings, as :meth:`InverseDynamics.solve` checks one
+    (checked once, not per instant).
+    Returns ``traj``, or a copy whose quaternions are normalised."""
     for name, n in (("q", robot.nq), ("qd", robot.nv), ("qdd", robot.nv)):
         x = getattr(traj, name)
         if not (isinstance(x, np.ndarray) and x.dtype == np.float64 and x.ndim == 2
@@ -334,6 +355,17 @@ def _check_trajectory(robot, traj) -> None:
         if not np.all(np.isfinite(x)):
             k = int(np.flatnonzero(~np.all(np.isfinite(x), axis=1))[0])
             robot.check_vector(x[k], f"{name}[{k}]", n)
+    q = charts.check_configurations(robot.model, traj.q, f"trajectory {traj.name!r}: q", robot._parts)
+    couplings = getattr(robot, "couplings", None)
+    if couplings is not None:  # coupled coordinates follow their couplings at every instant
+        for k in range(len(traj)):
+            try:
+                couplings.check(q[k], traj.qd[k], traj.qdd[k])
+            except StateError as exc:
+                raise StateError(f"trajectory {traj.name!r}, instant {k} (t = {traj.t[k]:g} s): {exc}") from None
+    if q is traj.q:
+        return traj
+    return type(traj)(traj.name, traj.t, q, traj.qd, traj.qdd)
 
 
 _OVERLAP = 3  # instants a batch piece solves before its own first one, to warm its solver up

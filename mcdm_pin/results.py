@@ -12,8 +12,12 @@ configuration               (N, nq)       Pinocchio's configuration vector (equa
                                           joint has nq == nv; absent from older files)
 qd, qdd                     (N, nv)       their first and second time derivatives
 f                           (N, m)        cable forces, N (rows of NaN where no valid answer)
-status                      (N,)          optimal, infeasible, max_iter, softened, inaccurate
-message                     (N,)          what cannot be met (empty when optimal)
+status                      (N,)          optimal, infeasible, max_iter, softened, inaccurate,
+                                          budget; error: the model is undefined at that
+                                          instant (a cable segment of zero length), the
+                                          others are solved
+message                     (N,)          what cannot be met, or why the instant has no
+                                          answer (empty when optimal)
 objective                   (N,)          objective value without the smoothing term
 eom_residual                (N,)          relative equation-of-motion residual
 joint_names                 (J,)          physical joints

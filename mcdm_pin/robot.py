@@ -25,7 +25,7 @@ from .model.cables import Cable, CableSet, RoutePoint
 from .model.joints import PhysicalJoint, group, massless_members, physical_joints
 from .model.terms import check_vector
 from .sidecar import Sidecar, _names, load_sidecar
-from .urdf import load_model, package_share_dirs, replace_joints, urdf_joint_axes
+from .urdf import check_model_inertias, load_model, package_share_dirs, replace_joints, urdf_joint_axes
 
 __all__ = ["Robot", "package_share_dirs", "resolve_package_uri"]
 
@@ -139,7 +139,9 @@ class Robot:
     def from_model(cls, model: pin.Model, cables, joints=None, actuators=(), name: str = "robot") -> "Robot":
         """A robot from a model built in code. ``cables``: a :class:`CableSet` or what its constructor
         takes; ``joints``: physical joints (default: every Pinocchio joint on its own,
-        :func:`~mcdm_pin.model.joints.physical_joints`)."""
+        :func:`~mcdm_pin.model.joints.physical_joints`). Bodies whose inertia no body can have are
+        refused (:func:`~mcdm_pin.urdf.check_model_inertias`)."""
+        check_model_inertias(model)
         if not isinstance(cables, CableSet):
             cables = CableSet(model, cables)
         return cls(model, cables, physical_joints(model) if joints is None else joints, actuators, name)
@@ -232,37 +234,9 @@ class Robot:
     def check_configuration(self, q, name: str = "q") -> np.ndarray:
         """``q`` as Pinocchio's configuration: a finite vector of length nq, or of length nv
         (coordinates, converted); :class:`StateError` otherwise. A quaternion must have unit norm
-        (to 1e-6; it is normalised)."""
-        try:
-            arr = np.asarray(q, dtype=float)
-        except (TypeError, ValueError):
-            raise StateError(f"{name}: expected {self.nq} numbers, got {type(q).__name__}") from None
-        if arr.ndim != 1 or arr.shape[0] not in (self.nq, self.nv):
-            want = f"{self.nq}" if self.nq == self.nv else f"{self.nq} (configuration) or {self.nv} (coordinates)"
-            raise StateError(f"{name}: expected a vector of length {want}, got shape {arr.shape}")
-        if not np.isfinite(arr).all():
-            bad = np.flatnonzero(~np.isfinite(arr))
-            raise StateError(f"{name}: expected finite numbers, entries {bad.tolist()} are not")
-        if self.nq == self.nv:
-            return arr
-        if arr.shape[0] == self.nv:
-            return self.configuration(arr)
-        out = arr.copy()
-        for p in self._parts:
-            if p.kind in (charts.BALL, charts.FREE):
-                s = p.idx_q + (3 if p.kind == charts.FREE else 0)
-                norm = float(np.linalg.norm(out[s:s + 4]))
-                if abs(norm - 1.0) > 1e-6:
-                    raise StateError(f"{name}: the quaternion of joint {p.joint!r} has norm {norm:.9g}; "
-                                     f"expected 1")
-                out[s:s + 4] /= norm
-            elif p.kind in (charts.ANGLE, charts.PLANAR):
-                s = p.idx_q + (2 if p.kind == charts.PLANAR else 0)
-                norm = float(np.hypot(out[s], out[s + 1]))
-                if abs(norm - 1.0) > 1e-6:
-                    raise StateError(f"{name}: (cos, sin) of joint {p.joint!r} has norm {norm:.9g}; expected 1")
-                out[s:s + 2] /= norm
-        return out
+        (to 1e-6; it is normalised): :func:`mcdm_pin.model.charts.check_configuration`, the one check
+        of every entry point."""
+        return charts.check_configuration(self.model, q, name, self._parts, coordinates=True)
 
     def reference_coordinates(self) -> np.ndarray:
         """(nv,) the source's reference pose as coordinates: zeros, or an MJCF model's ``qpos0`` with

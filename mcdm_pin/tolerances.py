@@ -35,6 +35,14 @@ KKT_DUAL_REL = 1e-6
 KKT_GAP_REL = 1e-7
 """Complementarity: ``sum |z_i| * distance_i`` relative to ``1 + |objective|``."""
 
+KKT_GRAD_FLOOR = 1e-6
+"""For a constant objective (``P = 0`` and ``c = 0``: case 2 with every weight zero) the gradient scale
+of the stationarity and complementarity checks is at least this (objective units per variable unit,
+on the problem the back-ends solve, whose variables are of order one: :mod:`mcdm_pin.scaling`). Its
+gradient is zero and its multipliers are of rounding or solver-tolerance size (~1e-22 to 1e-15;
+Clarabel's leave a duality gap ~4e-14 on CASPR's ACROBOT): relative to their own size they are noise,
+not a failure. The floor lets a stationarity residual of 1e-12 and a gap of ~1e-13 pass there."""
+
 # ----------------------------------------------------------------------------- uniqueness
 UNIQUE_REL = 1e-9
 """The reduced Hessian on the null space of the strongly active constraints is positive definite when

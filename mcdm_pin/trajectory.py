@@ -24,8 +24,10 @@ columns ``qdd:NAME``: Pinocchio's velocity and acceleration (tangent space), tak
 Without them the rates are the derivatives of the interpolating quintic B-spline through the samples
 (``scipy.interpolate.make_interp_spline(k=5)``, not-a-knot ends), mapped to the tangent space exactly
 (:func:`mcdm_pin.model.charts.tangent`); at least 6 samples with strictly increasing times. The first
-row may be a header: a row of names (no cell a number); any other row that does not parse is an error
-naming its row and column.
+row may be a header: a row of names (no cell a number), matched by name in any order; it must name
+``t`` and every coordinate (and every ``qd:``/``qdd:`` column or none), each once, and nothing else,
+and every row must have as many cells as it has names. Without a header the columns are read in the
+order above. Any row that does not parse is an error naming its row and column.
 """
 
 from __future__ import annotations
@@ -124,7 +126,7 @@ class SphericalKinematics:
         if abs(det) < SINGULAR_DET:
             raise TrajectoryError(
                 f"joint {self.name!r}: the Euler angles {np.round(th, 6).tolist()} rad are "
-                f"{np.degrees(np.arccos(min(abs(det), 1.0))):.4g} deg from 90 deg, at the singularity "
+                f"{np.degrees(np.arcsin(min(abs(det), 1.0))):.4g} deg from +-90 deg, at the singularity "
                 f"of the Euler angles (gimbal lock: |det S| = |cos q2| = {abs(det):.2e} < {SINGULAR_DET:g}); "
                 f"the angle rates of this motion are undefined or amplified by 1/|det S| there. Keep "
                 f"the middle angle away from +-90 deg (e.g. turn the joint's socket frame), or declare the "
@@ -256,7 +258,10 @@ def quintic_trajectory(robot, q_start, q_end, duration: float, dt: float,
     Q, V, A = np.empty((n, robot.nq)), np.empty((n, robot.nv)), np.empty((n, robot.nv))
     guess = plan_.x0
     for k in range(n):
-        Q[k], V[k], A[k], guess = plan_(t[k], guess)
+        try:
+            Q[k], V[k], A[k], guess = plan_(t[k], guess)
+        except TrajectoryError as exc:  # (gimbal lock: the instant where it is met)
+            raise TrajectoryError(f"trajectory {name!r} at t = {t[k]:g} s (sample {k}): {exc}") from None
     if abs(t[-1] - duration) <= 1e-9 * duration and plan_.rotations:  # the last sample is the end pose
         for joint, kind, iv, kin, R0, phi in plan_.rotations:
             if kin is not None:
@@ -299,22 +304,56 @@ def _is_number(cell: str) -> bool:
         return False
 
 
+def _header_columns(path: Path, header: list[str], robot) -> list[int]:
+    """The file column of each canonical column (``t``, the coordinates, then ``qd:``/``qdd:`` when
+    the header names them), matched by name; :class:`TrajectoryError` naming the column otherwise."""
+    import difflib
+
+    coords = list(robot.coordinate_names)
+    rates = [f"{k}:{c}" for k in ("qd", "qdd") for c in coords]
+    known = ["t", *coords, *rates]
+    for sep in (";", "\t"):
+        if len(header) == 1 and sep in header[0]:
+            raise TrajectoryError(f"{path}: row 1: one cell {header[0][:80]!r}, whose columns are separated by "
+                                  f"{sep!r}; expected commas (t,{','.join(coords)})")
+    for k, name in enumerate(header):
+        if name not in known:
+            near = difflib.get_close_matches(name, known, n=1)
+            absent = [n for n in (known if len(header) > 1 + len(coords) else known[:1 + len(coords)])
+                      if n not in header]
+            hint = (f" (did you mean {near[0]!r}?)" if near else
+                    f" (the header does not name {', '.join(map(repr, absent[:3]))})" if absent else "")
+            raise TrajectoryError(f"{path}: row 1, column {k + 1}: header {name!r} names no column{hint}; "
+                                  f"expected t, the coordinates {', '.join(coords)} and optionally qd:NAME "
+                                  f"and qdd:NAME for each (in any order)")
+        if header.index(name) != k:
+            raise TrajectoryError(f"{path}: row 1: the header names {name!r} twice (columns "
+                                  f"{header.index(name) + 1} and {k + 1})")
+    missing = [n for n in ("t", *coords) if n not in header]
+    if missing:
+        raise TrajectoryError(f"{path}: row 1: the header has no column {', '.join(map(repr, missing))}; "
+                              f"expected t and every coordinate ({', '.join(coords)})")
+    given = [n for n in rates if n in header]
+    if given and len(given) != len(rates):
+        absent = [n for n in rates if n not in header]
+        raise TrajectoryError(f"{path}: row 1: the header names some rate columns but not "
+                              f"{', '.join(map(repr, absent[:6]))}{', ...' if len(absent) > 6 else ''}; "
+                              f"rates are given for every coordinate (qd: and qdd:) or for none")
+    return [header.index(n) for n in known if n in header]
+
+
 def read_csv(robot, path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
-    """``(t, coordinates, qd, qdd)`` of a trajectory CSV (``qd``, ``qdd`` ``None`` when absent)."""
+    """``(t, coordinates, qd, qdd)`` of a trajectory CSV (``qd``, ``qdd`` ``None`` when absent). A
+    header's columns are matched by name (any order); without a header, columns are ``t``, the
+    coordinates (and the rates) in order."""
     path = Path(path)
     rows = _csv_rows(path)
     nv = robot.nv
-    names = ["t", *robot.coordinate_names]
-    full = names + [f"qd:{c}" for c in robot.coordinate_names] + [f"qdd:{c}" for c in robot.coordinate_names]
-    first = 0
+    first, order = 0, None
     if rows and not any(_is_number(c) for c in rows[0]):
-        header = [c.strip() for c in rows[0]]
-        if len(header) == len(full) and header != full:
-            k = next(i for i, (a, b) in enumerate(zip(header, full)) if a != b)
-            raise TrajectoryError(f"{path}: row 1, column {k + 1}: header {header[k]!r}; with qd/qdd columns "
-                                  f"the header must name them, expected {full[k]!r}")
+        order = _header_columns(path, [c.strip() for c in rows[0]], robot)
         first = 1
-    width = len(rows[first]) if len(rows) > first else 0
+    width = len(order) if order is not None else len(rows[first]) if len(rows) > first else 0
     if width not in (1 + nv, 1 + 3 * nv):
         raise TrajectoryError(f"{path}: row {first + 1}: expected {1 + nv} columns (t, "
                               f"{', '.join(robot.coordinate_names)}) or {1 + 3 * nv} (with qd:/qdd: columns), "
@@ -323,7 +362,8 @@ def read_csv(robot, path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np
     for i in range(first, len(rows)):
         row = rows[i]
         if len(row) != width:
-            raise TrajectoryError(f"{path}: row {i + 1}: expected {width} columns, got {len(row)}")
+            what = f"the header's {width}" if order is not None else f"{width}"
+            raise TrajectoryError(f"{path}: row {i + 1}: expected {what} columns, got {len(row)}")
         try:
             values.append([float(c) for c in row])
         except ValueError:
@@ -334,6 +374,8 @@ def read_csv(robot, path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np
     if not np.all(np.isfinite(data)):
         i, j = np.argwhere(~np.isfinite(data))[0]
         raise TrajectoryError(f"{path}: row {i + first + 1}, column {j + 1}: expected a finite number")
+    if order is not None:
+        data = data[:, order]  # canonical order: t, coordinates, qd:, qdd:
     t = data[:, 0]
     if len(t) and np.any(np.diff(t) <= 0):
         k = int(np.flatnonzero(np.diff(t) <= 0)[0])
@@ -372,11 +414,17 @@ def _spline_trajectory(robot, name, t, x) -> Trajectory:
 
 # ---------------------------------------------------------------------------------------- sidecar
 def trajectory_from_spec(robot, spec: TrajectorySpec) -> Trajectory:
+    """The sidecar's trajectory ``spec``, sampled; an error in a quintic names the sidecar file and
+    the trajectory's key (a CSV's names its file)."""
     if spec.type == "csv":
         return follow_couplings(robot, csv_trajectory(robot, spec.file, name=spec.name))
     x0, x1 = _ends(robot, spec)
-    return follow_couplings(robot, quintic_trajectory(robot, x0, x1, spec.duration, spec.dt, spec.spherical,
-                                                      name=spec.name))
+    try:
+        traj = quintic_trajectory(robot, x0, x1, spec.duration, spec.dt, spec.spherical, name=spec.name)
+    except TrajectoryError as exc:
+        where = robot.sidecar.path if robot.sidecar is not None else robot.name
+        raise TrajectoryError(f"{where}: {spec.key}: {exc}") from None
+    return follow_couplings(robot, traj)
 
 
 def follow_couplings(robot, traj: Trajectory) -> Trajectory:

@@ -13,6 +13,7 @@ import os
 import site
 import sys
 import tempfile
+import warnings
 import xml.etree.ElementTree as ET
 from contextlib import contextmanager
 from pathlib import Path
@@ -20,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .exceptions import ModelError
+from .exceptions import InertiaWarning, ModelError
 from .limits import MAX_JOINTS, MAX_MAGNITUDE, MAX_URDF_BYTES
 
 
@@ -85,6 +86,7 @@ def load_model(urdf_path) -> pin.Model:
         raise ModelError(f"{path}: {model.njoints} joints; at most {MAX_JOINTS} are supported (docs/limits.md)")
     del joints
     check_model_numbers(model, path)
+    check_urdf_inertias(path)
     return model
 
 
@@ -132,10 +134,112 @@ def check_model_numbers(model: pin.Model, source) -> None:
             raise ModelError(f"{source}: mass of {owner} is {inertia.mass!r} kg; expected >= 0")
         eig = np.linalg.eigvalsh(0.5 * (inertia.inertia + inertia.inertia.T))
         tol = 1e-12 * max(1.0, float(np.abs(eig).max()))
-        if eig.min() < -tol:
-            # (the triangle inequality is not required: planar models often give Izz only)
+        if eig.min() < -tol:  # (the triangle inequality: check_urdf_inertias, check_model_inertias)
             raise ModelError(f"{source}: inertia of {owner} has principal moments {np.round(eig, 12).tolist()} "
                              f"kg m^2; expected a positive semidefinite inertia (moments >= 0)")
+
+
+# ----------------------------------------------------------------------------- impossible inertias
+TRIANGLE_REL, TRIANGLE_ABS = 1e-9, 1e-15
+"""Principal moments ``A <= B <= C`` of a rotational inertia about the centre of mass satisfy
+``A + B >= C`` for every body (``A + B - C = 2 sum m z^2 >= 0`` along C's axis); a model may break it by
+``TRIANGLE_REL * C + TRIANGLE_ABS`` (kg m^2: rounding of moments that are all ~0) before it is called
+impossible."""
+
+CASPR_PROVENANCE = "Converted by mcdm-pin import-caspr from "
+"""The opening comment :mod:`mcdm_pin.caspr.writer` writes in every URDF it converts: such a URDF gives
+CASPR's inertias as CASPR ships them, and one no body can have is accepted with an
+:class:`~mcdm_pin.exceptions.InertiaWarning` instead of refused (docs/limits.md)."""
+
+
+def principal_moments(inertia) -> np.ndarray:
+    """The principal moments of a (3, 3) rotational inertia, ascending, kg m^2."""
+    I = np.asarray(inertia, dtype=float)
+    return np.linalg.eigvalsh(0.5 * (I + I.T))
+
+
+def breaks_triangle(moments) -> bool:
+    """Whether ascending principal moments ``(A, B, C)`` break ``A + B >= C`` (beyond :data:`TRIANGLE_REL`)."""
+    a, b, c = (float(x) for x in moments)
+    return a + b < c - TRIANGLE_REL * abs(c) - TRIANGLE_ABS
+
+
+def moments_text(items) -> str:
+    """``'link' [A, B, C]`` for the first few of ``items`` (link name, moments) and how many in all
+    (a name given as ``(label,)`` is shown as it is)."""
+    def one(name, mom) -> str:
+        return f"{name[0] if isinstance(name, tuple) else repr(name)} [{', '.join(f'{x:.9g}' for x in mom)}]"
+
+    shown = "; ".join(one(name, mom) for name, mom in items[:4])
+    return shown + (f"; ... ({len(items)} in all)" if len(items) > 4 else "")
+
+
+def urdf_impossible_inertias(path) -> list[tuple[str, np.ndarray]]:
+    """``[(link name, ascending principal moments)]`` of the links of a URDF whose ``<inertia>``
+    breaks the triangle inequality (:func:`breaks_triangle`). Values that are not numbers are left to
+    the URDF parser, which reports them."""
+    try:
+        root = ET.parse(str(path)).getroot()
+    except (ET.ParseError, OSError):
+        return []
+    out = []
+    for link in root.iter("link"):
+        el = link.find("inertial/inertia")
+        if el is None:
+            continue
+        try:
+            v = {k: float(el.get(k, "0")) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
+        except ValueError:
+            continue
+        I = np.array([[v["ixx"], v["ixy"], v["ixz"]], [v["ixy"], v["iyy"], v["iyz"]], [v["ixz"], v["iyz"], v["izz"]]])
+        if not np.all(np.isfinite(I)):
+            continue
+        moments = principal_moments(I)
+        if breaks_triangle(moments):
+            out.append((link.get("name"), moments))
+    return out
+
+
+def shipped_by_caspr(path) -> bool:
+    """Whether the URDF opens with the comment of mcdm-pin's CASPR import (:data:`CASPR_PROVENANCE`,
+    before its ``<robot>`` element)."""
+    try:
+        with open(path, encoding="utf-8", errors="replace") as fh:
+            head = fh.read(4096)
+    except OSError:
+        return False
+    head = head.split("<robot", 1)[0]
+    start = head.find("<!--")
+    return start >= 0 and CASPR_PROVENANCE in head[start:]
+
+
+def check_urdf_inertias(path) -> None:
+    """Refuse a URDF with a link whose inertia no body can have (:class:`ModelError` naming the links
+    and their principal moments); a URDF converted from CASPR (:func:`shipped_by_caspr`) is accepted
+    with an :class:`~mcdm_pin.exceptions.InertiaWarning`, because CASPR ships those inertias."""
+    bad = urdf_impossible_inertias(path)
+    if not bad:
+        return
+    what = (f"{len(bad)} link(s) have principal moments of inertia (kg m^2, about the centre of mass) that "
+            f"no body can have, breaking A + B >= C: {moments_text(bad)}")
+    if not shipped_by_caspr(path):
+        raise ModelError(f"{path}: {what}; expected moments with A + B >= C (a body's inertia; docs/limits.md)")
+    warnings.warn(f"{path}: {what}; accepted as CASPR ships them (the dynamics are those of these numbers, not "
+                  f"of a physical body; docs/limits.md)", InertiaWarning, stacklevel=3)
+
+
+def check_model_inertias(model: pin.Model, source="pin.Model") -> None:
+    """Refuse a ``pin.Model`` with a body whose inertia no body can have (:class:`ModelError` naming
+    the joint that moves it and its principal moments)."""
+    bad = []
+    for j in range(1, model.njoints):
+        moments = principal_moments(model.inertias[j].inertia)
+        if breaks_triangle(moments):
+            bad.append(((f"the body of joint {model.names[j]!r}",), moments))
+    if bad:
+        raise ModelError(f"{source}: {len(bad)} body(ies) have principal moments of inertia (kg m^2, about the "
+                         f"centre of mass) that no body can have, breaking A + B >= C: {moments_text(bad)}; "
+                         f"expected moments with A + B >= C (docs/limits.md)")
 
 
 def urdf_joint_axes(urdf_path, root=None) -> dict[str, tuple[str, np.ndarray]]:

@@ -234,7 +234,7 @@ def csv_cases() -> list[Case]:
     add("binary", b"\xff\xfe\x00\x00" * 20, r"not UTF-8")
     add("rate columns with wrong header", "t,a,b,c,d," + ",".join(f"qd:{n}" for n in "abcd") + "," + ",".join(f"qdd:{n}" for n in "abcd")
         + "\n" + "".join(f"{k * 0.1},0,0,0,0,0,0,0,0,0,0,0,0\n" for k in range(8)), r"row 1, column 2: header 'a'.*'q1_x'")
-    add("semicolons", CSV.replace(",", ";"), r"row 2: expected 5 columns")
+    add("semicolons", CSV.replace(",", ";"), r"row 1: one cell .* separated by ';'; expected commas")
     add("mixed header", "t,q1_x,2,q3_z,q4_x\n" + data, r"row 1, column 1: expected a number")
     return cases
 

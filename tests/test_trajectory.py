@@ -71,7 +71,8 @@ def test_csv_trajectory_differentiates_a_quintic_spline(two_link, tmp_path):
 
 
 @pytest.mark.parametrize("text, message", [
-    ("t,a,b,c,d\n0,0,0,0,0\n", "at least 6"),
+    ("t,q1_x,q2_y,q3_z,q4_x\n0,0,0,0,0\n", "at least 6"),
+    ("t,a,b,c,d\n0,0,0,0,0\n", "column 2: header 'a' names no column"),
     ("0,0,0,0\n" * 7, "columns"),
     ("".join(f"{t},0,0,0,0\n" for t in [0, 1, 2, 2, 3, 4, 5]), "increase"),
     ("".join(f"{t},0,x,0,0\n" for t in range(7)), r"row 1, column 3: expected a number"),

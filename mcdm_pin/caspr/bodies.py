@@ -29,12 +29,14 @@ Euler angles); its velocity is Pinocchio's :math:`(R^T\dot p, \omega)`. CASPR's 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..exceptions import CasprError
+from ..exceptions import CasprError, InertiaWarning
+from ..urdf import breaks_triangle
 from ._xml import child, ident, integer, number, numbers, parse_xml, text
 
 _X, _Y, _Z = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)
@@ -251,4 +253,8 @@ def _inertia(path, el, iw, mass, com) -> np.ndarray:
     if eig.min() < -1e-9 * scale:
         raise CasprError(path, iw, f"the inertia about the COM (ref={ref!r}) is not positive "
                                    f"semidefinite: eigenvalues {np.round(eig, 12).tolist()} kg m^2")
+    if breaks_triangle(eig):  # CASPR ships it: converted as given, loudly (docs/limits.md)
+        warnings.warn(f"{path}: {iw}: principal moments of inertia {[float(f'{x:.9g}') for x in eig]} kg m^2 "
+                      f"(about the COM) break A + B >= C, which every body meets; converted as CASPR ships them",
+                      InertiaWarning, stacklevel=2)
     return inertia

@@ -14,12 +14,13 @@ import os
 import re
 import shutil
 import tempfile
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from ..exceptions import CasprError, McdmError
+from ..exceptions import CasprError, InertiaWarning, McdmError
 from .bodies import CasprBodies, read_bodies
 from .cables import read_cables
 from .sampling import SamplingError, Samples, coordinates_from_caspr, sample, to_ours
@@ -236,7 +237,9 @@ def _load(data: dict, tmp: Path, urdf_name: str):
     from ..sidecar import parse_sidecar
 
     checked = dict(data, urdf=str(tmp / f"{urdf_name}.urdf"))
-    return Robot.from_sidecar(parse_sidecar(checked, path=tmp / f"{data['name']}.yaml", base_dir=tmp))
+    with warnings.catch_warnings():  # (said already, per CASPR element: caspr/bodies.py)
+        warnings.simplefilter("ignore", InertiaWarning)
+        return Robot.from_sidecar(parse_sidecar(checked, path=tmp / f"{data['name']}.yaml", base_dir=tmp))
 
 
 def _trajectories(result: CasprImport, tfile, data: dict, tmp: Path, name: str, urdf_name: str, robot) -> None:

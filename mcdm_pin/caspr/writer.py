@@ -15,6 +15,7 @@ import numpy as np
 import yaml
 
 from ..exceptions import CasprError
+from ..urdf import CASPR_PROVENANCE
 from .bodies import CasprBodies, CasprLink
 
 GRAVITY = (0.0, 0.0, -9.81)
@@ -65,7 +66,7 @@ def _v(v) -> str:
 
 def urdf_text(bodies: CasprBodies, chs: list[Chain], name: str, source: str) -> str:
     lines = ['<?xml version="1.0"?>',
-             "<!--", f"  Converted by mcdm-pin import-caspr from {comment(source)}.",
+             "<!--", f"  {CASPR_PROVENANCE}{comment(source)}.",  # (read back: urdf.shipped_by_caspr)
              "  Each link's frame is CASPR's body frame {k} (origin at the link's joint point). A CASPR joint",
              "  is one URDF joint (SPATIAL_EULER_XYZ: floating) or a chain of revolute/prismatic joints joined",
              "  by massless links; the sidecar groups them. Units: SI.", "-->",

@@ -66,7 +66,7 @@ def run(args) -> int:
             f"{n} ({t.type}{'' if t.type == 'csv' else f', {t.duration:g} s, dt {t.dt:g}'})"
             for n, t in sc.trajectories.items()))
     print("\nvalidation:")
-    report = validation_report(robot)
+    report = _inertia_report(robot) + validation_report(robot)
     if sc is not None and sc.trajectories:
         checks = check_trajectories(robot, samples=args.samples)
         report += [(c.level, c.text()) for c in checks]
@@ -91,3 +91,17 @@ def _route_text(cable) -> str:
         else:
             parts.append(f"{e.frame}{np.round(e.point, 4).tolist()}")
     return " -> ".join(parts)
+
+
+def _inertia_report(robot) -> list[tuple[str, str]]:
+    """A warning line when the robot's URDF carries inertias no body can have (accepted because its
+    source, CASPR, ships them: :func:`mcdm_pin.urdf.check_urdf_inertias`)."""
+    from ..urdf import moments_text, urdf_impossible_inertias
+
+    bad = urdf_impossible_inertias(robot.urdf_path) if robot.urdf_path is not None else []
+    if not bad:
+        return []
+    return [("warn", f"inertias as CASPR ships them: {len(bad)} link(s) have principal moments (kg m^2) that "
+                     f"no body can have, breaking A + B >= C: {moments_text(bad)}; the answers are those of "
+                     f"these numbers, not of physical bodies (docs/limits.md)")]
+

@@ -177,8 +177,10 @@ def stage_counts(result) -> str:
     """Which stage answered how many instants, with the median of what its iterations count:
     ``answered by warm_active_set at 99 instants (median 2 KKT solves), ipm at 2 (median 14
     interior-point iterations)``."""
-    first = np.array([str(s).split(">")[0] or "-" for s in result.stage])
+    first = np.array([str(s).split(">")[0] for s in result.stage])
     its = np.asarray(result.iterations)
+    asked = first != ""  # (an instant at which the model is undefined, status error, reached no stage)
+    first, its = first[asked], its[asked]
     parts = []
     names, counts = np.unique(first, return_counts=True)
     for k, (name, count) in enumerate(sorted(zip(names, counts), key=lambda nc: (-nc[1], nc[0]))):

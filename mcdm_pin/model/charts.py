@@ -28,10 +28,14 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import ModelError
+from ..exceptions import ModelError, StateError
 
 # chart kinds
 IDENTITY, ANGLE, BALL, FREE, PLANAR = "identity", "angle", "ball", "free", "planar"
+
+# a quaternion's norm, or the norm of a (cos, sin) pair, may differ from 1 by this much (it is then
+# normalised); beyond it the configuration is refused
+UNIT_NORM_TOL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -114,6 +118,81 @@ def configuration_names(model: pin.Model) -> tuple[str, ...]:
         for i, s in enumerate(sub):
             names[p.idx_q + i] = _name(p, s)
     return tuple(names)
+
+
+def _unit_blocks(parts) -> list[tuple[Part, int, int]]:
+    """``(part, start, length)`` of each block of ``q`` that must have unit norm: a quaternion
+    (ball, free joint) or a (cos, sin) pair (continuous, planar joint)."""
+    out = []
+    for p in parts:
+        if p.kind == BALL:
+            out.append((p, p.idx_q, 4))
+        elif p.kind == FREE:
+            out.append((p, p.idx_q + 3, 4))
+        elif p.kind == ANGLE:
+            out.append((p, p.idx_q, 2))
+        elif p.kind == PLANAR:
+            out.append((p, p.idx_q + 2, 2))
+    return out
+
+
+def check_configuration(model: pin.Model, q, name: str = "q", parts=None,
+                        coordinates: bool = False) -> np.ndarray:
+    """``q`` as Pinocchio's configuration of ``model``: a finite vector of length nq whose quaternions
+    and (cos, sin) pairs have unit norm to :data:`UNIT_NORM_TOL` (returned normalised, a copy);
+    :class:`~mcdm_pin.exceptions.StateError` naming ``name``, the joint and the norm otherwise.
+    ``coordinates``: a vector of length nv is accepted too, as coordinates (converted). Every entry
+    point (``solve``, ``solve_trajectory``, the functions of :mod:`mcdm_pin.model.terms`) checks a
+    configuration here."""
+    nq, nv = model.nq, model.nv
+    try:
+        arr = np.asarray(q, dtype=float)
+    except (TypeError, ValueError):
+        raise StateError(f"{name}: expected {nq} numbers, got {type(q).__name__}") from None
+    sizes = (nq, nv) if coordinates else (nq,)
+    if arr.ndim != 1 or arr.shape[0] not in sizes:
+        want = f"{nq}" if nq == nv or not coordinates else f"{nq} (configuration) or {nv} (coordinates)"
+        raise StateError(f"{name}: expected a vector of length {want}, got shape {arr.shape}")
+    if not np.isfinite(arr).all():
+        bad = np.flatnonzero(~np.isfinite(arr))
+        raise StateError(f"{name}: expected finite numbers, entries {bad.tolist()} are not")
+    if nq == nv:
+        return arr
+    parts = chart_parts(model) if parts is None else parts
+    if arr.shape[0] == nv:
+        return configuration(model, arr, parts)
+    out = arr.copy()
+    for p, s, n in _unit_blocks(parts):
+        norm = float(np.linalg.norm(out[s:s + n]))
+        if not abs(norm - 1.0) <= UNIT_NORM_TOL:
+            what = f"the quaternion of joint {p.joint!r}" if n == 4 else f"(cos, sin) of joint {p.joint!r}"
+            raise StateError(f"{name}: {what} has norm {norm:.9g}; expected 1")
+        out[s:s + n] /= norm
+    return out
+
+
+def check_configurations(model: pin.Model, Q, name: str = "q", parts=None) -> np.ndarray:
+    """Rows of ``Q`` (N, nq), each checked as :func:`check_configuration` (the first bad row is named
+    ``name[k]``); returns them normalised (``Q`` itself when nothing changes)."""
+    Q = np.asarray(Q, dtype=float)
+    if Q.ndim != 2 or Q.shape[1] != model.nq:
+        raise StateError(f"{name}: expected an array of shape (N, {model.nq}), got shape {Q.shape}")
+    for k in np.flatnonzero(~np.isfinite(Q).all(axis=1))[:1]:
+        check_configuration(model, Q[k], f"{name}[{k}]", parts)  # raises, naming the entries
+    if model.nq == model.nv:
+        return Q
+    parts = chart_parts(model) if parts is None else parts
+    out = Q
+    for p, s, n in _unit_blocks(parts):
+        norms = np.linalg.norm(Q[:, s:s + n], axis=1)
+        bad = ~(np.abs(norms - 1.0) <= UNIT_NORM_TOL)
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            check_configuration(model, Q[k], f"{name}[{k}]", parts)
+        if np.any(norms != 1.0):
+            out = out.copy() if out is Q else out
+            out[:, s:s + n] /= norms[:, None]
+    return out
 
 
 def _quat(R: np.ndarray) -> np.ndarray:

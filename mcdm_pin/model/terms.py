@@ -38,6 +38,7 @@ import pinocchio as pin
 
 from ..exceptions import ModelError, StateError
 from .cables import CableSet
+from .charts import check_configuration
 from .geometry import CableMaps, cable_geometry
 from .joints import PhysicalJoint, massless_members, resolve_joints
 from .routes import RoutePaths
@@ -269,7 +270,7 @@ class TermsEvaluator:
     def check_state(self, q, v=None, a=None):
         """``(q, v, a)`` as float arrays of sizes nq, nv, nv (``None``: zeros), or :class:`StateError`
         (also when coupled coordinates do not follow their couplings)."""
-        q, v, a = check_vector(q, "q", self.model.nq), *self.check_motion(v, a)
+        q, v, a = check_configuration(self.model, q), *self.check_motion(v, a)
         if self.couplings is not None:
             self.couplings.check(q, v, a)
         return q, v, a

@@ -287,6 +287,8 @@ def numpy_polish(qp: QPData, sol: Solution) -> Solution | None:
     sol_k = np.linalg.lstsq(K, rhs, rcond=None)[0]
     x[F] = sol_k[:len(F)]
     y = sol_k[len(F):]
+    if len(qp.b) and not _eom_met(qp, x):  # the held bounds leave the equations unmet (rounding-size
+        return None                        # multipliers of a constant objective read as binding)
     slack = 1e-12 * (1.0 + np.maximum(np.abs(qp.lb), np.abs(qp.ub)))
     if np.any(x[F] < qp.lb[F] - slack[F]) or np.any(x[F] > qp.ub[F] + slack[F]):
         return None
@@ -297,6 +299,12 @@ def numpy_polish(qp: QPData, sol: Solution) -> Solution | None:
     x = np.clip(x, qp.lb, qp.ub)
     zc = None if not qp.cones else np.zeros((len(qp.cones), 3))
     return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z, z_cone=zc, verified=False)
+
+
+def _eom_met(qp: QPData, x) -> bool:
+    """``A x = b`` to the answer check's tolerance (:data:`~mcdm_pin.tolerances.EOM_REL`, relative)."""
+    scale = max(np.abs(qp.b).max(initial=0.0), (np.abs(qp.A) @ np.abs(x)).max(initial=0.0), 1e-300)
+    return bool(np.abs(qp.A @ x - qp.b).max(initial=0.0) <= tol.EOM_REL * scale)
 
 
 def warm_calls():

@@ -5,7 +5,11 @@ onto the bounds.
 convex problem (:class:`~mcdm_pin.problem.QPData`; duals as in :mod:`.base`):
 
 - primal: equation of motion (relative), bounds (absolute), cones (degrees);
-- stationarity: ``|P x + c + A^T y + z - sum_k T_k^T z_k|_inf`` relative to the largest of its terms;
+- stationarity: ``|P x + c + A^T y + z - sum_k T_k^T z_k|_inf`` relative to the largest of its terms,
+  and of ``max_i sum_j |P_ij| |x_j|`` (the size of ``P x`` before cancellation: an objective constant
+  on the feasible set, e.g. a planar robot's interactions, has a gradient of rounding size there);
+  for a constant objective (``P = 0``, ``c = 0``: every weight zero) at least the absolute
+  ``KKT_GRAD_FLOOR``, since its multipliers are of rounding size, ~1e-22, noise relative to themselves;
 - dual feasibility and complementarity: ``sum_i z_i^+ (u_i - x_i) + z_i^- (x_i - l_i) + sum_k
   z_k . s_k`` (the duality gap of the Lagrangian), relative to the multipliers' size times the
   variables' size, and every cone dual in the second-order cone.
@@ -46,7 +50,8 @@ def kkt_residuals(qp, sol: Solution) -> dict:
     grad = qp.gradient(x)
     Aty = qp.A.T @ sol.y if len(qp.b) else np.zeros(qp.n)
     terms = [np.abs(grad - qp.c).max(initial=0.0), np.abs(qp.c).max(initial=0.0),
-             np.abs(Aty).max(initial=0.0), np.abs(sol.z).max(initial=0.0)]
+             np.abs(Aty).max(initial=0.0), np.abs(sol.z).max(initial=0.0),
+             _hessian_size(qp, x), tol.KKT_GRAD_FLOOR if _constant(qp) else 1e-300]
     g = grad + Aty + sol.z
     comp = 0.0
     if qp.cones:
@@ -60,7 +65,7 @@ def kkt_residuals(qp, sol: Solution) -> dict:
         # every dual in the cone (to rounding)
         lam_out = np.maximum(np.linalg.norm(lam[:, 1:], axis=1) - lam[:, 0], 0.0)
         comp += float(lam_out.sum() * (1.0 + np.abs(s).max(initial=0.0)))
-    gscale = max(max(terms), 1e-300)
+    gscale = max(terms)
     out["stationarity"] = float(np.abs(g).max(initial=0.0) / gscale)
     z = sol.z
     up, lo = np.maximum(z, 0.0), np.maximum(-z, 0.0)
@@ -73,6 +78,26 @@ def kkt_residuals(qp, sol: Solution) -> dict:
     xscale = max(np.abs(x).max(initial=0.0), 1e-12 * bounds.max(initial=0.0), 1e-300)
     out["complementarity"] = float(abs(comp) / (gscale * xscale)) if np.isfinite(comp) else float("inf")
     return out
+
+
+def _constant(qp) -> bool:
+    """Whether the objective is constant (``P = 0`` and ``c = 0``: case 2 with every weight zero)."""
+    if np.any(qp.c):
+        return False
+    if qp.structured:
+        return not (np.any(qp.P_diag) or np.any(qp.P_factor))
+    return not np.any(qp.P)
+
+
+def _hessian_size(qp, x) -> float:
+    """``max_i sum_j |P_ij| |x_j|``: the size of ``P x`` before cancellation, which sets its rounding
+    error (an objective constant on the feasible set, e.g. the interactions of a planar robot whose
+    cables all lie in its plane, has a gradient of rounding size at every feasible point)."""
+    ax = np.abs(x)
+    if qp.structured:
+        F = np.abs(qp.P_factor)
+        return float((np.abs(qp.P_diag) * ax + F.T @ (F @ ax)).max(initial=0.0))
+    return float((np.abs(qp.P) @ ax).max(initial=0.0))
 
 
 def kkt_problems(qp, sol: Solution) -> list[str]:
