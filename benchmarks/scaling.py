@@ -14,15 +14,24 @@ Two sweeps (each point one generated robot, written as URDF + sidecar into a tem
 - **links**: N = 2, 4, 8, 16, 32 links (6 to 96 DoF) with 9 cables per link (18 to 288 cables);
 - **cables**: N = 2 links (6 DoF) with 8 to 300 cables.
 
-For each robot and for case 1 (min f^T f) and case 3 (min interaction forces + 15 deg cones on every
-joint), ``InverseDynamics.solve_trajectory`` runs ``--repeat`` times (after one warm-up run) and the
-medians over instants and runs of the model time (kinematics, RNEA, cable maps, QP assembly) and the
-solve time are kept. Instants without an answer (infeasible, inaccurate) are counted and reported.
-Growth laws are least-squares fits of log(time) against log(DoF) (links sweep), log(cables) (cables
-sweep) and jointly ``t = C nv^a m^b`` over both sweeps.
+For each robot and for cases 1 (min f^T f), 2 (min interaction forces) and 3 (case 2 + 15 deg cones on
+every joint) (``--case``), ``InverseDynamics.solve_trajectory`` runs ``--repeat`` times (after one
+warm-up run) and the medians over instants and runs of the model time (kinematics, RNEA, cable maps, QP
+assembly) and the solve time are kept; ``--cold`` runs every instant alone (``reset()`` then ``solve``,
+shuffled; the total is the wall time of ``solve``), ``--warm-and-cold`` both. Instants without an answer
+(infeasible, inaccurate) are counted and reported. Growth laws are least-squares fits of log(time)
+against log(DoF) (links sweep), log(cables) (cables sweep) and jointly ``t = C nv^a m^b`` over both
+sweeps (first mode only).
 
-    python benchmarks/scaling.py [--instants 11] [--repeat 3] [--quick] [--json FILE]
-        [--plot docs/img/scaling.png] [--markdown docs/scaling.md]
+``--peers all`` (or some of daqp, piqp, proxqp, qoco, clarabel: ``benchmarks/peers``) times the solver
+peers on the same instants' problems, warm or cold like ours, one BLAS thread: a peer's total is the
+instant's model time plus its solve, and its answer is checked against our objective (1e-6 relative).
+For each case and size the table gives the best peer (among those that answered every instant at our
+objective) and its total over ours (below 1: the peer is faster).
+
+    python benchmarks/scaling.py [--instants 11] [--repeat 3] [--quick] [--case 1 2 3]
+        [--peers all] [--cold | --warm-and-cold] [--json FILE] [--plot docs/img/scaling.png]
+        [--markdown docs/scaling.md]
 """
 
 from __future__ import annotations
