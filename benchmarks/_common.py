@@ -15,6 +15,19 @@ os.environ.setdefault("MCDM_PIN_JIT", "compile")
 DEFAULT_CASPR = REPO / "robots" / "caspr"  # the committed conversions; or a folder of CASPR's XML files
 
 
+_BLAS_LIMIT = []  # the threadpoolctl limit in force (kept alive for the process)
+
+
+def one_blas_thread() -> None:
+    """One BLAS/OpenMP thread for everything in this process (ours and the peers alike): the
+    environment for libraries loaded later, threadpoolctl for those already loaded (numpy's BLAS)."""
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
+    if not _BLAS_LIMIT:
+        from threadpoolctl import threadpool_limits
+        _BLAS_LIMIT.append(threadpool_limits(limits=1))
+
+
 def cpu_model() -> str:
     """``lscpu``'s model name (``platform.processor()`` when lscpu is missing)."""
     model = platform.processor() or "unknown CPU"

@@ -4,8 +4,11 @@ For each case, one table row for mcdm-pin (``InverseDynamics.solve_trajectory``,
 back-end) and one per peer, each solving the *same* per-instant problem (the ``QPData`` that
 mcdm-pin assembles from the model terms):
 
-- ``clarabel``: Clarabel called directly as an exact cone program; the sparse matrices are built from
-  the QPData inside the timed region, as a user would (Clarabel's default settings).
+- ``daqp``, ``piqp``, ``proxqp``, ``qoco``, ``clarabel`` (``all`` = these five): the solver libraries
+  called directly, one small module each in ``benchmarks/peers/`` (its docstring gives its settings and
+  what its warm start reuses); DAQP, PIQP and ProxQP are QP solvers, so case 3 (second-order cones)
+  has QOCO and Clarabel only. Clarabel: the sparse matrices are built from the QPData inside the timed
+  region, as a user would (Clarabel's default settings).
 - ``cvxpy``: cvxpy with Clarabel; a Parameter-ised (DPP) problem is built and compiled **once** per
   case, outside the timing; per instant the parameters are set (inside the timing, including the
   factor ``K`` of ``P = K^T K`` by pivoted Cholesky, since ``quad_form`` of a parameter is not DPP)
@@ -26,7 +29,10 @@ equation of motion, bounds and cones satisfied (tolerances in ``CHECK``); failur
 table and printed.
 
     python benchmarks/bench_id.py [--robot neck|two_link|PATH.yaml] [--trajectory NAME] [--case 1 2 3]
-        [--samples N] [--repeat R] [--peers clarabel,cvxpy,slsqp,ipopt] [--json FILE] [--markdown FILE]
+        [--samples N] [--repeat R] [--peers all|daqp,piqp,proxqp,qoco,clarabel,cvxpy,slsqp,ipopt,opensim]
+        [--cold | --warm-and-cold] [--json FILE] [--markdown FILE]
+
+Every back-end runs with one BLAS/OpenMP thread (``_common.one_blas_thread``).
 
 ``--cold`` solves every instant alone, in a shuffled order, with fresh solver state
 (``InverseDynamics.reset()`` before each; each peer's ``reset()`` likewise): the cost of an instant
@@ -47,16 +53,21 @@ import json
 import sys
 import tempfile
 import time
-import warnings
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import DEFAULT_CASPR, REPO, import_neck, machine, neck_case_options  # noqa: E402
+from _common import DEFAULT_CASPR, REPO, import_neck, machine, neck_case_options, one_blas_thread  # noqa: E402
 
-from mcdm_pin.solvers.clarabel_ import cone_rows, conic_form  # noqa: E402
 from peers import opensim_so  # noqa: E402  (OpenSim SO + JRA: a whole-trajectory peer, case 1, --peers opensim)
+from peers.clarabel_ import ClarabelPeer  # noqa: E402
+from peers.cvxpy_ import CvxpyPeer  # noqa: E402
+from peers.ipopt_ import IpoptPeer  # noqa: E402
+from peers.slsqp_ import SlsqpPeer  # noqa: E402
+from peers.solvers import ALL, SOLVER_PEERS, expand, make_solver_peers  # noqa: E402
+
+one_blas_thread()
 PEERS = ("clarabel", "cvxpy", "slsqp", "ipopt")
 # correctness check: objective relative to the reference, relative EOM residual, bounds (N), cones (deg)
 CHECK = dict(obj_rtol=1e-6, obj_atol=1e-8, eom_rtol=1e-7, bound_tol=1e-6, cone_tol_deg=1e-3)
@@ -107,256 +118,16 @@ def reference_solve(qp):
 
 
 # ------------------------------------------------------------------------------------------ peers
-class Peer:
-    name = "peer"
-    label = "peer"
-    message = ""  # why the last failed solve failed, when the peer says
-
-    def reset(self):
-        pass
-
-    def prepare(self, qp):
-        """Called once per case with a representative problem, outside the timing."""
-
-    def solve(self, qp):
-        """Cable forces (m,) or None (no answer)."""
-        raise NotImplementedError
-
-
-class ClarabelPeer(Peer):
-    name = "clarabel"
-    label = "Clarabel (direct SOCP)"
-
-    def __init__(self, tight: bool = False):
-        import clarabel  # noqa: F401
-        self.tight = tight
-
-    def solve(self, qp):
-        import clarabel
-
-        # the library's conic form, timed here: building it is part of calling Clarabel
-        P, c, A, b, cones, _ = conic_form(qp)
-        settings = clarabel.DefaultSettings()
-        settings.verbose = False
-        if self.tight:
-            settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = 1e-11
-            settings.tol_ktratio = 1e-8
-        sol = clarabel.DefaultSolver(P, c, A, b, cones, settings).solve()
-        if str(sol.status) in ("Solved", "AlmostSolved"):
-            return np.array(sol.x)
-        return None
-
-
-class CvxpyPeer(Peer):
-    name = "cvxpy"
-    label = "cvxpy + Clarabel (DPP, built once)"
-
-    def __init__(self):
-        import cvxpy  # noqa: F401
-        self.prob = None
-
-    def prepare(self, qp):
-        import cvxpy as cp
-
-        n, me, k = qp.n, len(qp.b), len(qp.cones)
-        self.hi, self.lo = np.isfinite(qp.ub), np.isfinite(qp.lb)
-        f = self.f = cp.Variable(n)
-        self.K, self.c = cp.Parameter((n, n)), cp.Parameter(n)
-        cons = []
-        if me:
-            self.A, self.b = cp.Parameter((me, n)), cp.Parameter(me)
-            cons.append(self.A @ f == self.b)
-        if self.hi.any():
-            self.ub = cp.Parameter(int(self.hi.sum()))
-            cons.append(f[np.flatnonzero(self.hi)] <= self.ub)
-        if self.lo.any():
-            self.lb = cp.Parameter(int(self.lo.sum()))
-            cons.append(f[np.flatnonzero(self.lo)] >= self.lb)
-        self.T = [cp.Parameter((3, n)) for _ in range(k)]
-        self.t = [cp.Parameter(3) for _ in range(k)]
-        for T, t in zip(self.T, self.t):
-            s = T @ f + t
-            cons.append(cp.SOC(s[0], s[1:]))
-        self.prob = cp.Problem(cp.Minimize(0.5 * cp.sum_squares(self.K @ f) + self.c @ f), cons)
-        assert self.prob.is_dcp(dpp=True)
-        self._set(qp)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            self.prob.solve(solver=cp.CLARABEL)  # compile once (cached for the re-solves)
-
-    def _set(self, qp):
-        from scipy.linalg import lapack
-
-        # P = K^T K by pivoted Cholesky (P is PSD, possibly singular)
-        U, piv, rank, info = lapack.dpstrf(qp.P, lower=0)
-        U = np.triu(U)
-        U[rank:] = 0.0
-        K = np.empty_like(U)
-        K[:, piv - 1] = U
-        self.K.value, self.c.value = K, qp.c
-        if len(qp.b):
-            self.A.value, self.b.value = qp.A, qp.b
-        if self.hi.any():
-            self.ub.value = qp.ub[self.hi]
-        if self.lo.any():
-            self.lb.value = qp.lb[self.lo]
-        if qp.cones:
-            T, t = cone_rows(qp)
-            for k in range(len(qp.cones)):
-                self.T[k].value, self.t[k].value = T[k], t[k]
-
-    def solve(self, qp):
-        import cvxpy as cp
-
-        self._set(qp)
-        try:
-            self.prob.solve(solver=cp.CLARABEL)
-        except cp.error.SolverError:
-            return None
-        if self.prob.status in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE):
-            return np.array(self.f.value)
-        return None
-
-
-def _cone_values(T, t, f):
-    """Cone constraint values ``s0 - |s12|`` (K,) and Jacobian (K, m); also s12 and |s12|."""
-    s = T @ f + t  # (K, 3)
-    nrm = np.linalg.norm(s[:, 1:], axis=1)
-    u = s[:, 1:] / np.maximum(nrm, 1e-300)[:, None]
-    jac = T[:, 0, :] - np.einsum("ka,kam->km", u, T[:, 1:, :])
-    return s[:, 0] - nrm, jac, s[:, 1:], nrm
-
-
-def _start(qp, f_prev):
-    if f_prev is not None:
-        return np.clip(f_prev, qp.lb, qp.ub)
-    f0 = np.linalg.lstsq(qp.A, qp.b, rcond=None)[0] if len(qp.b) else np.zeros(qp.n)
-    return np.clip(f0, qp.lb, qp.ub)
-
-
-class SlsqpPeer(Peer):
-    name = "slsqp"
-    label = "scipy SLSQP (warm start)"
-
-    def __init__(self):
-        self.f_prev = None
-
-    def reset(self):
-        self.f_prev = None
-
-    def solve(self, qp):
-        from scipy.optimize import Bounds, minimize
-
-        P, c = qp.P, qp.c
-        cons = []
-        if len(qp.b):
-            A, b = qp.A, qp.b
-            cons.append(dict(type="eq", fun=lambda f: A @ f - b, jac=lambda f: A))
-        if qp.cones:
-            T, t = cone_rows(qp)
-            cons.append(dict(type="ineq", fun=lambda f: _cone_values(T, t, f)[0],
-                             jac=lambda f: _cone_values(T, t, f)[1]))
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            res = minimize(lambda f: (0.5 * f @ P @ f + c @ f, P @ f + c), _start(qp, self.f_prev),
-                           jac=True, method="SLSQP", bounds=Bounds(qp.lb, qp.ub), constraints=cons,
-                           options=dict(ftol=1e-8, maxiter=1000))
-        if not res.success:
-            self.message = res.message
-            return None
-        self.f_prev = res.x
-        return np.array(res.x)
-
-
-class _IpoptNLP:
-    def __init__(self, qp, T, t):
-        self.qp, self.T, self.t = qp, T, t
-        n, me, k = qp.n, len(qp.b), len(qp.cones)
-        self.me, self.k = me, k
-        self.jrows, self.jcols = np.indices((me + k, n)).reshape(2, -1)
-        self.hrows, self.hcols = np.tril_indices(n)
-
-    def objective(self, f):
-        return float(0.5 * f @ self.qp.P @ f + self.qp.c @ f)
-
-    def gradient(self, f):
-        return self.qp.P @ f + self.qp.c
-
-    def constraints(self, f):
-        parts = [self.qp.A @ f]
-        if self.k:
-            parts.append(_cone_values(self.T, self.t, f)[0])
-        return np.concatenate(parts)
-
-    def jacobianstructure(self):
-        return self.jrows, self.jcols
-
-    def jacobian(self, f):
-        parts = [self.qp.A]
-        if self.k:
-            parts.append(_cone_values(self.T, self.t, f)[1])
-        return np.vstack(parts).ravel()
-
-    def hessianstructure(self):
-        return self.hrows, self.hcols
-
-    def hessian(self, f, lam, obj_factor):
-        H = obj_factor * self.qp.P
-        if self.k:
-            # d^2 (-|s12|) = -T12^T (I - u u^T) T12 / |s12|
-            _, _, s12, nrm = _cone_values(self.T, self.t, f)
-            for j in range(self.k):
-                if nrm[j] > 1e-12:
-                    u = s12[j] / nrm[j]
-                    T12 = self.T[j, 1:, :]
-                    Tu = u @ T12
-                    H = H - lam[self.me + j] * (T12.T @ T12 - np.outer(Tu, Tu)) / nrm[j]
-        return H[self.hrows, self.hcols]
-
-
-class IpoptPeer(Peer):
-    name = "ipopt"
-    label = "IPOPT via cyipopt (warm start)"
-
-    def __init__(self):
-        import cyipopt  # noqa: F401
-        self.f_prev = None
-
-    def reset(self):
-        self.f_prev = None
-
-    def solve(self, qp):
-        import cyipopt
-
-        T, t = cone_rows(qp)
-        me, k = len(qp.b), len(qp.cones)
-        cl = np.concatenate([qp.b, np.zeros(k)])
-        cu = np.concatenate([qp.b, np.full(k, 2e19)])
-        lb = np.where(np.isfinite(qp.lb), qp.lb, -2e19)
-        ub = np.where(np.isfinite(qp.ub), qp.ub, 2e19)
-        nlp = cyipopt.Problem(n=qp.n, m=me + k, problem_obj=_IpoptNLP(qp, T, t), lb=lb, ub=ub, cl=cl, cu=cu)
-        nlp.add_option("print_level", 0)
-        nlp.add_option("sb", "yes")
-        nlp.add_option("tol", 1e-10)
-        nlp.add_option("max_iter", 500)
-        x, info = nlp.solve(_start(qp, self.f_prev))
-        if info["status"] not in (0, 1):  # solved, solved to acceptable level
-            self.message = info["status_msg"]
-            return None
-        self.f_prev = x
-        return np.array(x)
-
-
-PEER_CLASSES = {"clarabel": ClarabelPeer, "cvxpy": CvxpyPeer, "slsqp": SlsqpPeer, "ipopt": IpoptPeer}
-INSTALL = {"clarabel": "pip install clarabel", "cvxpy": "pip install cvxpy",
+PEER_CLASSES = {"cvxpy": CvxpyPeer, "slsqp": SlsqpPeer, "ipopt": IpoptPeer}
+INSTALL = {"cvxpy": "pip install cvxpy",
            "slsqp": "pip install scipy",
            "ipopt": "apt-get install -y coinor-libipopt-dev libblas-dev liblapack-dev pkg-config && "
                     "pip install cyipopt"}
 
 
 def make_peers(names):
-    peers, notes = [], []
-    for name in names:
+    peers, notes = make_solver_peers([n for n in names if n in SOLVER_PEERS])
+    for name in (n for n in names if n not in SOLVER_PEERS):
         try:
             peers.append(PEER_CLASSES[name]())
         except ImportError as e:
@@ -539,12 +310,14 @@ def time_peers(robot, traj, case, kw, peers, repeat: int, order=None):
 def run(args) -> dict:
     from mcdm_pin.problem import Context
 
-    names = [s.strip() for s in args.peers.split(",") if s.strip()] if args.peers else []
+    names = expand([s.strip() for s in args.peers.split(",") if s.strip()] if args.peers else [])
     with_opensim, names = "opensim" in names, [n for n in names if n != "opensim"]  # a trajectory peer
-    unknown = [n for n in names if n not in PEER_CLASSES]
+    unknown = [n for n in names if n not in PEER_CLASSES and n not in SOLVER_PEERS]
     if unknown:
-        raise SystemExit(f"bench_id: unknown peer(s) {unknown}; expected some of {','.join(PEERS)}")
-    peers, notes = make_peers(names)
+        raise SystemExit(f"bench_id: unknown peer(s) {unknown}; expected some of "
+                         f"{','.join(ALL + tuple(PEER_CLASSES))},opensim or all")
+    all_peers, notes = make_peers(names)
+    notes += [f"{p.name} warm start: {p.warm}" for p in all_peers if p.name in SOLVER_PEERS]
     rows, checks, failures = [], {}, []
     with tempfile.TemporaryDirectory() as tmp:
         robot, traj, kws, label = load_case_setup(args.robot, Path(tmp), Path(args.caspr), args.trajectory)
@@ -555,6 +328,8 @@ def run(args) -> dict:
             from mcdm_pin import InverseDynamics
             ident = InverseDynamics.for_case(robot, case, **kw)
             qp0 = ident.problem.assemble(ident.evaluate(*state(traj, 0)), Context(robot))
+            # a QP-only peer (DAQP, PIQP, ProxQP) takes no second-order cones: not asked in case 3
+            peers = [p for p in all_peers if getattr(p, "cones", True) or not qp0.cones]
             for p in peers:
                 p.prepare(qp0)
             chk = correctness(robot, traj, case, kw, peers, args.check)
@@ -594,6 +369,11 @@ def run(args) -> dict:
                                       solve_ms=stats_ms(r["solve"]), total_ms=tot,
                                       no_answer=r["no_answer"], check=verdict[p.name],
                                       ratio=tot["median"] / ours_total))
+            for p in all_peers:
+                if p not in peers:
+                    case_rows.append(dict(case=case, backend=p.name, label=p.label + ": QP solver, no cones",
+                                          model_ms=stats_ms([]), solve_ms=stats_ms([]), total_ms=stats_ms([]),
+                                          no_answer="-", check="n/a", ratio=float("nan")))
             ok_peers = [r for r in case_rows[1:] if r["check"] == "ok" and np.isfinite(r["ratio"])
                         and not r["backend"].startswith("mcdm-pin")]
             if ok_peers:
@@ -664,7 +444,8 @@ def main(argv=None) -> int:
     p.add_argument("--peer-repeat", type=int, default=1,
                    help="runs of the trajectory for the peers (default 1; they are 10-1000x slower)")
     p.add_argument("--peers", default=",".join(PEERS),
-                   help=f"comma-separated peers (default {','.join(PEERS)}; '' for none)")
+                   help=f"comma-separated peers (default {','.join(PEERS)}; 'all' for {','.join(ALL)}; "
+                        "'' for none)")
     p.add_argument("--workers", type=int, default=0,
                    help="also time mcdm-pin's batch mode with this many processes (whole trajectory, "
                         "wall time / instants; default off)")

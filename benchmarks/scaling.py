@@ -14,15 +14,24 @@ Two sweeps (each point one generated robot, written as URDF + sidecar into a tem
 - **links**: N = 2, 4, 8, 16, 32 links (6 to 96 DoF) with 9 cables per link (18 to 288 cables);
 - **cables**: N = 2 links (6 DoF) with 8 to 300 cables.
 
-For each robot and for case 1 (min f^T f) and case 3 (min interaction forces + 15 deg cones on every
-joint), ``InverseDynamics.solve_trajectory`` runs ``--repeat`` times (after one warm-up run) and the
-medians over instants and runs of the model time (kinematics, RNEA, cable maps, QP assembly) and the
-solve time are kept. Instants without an answer (infeasible, inaccurate) are counted and reported.
-Growth laws are least-squares fits of log(time) against log(DoF) (links sweep), log(cables) (cables
-sweep) and jointly ``t = C nv^a m^b`` over both sweeps.
+For each robot and for cases 1 (min f^T f), 2 (min interaction forces) and 3 (case 2 + 15 deg cones on
+every joint) (``--case``), ``InverseDynamics.solve_trajectory`` runs ``--repeat`` times (after one
+warm-up run) and the medians over instants and runs of the model time (kinematics, RNEA, cable maps, QP
+assembly) and the solve time are kept; ``--cold`` runs every instant alone (``reset()`` then ``solve``,
+shuffled; the total is the wall time of ``solve``), ``--warm-and-cold`` both. Instants without an answer
+(infeasible, inaccurate) are counted and reported. Growth laws are least-squares fits of log(time)
+against log(DoF) (links sweep), log(cables) (cables sweep) and jointly ``t = C nv^a m^b`` over both
+sweeps (first mode only).
 
-    python benchmarks/scaling.py [--instants 11] [--repeat 3] [--quick] [--json FILE]
-        [--plot docs/img/scaling.png] [--markdown docs/scaling.md]
+``--peers all`` (or some of daqp, piqp, proxqp, qoco, clarabel: ``benchmarks/peers``) times the solver
+peers on the same instants' problems, warm or cold like ours, one BLAS thread: a peer's total is the
+instant's model time plus its solve, and its answer is checked against our objective (1e-6 relative).
+For each case and size the table gives the best peer (among those that answered every instant at our
+objective) and its total over ours (below 1: the peer is faster).
+
+    python benchmarks/scaling.py [--instants 11] [--repeat 3] [--quick] [--case 1 2 3]
+        [--peers all] [--cold | --warm-and-cold] [--json FILE] [--plot docs/img/scaling.png]
+        [--markdown docs/scaling.md]
 """
 
 from __future__ import annotations
@@ -105,24 +114,47 @@ def build(folder: Path, n_links: int, n_cables: int, instants: int):
     return robot, load_trajectory(robot, "sweep")
 
 
-def measure(robot, traj, case: int, repeat: int) -> dict:
+def _ours_runs(ident, traj, repeat: int, cold: bool, rng):
+    """``repeat`` runs of ours: warm ``solve_trajectory`` (its timed model and solve per instant), or
+    cold (``reset()`` then ``solve`` per instant, shuffled; the wall time of each call as the total).
+    Yields ``(found, model_s, solve_s, total_s, status, message)`` arrays per run."""
+    for _ in range(repeat):
+        if not cold:
+            res = ident.solve_trajectory(traj, progress=False)
+            yield (res.found, res.time_model_s, res.time_solve_s, res.time_model_s + res.time_solve_s,
+                   res.status, res.message)
+            continue
+        n = len(traj)
+        found, model, solve, total = (np.zeros(n, bool), np.zeros(n), np.zeros(n), np.zeros(n))
+        status, message = np.empty(n, object), np.empty(n, object)
+        for k in rng.permutation(n):
+            ident.reset()
+            t0 = time.perf_counter()
+            r = ident.solve(traj.q[k], traj.qd[k], traj.qdd[k])
+            total[k] = time.perf_counter() - t0
+            found[k], model[k], solve[k], status[k], message[k] = (r.found, r.time_model_s, r.time_solve_s,
+                                                                   r.status, r.message)
+        yield found, model, solve, total, status, message
+
+
+def measure(robot, traj, case: int, repeat: int, cold: bool = False) -> dict:
+    """Ours on one robot and case: medians of the model, solve and total times per answered instant."""
     from mcdm_pin import InverseDynamics
 
     ident = InverseDynamics.for_case(robot, case)
     ident.solve_trajectory(traj, progress=False)  # warm-up
-    model, solve, bad, statuses = [], [], 0, {}
-    for _ in range(repeat):
-        res = ident.solve_trajectory(traj, progress=False)
-        ok = res.found
-        bad = int((~ok).sum())
-        model.append(res.time_model_s[ok])
-        solve.append(res.time_solve_s[ok])
-        for s in res.status:
-            statuses[str(s)] = statuses.get(str(s), 0) + 1
+    model, solve, total, bad, statuses = [], [], [], 0, {}
+    for found, m_, s_, t_, status, message in _ours_runs(ident, traj, repeat, cold, np.random.default_rng(0)):
+        bad = int((~found).sum())
+        model.append(m_[found])
+        solve.append(s_[found])
+        total.append(t_[found])
+        for st in status:
+            statuses[str(st)] = statuses.get(str(st), 0) + 1
     # instants without an answer: does Clarabel (exact SOCP) find one? (back-end failure vs infeasible)
     missing = []
-    for k in np.flatnonzero(~res.found):
-        entry = dict(instant=int(k), status=str(res.status[k]), message=str(res.message[k])[:160])
+    for k in np.flatnonzero(~found):
+        entry = dict(instant=int(k), status=str(status[k]), message=str(message[k])[:160])
         try:
             ref = InverseDynamics.for_case(robot, case, solver="clarabel").solve(
                 traj.q[k], traj.qd[k], traj.qdd[k])
@@ -130,10 +162,51 @@ def measure(robot, traj, case: int, repeat: int) -> dict:
         except Exception as e:  # noqa: BLE001 - clarabel not installed
             entry["clarabel"] = f"not checked ({e})"
         missing.append(entry)
-    model, solve = np.concatenate(model) * 1e3, np.concatenate(solve) * 1e3
+    model, solve, total = (np.concatenate(x) * 1e3 for x in (model, solve, total))
     med = lambda x: float(np.median(x)) if x.size else float("nan")  # noqa: E731
-    return dict(model_ms=med(model), solve_ms=med(solve), total_ms=med(model + solve),
+    return dict(model_ms=med(model), solve_ms=med(solve), total_ms=med(total),
                 no_answer=bad, statuses=statuses, missing=missing)
+
+
+def measure_peers(robot, traj, case: int, peers, repeat: int, cold: bool) -> dict:
+    """Each solver peer on the instants' problems (assembled once; the model time of each instant,
+    timed here, is added to the peer's solve time), checked against our objective per instant."""
+    from mcdm_pin import InverseDynamics
+    from mcdm_pin.problem import Context
+
+    from peers.timing import time_peer
+
+    ident = InverseDynamics.for_case(robot, case)
+    qps, model_s, ref_obj = [], [], []
+    for k in range(len(traj)):
+        t0 = time.perf_counter()
+        qp = ident.problem.assemble(ident.evaluate(traj.q[k], traj.qd[k], traj.qdd[k]), Context(robot))
+        model_s.append(time.perf_counter() - t0)
+        qps.append(qp)
+        ident.reset()
+        r = ident.solve(traj.q[k], traj.qd[k], traj.qdd[k])
+        ref_obj.append(qp.objective(r.f) if r.found else None)
+    out = {}
+    for p in peers:
+        if qps[0].cones and not p.cones:
+            continue  # a QP solver: no second-order cones
+        t = time_peer(p, qps, ref_obj, repeat, cold)
+        total = np.array([model_s[k] + dt for k, dt in zip(t["instant"], t["solve_s"])]) * 1e3
+        out[p.name] = dict(total_ms=float(np.median(total)) if total.size else float("nan"),
+                           solve_ms=float(np.median(t["solve_s"]) * 1e3) if t["solve_s"] else float("nan"),
+                           failed=t["failed"], mismatch=t["mismatch"], worst_rel=t["worst_rel"],
+                           message=str(t["message"])[:160])
+    return out
+
+
+def best_peer(row: dict):
+    """(name, best peer total / ours) over the peers that answered every instant at our objective."""
+    good = {n: r for n, r in row.get("peers", {}).items()
+            if not r["failed"] and not r["mismatch"] and np.isfinite(r["total_ms"])}
+    if not good:
+        return None, float("nan")
+    name = min(good, key=lambda n: good[n]["total_ms"])
+    return name, good[name]["total_ms"] / row["total_ms"]
 
 
 def fit(x, y) -> tuple[float, float]:
@@ -153,33 +226,42 @@ def joint_fit(nv, m, y) -> tuple[float, float, float]:
     return float(coef[1]), float(coef[2]), float(np.exp(coef[0]))
 
 
-def run(links_sweep, cables_sweep, instants: int, repeat: int, log=print) -> dict:
+def run(links_sweep, cables_sweep, instants: int, repeat: int, log=print, cases=(1, 2, 3),
+        modes=("warm",), peers=()) -> dict:
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for sweep, points in (("links", links_sweep), ("cables", cables_sweep)):
             for n_links, n_cables in points:
                 robot, traj = build(Path(tmp) / f"{sweep}_{n_links}_{n_cables}", n_links, n_cables, instants)
-                for case in (1, 3):
-                    t0 = time.perf_counter()
-                    r = measure(robot, traj, case, repeat)
-                    rows.append(dict(sweep=sweep, links=n_links, nv=robot.nv, cables=robot.m, case=case,
-                                     instants=len(traj), **r))
-                    log(f"{sweep:6s} links {n_links:2d} dof {robot.nv:3d} cables {robot.m:3d} case {case}: "
-                        f"model {r['model_ms']:8.3f} ms, solve {r['solve_ms']:8.3f} ms, "
-                        f"no answer {r['no_answer']}/{len(traj)} ({time.perf_counter() - t0:.1f} s)")
+                for case in cases:
+                    for mode in modes:
+                        t0 = time.perf_counter()
+                        r = measure(robot, traj, case, repeat, cold=mode == "cold")
+                        if peers:
+                            r["peers"] = measure_peers(robot, traj, case, peers, repeat, cold=mode == "cold")
+                        row = dict(sweep=sweep, links=n_links, nv=robot.nv, cables=robot.m, case=case,
+                                   mode=mode, instants=len(traj), **r)
+                        rows.append(row)
+                        best, ratio = best_peer(row)
+                        log(f"{sweep:6s} links {n_links:2d} dof {robot.nv:3d} cables {robot.m:3d} case {case} "
+                            f"{mode}: model {r['model_ms']:8.3f} ms, solve {r['solve_ms']:8.3f} ms, "
+                            f"no answer {r['no_answer']}/{len(traj)}"
+                            + (f"; best peer {best} {ratio:.2f}x ours" if best else "")
+                            + f" ({time.perf_counter() - t0:.1f} s)")
     fits = {}
-    for case in (1, 3):
+    for case in cases:
         for part in ("model_ms", "solve_ms", "total_ms"):
-            a = [r for r in rows if r["case"] == case and r["sweep"] == "links"]
-            b = [r for r in rows if r["case"] == case and r["sweep"] == "cables"]
-            allr = [r for r in rows if r["case"] == case]
+            sel = [r for r in rows if r["case"] == case and r["mode"] == modes[0]]
+            a = [r for r in sel if r["sweep"] == "links"]
+            b = [r for r in sel if r["sweep"] == "cables"]
             key = f"case{case}_{part[:-3]}"
             fits[key] = dict(
                 vs_dof=fit([r["nv"] for r in a], [r[part] for r in a]) if len(a) > 1 else None,
                 vs_cables=fit([r["cables"] for r in b], [r[part] for r in b]) if len(b) > 1 else None,
-                joint=joint_fit([r["nv"] for r in allr], [r["cables"] for r in allr], [r[part] for r in allr])
-                if len(allr) > 2 else None)
-    return dict(rows=rows, fits=fits, instants=instants, repeat=repeat)
+                joint=joint_fit([r["nv"] for r in sel], [r["cables"] for r in sel], [r[part] for r in sel])
+                if len(sel) > 2 else None)
+    return dict(rows=rows, fits=fits, instants=instants, repeat=repeat, modes=list(modes),
+                peers=[p.name for p in peers])
 
 
 def plot(result: dict, path: Path) -> None:
@@ -195,7 +277,8 @@ def plot(result: dict, path: Path) -> None:
     for ax, sweep, xkey, fkey, xlabel in ((axes[0], "links", "nv", "vs_dof", "degrees of freedom (3 per link)"),
                                           (axes[1], "cables", "cables", "vs_cables", "cables (2 links, 6 DoF)")):
         for (part, case), (color, marker, ls) in styles.items():
-            sel = [r for r in rows if r["sweep"] == sweep and r["case"] == case]
+            sel = [r for r in rows if r["sweep"] == sweep and r["case"] == case
+                   and r.get("mode", "warm") == result.get("modes", ["warm"])[0]]
             if not sel:
                 continue
             x = np.array([r[xkey] for r in sel], float)
@@ -222,12 +305,14 @@ def plot(result: dict, path: Path) -> None:
 
 
 def markdown(result: dict) -> str:
-    lines = ["| sweep | links | DoF | cables | case | model, ms | solve, ms | total, ms | no answer |",
-             "|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| sweep | links | DoF | cables | case | mode | model, ms | solve, ms | total, ms | no answer |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for r in result["rows"]:
-        lines.append(f"| {r['sweep']} | {r['links']} | {r['nv']} | {r['cables']} | {r['case']} | "
+        lines.append(f"| {r['sweep']} | {r['links']} | {r['nv']} | {r['cables']} | {r['case']} | {r['mode']} | "
                      f"{r['model_ms']:.3f} | {r['solve_ms']:.3f} | {r['total_ms']:.3f} | "
                      f"{r['no_answer']} of {r['instants']} |")
+    if result.get("peers"):
+        lines += ["", peers_markdown(result)]
     lines += ["", "| quantity | vs DoF (links sweep, cables = 3 DoF) | vs cables (6 DoF) | joint fit t = C nv^a m^b |",
               "|---|---|---|---|"]
     for key, f in result["fits"].items():
@@ -236,6 +321,30 @@ def markdown(result: dict) -> str:
         j = f["joint"]
         jt = f"a = {j[0]:.2f}, b = {j[1]:.2f}, C = {j[2]:.3g} ms" if j else "-"
         lines.append(f"| {key.replace('_', ' ')} | {one(f['vs_dof'])} | {one(f['vs_cables'])} | {jt} |")
+    return "\n".join(lines)
+
+
+def peers_markdown(result: dict) -> str:
+    """Ours and every peer's total per instant (ms, median), and the best peer / ours (below 1: the
+    peer is faster). A peer's cell carries ``F`` (instants without an answer, over all runs) and ``M``
+    (answers off our objective by more than 1e-6 relative); such a peer is not the best peer."""
+    names = result["peers"]
+    lines = ["| sweep | DoF | cables | case | mode | ours, ms | " + " | ".join(f"{n}, ms" for n in names)
+             + " | best peer | best peer / ours |",
+             "|---|---|---|---|---|---|" + "---|" * len(names) + "---|---|"]
+    for r in result["rows"]:
+        cells = []
+        for n in names:
+            p = r["peers"].get(n)
+            if p is None:
+                cells.append("n/a (no cones)")
+                continue
+            flags = "".join(f" {k[0].upper()}{p[k]}" for k in ("failed", "mismatch") if p[k])
+            cells.append(f"{p['total_ms']:.3f}{flags}")
+        best, ratio = best_peer(r)
+        lines.append(f"| {r['sweep']} | {r['nv']} | {r['cables']} | {r['case']} | {r['mode']} | "
+                     f"{r['total_ms']:.3f} | " + " | ".join(cells) + f" | {best or '-'} | "
+                     + (f"{ratio:.2f}" if best else "-") + " |")
     return "\n".join(lines)
 
 
@@ -297,17 +406,34 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--instants", type=int, default=11, help="instants of the quintic (default 11)")
     p.add_argument("--repeat", type=int, default=3, help="timed runs per robot and case (default 3)")
-    p.add_argument("--quick", action="store_true", help="small sweeps only (a few seconds)")
+    p.add_argument("--quick", action="store_true", help="small sweeps only (up to 24 DoF, 128 cables)")
+    p.add_argument("--case", type=int, nargs="+", default=[1, 2, 3], choices=[1, 2, 3])
+    p.add_argument("--peers", default="", help="comma-separated solver peers (daqp,piqp,proxqp,qoco,clarabel "
+                                               "or all; default none)")
+    mode = p.add_mutually_exclusive_group()
+    mode.add_argument("--cold", action="store_true", help="every instant alone (reset before each)")
+    mode.add_argument("--warm-and-cold", action="store_true", help="both, warm then cold")
     p.add_argument("--json", help="write rows and fits as JSON")
     p.add_argument("--plot", help="write the plot (PNG), e.g. docs/img/scaling.png")
     p.add_argument("--markdown", help="write the study as Markdown (e.g. docs/scaling.md)")
     args = p.parse_args(argv)
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from _common import machine, one_blas_thread
+    from peers.solvers import SOLVER_PEERS, expand, make_solver_peers
+
+    one_blas_thread()
+    names = expand([n.strip() for n in args.peers.split(",") if n.strip()])
+    unknown = [n for n in names if n not in SOLVER_PEERS]
+    if unknown:
+        raise SystemExit(f"scaling: unknown peer(s) {unknown}; expected some of {','.join(SOLVER_PEERS)} or all")
+    peers, notes = make_solver_peers(names)
+    for note in notes:
+        print(f"note: {note}")
+    modes = ("warm", "cold") if args.warm_and_cold else ("cold",) if args.cold else ("warm",)
     t0 = time.perf_counter()
     result = run(QUICK_LINKS if args.quick else LINKS_SWEEP, QUICK_CABLES if args.quick else CABLES_SWEEP,
-                 args.instants, args.repeat)
+                 args.instants, args.repeat, cases=tuple(args.case), modes=modes, peers=peers)
     result["wall_s"] = time.perf_counter() - t0
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from _common import machine
     result["machine"] = machine()
     print()
     print(markdown(result))
@@ -315,13 +441,21 @@ def main(argv=None) -> int:
     if bad:
         print("\ninstants without an answer:")
         for r in bad:
-            print(f"  {r['sweep']} {r['links']} links {r['cables']} cables case {r['case']}: "
+            print(f"  {r['sweep']} {r['links']} links {r['cables']} cables case {r['case']} {r['mode']}: "
                   f"{r['no_answer']} of {r['instants']} ({r['statuses']})")
             for e in r["missing"]:
                 print(f"    instant {e['instant']}: {e['status']}, Clarabel: {e['clarabel']}; {e['message']}")
-    print(f"\n{result['wall_s']:.0f} s in all")
+    peer_trouble = [(r, n, q) for r in result["rows"] for n, q in r.get("peers", {}).items()
+                    if q["failed"] or q["mismatch"]]
+    if peer_trouble:
+        print("\npeers without an answer (F) or off our objective (M, worst relative error):")
+        for r, n, q in peer_trouble:
+            print(f"  {n}: {r['sweep']} {r['nv']} DoF {r['cables']} cables case {r['case']} {r['mode']}: "
+                  f"F {q['failed']}, M {q['mismatch']} (worst {q['worst_rel']:.1e}) {q['message']}")
+    m = result["machine"]
+    print(f"\n{result['wall_s']:.0f} s in all; 1-min load average at the end {m['load_avg_1min']}")
     if args.json:
-        Path(args.json).write_text(json.dumps(result, indent=2))
+        Path(args.json).write_text(json.dumps(result, indent=2, default=str))
     if args.plot:
         plot(result, Path(args.plot))
         print(f"wrote {args.plot}")
