@@ -62,8 +62,9 @@ def validation_report(robot) -> list[tuple[str, str]]:
     res = InverseDynamics.for_case(robot, 1).solve(q0)
     name = "the reference pose" if mjcf else "the zero pose"
     if res.found:
+        case1 = "min f^T f" if robot.cables.muscles is None else "min sum a^2"
         out.append(("ok", f"holds {name} against gravity with forces in bounds "
-                          f"(case 1: peak {np.max(res.f):.4g} N)"))
+                          f"({case1}: peak {np.max(res.f):.4g} N)"))
     else:
         out.append(("warn", f"cannot hold {name} against gravity within the cable bounds "
                             f"({res.status}: {res.message})"))

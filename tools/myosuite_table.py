@@ -111,12 +111,9 @@ def _short(level: str, text: str) -> str:
 
 
 def _validation(robot) -> str:
-    """``mcdm-pin info``'s report at ``q = 0`` (``qpos0``), shortened: ``passes`` or its warnings.
-
-    The rank, the wrench closure and the count of cables are stated over the independent coordinates,
-    the closure's direction named here from :func:`mcdm_pin.conditioning.wrench_closure`'s
-    ``direction`` (the report's own sentences count all coordinates, coupled ones included, and name
-    the direction's entries after the first coordinates of the model)."""
+    """``mcdm-pin info``'s report at the reference pose (``qpos0``, coupled coordinates following their
+    couplings), shortened: ``passes`` or its warnings; the rank, the wrench closure and the count of
+    cables over the independent coordinates."""
     from mcdm_pin.conditioning import wrench_closure
     from mcdm_pin.validation import validation_report
 
@@ -124,7 +121,7 @@ def _validation(robot) -> str:
     if any(level == "fail" for level, _ in report):
         return "; ".join(_short(level, text) for level, text in report if level == "fail")
     bad = []
-    closure = wrench_closure(robot, np.zeros(robot.nv))
+    closure = wrench_closure(robot, robot.reference_coordinates())
     n = robot.nv if robot.couplings is None else robot.couplings.n
     if not closure.closed:
         bad.append(f"rank L = {closure.rank} of {n}" if closure.rank < n else "rank L full")
@@ -132,22 +129,10 @@ def _validation(robot) -> str:
     if robot.m <= n:
         bad.append(f"{robot.m} cables for {n} independent DoF")
     for level, text in report:
-        if level != "ok" and not text.startswith(("cables span only", "at q = 0: wrench closure")) \
+        if level != "ok" and not text.startswith(("cables span only", "at the reference pose: wrench closure")) \
                 and not text.endswith("to keep every cable in tension"):
             bad.append(_short(level, text))
     return "passes, case 1 feasible" if not bad else "; ".join(bad)
-
-
-def _coupled_pose(robot) -> str:
-    """Case 1 at ``qpos0`` with the coupled coordinates filled from their couplings (where ``qpos0``
-    itself breaks them)."""
-    from mcdm_pin.inverse_dynamics import InverseDynamics
-
-    q = robot.source.configuration({})  # Pinocchio's q of qpos0, dependent coordinates filled
-    res = InverseDynamics.for_case(robot, 1).solve(q)
-    if res.found:
-        return f"case 1 feasible (peak {np.max(res.f):.4g} N)"
-    return f"**case 1 infeasible** ({res.message.split(';')[0][:160]})"
 
 
 def survey(name: str) -> dict:
@@ -179,8 +164,6 @@ def survey(name: str) -> dict:
     row["validation"] = ""
     try:
         row["validation"] = _validation(robot)
-        if "breaks coupling" in row["validation"]:
-            row["validation"] += "; with the coupled coordinates filled: " + _coupled_pose(robot)
     except McdmError as exc:
         row["validation"] += f"; error: {exc}"
     row["seconds"] = time.perf_counter() - t0
