@@ -50,8 +50,9 @@ COMPOSED = ("myoarm_r", "myoarms", "myohand_r", "myohands", "myolegs", "myolegs2
 # myo_sim.FRAGMENT_SPEC_BUILDERS without a torso scaffold (myohand_l has no load_spec name)
 FRAGMENTS = ("myohand_l",)
 # the models that load (the table's "loaded" rows)
-LOADED = ("myoelbow", "myoelbow_2dof", "myofinger", "myoarm_r", "myohand_r", "myohand_l", "myolegs",
-          "myolegs26", "myolegs_abdomen", "myotorso_abdomen", "myoarms", "myohands")
+LOADED = ("myoelbow", "myoelbow_2dof", "myofinger", "legacy/finger/motorfinger_v0.xml", "myolegs_osl", "myoarm_r",
+          "myohand_r", "myohand_l", "myolegs", "myolegs26", "myolegs_abdomen", "myotorso", "myotorso_abdomen",
+          "myotorso_arm_r", "myoarms", "myohands", "myotorso_arms", "myofullbody")
 
 
 @contextmanager
@@ -99,11 +100,7 @@ def _short(level: str, text: str) -> str:
     """One warning or failure of ``mcdm-pin info``'s report, shortened for the table."""
     import re
 
-    if text.startswith("cannot evaluate the model at q = 0"):
-        found = re.search(r"coordinate '([^']+)' is .*? coupling '([^']+)' makes it np.float64\(([^)]+)\)", text)
-        return (f"{level}: `qpos0` breaks coupling `{found.group(2)}` ({found.group(1)} = 0, the coupling "
-                f"makes it {float(found.group(3)):.4g})" if found else f"{level}: {text}")
-    if text.startswith("cannot hold the zero pose"):
+    if text.startswith(("cannot hold the zero pose", "cannot hold the reference pose")):
         found = re.search(r"below f_min: ([^)]*)\)", text)
         why = f" (would need {found.group(1)} below their passive force)" if found else ""
         return "**case 1 infeasible**" + why
