@@ -150,6 +150,24 @@ def state(traj, k):
     return traj.q[k], traj.qd[k], traj.qdd[k]
 
 
+def cold_instants(ident, traj, order):
+    """Each instant of ``order`` solved cold (the solver reset first): the answered instants' model,
+    solve and wall times (s, arrays) and how many went unanswered."""
+    model, solve, wall, bad = [], [], [], 0
+    for k in order:
+        ident.reset()
+        t0 = time.perf_counter()
+        res = ident.solve(*state(traj, k))
+        t1 = time.perf_counter()
+        if not res.found:
+            bad += 1
+            continue
+        model.append(res.time_model_s)
+        solve.append(res.time_solve_s)
+        wall.append(t1 - t0)
+    return np.array(model), np.array(solve), np.array(wall), bad
+
+
 def correctness(robot, traj, case, kw, peers, n_check: int) -> dict:
     """Solve ``n_check`` instants spread over the trajectory with every back-end (in order, so warm
     starts behave as when timed) and compare with the tight Clarabel reference."""
@@ -238,22 +256,12 @@ def time_ours(robot, traj, case, kw, repeat: int, ident=None, order=None):
             solve.append(res.time_solve_s[ok])
             total.append((res.time_model_s + res.time_solve_s)[ok])
             continue
-        m_, s_, w_ = [], [], []
-        for k in order:
-            ident.reset()
-            t0 = time.perf_counter()
-            res = ident.solve(*state(traj, k))
-            t1 = time.perf_counter()
-            if not res.found:
-                bad += 1
-                continue
-            m_.append(res.time_model_s)
-            s_.append(res.time_solve_s)
-            w_.append(t1 - t0)
-        model.append(np.array(m_))
-        solve.append(np.array(s_))
-        total.append(np.array(w_))
-        wall.append(np.array(w_))
+        m_, s_, w_, b_ = cold_instants(ident, traj, order)
+        bad += b_
+        model.append(m_)
+        solve.append(s_)
+        total.append(w_)
+        wall.append(w_)
     cat = np.concatenate
     return dict(model=cat(model), solve=cat(solve), total=cat(total), wall=cat(wall), no_answer=bad)
 

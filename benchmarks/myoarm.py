@@ -41,7 +41,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import REPO, machine  # noqa: E402
-from bench_id import check_solution, reference_solve, state, stats_ms  # noqa: E402
+from bench_id import check_solution, cold_instants, reference_solve, state, stats_ms  # noqa: E402
 
 DEFAULT_ROBOT = REPO / "robots" / "myosuite" / "myoarm.yaml"
 BACKENDS = (("ours", "default"), ("clarabel", "clarabel"))
@@ -117,20 +117,8 @@ def time_warm(ident, traj) -> dict:
 
 
 def time_cold(ident, traj, order) -> dict:
-    model, solve, wall, bad = [], [], [], 0
-    for k in order:
-        ident.reset()
-        t0 = time.perf_counter()
-        res = ident.solve(*state(traj, k))
-        t1 = time.perf_counter()
-        if not res.found:
-            bad += 1
-            continue
-        model.append(res.time_model_s)
-        solve.append(res.time_solve_s)
-        wall.append(t1 - t0)
-    return dict(model=np.array(model), solve=np.array(solve), wall=np.array(wall), total=np.array(wall),
-                no_answer=bad)
+    model, solve, wall, bad = cold_instants(ident, traj, order)
+    return dict(model=model, solve=solve, wall=wall, total=wall, no_answer=bad)
 
 
 def time_case(idents, traj, repeat: int, seed: int = 0) -> dict:
