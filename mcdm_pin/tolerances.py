@@ -64,7 +64,8 @@ ACTIVE_SET_DUAL = 1e-9
 ACTIVE_SET_EOM = 1e-11
 """Active-set verification: equation of motion, relative."""
 ACTIVE_SET_REG = 1e-12
-"""Tikhonov term on the free variables of an active-set solve, relative to the objective's scale."""
+"""Tikhonov term on the free variables of an active-set solve, relative to each variable's own
+curvature (its diagonal entry of the Hessian; :func:`mcdm_pin.solvers._kkt.tikhonov`)."""
 ACTIVE_SET_STEP = 1e-10
 """Newton steps on the cone surfaces: stop when the step is below this, relative."""
 ACTIVE_SET_FROM_SOLUTION = 1e-8

@@ -321,6 +321,48 @@ def test_ipm_answers_with_a_nearly_rank_deficient_objective_factor(cone):
         assert ours.iterations <= 20, (seed, ours.iterations)
 
 
+def _myoarm_cone_problems():
+    """One instant of MyoSuite's arm with the glenohumeral cone (``scapphant_r``, 19.03 deg) as the
+    interior-point stage received it under two scalings (``tests/data/myoarm_cone_qps.npz``, from
+    ``abduction`` subsampled to 41 instants): 63 muscles and 22 reserves, ``MinActivations``'
+    diagonal from 4e-7 to 381 (one muscle fixed at ``0 <= f <= 0``), the cone active at the
+    optimum."""
+    from pathlib import Path
+
+    from mcdm_pin.constraints import ConeData
+    from mcdm_pin.problem import QPData
+
+    with np.load(Path(__file__).parent / "data" / "myoarm_cone_qps.npz") as z:
+        d = {k: z[k] for k in z.files}
+    out = []
+    for tag in ("a", "b"):
+        g = lambda k: d[f"{tag}_{k}"]  # noqa: E731
+        n = len(g("c"))
+        cone = ConeData("scapphant_r", g("cone_G"), g("cone_g"), g("cone_axis"), float(g("cone_angle_deg")),
+                        g("cone_basis"))
+        out.append(QPData(None, g("c"), float(g("r")), g("A"), g("b"), g("lb"), g("ub"), [cone],
+                          P_diag=g("P_diag"), P_factor=np.zeros((0, n))))
+    return out
+
+
+def test_ipm_crosses_over_on_the_myoarm_with_its_cone():
+    """The interior-point stage alone answers these at Clarabel's optimum through its crossover.
+    Before the active-set solve's Tikhonov term was relative to each variable's own curvature
+    (:func:`mcdm_pin.solvers._kkt.tikhonov`), its stationarity residual on the strong muscles
+    failed the KKT check at the optimum's active set, every crossover was refused, and the method
+    ran on to the rounding floor of the active cone: "numerical breakdown (the step vanished)" on
+    8 of 41 instants."""
+    from mcdm_pin.solvers.cascade import make_solver
+    from mcdm_pin.solvers.ipm import ipm_solve
+
+    for k, qp in enumerate(_myoarm_cone_problems()):
+        ours, ref = ipm_solve(qp), make_solver("clarabel").solve(qp)
+        assert ours.status == "optimal" and ref.status == "optimal", (k, ours.message)
+        assert ours.active is not None, k  # the crossover's verified active set
+        assert qp.objective(ours.x) == pytest.approx(qp.objective(ref.x), rel=OBJ_RTOL), k
+        assert ours.iterations <= 20, (k, ours.iterations)
+
+
 @pytest.mark.parametrize("quadratic", [True, False])
 def test_ipm_stops_on_a_problem_whose_optimum_is_zero(quadratic):
     """An objective whose optimum is exactly zero (no force needed, and none wanted: ``|f|^2`` or

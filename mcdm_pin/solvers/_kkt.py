@@ -340,11 +340,12 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
     bounds and the cones of ``cact`` held on their surface (Newton steps with the cones' curvature
     weighted by their multipliers).
 
-    ``reg`` > 0 is added to the free cables' diagonal (a Tikhonov term ``reg/2 |f_free|^2``): with a
-    positive semidefinite objective whose optimum is a flat ridge (case 2 with ``beta = 0``) the
-    system is otherwise singular and its solution arbitrary along the ridge; with it, the point of
-    the ridge nearest the origin. The KKT check of the original problem decides whether the point is
-    accepted (its stationarity residual ``reg |f|`` is ~1e-12 of the gradient's scale).
+    ``reg`` (n,) > 0 is added to the free cables' diagonal (a Tikhonov term ``1/2 sum reg_i f_i^2``):
+    with a positive semidefinite objective whose optimum is a flat ridge (case 2 with ``beta = 0``)
+    the system is otherwise singular and its solution arbitrary along the ridge; with it, the point
+    of the ridge nearest the origin in that weighted norm. The KKT check of the original problem
+    decides whether the point is accepted (its stationarity residual ``reg_i f_i``: ~1e-12 of the
+    gradient's scale, :func:`tikhonov`).
 
     Returns ``(code, f, y, mus, dirs, solves, LU, perm, lu_ok)``: ``mus`` (nc,) the active cones'
     multipliers (0 elsewhere), ``dirs`` (nc, 3) their surface directions at ``f``, ``solves`` the
@@ -407,7 +408,7 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
             i = free[p]
             for q in range(nf):
                 K[p, q] = H[i, free[q]]
-            K[p, p] += reg
+            K[p, p] += reg[i]
             for r in range(neq):
                 K[p, nf + r] = A[r, i]
                 K[nf + r, p] = A[r, i]
@@ -648,6 +649,37 @@ def next_guess(state, grad):
 
 
 @njit(cache=True, nogil=True)
+def tikhonov(H, g, ub, reg_rel):
+    """The Tikhonov terms ``reg`` (n,) of :func:`eq_solve`: ``reg_rel`` times each variable's own
+    curvature ``H_ii``, at least ``1e-8`` of the objective's scale ``s = max(max H_ii, max |g_i| /
+    (1 + max |u_i|))``; ``reg_rel s`` for a variable the objective does not see (``H_ii = 0``, a
+    zero row of a positive semidefinite ``H``).
+
+    Relative to each variable's own curvature, the stationarity residual ``reg_i f_i`` stays
+    ~``reg_rel`` of that variable's gradient ``H_ii f_i`` whatever the spread of the diagonal: with
+    one term ``reg_rel s`` for all (MyoSuite's arm, scaled: the muscles' ``2 w / g^2`` from 4e-7 to
+    381 next to the reserves' 200), the strong muscles' residual ``reg_rel s f_i`` (``s f_i`` 1e4-7e4
+    times the gradient's scale) fails the check of stationarity (1e-8 of that scale) at the optimum's
+    active set, and the interior-point method's crossover is refused (a fifth of the arm's instants
+    with the glenohumeral cone then ran on to a numerical breakdown).
+    """
+    n = H.shape[0]
+    hmax = 0.0  # H's largest entry: for a positive semidefinite H, its largest diagonal entry
+    gmax = 0.0
+    umax = 0.0
+    for i in range(n):
+        hmax = max(hmax, H[i, i])
+        gmax = max(gmax, abs(g[i]))
+        if np.isfinite(ub[i]):
+            umax = max(umax, abs(ub[i]))
+    scale = max(hmax, gmax / (1.0 + umax))
+    reg = np.empty(n)
+    for i in range(n):
+        reg[i] = reg_rel * (max(H[i, i], 1e-8 * scale) if H[i, i] > 0.0 else scale)
+    return reg
+
+
+@njit(cache=True, nogil=True)
 def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
                    max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel):
     """Block principal pivoting from the guess ``(state0, cact0, cdir0)`` until a verified KKT point
@@ -659,7 +691,7 @@ def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdi
     system (too many cables fixed for the equation of motion), only the worst violation changes
     (Judice and Pires' safeguard).
 
-    ``reg_rel``: the Tikhonov term of :func:`eq_solve` relative to the objective's scale.
+    ``reg_rel``: the Tikhonov terms of :func:`eq_solve` relative to each variable's curvature (:func:`tikhonov`).
 
     Returns ``(code, f, mus, grad, state, cact, dirs, next_state, y, sets, solves)``: ``code`` :data:`FOUND` or a
     key of :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers, ``grad`` the bounds'
@@ -669,16 +701,7 @@ def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdi
     (one per active set without cones, one per Newton step with them).
     """
     n = H.shape[0]
-    hmax = 0.0  # H's largest entry: for a positive semidefinite H, its largest diagonal entry
-    for i in range(n):
-        hmax = max(hmax, H[i, i])
-    gmax = 0.0
-    umax = 0.0
-    for i in range(n):
-        gmax = max(gmax, abs(g[i]))
-        if np.isfinite(ub[i]):
-            umax = max(umax, abs(ub[i]))
-    reg = reg_rel * max(hmax, gmax / (1.0 + umax))
+    reg = tikhonov(H, g, ub, reg_rel)
     neq = A.shape[0]
     nc = G.shape[0]
     state = state0.copy()
