@@ -2,11 +2,12 @@
 and of the model part against MuJoCo's own floor, on the same states.
 
     python benchmarks/myoarm.py [--robot robots/myosuite/myoarm.yaml] [--trajectory abduction]
-        [--case 1 3] [--repeat 3] [--check 5] [--json FILE]
+        [--case 1 1c 3] [--repeat 3] [--check 5] [--json FILE]
 
 On ``robots/myosuite/myoarm.yaml``'s ``abduction`` trajectory (101 instants), for case 1 (least
-squared muscle tensions) and case 3 (interactions and stability cones; when the sidecar gives no
-cone, case 3 is refused and case 2 is timed instead, with a note):
+squared activations), ``1c`` (the same with the sidecar's stability cones: the glenohumeral question,
+RMR's problem, docs/glenohumeral.md) and case 3 (interactions and stability cones; when the sidecar
+gives no cone, case 3 is refused and case 2 is timed instead, with a note):
 
 - **ours** (``InverseDynamics``, default solver chain) and **Clarabel** (the same problem through
   ``solver="clarabel"``) in the same run, their runs taken in turns so that a slow spell of the shared
@@ -64,12 +65,20 @@ def load(robot_path: Path, trajectory: str, tmp: Path):
     return robot, load_trajectory(robot, trajectory), mj
 
 
-def case_idents(robot, case: int):
-    """``(case timed, note, {backend: InverseDynamics})``: case 3 falls back to case 2 when refused."""
+def case_idents(robot, case: str):
+    """``(case timed, note, {backend: InverseDynamics})``: case 3 falls back to case 2 when refused;
+    ``1c`` is case 1's objective with every cone of the sidecar."""
     from mcdm_pin import InverseDynamics
+    from mcdm_pin.constraints import InteractionCone
     from mcdm_pin.exceptions import ProblemError
+    from mcdm_pin.problem import Problem, case_problem
 
     note = ""
+    if case == "1c":
+        cones = [InteractionCone(j.name) for j in robot.joints if j.cone_deg is not None]
+        problem = Problem(robot, case_problem(robot, 1).objective, cones)
+        return "1 + cones", note, {name: InverseDynamics(robot, problem, solver=solver) for name, solver in BACKENDS}
+    case = int(case)
     try:
         idents = {name: InverseDynamics.for_case(robot, case, solver=solver) for name, solver in BACKENDS}
     except ProblemError as exc:
@@ -287,7 +296,7 @@ def main(argv=None) -> int:
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--robot", default=str(DEFAULT_ROBOT), help="MJCF sidecar (default: MyoSuite's arm)")
     p.add_argument("--trajectory", default="abduction")
-    p.add_argument("--case", type=int, nargs="+", default=[1, 3], choices=[1, 2, 3])
+    p.add_argument("--case", nargs="+", default=["1", "1c", "3"], choices=["1", "1c", "2", "3"])
     p.add_argument("--repeat", type=int, default=3, help="timed runs per back-end and mode (default 3)")
     p.add_argument("--check", type=int, default=5, help="instants checked against Clarabel at 1e-11")
     p.add_argument("--json", help="write the samples' statistics as JSON")
