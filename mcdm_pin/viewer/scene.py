@@ -11,8 +11,8 @@ import pinocchio as pin
 
 from ..exceptions import McdmError, ResultsError
 from . import three
-from .animation import (ARROW_LENGTH, Track, arrow_share, draw_cables, draw_cones, draw_forces, draw_labels, drawn_forces, force_arrows,
-                        labels, safe, track_pose)
+from .animation import (ARROW_LENGTH, Track, arrow_share, draw_cables, draw_cones, draw_forces, draw_labels,
+                        drawn_forces, force_arrows, labels, safe, track_pose)
 from .camera import (ASPECT, LABEL_HEIGHT, VIEW, camera_basis, camera_position, label_layout, robot_box,
                      up_rotation, view_direction)
 from .colors import ANCHOR_RGB, BACKGROUND, GRID_RGB, LINK_RGB, PLATFORM_RGB, mute, nice_ceil
