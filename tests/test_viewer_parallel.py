@@ -11,7 +11,7 @@ import pytest
 from mcdm_pin import InverseDynamics, Robot, load_trajectory
 from mcdm_pin.viewer import build_scene
 from mcdm_pin.viewer.animation import FORCE_FLOOR, arrow_share, drawn_forces
-from mcdm_pin.viewer.camera import FOV_DEG, camera_basis
+from mcdm_pin.viewer.camera import FILL, FOV_DEG, camera_basis
 from mcdm_pin.viewer.visuals import platform_hull
 
 from .conftest import REPO
