@@ -27,7 +27,9 @@ cable_names                 (m,)          cables
 coordinate_names            (nv,)         URDF joint of each coordinate
 interaction_wrench          (N, J, 6)     [F; M] of parent on child, joint point, child frame
 interaction_force_socket    (N, J, 3)     F in the socket (parent-side) frame
-interaction_angle_deg       (N, J)        angle of F from the socket axis, degrees
+interaction_angle_deg       (N, J)        angle of F from the socket axis, degrees (NaN for
+                                          joints without one: not spherical, no cone in the
+                                          sidecar or the run)
 cone_deg                    (J,)          cone half-angle used (NaN: no cone)
 time_model_s, time_solve_s  (N,)          wall time of model evaluation and of solving, s
 iterations                  (N,)          work of the stages that answered, summed: the
@@ -139,6 +141,21 @@ META_KEYS = ("robot", "problem", "solver", "trajectory", "problem_json")
 _OPTIONAL = {"needed_f_max": float("nan"), "needed_cone_deg": float("nan"), "unique": False, "stage": ""}
 
 
+def socket_angles(angles, rob, cone_deg) -> np.ndarray:
+    """``angles`` (N, J) with NaN in the columns of the joints of ``rob`` that have no socket axis:
+    not spherical, no cone in the sidecar (``cone_deg``) and none in the run (``cone_deg`` here, NaN
+    for none). A revolute joint's interaction force has no axis to lean from: no angle is stored."""
+    angles = np.array(angles, dtype=float)
+    cones = np.asarray(cone_deg, dtype=float).reshape(-1)
+    if angles.ndim != 2 or angles.shape[1] != len(rob.joints):
+        return angles
+    for j, joint in enumerate(rob.joints):
+        run_cone = j < len(cones) and np.isfinite(cones[j])
+        if joint.type != "spherical" and joint.cone_deg is None and not run_cone:
+            angles[:, j] = np.nan
+    return angles
+
+
 @dataclass
 class TrajectoryResult:
     """Results over a trajectory (arrays as in the module docstring)."""
@@ -225,6 +242,7 @@ class TrajectoryResult:
         """From the per-instant fields stacked into arrays (:func:`instant_columns`)."""
         coords = (traj.q.copy() if rob.nq == rob.nv else
                   np.array([rob.coordinates(q) for q in traj.q]).reshape(len(traj.t), rob.nv))
+        columns = dict(columns, interaction_angle_deg=socket_angles(columns["interaction_angle_deg"], rob, cone_deg))
         return cls(t=traj.t.copy(), q=coords, qd=traj.qd.copy(), qdd=traj.qdd.copy(), **columns,
                    configuration=traj.q.copy(),
                    joint_names=np.array(rob.joint_names, dtype=str),

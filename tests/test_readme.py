@@ -54,7 +54,7 @@ def test_readme_composable_example_runs(tmp_path, monkeypatch):
 @pytest.mark.skipif(shutil.which("git") is None or not (REPO / ".git").exists(), reason="not a git checkout")
 def test_outputs_the_docs_make_are_ignored_by_git():
     outputs = ["run.npz", "run.csv", "run.html", "traj2_case3.npz", "out/viewer.html", "out/traj1_case1.npz",
-               "notebooks/out/neck_case3.npz", "notebooks/out/summary.png", "build/neck/8S_neck.yaml",
+               "notebooks/out/neck_case3.npz", "notebooks/out/summary.png", "out/neck/8S_neck.yaml",
                "out.json", "out.md"]
     proc = subprocess.run(["git", "check-ignore", "--no-index", *outputs], cwd=REPO, capture_output=True,
                           text=True)

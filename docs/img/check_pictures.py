@@ -10,6 +10,7 @@ screenshot ``view --screenshot`` wrote):
   channel; rows and columns with at least 3 of them) as shares of the picture's height and width;
 * stray lines in the upper-left block (300 x 330 pixels): pixels that are not the robot's and differ
   by more than 0.05 from their row's background (the background is a vertical gradient);
+* the magenta pixels of the interaction-force arrows, and their share of the robot's pixels;
 * the cables' colours at TIME: how many pixels of each colour of the scale the cables have then
   (within 0.06 per channel, and not in the empty scene), the minimum-force colour among them.
 
@@ -63,6 +64,9 @@ def main(argv=None) -> int:
     block, robot_px = img[:300, :330], mask[:300, :330]
     dev = np.abs(block - np.median(block, axis=1, keepdims=True)).max(axis=2)
     print(f"  upper-left 300 x 330 block: {int((dev[~robot_px] > 0.05).sum())} stray pixels off the robot")
+    magenta = (img[..., 0] > 0.45) & (img[..., 1] < 0.3) & (img[..., 2] > 0.45) & mask
+    print(f"  interaction-force arrows (magenta): {int(magenta.sum())} pixels, "
+          f"{magenta.sum() / max(int(mask.sum()), 1):.2f} of the robot's")
     k = int(np.argmin(np.abs(run.t - args.time)))
     colors = tension_rgb(run.f[k], scene.fmax)
     for i, what in ((int(np.nanargmin(run.f[k])), "minimum"), (int(np.nanargmax(run.f[k])), "maximum")):

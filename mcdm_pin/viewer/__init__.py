@@ -13,7 +13,9 @@ so that gravity points down the screen, e.g. example-robot-data's y-up human sta
 * ``links/<link>``: every URDF link's visuals as Pinocchio's visual model has them (boxes, cylinders,
   spheres, meshes of any format Pinocchio reads), in muted colours; meshes (body skins, which hide the
   cables attached inside them) translucent by default (``links='auto'``). ``bodies/<joint>``: a simple
-  shape for a body without visuals, and a small dark sphere at every cable attachment point.
+  shape for a body without visuals, and a small dark sphere at every cable attachment point;
+  ``bodies/<joint>/platform``: a body whose attachment points span more than twice its visuals (a
+  cable robot's platform, which CASPR draws as a 1.6 cm sphere) as the convex hull of those points.
 * ``cables/<cable>/s<k>``: every route segment as a thin cylinder (browsers ignore line widths),
   coloured by the cable's tension on a **fixed colour scale** from 0 N (clear blue) through cyan,
   green and yellow to ``fmax`` (dark red), :mod:`~mcdm_pin.viewer.colors`; forces above ``fmax`` keep
@@ -23,8 +25,10 @@ so that gravity points down the screen, e.g. example-robot-data's y-up human sta
 * ``forces/<joint>``: the interaction force of the parent on the child (``interaction_wrench[:3]``)
   as a magenta arrow (cylinder + cone head) from the joint point with the joint's name at its tip,
   ``arrow_scale`` metres per newton (fixed; by default the run's largest force is drawn half as long
-  as the diagonal of the box that holds the robot over the trajectory). Hidden where there is no
-  answer.
+  as the diagonal of the box that holds the robot over the trajectory, and arrows are shorter and
+  thinner by sqrt(2 / count) when more than two joints have one, e.g. the neck's 8). Hidden where
+  there is no answer; a free joint (which transmits nothing: a cable robot's platform) and forces
+  below 1e-6 x the run's peak interaction or cable force (round-off) get no arrow.
 * ``cones/<joint>``: each spherical joint's stability cone: apex at the joint point, half-angle
   ``rho*`` about the socket axis, drawn in the socket frame (it moves with the parent link), about
   half as long as the child link. It is translucent green while the force is inside

@@ -12,6 +12,9 @@ from . import three
 from .colors import ARROW_RGB, CONE_OK_RGB, CONE_OUT_RGB, NO_ANSWER_RGB, tension_rgb
 
 CONE_TOL_DEG = 1e-6
+ARROW_LENGTH = 0.5  # the run's largest interaction force is drawn this share of the robot's extent
+# (x arrow_share: less for more than two arrows)
+FORCE_FLOOR = 1e-6  # forces below this share of the run's peak (interaction or cable) are not drawn
 _DISCRETE = 2300  # THREE.InterpolateDiscrete
 
 
@@ -91,6 +94,24 @@ class Arrows:
     origin: np.ndarray
     vector: np.ndarray
     visible: np.ndarray
+
+
+def arrow_share(count: int) -> float:
+    """The arrows' length and thickness, x those of one or two arrows: sqrt(2 / count) for more
+    (0.5 for the neck's 8 stacked joints), so that many arrows along a chain do not hide it."""
+    return float(min(1.0, np.sqrt(2.0 / max(count, 1))))
+
+
+def drawn_forces(robot, wrench: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """(N, J) where an interaction-force arrow is drawn: never for a free joint (it transmits no
+    force: what the solver reports there is round-off, e.g. 1e-12 N on a cable robot's platform), and
+    only for forces of at least :data:`FORCE_FLOOR` x the run's peak interaction force and x its
+    peak cable force (smaller ones are round-off or invisible at any common arrow scale)."""
+    F = np.linalg.norm(np.asarray(wrench, float)[:, :, :3], axis=2)
+    free = np.array([joint.type == "free" for joint in robot.joints], bool)
+    F = np.where(free[None, :] | ~np.isfinite(F), 0.0, F)
+    fpeak = float(np.nanmax(np.abs(f))) if np.any(np.isfinite(f)) else 0.0
+    return F > FORCE_FLOOR * max(float(F.max(initial=0.0)), fpeak)
 
 
 def force_arrows(robot, joint_T: np.ndarray, wrench: np.ndarray, scale: float) -> Arrows:

@@ -24,6 +24,7 @@ CONE_OK_RGB = (0.15, 0.75, 0.25)
 CONE_OUT_RGB = (1.0, 0.0, 0.0)
 ARROW_RGB = (0.8, 0.0, 0.8)
 LINK_RGB = (0.55, 0.6, 0.7)
+PLATFORM_RGB = (0.35, 0.42, 0.55)  # a cable robot's platform (muted to a mid blue-grey)
 ANCHOR_RGB = (0.25, 0.25, 0.25)
 MUTE_TOWARD = np.array([0.80, 0.80, 0.82])
 MUTE = 0.6  # share of the light grey in a muted link colour

@@ -11,12 +11,12 @@ import pinocchio as pin
 
 from ..exceptions import McdmError, ResultsError
 from . import three
-from .animation import (Track, draw_cables, draw_cones, draw_forces, draw_labels, force_arrows, labels,
-                        safe, track_pose)
+from .animation import (ARROW_LENGTH, Track, arrow_share, draw_cables, draw_cones, draw_forces, draw_labels,
+                        drawn_forces, force_arrows, labels, safe, track_pose)
 from .camera import (ASPECT, LABEL_HEIGHT, VIEW, camera_basis, camera_position, label_layout, robot_box,
                      up_rotation, view_direction)
-from .colors import ANCHOR_RGB, BACKGROUND, GRID_RGB, LINK_RGB, mute, nice_ceil
-from .visuals import fallback_bones, robot_visuals
+from .colors import ANCHOR_RGB, BACKGROUND, GRID_RGB, LINK_RGB, PLATFORM_RGB, mute, nice_ceil
+from .visuals import fallback_bones, platforms, robot_visuals
 
 GHOST_OPACITY = 0.3
 GHOST_MUTE = 0.8
@@ -258,12 +258,14 @@ def build_scene(robot, result, fmax: float | None = None, arrow_scale: float | N
                   f"trajectory {result.trajectory or '?'}, solver {result.solver or '?'}"]
     box = robot_box(kin, visuals, scene.up)
     scene.extent = box.extent
-    Fmag = np.linalg.norm(wrench[:, :, :3], axis=2)
+    shown = drawn_forces(robot, wrench, f)
+    Fmag = np.where(shown, np.linalg.norm(wrench[:, :, :3], axis=2), np.nan)
     Fpeak = np.nanmax(Fmag) if np.any(np.isfinite(Fmag)) else 0.0
+    thin = arrow_share(int(shown.any(axis=0).sum()))
     if arrow_scale is None:
-        arrow_scale = 0.5 * scene.extent / Fpeak if Fpeak > 0 else 0.0
+        arrow_scale = ARROW_LENGTH * thin * scene.extent / Fpeak if Fpeak > 0 else 0.0
     scene.arrow_scale = float(arrow_scale)
-    arrows = force_arrows(robot, kin.joint_T, wrench, scene.arrow_scale)
+    arrows = force_arrows(robot, kin.joint_T, np.where(shown[:, :, None], wrench, np.nan), scene.arrow_scale)
     direction = view_direction(box, kin, visuals, scene.up)
     tags = labels(robot, LABEL_HEIGHT * scene.extent)
     offsets = label_layout(arrows.origin[0] @ scene.up.T, tags.widths, tags.height, direction)
@@ -271,7 +273,7 @@ def build_scene(robot, result, fmax: float | None = None, arrow_scale: float | N
     environment(scene)
     _draw_links(scene, robot, kin, visuals, links)
     draw_cables(scene, robot, kin.segments, kin.seg_cable, f, fmax, scene.extent)
-    draw_forces(scene, robot, arrows, scene.extent)
+    draw_forces(scene, robot, arrows, thin * scene.extent)
     draw_labels(scene, robot, tags, arrows, offsets @ scene.up)
     draw_cones(scene, robot, kin.joint_T, kin.points, result, scene.extent)
     return scene
@@ -329,7 +331,8 @@ def environment(scene: Scene) -> None:
 # ------------------------------------------------------------------------------------------ links
 def _draw_links(scene: Scene, robot, kin: Kinematics, visuals, style: str) -> None:
     """Every link's visuals (muted colours; meshes translucent in ``auto``), simple shapes for bodies
-    without visuals, and a small dark sphere at every cable attachment point."""
+    without visuals (a platform's hull for a body spanned by its attachment points), and a small dark
+    sphere at every cable attachment point."""
     r = 0.015 * scene.extent
     by_link: dict[str, list] = {}
     for v in visuals:
@@ -345,17 +348,21 @@ def _draw_links(scene: Scene, robot, kin: Kinematics, visuals, style: str) -> No
         _pose(scene, base, kin.link_T[link])
     model = robot.model
     drawn = {int(model.frames[model.getFrameId(link, pin.FrameType.BODY)].parentJoint) for link in by_link}
+    cables = robot.cables
+    plates = platforms(robot, visuals)
     bodies = {}
+    for j, hull in plates.items():  # a platform: the body its attachment points span
+        base = bodies[j] = "/meshcat/mcdm/bodies/" + safe(model.names[j])
+        scene.set_object(f"{base}/platform", three.obj(three.mesh(*hull), three.material(mute(PLATFORM_RGB))))
     for bone in fallback_bones(robot, drawn):
         base = bodies[bone.joint_id] = "/meshcat/mcdm/bodies/" + safe(model.names[bone.joint_id])
         color = three.material(mute(LINK_RGB))
-        if bone.sphere:
+        if bone.sphere and bone.joint_id not in plates:
             scene.set_object(f"{base}/joint", three.obj(three.sphere(1.6 * r), color))
         for k, p in enumerate(bone.ends):
             L = float(np.linalg.norm(p))
             scene.set_object(f"{base}/bone{k}", three.obj(three.cylinder(L, r, r), color))
             scene.set_transform(f"{base}/bone{k}", three.T(three.rot_y_to(p)[0], 0.5 * p))
-    cables = robot.cables
     for i, (j, p) in enumerate(zip(cables.point_joint, cables.point_local)):
         j = int(j)
         base = bodies.setdefault(j, "/meshcat/mcdm/bodies/" + safe(model.names[j]))

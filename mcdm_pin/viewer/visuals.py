@@ -5,8 +5,11 @@ cylinders, spheres, capsules, cones, ellipsoids, and meshes in any format Pinocc
 scaled as the URDF says), each placed in the frame of its URDF link; ``package://`` paths resolve
 through the installed packages (:func:`mcdm_pin.urdf.package_share_dirs`). A body without visuals
 (and a robot built in code, which has no URDF) gets a simple shape: a cylinder from its joint to each
-child joint (or to twice its centre of mass) and a sphere at its joint. The massless bodies inside a
-grouped joint (e.g. the two inside an Euler-triple spherical joint) are not drawn.
+child joint (or to twice its centre of mass) and a sphere at its joint; a body that carries three or
+more cable attachment points spread over a plane or a volume (the moving platform of a parallel
+cable robot) is drawn as the convex hull of those points (:func:`platform_hull`), a flat one given a
+thickness of :data:`PLATFORM_THICKNESS` x its span. The massless bodies inside a grouped joint (e.g.
+the two inside an Euler-triple spherical joint) are not drawn.
 """
 
 from __future__ import annotations
@@ -123,6 +126,36 @@ def robot_visuals(robot) -> list[Visual]:
     return out
 
 
+PLATFORM_THICKNESS = 0.04  # a flat platform's thickness, x its span
+
+
+def platform_hull(points: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """(vertices (k, 3), faces (t, 3)) of the convex hull of a body's cable attachment points
+    ``points`` (n, 3, body frame), with outward-facing triangles; points on one plane are extruded
+    by +-half :data:`PLATFORM_THICKNESS` x their span along its normal. ``None`` for fewer than three
+    distinct points or points on one line (nothing to span: the body keeps its simple shape)."""
+    from scipy.spatial import ConvexHull
+
+    p = np.unique(np.round(np.asarray(points, float).reshape(-1, 3), 12), axis=0)
+    if len(p) < 3:
+        return None
+    center = p.mean(axis=0)
+    _, sv, vt = np.linalg.svd(p - center)
+    span = float(np.linalg.norm(p.max(axis=0) - p.min(axis=0)))
+    if sv[1] <= 1e-6 * span:  # on a line
+        return None
+    if sv[2] <= 1e-6 * span:  # on a plane: give it a thickness
+        n = vt[2] * 0.5 * PLATFORM_THICKNESS * span
+        p = np.concatenate([p + n, p - n])
+    hull = ConvexHull(p)
+    faces = hull.simplices.copy()
+    normals = hull.equations[:, :3]  # outward
+    tri_n = np.cross(p[faces[:, 1]] - p[faces[:, 0]], p[faces[:, 2]] - p[faces[:, 0]])
+    flip = np.einsum("ij,ij->i", tri_n, normals) < 0
+    faces[flip] = faces[flip][:, ::-1]
+    return p, faces
+
+
 @dataclass
 class Bone:
     """A simple shape for a body without visuals: ``ends`` (k, 3) of cylinders from its joint, in the
@@ -153,3 +186,22 @@ def fallback_bones(robot, drawn_joints: set[int]) -> list[Bone]:
         if ends or j > 0:
             bones.append(Bone(j, np.array(ends).reshape(-1, 3), sphere=j > 0))
     return bones
+
+
+def platforms(robot, visuals) -> dict:
+    """{Pinocchio joint: hull} of the moving bodies whose cable attachment points span a plane or a
+    volume more than twice as wide as the body's own visuals (e.g. CASPR's 1.6 cm centre-of-mass
+    sphere on a cable robot's 1 m platform): they are drawn as the hull of those points."""
+    model, cables = robot.model, robot.cables
+    size: dict[int, float] = {}
+    for v in visuals:
+        j = int(model.frames[model.getFrameId(v.link, pin.FrameType.BODY)].parentJoint)
+        size[j] = max(size.get(j, 0.0), float(np.linalg.norm(np.ptp(v.corners, axis=0))))
+    out = {}
+    for j in sorted({int(j) for j in cables.point_joint} - {0}):
+        p = cables.point_local[cables.point_joint == j]
+        span = float(np.linalg.norm(np.ptp(p, axis=0)))
+        hull = platform_hull(p) if span > 2.0 * size.get(j, 0.0) else None
+        if hull is not None:
+            out[j] = hull
+    return out

@@ -5,6 +5,8 @@ Colours (``color_by``: ``needed_f_max`` or ``needed_cone_deg``): the *turbo* map
 to the problem's limit (``f_max``, or the cone half-angle; dark red), so the colour says how much of
 the limit a pose uses; poses past the limit are red, poses that no bound or cone makes feasible
 (``inf``) and poses without a margin (NaN) are grey. The point cloud is ``/meshcat/mcdm/workspace``.
+The drawn pose's cables are coloured on the viewer's tension scale up to the store's peak cable force
+(rounded up, :func:`cable_scale`).
 
 Use::
 
@@ -57,6 +59,17 @@ def margin_colors(value: np.ndarray, limit: float) -> np.ndarray:
     return rgb
 
 
+def cable_scale(f: np.ndarray) -> float:
+    """The top of the drawn pose's cable colour scale, N: the store's peak cable force over every
+    pose, rounded up as the trajectory viewer rounds a run's peak (:func:`~mcdm_pin.viewer.nice_ceil`),
+    so that the pose's cables are coloured against the whole workspace (not against their own
+    maximum, which puts every cable of a pose at its lower bound at the top of the scale)."""
+    from ..viewer import nice_ceil
+
+    f = np.asarray(f, float)
+    return nice_ceil(float(np.nanmax(f))) if np.isfinite(f).any() else 1.0
+
+
 def cloud_scene(robot, ds, frame: str, color_by: str = "needed_f_max", pose: int | None = None,
                 point_size: float | None = None):
     """The viewer's scene of the robot at pose ``pose`` (default: the optimal pose with the largest
@@ -96,7 +109,7 @@ def cloud_scene(robot, ds, frame: str, color_by: str = "needed_f_max", pose: int
         robot, Trajectory(f"pose {pose}", np.zeros(1), q[pose:pose + 1], qd[None], qdd[None]),
         instant_columns([res]), np.full(len(robot.joints), np.nan), problem=attrs["problem"],
         solver=setup.solver, trajectory=f"workspace pose {pose}")
-    scene = build_scene(robot, one, source="the workspace pose")
+    scene = build_scene(robot, one, source="the workspace pose", fmax=cable_scale(ds["f"].values))
     limit = float(min(attrs["f_max"])) if color_by == "needed_f_max" else max(attrs["cones_deg"].values())
     points = frame_positions(robot, q, frame)
     rgb = margin_colors(ds[color_by].values, limit)
