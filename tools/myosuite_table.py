@@ -211,7 +211,12 @@ def errors(name: str, count: int = 50) -> dict:
     body_of = {int(maps.body_joint[b]): b for b in range(1, mj.nbody) if mj.body_jntnum[b]}
     err = dict(model=name, states=count, lengths=0.0, L=0.0, tensions=0.0, wrenches=0.0)
     for qpos, qvel, act in _states(mj, robot, np.random.default_rng(1), count):
-        d.qpos[:], d.qvel[:], d.act[:] = qpos, qvel, act
+        d.qpos[:], d.qvel[:] = qpos, qvel
+        for i in range(mj.nu):  # muscles: the activation; motors: that share of the control range
+            if mj.actuator_actadr[i] >= 0:
+                d.act[mj.actuator_actadr[i]] = act[i]
+            else:
+                d.ctrl[i] = mj.actuator_ctrlrange[i, 0] + act[i] * np.diff(mj.actuator_ctrlrange[i])[0]
         mujoco.mj_forward(mj, d)
         mujoco.mj_rnePostConstraint(mj, d)
         q = maps.to_pin_q(qpos)
@@ -219,7 +224,10 @@ def errors(name: str, count: int = 50) -> dict:
         J = _tendon_J(mj, d)[tendons]
         L_mj = t.L_full @ np.column_stack([maps.to_pin_v(e, qpos) for e in np.eye(mj.nv)])
         f_mj = -d.actuator_force[acts] * gear
-        f = t.muscles.passive + t.muscles.gain * act[acts]
+        k = robot.cables.muscle_index  # the muscles' tensions from our model; a motor's is its control
+        f = f_mj.copy()
+        if t.muscles is not None:
+            f[k] = t.muscles.passive + t.muscles.gain * act[acts[k]]
         p = t.wrenches(f_mj)
         worst_p = 0.0
         for k, joint in enumerate(robot.joints):
