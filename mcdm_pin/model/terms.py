@@ -230,28 +230,38 @@ class TermsEvaluator:
         # numpy reference formulation covers fixed routes only)
         self._routes = RoutePaths(cables, pos) if cables.configuration_dependent else None
         if compiled or self._routes is not None:
-            from .. import jit
-            from .kernels import csr
+            self._setup_kernel(len(keys))
+        else:
+            self._setup_numpy(len(keys))
 
-            self._kernel = jit.kernels("model.kernels").cable_terms  # compiled or not (mcdm_pin/jit.py)
-            self.compiled = True
-            K = len(keys)
-            self._v_csr = csr([np.flatnonzero(self._sub_v[:, k]).tolist() for k in range(K)], K)
-            self._a_csr = csr([np.flatnonzero(self._sub_phys[:, k]).tolist() for k in range(K)], K)
-            self._route_args = (
-                np.ascontiguousarray(cables.point_local, dtype=float),
-                self._point_key.astype(np.int64), cables.seg_a.astype(np.int64),
-                cables.seg_b.astype(np.int64), cables.seg_cable.astype(np.int64),
-                cables.seg_active.astype(np.bool_), np.ascontiguousarray(cables.seg_scale, dtype=float))
-            self._kernel_args = (
-                *self._v_csr, *self._a_csr,
-                self._child_key.astype(np.int64), self._parent_key.astype(np.int64),
-                np.ascontiguousarray(self._R_sp, dtype=float), int(cables.m), len(js))
-            return
-        self._maps = maps = CableMaps(cables, self._point_key, len(keys))
+    def _setup_kernel(self, K: int) -> None:
+        """The cable-terms kernel's fixed arguments (compiled or not: :mod:`mcdm_pin.jit`)."""
+        from .. import jit
+        from .kernels import csr
+
+        cables = self.cables
+        self._kernel = jit.kernels("model.kernels").cable_terms
+        self.compiled = True
+        self._v_csr = csr([np.flatnonzero(self._sub_v[:, k]).tolist() for k in range(K)], K)
+        self._a_csr = csr([np.flatnonzero(self._sub_phys[:, k]).tolist() for k in range(K)], K)
+        self._route_args = (
+            np.ascontiguousarray(cables.point_local, dtype=float),
+            self._point_key.astype(np.int64), cables.seg_a.astype(np.int64),
+            cables.seg_b.astype(np.int64), cables.seg_cable.astype(np.int64),
+            cables.seg_active.astype(np.bool_), np.ascontiguousarray(cables.seg_scale, dtype=float))
+        self._kernel_args = (
+            *self._v_csr, *self._a_csr,
+            self._child_key.astype(np.int64), self._parent_key.astype(np.int64),
+            np.ascontiguousarray(self._R_sp, dtype=float), int(cables.m), len(self.joints))
+
+    def _setup_numpy(self, K: int) -> None:
+        """The numpy reference formulation's index maps (fixed routes)."""
+        from scipy import sparse
+
+        cables = self.cables
+        self._maps = maps = CableMaps(cables, self._point_key, K)
         # end point e moves with column v when its body is in the subtree of v's joint
         self._end_mask = self._sub_v[:, maps.end_body].T  # (E, nv)
-        from scipy import sparse
         n_end = len(maps.ends)
         m = cables.m
         self._cable_of_end = sparse.csr_matrix(
@@ -265,7 +275,7 @@ class TermsEvaluator:
         rows = np.concatenate(rows) if rows else np.zeros(0, int)
         cols = np.concatenate(cols) if cols else np.zeros(0, int)
         self._subtree_of_end = sparse.csr_matrix((np.ones(len(rows)), (rows, cols)),
-                                                 shape=(len(js) * m, n_end))
+                                                 shape=(len(self.joints) * m, n_end))
 
     def check_state(self, q, v=None, a=None):
         """``(q, v, a)`` as float arrays of sizes nq, nv, nv (``None``: zeros), or :class:`StateError`
