@@ -33,3 +33,6 @@ MAX_XML_BYTES = 64 * 2**20
 MAX_RESULTS_BYTES = 4 * 2**30
 #: the largest magnitude of any number read (larger finite values overflow in the dynamics)
 MAX_MAGNITUDE = 1e100
+#: the smallest cable force bound other than 0, N (squares of smaller forces, ``f^T f``, underflow
+#: double precision: the problem's scale is then lost and no check can tell an optimum)
+MIN_FORCE_BOUND = 1e-100

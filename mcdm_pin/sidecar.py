@@ -17,7 +17,7 @@ from typing import Any
 
 from . import yaml12
 from .exceptions import SidecarError
-from .limits import MAX_CABLES, MAX_MAGNITUDE, MAX_ROUTE_POINTS, MAX_SAMPLES, MAX_SIDECAR_BYTES
+from .limits import MAX_CABLES, MAX_MAGNITUDE, MAX_ROUTE_POINTS, MAX_SAMPLES, MAX_SIDECAR_BYTES, MIN_FORCE_BOUND
 
 SUPPORTED_VERSIONS = (1,)
 JOINT_TYPES = ("spherical", "revolute", "prismatic", "universal", "planar", "translation", "free")
@@ -492,6 +492,10 @@ def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:
         names[name] = i
         f_min = r.number(spec["f_min"], f"{key}.f_min", lo=0.0)
         f_max = r.number(spec["f_max"], f"{key}.f_max")
+        for which, value in (("f_min", f_min), ("f_max", f_max)):
+            if 0.0 < abs(value) < MIN_FORCE_BOUND:
+                raise r.fail(f"{key}.{which}", f"expected 0 or at least {MIN_FORCE_BOUND:g} N (docs/limits.md: "
+                                               f"smaller forces' squares underflow), got {value!r}")
         if not f_max > f_min:
             raise r.fail(f"{key}.f_max", f"expected f_max > f_min = {f_min!r}, got {f_max!r}")
         route = spec["route"]

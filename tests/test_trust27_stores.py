@@ -210,7 +210,8 @@ def test_names_made_legal_are_unique_and_keep_legal_spellings():
 
 # ------------------------------------------------------------------------------ the time budget
 def _tiny_bounds_robot(tmp_path):
-    """The 2-link arm without gravity, every cable bounded to 1e-300..1e-290 N."""
+    """The 2-link arm without gravity, every cable bounded to 1e-100..1e-90 N (the smallest bounds the
+    limits let through: docs/limits.md)."""
     import yaml
 
     from mcdm_pin import Robot
@@ -219,28 +220,63 @@ def _tiny_bounds_robot(tmp_path):
     sc["urdf"] = str((TWO_LINK.parent / sc["urdf"]).resolve())
     sc["gravity"] = [0.0, 0.0, 0.0]
     for c in sc["cables"]:
-        c["f_min"], c["f_max"] = 1e-300, 1e-290
+        c["f_min"], c["f_max"] = 1e-100, 1e-90
     (tmp_path / "tiny.yaml").write_text(yaml.safe_dump(sc, sort_keys=False))
     return Robot.load(tmp_path / "tiny.yaml")
 
 
 @pytest.mark.parametrize("solver", ["proxqp", "default"])
 def test_the_budget_holds_inside_a_proxqp_call(tmp_path, solver):
-    """At t = 0.25 s of traj1 the forces cannot move the arm; ProxQP's one call ran 1.5 million inner
-    iterations (58 s) past a 1 s budget before it stopped at its iteration limit."""
-    from mcdm_pin import InverseDynamics
-    from mcdm_pin.problem import case_problem
+    """At t = 0.25 s of traj1 the forces cannot move the arm; with bounds of 1e-300..1e-290 N,
+    ProxQP's one call ran 1.5 million inner iterations (58 s) past a 1 s budget before it stopped at
+    its iteration limit. Such bounds are refused as input now (docs/limits.md), so the instant's
+    problem gets them after assembly: the back-end's own budget is what is tested."""
+    import numpy as np
+
+    from mcdm_pin.model.terms import TermsEvaluator
+    from mcdm_pin.problem import Context, case_problem
+    from mcdm_pin.solvers import get_solver
     from mcdm_pin.trajectory import load_trajectory
 
     robot = _tiny_bounds_robot(tmp_path)
     k = 1
     traj = load_trajectory(robot, "traj1").subsample(5)
-    solve = InverseDynamics(robot, case_problem(robot, 1), solver=solver, diagnose=False, budget_s=0.3)
+    terms = TermsEvaluator(robot)(traj.q[k], traj.qd[k], traj.qdd[k])
+    qp = case_problem(robot, 1).assemble(terms, Context(robot))
+    qp = qp.replace(lb=np.full(robot.m, 1e-300), ub=np.full(robot.m, 1e-290))
     t0 = time.perf_counter()
-    r = solve.solve(traj.q[k], traj.qd[k], traj.qdd[k])
+    r = get_solver(solver, budget_s=0.3).solve(qp)
     elapsed = time.perf_counter() - t0
     assert elapsed < 0.3 + 0.5, (elapsed, r.status, r.message)
     assert r.status in ("budget", "infeasible"), (r.status, r.message)
+
+
+def test_force_bounds_below_the_underflow_limit_are_refused(tmp_path):
+    """Bounds of 1e-300..1e-290 N were solved with f = f_min and called inaccurate (f^T f underflows):
+    now the sidecar, and a CableSet built in code, refuse them, naming the key."""
+    import numpy as np
+    import yaml
+
+    from mcdm_pin.exceptions import ModelError, SidecarError
+    from mcdm_pin.model.cables import Cable, CableSet
+    from mcdm_pin import Robot
+
+    sc = yaml.safe_load(TWO_LINK.read_text())
+    sc["urdf"] = str((TWO_LINK.parent / sc["urdf"]).resolve())
+    for c in sc["cables"]:
+        c["f_min"], c["f_max"] = 1e-300, 1e-290
+    (tmp_path / "tiny.yaml").write_text(yaml.safe_dump(sc, sort_keys=False))
+    with pytest.raises(SidecarError, match=r"cables\[0\]\.f_min: expected 0 or at least 1e-100 N"):
+        Robot.load(tmp_path / "tiny.yaml")
+    robot = _tiny_bounds_robot(tmp_path)  # 1e-100..1e-90: the limit itself loads, and at rest
+    from mcdm_pin import InverseDynamics  # f = f_min is the answer of every case
+
+    for case in (1, 2, 3):
+        res = InverseDynamics.for_case(robot, case).solve(np.zeros(robot.nv))
+        assert res.status == "optimal" and np.allclose(res.f, 1e-100, rtol=1e-9, atol=0), (case, res.message)
+    cable = robot.cables.cables[0]
+    with pytest.raises(ModelError, match="at least 1e-100 N"):
+        CableSet(robot.model, [Cable("c", cable.route, 1e-300, 1e-290)])
 
 
 # ------------------------------------------------------------------------------------ clean words

@@ -32,6 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ModelError
+from ..limits import MIN_FORCE_BOUND
 
 
 @dataclass(frozen=True)
@@ -164,6 +165,10 @@ def _as_cable(model, item, k: int) -> tuple[Cable, list]:
     if not (math.isfinite(f_min) and math.isfinite(f_max) and 0.0 <= f_min < f_max):
         raise ModelError(f"cable {cable.name!r}: expected finite bounds with 0 <= f_min < f_max, got "
                          f"f_min={cable.f_min!r}, f_max={cable.f_max!r}")
+    if 0.0 < f_min < MIN_FORCE_BOUND or f_max < MIN_FORCE_BOUND:
+        raise ModelError(f"cable {cable.name!r}: expected bounds of 0 or at least {MIN_FORCE_BOUND:g} N "
+                         f"(docs/limits.md: smaller forces' squares underflow), got f_min={f_min!r}, "
+                         f"f_max={f_max!r}")
     n_points = sum(1 for r in resolved if r[0] == "point")
     if n_points < 2:
         raise ModelError(f"cable {cable.name!r}: expected a route of at least two points, got {n_points}")
