@@ -22,6 +22,8 @@ import numpy as np
 import yaml
 from hypothesis import strategies as st
 
+from mcdm_pin.limits import MIN_FORCE_BOUND
+
 
 @dataclass(frozen=True)
 class GenLink:
@@ -230,6 +232,8 @@ def robots(draw, min_links: int = 1, max_links: int = 6, tree: bool | None = Non
                 rad, z = draw(st.floats(0.2, 0.6)) * max(Lk, 0.05), draw(st.floats(0.1, 0.9)) * Lk
             points.append((_r(rad * np.cos(theta)), _r(rad * np.sin(theta)), _r(z)))
         f_min = _r(draw(st.floats(*f_bounds[0])))
+        if f_min < MIN_FORCE_BOUND:  # a bound other than 0 is at least 1e-100 N (docs/limits.md)
+            f_min = 0.0
         f_max = _r(max(draw(st.floats(*f_bounds[1])), 2 * f_min + 1e-3))
         for turn in ((0.0, 2 * np.pi / 3, 4 * np.pi / 3) if grouped else (0.0,)):
             c, s = np.cos(turn), np.sin(turn)
