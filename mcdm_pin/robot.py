@@ -24,6 +24,7 @@ from .model.actuators import Actuator, actuation_matrix
 from .model.cables import Cable, CableSet, RoutePoint
 from .model.joints import PhysicalJoint, group, massless_members, physical_joints
 from .model.terms import check_vector
+from .mjcf.load import compile_mjcf, is_mjcf, mjcf_parts
 from .sidecar import Sidecar, _names, load_sidecar
 from .urdf import check_model_inertias, load_model, package_share_dirs, replace_joints, urdf_joint_axes
 
@@ -128,12 +129,20 @@ class Robot:
     # ----------------------------------------------------------------------------------------- load
     @classmethod
     def load(cls, path) -> "Robot":
-        """Load a robot from a sidecar YAML file (which names its URDF) or a MuJoCo MJCF file."""
-        from .mjcf.load import is_mjcf, load_mjcf
-
+        """Load a robot from a sidecar YAML file (which names its URDF or MJCF) or a MuJoCo MJCF file."""
         if is_mjcf(path):
-            return load_mjcf(path)
+            return cls.from_mujoco(compile_mjcf(path), str(path), Path(path).stem)
         return cls.from_sidecar(load_sidecar(path))
+
+    @classmethod
+    def from_mujoco(cls, mj, source: str = "mujoco model", name: str = "robot") -> "Robot":
+        """A robot from a compiled ``mujoco.MjModel`` (:mod:`mcdm_pin.mjcf`; ``source`` names it in
+        messages)."""
+        try:
+            return cls(**mjcf_parts(mj, source, name)._asdict())
+        except ModelError as exc:
+            msg = str(exc)
+            raise ModelError(msg if msg.startswith(source) else f"{source}: {msg}") from None
 
     @classmethod
     def from_model(cls, model: pin.Model, cables, joints=None, actuators=(), name: str = "robot") -> "Robot":
@@ -275,12 +284,10 @@ class Robot:
 # ------------------------------------------------------------------------------------ sidecar helpers
 def _from_mjcf_sidecar(sc: Sidecar) -> Robot:
     """The MJCF file's robot with the sidecar's joint settings and trajectories."""
-    from .mjcf.load import load_mjcf
-
     if not sc.mjcf_path.is_file():
         raise sc.error("mjcf", f"MJCF file not found: {sc.mjcf_path}")
     try:
-        robot = load_mjcf(sc.mjcf_path, sc.name)
+        robot = Robot.from_mujoco(compile_mjcf(sc.mjcf_path), str(sc.mjcf_path), sc.name)
     except ModelError as exc:
         raise sc.error("mjcf", str(exc)) from None
     joints = {j.name: j for j in robot.joints}

@@ -15,7 +15,7 @@ import pytest
 mujoco = pytest.importorskip("mujoco")
 myo_sim = pytest.importorskip("myo_sim", reason="MyoSuite's models (pip install myo-sim) are the references")
 
-from mcdm_pin.mjcf.load import robot_from_mujoco  # noqa: E402
+from mcdm_pin.robot import Robot  # noqa: E402
 from mcdm_pin.model.terms import TermsEvaluator  # noqa: E402
 
 STATES = 50
@@ -44,7 +44,7 @@ def case(request, tmp_path_factory):
     try:
         mj = _compile(request.param)
         mj.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
-        robot = robot_from_mujoco(mj, request.param, request.param)
+        robot = Robot.from_mujoco(mj, request.param, request.param)
         yield request.param, mj, robot, TermsEvaluator(robot)
     finally:
         os.chdir(here)

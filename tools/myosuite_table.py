@@ -4,7 +4,7 @@ For each model of ``myo_sim`` (the file models of ``myo_sim.REGISTRY``, the othe
 ``models/legacy`` folder that are whole models, the models ``myo_sim.load_spec`` composes in code and
 the left hand of ``myo_sim.FRAGMENT_SPEC_BUILDERS``), MuJoCo compiles it (a composed model through
 ``MjSpec.compile``, as ``myo_sim.load_model`` does: MuJoCo 4.0 cannot compile again the ``to_xml`` of the
-mirrored ones, "repeated default class name"), :func:`mcdm_pin.mjcf.load.robot_from_mujoco`
+mirrored ones, "repeated default class name"), :meth:`mcdm_pin.robot.Robot.from_mujoco`
 reads it, and, when it loads, ``mcdm-pin info``'s validation report runs at MuJoCo's reference pose
 ``qpos0`` (Pinocchio's ``q = 0``). A refusal prints the loader's message.
 
@@ -137,7 +137,7 @@ def survey(name: str) -> dict:
     import mujoco
 
     from mcdm_pin.exceptions import McdmError
-    from mcdm_pin.mjcf.load import robot_from_mujoco
+    from mcdm_pin.robot import Robot
 
     row = dict(model=name)
     t0 = time.perf_counter()
@@ -151,7 +151,7 @@ def survey(name: str) -> dict:
                      f"{mj.nu} actuators, {mj.neq} equalities")
     mj.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
     try:
-        robot = robot_from_mujoco(mj, name, name)
+        robot = Robot.from_mujoco(mj, name, name)
     except McdmError as exc:
         row["result"] = f"refused: {exc}"
         return row
@@ -198,12 +198,12 @@ def errors(name: str, count: int = 50) -> dict:
     """Largest relative errors against MuJoCo of one model (``--errors`` in the module docstring)."""
     import mujoco
 
-    from mcdm_pin.mjcf.load import robot_from_mujoco
+    from mcdm_pin.robot import Robot
     from mcdm_pin.model.terms import TermsEvaluator
 
     mj = compile_model(name)
     mj.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
-    robot = robot_from_mujoco(mj, name, name)
+    robot = Robot.from_mujoco(mj, name, name)
     maps, ev, d = robot.source.maps, TermsEvaluator(robot), mujoco.MjData(mj)
     acts = np.array([mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_ACTUATOR, n) for n in robot.cable_names])
     tendons = mj.actuator_trnid[acts, 0]

@@ -1,12 +1,12 @@
 """A loader: MuJoCo MJCF files (MyoSuite's models among them) -> Robot, through MuJoCo's own compiler.
 
-:func:`load_mjcf` (a file) and :func:`robot_from_mujoco` (a compiled ``mujoco.MjModel``) give the
-:class:`~mcdm_pin.robot.Robot`; :mod:`.model` builds the ``pin.Model`` and the coordinate maps,
-:mod:`.tendons` the cables, muscles, motors and couplings. ``Robot.load("model.xml")`` and every command
-call it. MuJoCo is the ``mjcf`` extra (``pip install 'mcdm-pin[mjcf]'``).
+:func:`compile_mjcf` (MuJoCo compiles a file) and :func:`mjcf_parts` (a compiled ``mujoco.MjModel`` ->
+the robot's parts) are what ``Robot.load("model.xml")``, ``Robot.from_mujoco(mj)`` and every command
+use; :mod:`.model` builds the ``pin.Model`` and the coordinate maps, :mod:`.tendons` the cables,
+muscles, motors and couplings. MuJoCo is the ``mjcf`` extra (``pip install 'mcdm-pin[mjcf]'``).
 """
 
-from .load import is_mjcf, load_mjcf, robot_from_mujoco
+from .load import RobotParts, compile_mjcf, is_mjcf, mjcf_parts
 from .model import MjcfModel, build_model
 
-__all__ = ["is_mjcf", "load_mjcf", "robot_from_mujoco", "MjcfModel", "build_model"]
+__all__ = ["RobotParts", "compile_mjcf", "is_mjcf", "mjcf_parts", "MjcfModel", "build_model"]

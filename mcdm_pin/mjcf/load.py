@@ -1,4 +1,5 @@
-"""A loader: a MuJoCo MJCF file -> :class:`~mcdm_pin.robot.Robot`, through MuJoCo's own compiler.
+"""A loader: a MuJoCo MJCF file -> the parts of a :class:`~mcdm_pin.robot.Robot`, through MuJoCo's own
+compiler (``Robot.load("model.xml")`` and ``Robot.from_mujoco(mj)`` build the robot from them).
 
 MuJoCo (the ``mjcf`` extra) compiles the file: defaults, includes, frames, inertias from geoms are
 resolved exactly as MuJoCo resolves them. The Pinocchio model is built from the compiled arrays
@@ -11,10 +12,17 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
 from ..exceptions import ModelError, StateError
+from ..model.actuators import Actuator
+from ..model.cables import CableSet
+from ..model.couplings import Couplings
+from ..model.joints import physical_joints
+from .model import build_model
+from .tendons import read_couplings, read_tendons
 
 MJCF_SUFFIXES = (".xml", ".mjcf")
 
@@ -44,21 +52,23 @@ def is_mjcf(path) -> bool:
     return re.search(r"<mujoco[\s>]", head) is not None
 
 
-def load_mjcf(path, name: str | None = None):
-    """The :class:`~mcdm_pin.robot.Robot` of an MJCF file (module docstring)."""
-    mj = compile_mjcf(path)
-    return robot_from_mujoco(mj, str(path), name or Path(path).stem)
+class RobotParts(NamedTuple):
+    """What :func:`mjcf_parts` reads, as :class:`~mcdm_pin.robot.Robot` takes it (``Robot(**parts._asdict())``:
+    :meth:`~mcdm_pin.robot.Robot.from_mujoco` does that)."""
+
+    model: object
+    cables: object
+    joints: tuple
+    actuators: tuple
+    name: str
+    couplings: object
+    coordinate_names: tuple
+    source: object
+    notes: tuple
 
 
-def robot_from_mujoco(mj, source: str, name: str = "robot"):
-    """The :class:`~mcdm_pin.robot.Robot` of a compiled ``mujoco.MjModel`` (``source``: for messages)."""
-    from ..model.cables import CableSet
-    from ..model.couplings import Couplings
-    from ..model.joints import physical_joints
-    from ..robot import Robot
-    from .model import build_model
-    from .tendons import read_couplings, read_tendons
-
+def mjcf_parts(mj, source: str, name: str = "robot") -> RobotParts:
+    """The robot of a compiled ``mujoco.MjModel``, in parts (``source``: a path or label for messages)."""
     try:
         mjm = build_model(mj, source)
         tendons = read_tendons(mj, mjm, source)
@@ -77,19 +87,13 @@ def robot_from_mujoco(mj, source: str, name: str = "robot"):
             q_index[mjm.jnt_idx_v[j]] = mjm.jnt_idx_q[j]
     couplings = Couplings(q_index, coupled, names) if coupled else None
     joints = physical_joints(mjm.model)
-    try:
-        return Robot(mjm.model, cables, joints, _joint_motors(mjm, joints, tendons.joint_motors), name=name,
-                     couplings=couplings, coordinate_names=names, source=MjcfSource(mjm, couplings),
-                     notes=tendons.notes)
-    except ModelError as exc:
-        raise ModelError(f"{source}: {exc}") from None
+    return RobotParts(mjm.model, cables, joints, _joint_motors(mjm, joints, tendons.joint_motors), name,
+                      couplings, names, MjcfSource(mjm, couplings), tendons.notes)
 
 
 def _joint_motors(mjm, joints, motors) -> tuple:
     """Bounded motors on hinge and slide joints as actuators of the physical joint (MuJoCo body) holding
     the joint, named after the MuJoCo actuator."""
-    from ..model.actuators import Actuator
-
     owner = {int(i): j for j in joints for i in j.idx_v}
     out = []
     for name, jnt, lo, hi in motors:
