@@ -312,15 +312,13 @@ def _from_mjcf_sidecar(sc: Sidecar) -> Robot:
 def _reserves(sc: Sidecar, robot: Robot) -> tuple[Actuator, ...]:
     """The sidecar's reserve actuators: one per named coordinate, on the physical joint that holds it."""
     out = []
-    owner = {int(i): j for j in robot.joints for i in j.idx_v}
     for spec in sc.reserves:
         for k, name in enumerate(spec.coordinates):
             if name not in robot.coordinate_names:
                 raise sc.error(f"{spec.key}.coordinates[{k}]", f"unknown coordinate {name!r}; expected one of "
                                                                f"{_names(robot.coordinate_names)}")
-            i = robot.coordinate_names.index(name)
-            out.append(Actuator(owner[i].name, np.array([i]), np.array([-spec.max]), np.array([spec.max]),
-                                spec.weight, label=name))
+            out.append(Actuator.on_coordinate(robot.joints, robot.coordinate_names.index(name), -spec.max,
+                                              spec.max, spec.weight, label=name))
     return tuple(out)
 
 
@@ -417,8 +415,10 @@ def _physical_joints(model: pin.Model, sc: Sidecar, urdf_path) -> tuple[Physical
 
 
 def _cables(model: pin.Model, sc: Sidecar, joints) -> CableSet:
-    cables = [Cable(spec.name, tuple(_route_element(model, sc, joints, p) for p in spec.route), spec.f_min,
-                    spec.f_max) for spec in sc.cables]
+    links = {f.name for f in model.frames if f.type == pin.FrameType.BODY}
+    inside = massless_members(joints)
+    cables = [Cable(spec.name, tuple(_route_element(model, sc, links, inside, p) for p in spec.route),
+                    spec.f_min, spec.f_max) for spec in sc.cables]
     try:
         return CableSet(model, cables)
     except ModelError as exc:
@@ -428,19 +428,18 @@ def _cables(model: pin.Model, sc: Sidecar, joints) -> CableSet:
         raise sc.error("cables", str(exc)) from None
 
 
-def _route_element(model: pin.Model, sc: Sidecar, joints, p):
-    """A sidecar route element (point, wrap or pulley) as the model layer's, its link checked."""
+def _route_element(model: pin.Model, sc: Sidecar, links: set, inside: dict, p):
+    """A sidecar route element (point, wrap or pulley) as the model layer's, its link checked against
+    the model's ``links`` and the massless links ``inside`` grouped joints."""
     from .model.cables import Pulley, Wrap, find_frame
     from .sidecar import PulleySpec, WrapSpec
 
     if isinstance(p, PulleySpec):
         return Pulley(p.divisor)
-    links = {f.name for f in model.frames if f.type == pin.FrameType.BODY}
     if p.link not in links:
         raise sc.error(f"{p.key}.link", f"unknown link {p.link!r}; expected one of "
                                         f"{_names(dict.fromkeys(f.name for f in model.frames if f.type == pin.FrameType.BODY))}")
     jid = int(model.frames[find_frame(model, p.link)].parentJoint)
-    inside = massless_members(joints)
     if jid in inside:
         raise sc.error(f"{p.key}.link", f"link {p.link!r} is an intermediate massless link of joint "
                                         f"{inside[jid]!r}; attach cables to the parent or child link")

@@ -94,12 +94,8 @@ def mjcf_parts(mj, source: str, name: str = "robot") -> RobotParts:
 def _joint_motors(mjm, joints, motors) -> tuple:
     """Bounded motors on hinge and slide joints as actuators of the physical joint (MuJoCo body) holding
     the joint, named after the MuJoCo actuator."""
-    owner = {int(i): j for j in joints for i in j.idx_v}
-    out = []
-    for name, jnt, lo, hi in motors:
-        i = int(mjm.jnt_idx_v[jnt])
-        out.append(Actuator(owner[i].name, np.array([i]), np.array([lo]), np.array([hi]), 1.0, label=name))
-    return tuple(out)
+    return tuple(Actuator.on_coordinate(joints, int(mjm.jnt_idx_v[jnt]), lo, hi, 1.0, label=name)
+                 for name, jnt, lo, hi in motors)
 
 
 def _line_of(source: str, message: str) -> str:

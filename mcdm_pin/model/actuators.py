@@ -58,6 +58,17 @@ class Actuator:
         return (base,) if k == 1 else tuple(f"{base}[{i}]" for i in range(k))
 
     @classmethod
+    def on_coordinate(cls, joints, i: int, tau_min: float, tau_max: float, weight: float = 1.0,
+                      label: str = "") -> "Actuator":
+        """An actuator of the one coordinate ``i`` (index in ``v``), on the physical joint among
+        ``joints`` that holds it (an MJCF motor, a reserve)."""
+        owner = next((j for j in joints if int(i) in j.idx_v), None)
+        if owner is None:
+            raise ModelError(f"actuator {label!r}: coordinate {i} belongs to no physical joint")
+        return cls(owner.name, np.array([int(i)]), np.array([float(tau_min)]), np.array([float(tau_max)]),
+                   float(weight), label=label)
+
+    @classmethod
     def on(cls, joint, tau_min, tau_max, weight: float = 1.0) -> "Actuator":
         """An actuator on a :class:`~mcdm_pin.model.joints.PhysicalJoint`."""
         return cls(joint.name, joint.idx_v, np.atleast_1d(np.asarray(tau_min, dtype=float)),
