@@ -113,6 +113,8 @@ class InverseDynamics:
         if not checked:  # (q once: the configuration's check is the evaluator's and more)
             q = self.robot.check_configuration(q)
             qd, qdd = self.evaluate.check_motion(qd, qdd)
+            if self.robot.couplings is not None:  # coupled coordinates follow their couplings
+                self.robot.couplings.check(q, qd, qdd)
         terms = self.evaluate(q, qd, qdd, checked=True)
         if not terms.finite and not (np.all(np.isfinite(terms.tau)) and np.all(np.isfinite(terms.L))):
             raise StateError("the dynamics overflow at this state (non-finite M qdd + h or L): check "

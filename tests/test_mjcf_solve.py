@@ -68,3 +68,17 @@ def test_arm_abduction_with_and_without_the_glenohumeral_cone(cone):
         assert np.all(angle <= robot.joint("scapphant_r").cone_deg + 1e-6)
     else:
         assert angle.max() > robot.joint("scapphant_r").cone_deg  # the cone binds along this motion
+
+
+def test_a_state_that_breaks_a_coupling_is_refused_by_solve():
+    """One instant, as a trajectory's are: the coupled coordinates must follow their couplings."""
+    from mcdm_pin.exceptions import StateError
+
+    robot = Robot.load(ROBOTS / "myoarm.yaml")
+    q = robot.configuration({"shoulder_elv_r": 0.8})
+    ident = InverseDynamics.for_case(robot, 1)
+    assert ident.solve(q).found
+    bad = q.copy()
+    bad[robot.couplings.q_index[robot.couplings.dependent[0]]] += 0.1
+    with pytest.raises(StateError, match="coupling"):
+        ident.solve(bad)
