@@ -150,7 +150,7 @@ class Couplings:
         if self._chain is None:
             self._chain = _chain(self)
         dep_rows, dep_cols, src, coef = self._chain
-        qv = np.asarray(q, dtype=float)[self.q_index[self._x_of]].tolist() if len(dep_rows) else []
+        qv = np.asarray(q, dtype=float)[self.q_index[src]].tolist() if len(dep_rows) else []
         value = [1.0] * self.nv  # each row's entry (1 for the independent rows)
         for k, (d, i, x) in enumerate(zip(dep_rows, src, qv)):
             a0, a1, a2, a3, a4 = coef[k]
@@ -165,10 +165,10 @@ class Couplings:
 def _chain(cs: Couplings):
     """:meth:`Couplings.basis`'s lists, in the couplings' order, for those with an independent
     coordinate at the root of its chain (not a fixed one): ``(rows, columns, sources, coefficients)``:
-    each dependent's row, the column of that independent coordinate, the row it multiplies and its
-    polynomial; and ``cs._x_of`` the ``v`` index whose ``q`` entry is each one's ``x``."""
+    each dependent's row, the column of that independent coordinate, the row it multiplies (whose
+    ``q`` entry is also the polynomial's ``x``) and its polynomial."""
     col = {int(i): k for k, i in enumerate(cs.independent)}
-    rows, cols, src, coef, x_of = [], [], [], [], []
+    rows, cols, src, coef = [], [], [], []
     for c in cs.items:
         root = col.get(c.independent) if c.independent >= 0 else None
         if root is None:  # a fixed coordinate, or one coupled to a fixed one: a zero row
@@ -179,9 +179,7 @@ def _chain(cs: Couplings):
         cols.append(root)
         src.append(c.independent)
         coef.append(tuple(float(a) for a in c.coef))
-        x_of.append(c.independent)
-    cs._x_of = np.array(x_of, dtype=int)
-    return rows, cols, src, coef
+    return rows, cols, np.array(src, dtype=int), coef
 
 
 def _ordered(items, names):
