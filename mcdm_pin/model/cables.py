@@ -218,7 +218,7 @@ def _as_wrap(model, w: Wrap, where: str) -> tuple[Wrap, int, int | None]:
     fid = find_frame(model, w.frame)
     center = tuple(_number(v, f"{where}: wrap center") for v in w.center)
     rot = np.array([_number(v, f"{where}: wrap rotation") for v in w.rotation])
-    if center.__len__() != 3 or rot.shape != (9,):
+    if len(center) != 3 or rot.shape != (9,):
         raise ModelError(f"{where}: expected a wrap center of 3 numbers and a rotation of 9")
     R = rot.reshape(3, 3)
     if not (np.allclose(R @ R.T, np.eye(3), atol=1e-9) and np.linalg.det(R) > 0):
