@@ -1,0 +1,205 @@
+"""OpenSim muscle paths computed by our route pass against OpenSim 4.6 itself: lengths (``getLength``)
+and moment arms (``computeMomentArm`` = -dl/dq) at random states of tiny models built with OpenSim's
+API (two bodies on PinJoints, path points of every kind, wraps over spheres and cylinders with
+quadrants and ranges), read back from their ``.osim`` by :func:`mcdm_pin.osim.paths.read_paths` onto
+a pin model built here; and moving points' own term against finite differences."""
+
+import math
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from mcdm_pin.model import CableSet, cable_jacobian, cable_lengths
+from mcdm_pin.osim.paths import read_paths, simm_spline
+
+osim = pytest.importorskip("opensim")
+
+RNG = np.random.default_rng(24)
+# (parent, child, location of the joint in the parent, orientation (XYZ body-fixed) in the parent, child
+# offset location); the joints are PinJoints about their frames' z axis
+JOINTS = (("ground", "b1", (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), "q1"),
+          ("b1", "b2", (0.3, 0.0, 0.0), (0.4, -0.3, 0.2), (-0.02, 0.01, 0.0), "q2"))
+RANGES = {"q1": (-1.0, 1.2), "q2": (-0.8, 1.5)}
+
+
+def _xyz(a, b, c):
+    ca, sa, cb, sb, cc, sc = math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(c), math.sin(c)
+    return (np.array([[1, 0, 0], [0, ca, -sa], [0, sa, ca]]) @ np.array([[cb, 0, sb], [0, 1, 0], [-sb, 0, cb]])
+            @ np.array([[cc, -sc, 0], [sc, cc, 0], [0, 0, 1]]))
+
+
+def _pin_model():
+    """The same chain in Pinocchio: one frame per body (and ground) at the OpenSim body frame."""
+    model = pin.Model()
+    model.addFrame(pin.Frame("ground", 0, 0, pin.SE3.Identity(), pin.FrameType.BODY))
+    joint_of = {"ground": 0}
+    for parent, child, loc, ori, child_loc, coord in JOINTS:
+        pj = joint_of[parent]
+        parent_body = model.frames[model.getFrameId(parent)].placement
+        jid = model.addJoint(pj, pin.JointModelRZ(), parent_body * pin.SE3(_xyz(*ori), np.array(loc)), coord)
+        body = pin.SE3(np.eye(3), np.array(child_loc)).inverse()
+        model.appendBodyToJoint(jid, pin.Inertia.FromSphere(1.0, 0.05), body)
+        model.addFrame(pin.Frame(child, jid, 0, body, pin.FrameType.BODY))
+        joint_of[child] = jid
+    return model
+
+
+def _osim_model(muscles, wraps):
+    """An OpenSim model of the chain; ``wraps``: (kind, name, body, radius, length, translation,
+    rotation, quadrant); ``muscles``: (name, points, wrap names with ranges)."""
+    m = osim.Model()
+    bodies = {"ground": m.getGround()}
+    coords = {}
+    for parent, child, loc, ori, child_loc, coord in JOINTS:
+        b = osim.Body(child, 1.0, osim.Vec3(0), osim.Inertia(0.01, 0.01, 0.01))
+        j = osim.PinJoint(f"j_{child}", bodies[parent], osim.Vec3(*loc), osim.Vec3(*ori), b,
+                          osim.Vec3(*child_loc), osim.Vec3(0))
+        j.updCoordinate().setName(coord)
+        m.addBody(b)
+        m.addJoint(j)
+        bodies[child] = b
+        c = j.updCoordinate()
+        c.setRangeMin(RANGES[coord][0])
+        c.setRangeMax(RANGES[coord][1])
+        c.set_clamped(False)
+        coords[coord] = c
+    objects = {}
+    for kind, name, body, radius, length, tr, rot, quadrant in wraps:
+        w = osim.WrapSphere() if kind == "sphere" else osim.WrapCylinder()
+        w.setName(name)
+        w.set_radius(radius)
+        if kind == "cylinder":
+            w.set_length(length)
+        w.set_translation(osim.Vec3(*tr))
+        w.set_xyz_body_rotation(osim.Vec3(*rot))
+        w.set_quadrant(quadrant)
+        bodies[body].addWrapObject(w)
+        objects[name] = w
+    forces = []
+    for name, points, pw in muscles:
+        mus = osim.Thelen2003Muscle(name, 100.0, 0.1, 0.1, 0.0)
+        path = mus.updGeometryPath()
+        for i, p in enumerate(points):
+            if p[0] == "point":
+                path.appendNewPathPoint(f"{name}-P{i}", bodies[p[1]], osim.Vec3(*p[2]))
+            elif p[0] == "conditional":
+                c = osim.ConditionalPathPoint()
+                c.setName(f"{name}-P{i}")
+                c.setParentFrame(bodies[p[1]])
+                c.set_location(osim.Vec3(*p[2]))
+                c.setCoordinate(coords[p[3]])
+                c.setRangeMin(p[4][0])
+                c.setRangeMax(p[4][1])
+                path.updPathPointSet().adoptAndAppend(c)
+            else:  # moving: per axis (x knots, y values)
+                mp = osim.MovingPathPoint()
+                mp.setName(f"{name}-P{i}")
+                mp.setParentFrame(bodies[p[1]])
+                for axis, (xs, ys) in zip("xyz", p[2]):
+                    f = osim.SimmSpline()
+                    for x, y in zip(xs, ys):
+                        f.addPoint(x, y)
+                    getattr(mp, f"set_{axis}_location")(f)
+                    getattr(mp, f"set{axis.upper()}Coordinate")(coords[p[3]])
+                path.updPathPointSet().adoptAndAppend(mp)
+        for wname, rng in pw:
+            path.addPathWrap(objects[wname])
+            n = path.getWrapSet().getSize()
+            path.updWrapSet().get(n - 1).set_range(0, rng[0])
+            path.updWrapSet().get(n - 1).set_range(1, rng[1])
+        m.addForce(mus)
+        forces.append(mus)
+    return m, forces, coords
+
+
+def _compare(tmp_path, muscles, wraps, n_states=30, rtol=1e-9):
+    """Lengths and moment arms, ours against OpenSim's, at random states (q beyond the coordinates'
+    ranges too: moving points clamp there)."""
+    m, forces, coords = _osim_model(muscles, wraps)
+    file = tmp_path / "tiny.osim"
+    m.finalizeConnections()
+    m.printToXML(str(file))
+    m = osim.Model(str(file))
+    state = m.initSystem()
+    model = _pin_model()
+    cables, _, _ = read_paths(ET.parse(file).getroot(), str(file), model)
+    cs = CableSet(model, cables)
+    data = model.createData()
+    names = [c.name for c in cables]
+    worst_l, worst_r = 0.0, 0.0
+    for _ in range(n_states):
+        q = RNG.uniform(-1.6, 1.8, size=2)
+        for k, name in enumerate(("q1", "q2")):
+            m.getCoordinateSet().get(name).setValue(state, q[k], False)
+        m.realizePosition(state)
+        ours_l = cable_lengths(model, data, cs, q)
+        ours_L = cable_jacobian(model, data, cs, q)
+        for i, name in enumerate(names):
+            mus = osim.Muscle.safeDownCast(m.getForceSet().get(name))
+            ref = mus.getLength(state)
+            worst_l = max(worst_l, abs(ours_l[i] - ref) / ref)
+            for k, cname in enumerate(("q1", "q2")):
+                arm = mus.computeMomentArm(state, m.getCoordinateSet().get(cname))
+                worst_r = max(worst_r, abs(-ours_L[i, k] - arm) / max(1e-3, abs(arm)))
+    assert worst_l < rtol and worst_r < rtol, (worst_l, worst_r)
+    return worst_l, worst_r
+
+
+SPLINE = ((-1.0, 0.0, 0.7, 1.2), (0.02, 0.03, 0.05, 0.04))
+
+
+def test_points_of_every_kind(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    moving = ("moving", "b2", (SPLINE, ((-1, 1.5), (0.01, -0.01)), ((-1.0, 0.5, 1.5), (0.0, 0.02, 0.01))), "q2")
+    muscles = [("m1", [("point", "ground", (0.05, 0.1, 0.0)), ("conditional", "b1", (0.2, 0.04, 0.01), "q1",
+                                                                 (-0.5, 0.6)),
+                       moving, ("point", "b2", (0.1, 0.02, -0.01))], []),
+               ("m2", [("point", "b1", (0.1, -0.03, 0.02)), moving, ("conditional", "b2", (0.12, 0.0, 0.03), "q2",
+                                                                      (0.0, 2.0))], [])]
+    _compare(tmp_path, muscles, [])
+
+
+@pytest.mark.parametrize("quadrant", ["all", "+x", "-y"])
+def test_sphere_and_cylinder_wraps(tmp_path, monkeypatch, quadrant):
+    monkeypatch.chdir(tmp_path)
+    wraps = [("sphere", "S", "b1", 0.04, 0.0, (0.3, 0.0, 0.0), (0.2, 0.1, -0.3), quadrant),
+             ("cylinder", "C", "ground", 0.03, 0.2, (0.0, 0.0, 0.0), (0.3, -0.2, 0.1), quadrant)]
+    muscles = [("single", [("point", "ground", (0.1, 0.1, 0.0)), ("point", "b2", (0.15, 0.0, 0.01))], [("S", (-1, -1))]),
+               ("double", [("point", "ground", (-0.05, 0.06, 0.01)), ("point", "b1", (0.15, 0.05, 0.0)),
+                           ("point", "b2", (0.2, -0.02, 0.0))], [("C", (1, 2)), ("S", (2, 3))]),
+               ("cyl", [("point", "ground", (0.05, -0.1, 0.02)), ("point", "b1", (0.2, 0.06, 0.0))], [("C", (-1, -1))])]
+    _compare(tmp_path, muscles, wraps)
+
+
+def test_moving_point_term_is_the_derivative(tmp_path, monkeypatch):
+    """L of a path with a moving point against central differences of our lengths."""
+    monkeypatch.chdir(tmp_path)
+    moving = ("moving", "b2", (SPLINE, ((-1, 1.5), (0.01, -0.01)), ((-1.0, 0.5, 1.5), (0.0, 0.02, 0.01))), "q2")
+    m, _, _ = _osim_model([("m", [("point", "b1", (0.1, 0.03, 0.0)), moving], [])], [])
+    file = tmp_path / "m.osim"
+    m.finalizeConnections()
+    m.printToXML(str(file))
+    model = _pin_model()
+    cs = CableSet(model, read_paths(ET.parse(file).getroot(), str(file), model)[0])
+    data = model.createData()
+    h = 1e-6
+    for _ in range(10):
+        q = RNG.uniform(-0.7, 1.1, size=2)
+        L = cable_jacobian(model, data, cs, q)[0]
+        fd = [(cable_lengths(model, data, cs, q + h * e)[0] - cable_lengths(model, data, cs, q - h * e)[0]) / (2 * h)
+              for e in np.eye(2)]
+        assert np.allclose(L, fd, rtol=1e-7, atol=1e-9)
+
+
+def test_simm_spline_matches_opensim():
+    x, y = (-1.0, -0.2, 0.3, 0.9, 1.7), (0.1, -0.05, 0.2, 0.0, 0.3)
+    ours = simm_spline(x, y)
+    ref = osim.SimmSpline()
+    for a, b in zip(x, y):
+        ref.addPoint(a, b)
+    from mcdm_pin.osim.paths import _eval
+
+    for t in np.linspace(-1.5, 2.0, 23):
+        assert abs(_eval(ours, t) - ref.calcValue(osim.Vector(1, t))) < 1e-13
