@@ -203,3 +203,82 @@ def test_simm_spline_matches_opensim():
 
     for t in np.linspace(-1.5, 2.0, 23):
         assert abs(_eval(ours, t) - ref.calcValue(osim.Vector(1, t))) < 1e-13
+
+
+def _muscle_model(kind, tmp_path, lo, ls, damping):
+    m = osim.Model()
+    bodies = {"ground": m.getGround()}
+    for parent, child, loc, ori, child_loc, coord in JOINTS:
+        b = osim.Body(child, 1.0, osim.Vec3(0), osim.Inertia(0.01, 0.01, 0.01))
+        j = osim.PinJoint(f"j_{child}", bodies[parent], osim.Vec3(*loc), osim.Vec3(*ori), b,
+                          osim.Vec3(*child_loc), osim.Vec3(0))
+        j.updCoordinate().setName(coord)
+        m.addBody(b)
+        m.addJoint(j)
+        bodies[child] = b
+    if kind == "Millard2012EquilibriumMuscle":
+        mus = osim.Millard2012EquilibriumMuscle("mus", 500.0, lo, ls, 0.25)
+        mus.set_ignore_tendon_compliance(True)
+        mus.set_fiber_damping(damping)
+    else:
+        mus = osim.DeGrooteFregly2016Muscle()
+        mus.setName("mus")
+        mus.set_max_isometric_force(500.0)
+        mus.set_optimal_fiber_length(lo)
+        mus.set_tendon_slack_length(ls)
+        mus.set_pennation_angle_at_optimal(0.25)
+        mus.set_ignore_tendon_compliance(True)
+        mus.set_fiber_damping(damping)
+        mus.set_active_force_width_scale(1.2)
+    mus.addNewPathPoint("p1", bodies["ground"], osim.Vec3(-0.1, 0.12, 0.0))
+    mus.addNewPathPoint("p2", bodies["b2"], osim.Vec3(0.1, 0.03, 0.01))
+    m.addForce(mus)
+    m.finalizeConnections()
+    file = tmp_path / "muscle.osim"
+    m.printToXML(str(file))
+    return file
+
+
+@pytest.mark.parametrize("kind,damping", [("Millard2012EquilibriumMuscle", 0.1),
+                                          ("Millard2012EquilibriumMuscle", 0.0),
+                                          ("DeGrooteFregly2016Muscle", 0.05)])
+def test_muscle_force_bounds(tmp_path, monkeypatch, kind, damping):
+    """Tension at activation 0 (OpenSim clamps it to its minimum) and 1, rigid tendon, against
+    OpenSim's ``getTendonForce``, and the curves' multipliers against OpenSim's own."""
+    from mcdm_pin.model.muscles import force_range
+
+    monkeypatch.chdir(tmp_path)
+    model = _pin_model()
+    data = model.createData()
+    probe = CableSet(model, read_paths(ET.parse(_muscle_model(kind, tmp_path, 0.1, 0.1, damping)).getroot(), "p",
+                                       model)[0])
+    qs = RNG.uniform(-0.6, 0.9, size=(40, 2))
+    lengths = np.array([cable_lengths(model, data, probe, q)[0] for q in qs])
+    lo = (lengths.max() - lengths.min()) / 1.1
+    ls = lengths.min() - 0.45 * lo
+    file = _muscle_model(kind, tmp_path, lo, ls, damping)
+    cables, muscles, _ = read_paths(ET.parse(file).getroot(), str(file), model)
+    cs = CableSet(model, cables, muscles=muscles, muscle_cables=muscles.names)
+    m = osim.Model(str(file))
+    s = m.initSystem()
+    mus = osim.Muscle.safeDownCast(m.getForceSet().get("mus"))
+    worst = 0.0
+    for q in qs:
+        qd = RNG.normal(0.0, 3.0, size=2)
+        for k, name in enumerate(("q1", "q2")):
+            m.getCoordinateSet().get(name).setValue(s, q[k], False)
+            m.getCoordinateSet().get(name).setSpeedValue(s, qd[k])
+        ell = cable_lengths(model, data, cs, q)
+        ell_dot = cable_jacobian(model, data, cs, q) @ qd
+        state = force_range(muscles, ell, ell_dot)
+        l, v, cos_a, _ = muscles.fiber(ell, ell_dot)
+        for a, ours in ((0.0, state.f_min[0]), (1.0, state.f_max[0])):
+            mus.setActivation(s, a)
+            m.realizeDynamics(s)
+            ref = mus.getTendonForce(s)
+            worst = max(worst, abs(ours - ref) / max(1.0, abs(ref)))
+        assert abs(l[0] - mus.getNormalizedFiberLength(s)) < 1e-10
+        assert abs(v[0] - mus.getNormalizedFiberVelocity(s)) < 1e-10
+        assert abs(mus.getActiveForceLengthMultiplier(s) * mus.getForceVelocityMultiplier(s) * 500.0 * cos_a[0]
+                   - state.gain[0]) < 1e-9 * 500.0
+    assert worst < 1e-9, worst

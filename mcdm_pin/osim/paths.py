@@ -31,12 +31,11 @@ import numpy as np
 
 from ..exceptions import ModelError
 from ..model.cables import Cable, ConditionalPoint, MovingPoint, PiecewiseCubic, Wrap
+from ..model.muscles_osim import KINDS as MODELLED
+from ..model.muscles_osim import OpenSimMuscles
+from .muscles import read_muscle
 
 MUSCLE_KINDS = ("Thelen2003Muscle", "Millard2012EquilibriumMuscle", "DeGrooteFregly2016Muscle")
-PATH_FORCES = MUSCLE_KINDS + ("PathActuator", "PathSpring", "Ligament", "Blankevoort1991Ligament",
-                              "McKibbenActuator", "RigidTendonMuscle", "Thelen2003Muscle_Deprecated",
-                              "Millard2012AccelerationMuscle", "Schutte1993Muscle_Deprecated",
-                              "Delp1990Muscle_Deprecated")
 WRAP_KINDS = {"WrapSphere": "opensim_sphere", "WrapCylinder": "opensim_cylinder"}
 TINY = 1e-7  # SIMM's TINY_NUMBER: the floor of a spline's knot spacing
 
@@ -303,9 +302,12 @@ def read_paths(root, file, model, coordinates=None):
 
     Returns:
         ``(cables, muscles, notes)``: :class:`~mcdm_pin.model.cables.Cable`\ s named after the muscles
-        (bounds ``[0, 2 F0]`` placeholders: a muscle's range at an instant follows its length and speed),
-        the muscles' ``(name, kind, element)`` in cable order (:mod:`mcdm_pin.osim.muscles`), and notes
-        on what was left aside (forces without a path, inactive wrap objects).
+        (bounds ``[0, 2 F0]``: a muscle's range at an instant follows its length and speed, these only
+        bound it), the modelled muscles (Millard, De Groote) as
+        :class:`~mcdm_pin.model.muscles_osim.OpenSimMuscles` in cable order
+        (``None`` without muscles; pass them as ``CableSet(model, cables, muscles=muscles,
+        muscle_cables=muscles.names)``), and notes on what was left aside (forces without a path,
+        inactive wrap objects).
     """
     coordinates = default_coordinates(model) if coordinates is None else dict(coordinates)
     ranges = _coordinates(model, root)
@@ -325,6 +327,12 @@ def read_paths(root, file, model, coordinates=None):
             notes += more
             f0 = _floats(_text(force, "max_isometric_force", f"{file}: {force.tag} {name!r}"), 1,
                          f"{file}: {force.tag} {name!r}: <max_isometric_force>")[0]
-            cables.append(Cable(name, tuple(route), 0.0, max(2.0 * f0, 1.0)))
-            muscles.append((name, force.tag, force))
-    return cables, muscles, notes
+            if force.tag in MODELLED:
+                cables.append(Cable(name, tuple(route), 0.0, max(2.0 * f0, 1.0)))
+                muscles.append(read_muscle(force, file))
+            else:
+                cables.append(Cable(name, tuple(route), 0.0, f0))
+                notes.append(f"{force.tag} {name!r}: no rigid-tendon force model (OpenSim 4.6 has none for it, "
+                             f"and its force-velocity relation depends on the activation): a cable with fixed "
+                             f"bounds [0, max_isometric_force = {f0:g} N]")
+    return cables, (OpenSimMuscles(muscles) if muscles else None), notes
