@@ -67,9 +67,12 @@ def _osim_model(muscles, wraps):
         coords[coord] = c
     objects = {}
     for kind, name, body, radius, length, tr, rot, quadrant in wraps:
-        w = osim.WrapSphere() if kind == "sphere" else osim.WrapCylinder()
+        w = {"sphere": osim.WrapSphere, "cylinder": osim.WrapCylinder, "ellipsoid": osim.WrapEllipsoid}[kind]()
         w.setName(name)
-        w.set_radius(radius)
+        if kind == "ellipsoid":
+            w.set_dimensions(osim.Vec3(*radius))
+        else:
+            w.set_radius(radius)
         if kind == "cylinder":
             w.set_length(length)
         w.set_translation(osim.Vec3(*tr))
@@ -104,11 +107,13 @@ def _osim_model(muscles, wraps):
                     getattr(mp, f"set_{axis}_location")(f)
                     getattr(mp, f"set{axis.upper()}Coordinate")(coords[p[3]])
                 path.updPathPointSet().adoptAndAppend(mp)
-        for wname, rng in pw:
+        for wname, rng, *method in pw:
             path.addPathWrap(objects[wname])
             n = path.getWrapSet().getSize()
             path.updWrapSet().get(n - 1).set_range(0, rng[0])
             path.updWrapSet().get(n - 1).set_range(1, rng[1])
+            if method:
+                path.updWrapSet().get(n - 1).set_method(method[0])
         m.addForce(mus)
         forces.append(mus)
     return m, forces, coords
@@ -171,6 +176,22 @@ def test_sphere_and_cylinder_wraps(tmp_path, monkeypatch, quadrant):
                            ("point", "b2", (0.2, -0.02, 0.0))], [("C", (1, 2)), ("S", (2, 3))]),
                ("cyl", [("point", "ground", (0.05, -0.1, 0.02)), ("point", "b1", (0.2, 0.06, 0.0))], [("C", (-1, -1))])]
     _compare(tmp_path, muscles, wraps)
+
+
+@pytest.mark.parametrize("quadrant", ["all", "+x", "-z"])
+def test_ellipsoid_wraps(tmp_path, monkeypatch, quadrant):
+    """OpenSim's iterative ellipsoid wrap (hybrid, midpoint and axial methods), alone and with a
+    cylinder on the same path: our code takes OpenSim's own iterations, so the agreement is to
+    rounding, not to OpenSim's tolerances (squared residual 1e-8 for the tangent points, a 1 mm
+    polyline for the surface path)."""
+    monkeypatch.chdir(tmp_path)
+    wraps = [("ellipsoid", "E", "b1", (0.05, 0.03, 0.07), 0.0, (0.3, 0.0, 0.0), (0.2, 0.1, -0.3), quadrant),
+             ("cylinder", "C", "ground", 0.03, 0.2, (0.0, 0.0, 0.0), (0.3, -0.2, 0.1), "all")]
+    muscles = [(f"e_{method}", [("point", "ground", (0.1, 0.1, 0.0)), ("point", "b2", (0.15, 0.0, 0.01))],
+                [("E", (-1, -1), method)]) for method in ("hybrid", "midpoint", "axial")]
+    muscles.append(("two", [("point", "ground", (-0.05, 0.06, 0.01)), ("point", "b1", (0.15, 0.05, 0.0)),
+                            ("point", "b2", (0.2, -0.02, 0.0))], [("C", (1, 2)), ("E", (2, 3))]))
+    _compare(tmp_path, muscles, wraps, rtol=1e-6)
 
 
 def test_moving_point_term_is_the_derivative(tmp_path, monkeypatch):

@@ -43,8 +43,9 @@ class RoutePoint:
     point: tuple[float, float, float]
 
 
-WRAP_KINDS = ("sphere", "cylinder", "opensim_sphere", "opensim_cylinder")
-OPENSIM_WRAPS = ("opensim_sphere", "opensim_cylinder")
+WRAP_KINDS = ("sphere", "cylinder", "opensim_sphere", "opensim_cylinder", "opensim_ellipsoid")
+OPENSIM_WRAPS = ("opensim_sphere", "opensim_cylinder", "opensim_ellipsoid")
+PATH_WRAP_METHODS = ("hybrid", "midpoint", "axial")
 """Wraps with OpenSim's semantics (:mod:`mcdm_pin.model.route_osim`): they follow the route's points
 and apply over the span of points their ``span`` names, as an OpenSim ``PathWrap`` does."""
 QUADRANTS = ("all", "+x", "-x", "+y", "-y", "+z", "-z")
@@ -98,9 +99,10 @@ class Wrap:
         side: a :class:`RoutePoint` on the side the cable must pass (MuJoCo's ``sidesite``), or
             ``None`` (the shorter way round).
         name: the surface's name (MuJoCo's geom name), for messages.
-        quadrant, length, span: for the ``opensim_*`` kinds only: OpenSim's ``quadrant``, the
-            cylinder's ``length`` (m) and the ``PathWrap``'s ``range`` (1-based route point
-            indices, -1: the first or the last point).
+        quadrant, length, span, radii, method: for the ``opensim_*`` kinds only: OpenSim's
+            ``quadrant``, the cylinder's ``length`` (m), the ``PathWrap``'s ``range`` (1-based route
+            point indices, -1: the first or the last point), the ellipsoid's semi-axes ``radii`` (m;
+            ``radius`` then their largest) and the ``PathWrap``'s ``method`` (ellipsoids).
     """
 
     frame: str
@@ -113,6 +115,8 @@ class Wrap:
     quadrant: str = "all"
     length: float = 0.0
     span: tuple[int, int] = (-1, -1)
+    radii: tuple = ()
+    method: str = "hybrid"
 
 
 @dataclass(frozen=True)
@@ -292,10 +296,13 @@ def _as_wrap(model, w: Wrap, where: str) -> tuple[Wrap, int, int | None]:
     if w.kind not in WRAP_KINDS:
         raise ModelError(f"{where}: expected a wrap kind in {WRAP_KINDS}, got {w.kind!r}")
     if w.kind in OPENSIM_WRAPS and (w.quadrant not in QUADRANTS or w.side is not None or (
-            w.kind == "opensim_cylinder" and not float(w.length) > 0) or len(w.span) != 2):
+            w.kind == "opensim_cylinder" and not float(w.length) > 0) or len(w.span) != 2 or (
+            w.kind == "opensim_ellipsoid" and (len(w.radii) != 3 or not min(w.radii) > 0
+                                               or w.method not in PATH_WRAP_METHODS))):
         raise ModelError(f"{where}: an OpenSim wrap needs a quadrant in {QUADRANTS}, no side point, a "
-                         f"span of two point indices and (cylinder) a length > 0; got quadrant="
-                         f"{w.quadrant!r}, length={w.length!r}, span={w.span!r}")
+                         f"span of two point indices, (cylinder) a length > 0, (ellipsoid) three radii > 0 and a "
+                         f"method in {PATH_WRAP_METHODS}; got quadrant={w.quadrant!r}, length={w.length!r}, "
+                         f"span={w.span!r}, radii={w.radii!r}, method={w.method!r}")
     radius = _number(w.radius, f"{where}: wrap radius")
     if not radius > 0:
         raise ModelError(f"{where}: expected a wrap radius > 0, got {w.radius!r}")
@@ -312,7 +319,7 @@ def _as_wrap(model, w: Wrap, where: str) -> tuple[Wrap, int, int | None]:
         side, side_fid = _as_point(model, w.side, f"{where}: side")
     frame = w.frame if isinstance(w.frame, str) else model.frames[fid].name
     return Wrap(frame, w.kind, radius, center, tuple(rot), side, str(w.name), w.quadrant, float(w.length),
-                tuple(int(i) for i in w.span)), fid, side_fid
+                tuple(int(i) for i in w.span), tuple(float(r) for r in w.radii), w.method), fid, side_fid
 
 
 class CableSet:

@@ -41,7 +41,8 @@ import math
 import numpy as np
 from numba import extending
 
-from .wrapping_osim import INSIDE_RADIUS, MANDATORY_WRAP, NO_WRAP, WRAPPED, osim_cylinder, osim_sphere
+from .wrapping_osim import (INSIDE_RADIUS, MANDATORY_WRAP, NO_WRAP, WRAPPED, osim_cylinder, osim_ellipsoid,
+                            osim_sphere)
 
 register_jitable = extending.register_jitable
 
@@ -49,11 +50,12 @@ register_jitable = extending.register_jitable
 R_CABLE, R_P0, R_N, R_S0, R_W0, R_NW, R_E0, R_T0 = range(8)
 N_ROUTE = 8
 # columns of wrap_int (OpenSim wraps)
-O_KEY, O_CYL, O_AXIS, O_SIGN, O_START, O_END, O_OBJECT = range(7)
-N_OINT = 7
-# columns of wrap_float (OpenSim wraps): R_w (row-major), p_w, radius, length
-O_R, O_P, O_RADIUS, O_LENGTH = 0, 9, 12, 13
-N_OFLOAT = 14
+O_KEY, O_CYL, O_AXIS, O_SIGN, O_START, O_END, O_OBJECT, O_METHOD = range(8)
+N_OINT = 8
+SPHERE, CYLINDER, ELLIPSOID = 0, 1, 2  # values of the O_CYL column (the wrap object's kind)
+# columns of wrap_float (OpenSim wraps): R_w (row-major), p_w, radius, length, the ellipsoid's radii
+O_R, O_P, O_RADIUS, O_LENGTH, O_DIMS = 0, 9, 12, 13, 14
+N_OFLOAT = 17
 # point kinds and columns of pt_float: the range (conditional) or clamp (moving), the frame's
 # placement in its joint (R_f row-major, p_f)
 FIXED, CONDITIONAL, MOVING = 0, 1, 2
@@ -209,8 +211,11 @@ def _wrap_one(oM, point_key, point_local, path, owner, plen, w0, w, wrap_int, wr
             continue
         x1 = _to(Rg, pg, _node_world(oM, point_key, point_local, path[pt1]))
         x2 = _to(Rg, pg, _node_world(oM, point_key, point_local, path[pt1 + 1]))
-        if wi[O_CYL] != 0:
+        if wi[O_CYL] == CYLINDER:
             code, r1, r2, wl = osim_cylinder(x1, x2, wf[O_RADIUS], wf[O_LENGTH], wi[O_AXIS], wi[O_SIGN], single)
+        elif wi[O_CYL] == ELLIPSOID:
+            code, r1, r2, wl = osim_ellipsoid(x1, x2, (wf[O_DIMS], wf[O_DIMS + 1], wf[O_DIMS + 2]), wi[O_AXIS],
+                                              wi[O_SIGN], wi[O_METHOD])
         else:
             code, r1, r2, wl = osim_sphere(x1, x2, wf[O_RADIUS], wi[O_AXIS], wi[O_SIGN])
         if code == MANDATORY_WRAP:
@@ -383,12 +388,15 @@ class OsimTables:
                                      f"{n} path points")
                 axis, sign = _QUADRANT[e.quadrant]
                 obj = objects.setdefault((rw.joint, e.frame, e.name), len(objects))
-                wint.append((int(wrap_keys[len(wflt)]), int(e.kind == "opensim_cylinder"),
-                             axis, sign, start, end, obj))
+                kind = {"opensim_sphere": SPHERE, "opensim_cylinder": CYLINDER, "opensim_ellipsoid": ELLIPSOID}[e.kind]
+                method = ("hybrid", "midpoint", "axial").index(e.method)
+                wint.append((int(wrap_keys[len(wflt)]), kind, axis, sign, start, end, obj, method))
                 flt = np.zeros(N_OFLOAT)
                 flt[O_R:O_R + 9] = np.asarray(rw.placement.rotation).reshape(9)
                 flt[O_P:O_P + 3] = np.asarray(rw.placement.translation).reshape(3)
                 flt[O_RADIUS], flt[O_LENGTH] = rw.radius, e.length
+                if e.kind == "opensim_ellipsoid":
+                    flt[O_DIMS:O_DIMS + 3] = e.radii
                 wflt.append(flt)
             nw = len(elems)
             rows.append((k, p0, n, s0, w0, nw, seg0 + w0, slot0 + 2 * w0))

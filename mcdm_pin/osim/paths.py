@@ -1,12 +1,12 @@
 r"""OpenSim muscles' paths as cables: ``PathPoint``, ``ConditionalPathPoint``, ``MovingPathPoint`` and
-``PathWrap`` over ``WrapSphere`` and ``WrapCylinder``, read from the ``.osim`` XML.
+``PathWrap`` over ``WrapSphere``, ``WrapCylinder`` and ``WrapEllipsoid``, read from the ``.osim`` XML.
 
 A muscle becomes a :class:`~mcdm_pin.model.cables.Cable` of the same name whose route is its path
 points, each ``(body name, location in the body's frame)`` (the pin model carries one frame per
 OpenSim body and ``ground``, named as the body and placed at the body frame), followed by its
 ``PathWrap``\ s in order as ``opensim_*`` :class:`~mcdm_pin.model.cables.Wrap`\ s fixed on the wrap
 object's body (``translation``, ``xyz_body_rotation`` a body-fixed X-Y-Z sequence: ``R = R_x R_y R_z``,
-``quadrant``, ``radius``, ``length``, and the ``PathWrap``'s ``range``). The path is computed by our
+``quadrant``, ``radius``, ``length``, ``dimensions``, and the ``PathWrap``'s ``range`` and ``method``). The path is computed by our
 route pass (:mod:`mcdm_pin.model.route_osim`), not by OpenSim.
 
 Coordinates (conditional and moving points) are OpenSim coordinate names resolved through
@@ -19,7 +19,8 @@ there.
 
 Refused, naming the element and the reason (:class:`~mcdm_pin.exceptions.ModelError`): a muscle or
 path-based force of another kind, a path point on a frame other than a body or ground, a wrap object
-kind other than sphere and cylinder (``WrapEllipsoid``, ``WrapTorus``), a function kind not listed.
+kind other than sphere, cylinder and ellipsoid (``WrapTorus``, ``WrapDoubleCylinderObst``), a
+function kind not listed.
 """
 
 from __future__ import annotations
@@ -36,7 +37,8 @@ from ..model.muscles_osim import OpenSimMuscles
 from .muscles import read_muscle
 
 MUSCLE_KINDS = ("Thelen2003Muscle", "Millard2012EquilibriumMuscle", "DeGrooteFregly2016Muscle")
-WRAP_KINDS = {"WrapSphere": "opensim_sphere", "WrapCylinder": "opensim_cylinder"}
+WRAP_KINDS = {"WrapSphere": "opensim_sphere", "WrapCylinder": "opensim_cylinder",
+              "WrapEllipsoid": "opensim_ellipsoid"}
 TINY = 1e-7  # SIMM's TINY_NUMBER: the floor of a spline's knot spacing
 
 
@@ -247,18 +249,25 @@ def _wrap(pw, objects, file, where: str):
     body, obj = objects[name]
     w = f"{file}: {obj.tag} {name!r} (on {body!r})"
     if obj.tag not in WRAP_KINDS:
-        raise ModelError(f"{w}: {obj.tag} is not supported yet; expected WrapSphere or WrapCylinder")
+        raise ModelError(f"{w}: {obj.tag} is not supported; expected WrapSphere, WrapCylinder or WrapEllipsoid")
     if _text(obj, "active", w, "true").lower() != "true":
         return None
     rot = _floats(_text(obj, "xyz_body_rotation", w, "0 0 0"), 3, f"{w}: <xyz_body_rotation>")
     tr = tuple(_floats(_text(obj, "translation", w, "0 0 0"), 3, f"{w}: <translation>"))
     quadrant = _text(obj, "quadrant", w, "all")
     q = {"x": "+x", "y": "+y", "z": "+z", "unassigned": "all"}.get(quadrant.lower(), quadrant.lower())
-    radius = _floats(_text(obj, "radius", w), 1, f"{w}: <radius>")[0]
+    radii = ()
+    if obj.tag == "WrapEllipsoid":
+        radii = tuple(_floats(_text(obj, "dimensions", w), 3, f"{w}: <dimensions>"))
+        radius = max(radii)
+    else:
+        radius = _floats(_text(obj, "radius", w), 1, f"{w}: <radius>")[0]
     length = _floats(_text(obj, "length", w, "1"), 1, f"{w}: <length>")[0] if obj.tag == "WrapCylinder" else 0.0
     span = _floats(_text(pw, "range", where, "-1 -1"), 2, f"{where}: <range>")
+    method = _text(pw, "method", where, "hybrid").lower()
+    method = method if method in ("hybrid", "midpoint", "axial") else "hybrid"  # OpenSim's fallback
     return Wrap(body, WRAP_KINDS[obj.tag], radius, tr, _rotation_xyz(*rot), name=name, quadrant=q, length=length,
-                span=(int(span[0]), int(span[1])))
+                span=(int(span[0]), int(span[1])), radii=radii, method=method)
 
 
 def default_coordinates(model) -> dict:
