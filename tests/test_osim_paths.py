@@ -5,6 +5,7 @@ quadrants and ranges), read back from their ``.osim`` by :func:`mcdm_pin.osim.pa
 a pin model built here; and moving points' own term against finite differences."""
 
 import math
+from pathlib import Path
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -303,3 +304,71 @@ def test_muscle_force_bounds(tmp_path, monkeypatch, kind, damping):
         assert abs(mus.getActiveForceLengthMultiplier(s) * mus.getForceVelocityMultiplier(s) * 500.0 * cos_a[0]
                    - state.gain[0]) < 1e-9 * 500.0
     assert worst < 1e-9, worst
+
+
+ARM26 = Path(__file__).resolve().parents[1] / ".." / ".." / "shared" / "reference" / "opensim-models" / "Arm26" / "arm26.osim"
+
+
+def _se3(T):
+    R = T.R()
+    return pin.SE3(np.array([[R.get(i, k) for k in range(3)] for i in range(3)]),
+                   np.array([T.p()[i] for i in range(3)]))
+
+
+def _arm26_pin(m):
+    """A pin model of arm26 (a weld, then two one-axis CustomJoints: revolute joints about their
+    axis in the joint frames), frames named as the bodies, joints named as the coordinates."""
+    model = pin.Model()
+    model.addFrame(pin.Frame("ground", 0, 0, pin.SE3.Identity(), pin.FrameType.BODY))
+    joint_of, body_in_joint = {"ground": 0}, {"ground": pin.SE3.Identity()}
+    for j in m.getJointSet():
+        pf = osim.PhysicalOffsetFrame.safeDownCast(j.getParentFrame())
+        cf = osim.PhysicalOffsetFrame.safeDownCast(j.getChildFrame())
+        parent, child = pf.getParentFrame().getName(), cf.getParentFrame().getName()
+        X_p = body_in_joint[parent] * _se3(pf.getOffsetTransform())
+        X_c = _se3(cf.getOffsetTransform()).inverse()
+        if j.numCoordinates() == 0:
+            joint_of[child], body_in_joint[child] = joint_of[parent], X_p * X_c
+        else:
+            st = osim.CustomJoint.safeDownCast(j).getSpatialTransform()
+            axis = np.array([st.getTransformAxis(0).getAxis()[i] for i in range(3)])
+            jid = model.addJoint(joint_of[parent], pin.JointModelRevoluteUnaligned(axis), X_p,
+                                 j.get_coordinates(0).getName())
+            model.appendBodyToJoint(jid, pin.Inertia.FromSphere(1.0, 0.05), X_c)
+            joint_of[child], body_in_joint[child] = jid, X_c
+        model.addFrame(pin.Frame(child, joint_of[child], 0, body_in_joint[child], pin.FrameType.BODY))
+    return model
+
+
+@pytest.mark.skipif(not ARM26.exists(), reason="arm26 reference model not present")
+def test_arm26_muscle_paths(tmp_path, monkeypatch):
+    """Every muscle of arm26 (cylinders and ellipsoids, several wraps per path): lengths and moment
+    arms at 30 random states against OpenSim's own."""
+    monkeypatch.chdir(tmp_path)
+    m = osim.Model(str(ARM26))
+    s = m.initSystem()
+    model = _arm26_pin(m)
+    data = model.createData()
+    cables, muscles, notes = read_paths(ET.parse(ARM26).getroot(), str(ARM26), model)
+    cs = CableSet(model, cables)
+    coords = [m.getCoordinateSet().get(model.names[j]) for j in range(1, model.njoints)]
+    worst_l = worst_r = 0.0
+    for _ in range(30):
+        q = np.array([RNG.uniform(c.getRangeMin(), c.getRangeMax()) for c in coords])
+        for c, v in zip(coords, q):
+            c.setValue(s, v, False)
+        m.realizePosition(s)
+        pin.framesForwardKinematics(model, data, q)
+        for name in ("r_humerus", "r_ulna_radius_hand"):  # the pin model places the bodies as OpenSim does
+            ref = _se3(m.getBodySet().get(name).getTransformInGround(s))
+            assert np.allclose(data.oMf[model.getFrameId(name)].homogeneous, ref.homogeneous, atol=1e-12)
+        ours_l = cable_lengths(model, data, cs, q)
+        ours_L = cable_jacobian(model, data, cs, q)
+        for i, c in enumerate(cables):
+            mus = osim.Muscle.safeDownCast(m.getForceSet().get(c.name))
+            ref = mus.getLength(s)
+            worst_l = max(worst_l, abs(ours_l[i] - ref) / ref)
+            for k, co in enumerate(coords):
+                arm = mus.computeMomentArm(s, co)
+                worst_r = max(worst_r, abs(-ours_L[i, k] - arm) / max(1e-3, abs(arm)))
+    assert worst_l < 1e-6 and worst_r < 1e-6, (worst_l, worst_r)

@@ -95,6 +95,19 @@ def _node_world(oM, point_key, point_local, p):
 
 
 @register_jitable
+def _ground(oM, point_key, point_local, p, t0, cache):
+    """OpenSim's ``getLocationInGround`` of path node ``p``: a tangent point's (slot ``t0 <= p``) is
+    cached at its first read in the instant and kept, even when the wrap moves it later (module
+    docstring); ``cache`` (2W, 4): the cached position in the wrap body's frame and a flag."""
+    j = p - t0
+    if j < 0:
+        return _node_world(oM, point_key, point_local, p)
+    if cache[j, 3] == 0.0:
+        cache[j, 0], cache[j, 1], cache[j, 2], cache[j, 3] = point_local[p, 0], point_local[p, 1], point_local[p, 2], 1.0
+    return _world(oM, point_key[p], (cache[j, 0], cache[j, 1], cache[j, 2]))
+
+
+@register_jitable
 def _dist(a, b):
     return math.sqrt((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 + (a[2] - b[2]) ** 2)
 
@@ -158,14 +171,18 @@ def _same_object(owner, wrap_int, w0, path_a, path_b):
 
 
 @register_jitable
-def _path_length(oM, point_key, point_local, path, owner, plen, wrap_int, w0, wrap_len):
+def _path_length(oM, point_key, point_local, path, owner, plen, wrap_int, w0, wrap_len, t0, cache):
+    """``calcLengthAfterPathComputation``: straight pieces between the nodes' (cached) ground
+    positions, wrap lengths between a wrap's tangent points."""
     total = 0.0
+    x0 = _ground(oM, point_key, point_local, path[0], t0, cache)
     for j in range(plen - 1):
+        x1 = _ground(oM, point_key, point_local, path[j + 1], t0, cache)
         if _same_object(owner, wrap_int, w0, j, j + 1):
             total += wrap_len[w0 + owner[j + 1]]
         else:
-            total += _dist(_node_world(oM, point_key, point_local, path[j]),
-                           _node_world(oM, point_key, point_local, path[j + 1]))
+            total += _dist(x0, x1)
+        x0 = x1
     return total
 
 
@@ -183,7 +200,7 @@ def _remove_wrap(path, owner, plen, w):
 
 @register_jitable
 def _wrap_one(oM, point_key, point_local, path, owner, plen, w0, w, wrap_int, wrap_float, p0, active,
-              single, slot):
+              single, slot, t0, cache):
     """One wrap's turn in a round (step 2): ``(code, plen, stop, length)``; on success its tangent points are
     in ``point_local[slot]``, ``point_local[slot + 1]`` (wrap body frame) and inserted in the path;
     ``stop``: no active point in its span (OpenSim then ends the wrapping)."""
@@ -221,8 +238,10 @@ def _wrap_one(oM, point_key, point_local, path, owner, plen, w0, w, wrap_int, wr
         if code == MANDATORY_WRAP:
             best, r1b, r2b, lb = pt1, r1, r2, wl
             break
-        if code == WRAPPED:
-            change = _dist(x1, r1) + wl + _dist(r2, x2) - _dist(x1, x2)
+        if code == WRAPPED:  # calcPathLengthChange reads the ends' (cached) ground positions
+            g1 = _to(Rg, pg, _ground(oM, point_key, point_local, path[pt1], t0, cache))
+            g2 = _to(Rg, pg, _ground(oM, point_key, point_local, path[pt1 + 1], t0, cache))
+            change = _dist(g1, r1) + wl + _dist(r2, g2) - _dist(g1, g2)
             if change < best_change:
                 best, r1b, r2b, lb, best_change = pt1, r1, r2, wl, change
     if best < 0:
@@ -241,7 +260,8 @@ def _wrap_one(oM, point_key, point_local, path, owner, plen, w0, w, wrap_int, wr
 
 
 @register_jitable
-def _apply_wraps(oM, point_key, point_local, path, owner, plen, r, wrap_int, wrap_float, active, wrap_len):
+def _apply_wraps(oM, point_key, point_local, path, owner, plen, r, wrap_int, wrap_float, active, wrap_len,
+                 cache):
     """Step 2 for route row ``r`` (``GeometryPath::applyWrapObjects``): the new path length."""
     p0, w0, nw, t0 = r[R_P0], r[R_W0], r[R_NW], r[R_T0]
     order = np.arange(nw)
@@ -251,12 +271,12 @@ def _apply_wraps(oM, point_key, point_local, path, owner, plen, r, wrap_int, wra
         for i in range(nw):
             w = order[i]
             code, plen, stop, wl = _wrap_one(oM, point_key, point_local, path, owner, plen, w0, w, wrap_int,
-                                         wrap_float, p0, active, nw == 1, t0 + 2 * w)
+                                         wrap_float, p0, active, nw == 1, t0 + 2 * w, t0, cache)
             if stop:
                 return plen
             result[i] = code
             wrap_len[w0 + w] = wl
-        length = _path_length(oM, point_key, point_local, path, owner, plen, wrap_int, w0, wrap_len)
+        length = _path_length(oM, point_key, point_local, path, owner, plen, wrap_int, w0, wrap_len, t0, cache)
         if abs(length - last) < ROUND_TOL:
             break
         last = length
@@ -326,8 +346,18 @@ def osim_routes(oM, q, route_int, pt_kind, pt_q, pt_v, pt_fun, pt_float, fun_ptr
                 path[plen], owner[plen] = p0 + i, -1
                 plen += 1
         if nw > 0:
+            t0 = r[R_T0]
+            cache = np.zeros((2 * nw, 4))
             plen = _apply_wraps(oM, point_key, point_local, path, owner, plen, r, wrap_int, wrap_float,
-                                active, wrap_len)
+                                active, wrap_len, cache)
+            # computePath's last length: every node's ground position read (and cached); the path's
+            # tangent points are then where OpenSim's lengths and forces see them
+            _path_length(oM, point_key, point_local, path, owner, plen, wrap_int, r[R_W0], wrap_len, t0, cache)
+            for j in range(plen):
+                k = path[j] - t0
+                if k >= 0:
+                    point_local[path[j], 0], point_local[path[j], 1] = cache[k, 0], cache[k, 1]
+                    point_local[path[j], 2] = cache[k, 2]
         _write_segments(oM, point_key, point_local, path, owner, plen, r, wrap_int, wrap_len, seg_a, seg_b,
                         seg_active, seg_scale, arc_length, pt_kind, pt_v, pt_dP, L_extra)
 
