@@ -563,8 +563,13 @@ def _tangent_point(pe, r1, p1, a, vs, vs4):
         pm = _unit(p1)
         pcos = _dot(pr, pm)
         dd = 1.0 - pcos ** 100 if pcos > 0.1 else 1.0
-        v = -(D @ ee)
-        D2 = D @ D.T
+        v = np.zeros(4)
+        D2 = np.zeros((4, 4))
+        for i in range(4):
+            for j in range(4):
+                v[i] -= D[i, j] * ee[j]
+                for k in range(4):
+                    D2[i, j] += D[i, k] * D[j, k]
         diag = np.array([D2[0, 0], D2[1, 1], D2[2, 2], D2[3, 3]])
         vt = np.zeros(4)
         n2 = 0
