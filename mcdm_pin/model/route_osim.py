@@ -41,8 +41,8 @@ import math
 import numpy as np
 from numba import extending
 
-from .wrapping_osim import (INSIDE_RADIUS, MANDATORY_WRAP, NO_WRAP, WRAPPED, osim_cylinder, osim_ellipsoid,
-                            osim_sphere)
+from .wrapping_osim import INSIDE_RADIUS, MANDATORY_WRAP, NO_WRAP, WRAPPED, osim_cylinder, osim_sphere
+from .wrapping_osim_ellipsoid import osim_ellipsoid
 
 register_jitable = extending.register_jitable
 
