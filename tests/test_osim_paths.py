@@ -348,10 +348,10 @@ def test_arm26_muscle_paths(tmp_path, monkeypatch):
     """Every muscle of arm26 (cylinders and ellipsoids, several wraps per path): lengths and moment
     arms at 30 random states against OpenSim's own.
 
-    TRIlong's moment arms are left out: its three wraps need several of OpenSim's rounds, whose moved
-    tangent points OpenSim's lengths see at their first (cached) ground positions, which we follow;
-    OpenSim's ``computeMomentArm`` (on a copy of the state) sees yet other positions and is not the
-    derivative of its own ``getLength`` there (docs/opensim.md)."""
+    TRIlong's three wraps need several of OpenSim's rounds: its lengths see the moved tangent points
+    at their first (cached) ground positions and its forces act where the wraps last put them
+    (docs/opensim.md), both followed here. And the interaction wrenches stay consistent with ``L``:
+    ``S^T p = M qdd + h + L^T f`` for each joint."""
     monkeypatch.chdir(tmp_path)
     shutil.copy(ARM26, tmp_path / ARM26.name)
     m = osim.Model(str(tmp_path / ARM26.name))
@@ -378,13 +378,23 @@ def test_arm26_muscle_paths(tmp_path, monkeypatch):
             ref = mus.getLength(s)
             worst_l = max(worst_l, abs(ours_l[i] - ref) / ref)
             for k, co in enumerate(coords):
-                if c.name == "TRIlong":
-                    continue
                 arm = mus.computeMomentArm(s, co)
                 worst_r = max(worst_r, abs(-ours_L[i, k] - arm) / max(1e-3, abs(arm)))
     # 1e-6 where ellipsoids are involved (the issue's bar); measured ~5e-9, the stand-in pin model's
     # kinematics (about 2e-9 rad from OpenSim's CustomJoint) rather than the paths (1e-16 on the tiny models)
     assert worst_l < 1e-6 and worst_r < 1e-6, (worst_l, worst_r)
+    from mcdm_pin.model import TermsEvaluator
+
+    ev = TermsEvaluator(model, cs)
+    for q in RNG.uniform(0.2, 2.2, size=(5, 2)):
+        t = ev(q, RNG.normal(size=2), RNG.normal(size=2))
+        f = RNG.uniform(0.0, 100.0, size=cs.m)
+        p = t.wrenches(f)
+        pin.forwardKinematics(model, data, q)
+        for a, j in enumerate(ev.joints):
+            S = np.asarray(data.joints[j.child_id].S).reshape(6, -1)
+            iv = model.joints[j.child_id].idx_v
+            assert np.allclose(S.T @ p[a], (t.tau + t.L.T @ f)[iv:iv + 1], rtol=0, atol=1e-12)
 
 
 TSM = Path(__file__).resolve().parents[1] / ".." / ".." / "shared" / "reference" / "rmr" / "model" / "TSM_subject_noWeight.osim"
@@ -396,7 +406,10 @@ def test_thoracoscapular_muscle_lengths(tmp_path, monkeypatch):
     muscles, moving points, 37 PathWraps over ellipsoids, cylinders and spheres): lengths at random
     states against OpenSim's ``getLength``. The pin model here is a stand-in placing each body by a
     free-flyer at OpenSim's own body pose (and one prismatic joint per coordinate a moving point
-    follows), so that only the paths are compared; moment arms wait for the loader's kinematics."""
+    follows), so that only the paths are compared. Moment arms: ``-L V`` with ``V`` the bodies'
+    velocities (and the moving points' coordinate speed) for a unit speed of the coordinate, read from
+    OpenSim; the clavicle and scapula coordinates are left out (OpenSim projects that unit speed onto
+    the model's PointConstraint, which its Python bindings do not expose; the loader's test will)."""
     monkeypatch.chdir(tmp_path)
     shutil.copy(TSM, tmp_path / TSM.name)  # OpenSim loads from the model's folder: load a copy
     m = osim.Model(str(tmp_path / TSM.name))
@@ -418,7 +431,7 @@ def test_thoracoscapular_muscle_lengths(tmp_path, monkeypatch):
     cs = CableSet(model, cables, muscles=muscles, muscle_cables=muscles.names)
     data = model.createData()
     cset = m.getCoordinateSet()
-    worst = 0.0
+    worst = worst_r = 0.0
     for _ in range(8):
         for c in cset:
             lo, hi = max(c.getRangeMin(), -3.0), min(c.getRangeMax(), 3.0)
@@ -435,4 +448,32 @@ def test_thoracoscapular_muscle_lengths(tmp_path, monkeypatch):
         for i, c in enumerate(cables):
             ref = osim.Muscle.safeDownCast(m.getForceSet().get(c.name)).getLength(s)
             worst = max(worst, abs(ours[i] - ref) / ref)
-    assert worst < 1e-6, worst
+        L = cable_jacobian(model, data, cs, q)
+        for co in cset:
+            if co.get_locked() or co.getName().startswith(("clav_", "scapula_")):
+                continue
+            arms = -(L @ _unit_speed_velocities(m, s, co, model, bodies, moving))
+            for i, c in enumerate(cables):
+                arm = osim.Muscle.safeDownCast(m.getForceSet().get(c.name)).computeMomentArm(s, co)
+                worst_r = max(worst_r, abs(arms[i] - arm) / max(1e-3, abs(arm)))
+    assert worst < 1e-6 and worst_r < 1e-6, (worst, worst_r)
+
+
+def _unit_speed_velocities(m, s, coordinate, model, bodies, moving):
+    """The stand-in pin model's velocity (free-flyers: each body's in its own frame) when
+    ``coordinate`` moves at unit speed and every other coordinate is still (OpenSim's state)."""
+    s2 = osim.State(s)
+    s2.updU().setToZero()
+    coordinate.setSpeedValue(s2, 1.0)
+    m.realizeVelocity(s2)
+    V = np.zeros(model.nv)
+    for name in bodies:
+        b = m.getBodySet().get(name)
+        R = _se3(b.getTransformInGround(s2)).rotation
+        sv = b.getVelocityInGround(s2)
+        iv = model.joints[model.getJointId(f"ff_{name}")].idx_v
+        V[iv:iv + 3] = R.T @ np.array([sv.get(1)[i] for i in range(3)])
+        V[iv + 3:iv + 6] = R.T @ np.array([sv.get(0)[i] for i in range(3)])
+    for name in moving:
+        V[model.joints[model.getJointId(name)].idx_v] = m.getCoordinateSet().get(name).getSpeedValue(s2)
+    return V

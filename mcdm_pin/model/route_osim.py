@@ -332,10 +332,11 @@ def _write_segments(oM, point_key, point_local, path, owner, plen, r, wrap_int, 
 @register_jitable
 def osim_routes(oM, q, route_int, pt_kind, pt_q, pt_v, pt_fun, pt_float, fun_ptr, knots, wrap_int,
                 wrap_float, point_local, point_key, seg_a, seg_b, seg_active, seg_scale, arc_length,
-                L_extra, wrap_len, pt_dP):
+                L_extra, wrap_len, pt_dP, lever):
     """Every OpenSim route at configuration ``q`` (steps 1-4 of the module docstring), in place.
     ``L_extra`` (m, nv) is zeroed first; ``arc_length`` is added to (the MuJoCo wraps' pass zeroes
-    it)."""
+    it); ``lever`` (P, 3): for a tangent point whose cached position (``point_local``) differs from
+    where its wrap last put it, that difference (its body's frame), else 0."""
     L_extra[:, :] = 0.0
     for ri in range(route_int.shape[0]):
         r = route_int[ri]
@@ -357,11 +358,15 @@ def osim_routes(oM, q, route_int, pt_kind, pt_q, pt_v, pt_fun, pt_float, fun_ptr
             # computePath's last length: every node's ground position read (and cached); the path's
             # tangent points are then where OpenSim's lengths and forces see them
             _path_length(oM, point_key, point_local, path, owner, plen, wrap_int, r[R_W0], wrap_len, t0, cache)
+            for j in range(2 * nw):
+                for i in range(3):
+                    lever[t0 + j, i] = 0.0
             for j in range(plen):
                 k = path[j] - t0
-                if k >= 0:
-                    point_local[path[j], 0], point_local[path[j], 1] = cache[k, 0], cache[k, 1]
-                    point_local[path[j], 2] = cache[k, 2]
+                if k >= 0:  # lever: the refreshed position less the cached one (forces act there)
+                    for i in range(3):
+                        lever[path[j], i] = point_local[path[j], i] - cache[k, i]
+                        point_local[path[j], i] = cache[k, i]
         _write_segments(oM, point_key, point_local, path, owner, plen, r, wrap_int, wrap_len, seg_a, seg_b,
                         seg_active, seg_scale, arc_length, pt_kind, pt_v, pt_dP, L_extra)
 
