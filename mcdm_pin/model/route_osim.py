@@ -29,13 +29,24 @@ configuration ``q``:
 
 Tangent points are written into their slots in the frame of the wrap's body: the cable-terms kernel
 then treats them as points fixed on that body at the instant, as OpenSim's ``produceForces`` does.
+
+**OpenSim's cached ground positions.** OpenSim reads a point's ground position through a cache that
+is filled at its first read in an instant (``Point::getLocationInGround``) and that a wrap moving
+its tangent point later in the same instant does not refresh (``PathWrapPoint::setLocation``). Its
+lengths (the rounds' convergence test, the candidates' length change, the final length) and its
+forces' directions use those cached positions, its wrap geometry and the points where its forces
+act use the refreshed ones. We keep the same cache (``_ground``; the tangent points left in the slots
+are the cached ones) and report, in ``lever``, each path tangent point's refreshed position less its
+cached one: :func:`mcdm_pin.model.routes.add_levers` adds the moments of those levers to ``L`` and to
+the interaction wrenches. With one wrap, or wraps that settle in their first round, the lever is 0.
+
 Departures from OpenSim: the previous instant's wrap is never reused (OpenSim reuses it only for a
-sphere segment through the centre), and a wrap whose span has no active point ends the wrapping of
-the path as OpenSim does (its ``return``).
+sphere segment through the centre). A wrap whose span has no active point ends the wrapping of the
+path, as OpenSim's ``return`` does.
 
 The functions here are ``register_jitable`` (compiled inline into
 :func:`mcdm_pin.model.route_kernels.osim_route_pass`, plain Python before ``mcdm-pin compile``);
-:func:`osim_tables` builds their tables once per cable set.
+:class:`OsimTables` builds their tables once per cable set.
 """
 
 from __future__ import annotations
