@@ -21,10 +21,10 @@ osim.Logger.removeFileSink()  # OpenSim would append to an opensim.log beside th
 osim.Logger.setLevelString("warn")
 
 RNG = np.random.default_rng(24)
-# (parent, child, location of the joint in the parent, orientation (XYZ body-fixed) in the parent, child
-# offset location); the joints are PinJoints about their frames' z axis
-JOINTS = (("ground", "b1", (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), "q1"),
-          ("b1", "b2", (0.3, 0.0, 0.0), (0.4, -0.3, 0.2), (-0.02, 0.01, 0.0), "q2"))
+# (parent, child, location and orientation (XYZ body-fixed) of the joint frame in the parent, and in the
+# child); the joints are PinJoints about their frames' z axis
+JOINTS = (("ground", "b1", (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), "q1"),
+          ("b1", "b2", (0.3, 0.0, 0.0), (0.4, -0.3, 0.2), (-0.02, 0.01, 0.0), (0.1, 0.25, -0.3), "q2"))
 RANGES = {"q1": (-1.0, 1.2), "q2": (-0.8, 1.5)}
 
 
@@ -39,11 +39,11 @@ def _pin_model():
     model = pin.Model()
     model.addFrame(pin.Frame("ground", 0, 0, pin.SE3.Identity(), pin.FrameType.BODY))
     joint_of = {"ground": 0}
-    for parent, child, loc, ori, child_loc, coord in JOINTS:
+    for parent, child, loc, ori, child_loc, child_ori, coord in JOINTS:
         pj = joint_of[parent]
         parent_body = model.frames[model.getFrameId(parent)].placement
         jid = model.addJoint(pj, pin.JointModelRZ(), parent_body * pin.SE3(_xyz(*ori), np.array(loc)), coord)
-        body = pin.SE3(np.eye(3), np.array(child_loc)).inverse()
+        body = pin.SE3(_xyz(*child_ori), np.array(child_loc)).inverse()
         model.appendBodyToJoint(jid, pin.Inertia.FromSphere(1.0, 0.05), body)
         model.addFrame(pin.Frame(child, jid, 0, body, pin.FrameType.BODY))
         joint_of[child] = jid
@@ -56,10 +56,10 @@ def _osim_model(muscles, wraps):
     m = osim.Model()
     bodies = {"ground": m.getGround()}
     coords = {}
-    for parent, child, loc, ori, child_loc, coord in JOINTS:
+    for parent, child, loc, ori, child_loc, child_ori, coord in JOINTS:
         b = osim.Body(child, 1.0, osim.Vec3(0), osim.Inertia(0.01, 0.01, 0.01))
         j = osim.PinJoint(f"j_{child}", bodies[parent], osim.Vec3(*loc), osim.Vec3(*ori), b,
-                          osim.Vec3(*child_loc), osim.Vec3(0))
+                          osim.Vec3(*child_loc), osim.Vec3(*child_ori))
         j.updCoordinate().setName(coord)
         m.addBody(b)
         m.addJoint(j)
@@ -233,10 +233,10 @@ def test_simm_spline_matches_opensim():
 def _muscle_model(kind, tmp_path, lo, ls, damping):
     m = osim.Model()
     bodies = {"ground": m.getGround()}
-    for parent, child, loc, ori, child_loc, coord in JOINTS:
+    for parent, child, loc, ori, child_loc, child_ori, coord in JOINTS:
         b = osim.Body(child, 1.0, osim.Vec3(0), osim.Inertia(0.01, 0.01, 0.01))
         j = osim.PinJoint(f"j_{child}", bodies[parent], osim.Vec3(*loc), osim.Vec3(*ori), b,
-                          osim.Vec3(*child_loc), osim.Vec3(0))
+                          osim.Vec3(*child_loc), osim.Vec3(*child_ori))
         j.updCoordinate().setName(coord)
         m.addBody(b)
         m.addJoint(j)
