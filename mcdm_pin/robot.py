@@ -25,6 +25,7 @@ from .model.cables import Cable, CableSet, RoutePoint
 from .model.joints import PhysicalJoint, group, massless_members, physical_joints
 from .model.terms import check_vector
 from .mjcf.load import compile_mjcf, is_mjcf, mjcf_parts
+from .osim.load import is_osim, osim_parts
 from .sidecar import Sidecar, _names, load_sidecar
 from .urdf import check_model_inertias, load_model, package_share_dirs, replace_joints, urdf_joint_axes
 
@@ -129,7 +130,10 @@ class Robot:
     # ----------------------------------------------------------------------------------------- load
     @classmethod
     def load(cls, path) -> "Robot":
-        """Load a robot from a sidecar YAML file (which names its URDF or MJCF) or a MuJoCo MJCF file."""
+        """Load a robot from a sidecar YAML file (which names its URDF or MJCF), a MuJoCo MJCF file or an
+        OpenSim ``.osim`` file (:mod:`mcdm_pin.osim`)."""
+        if is_osim(path):
+            return cls(**osim_parts(path)._asdict())
         if is_mjcf(path):
             return cls.from_mujoco(compile_mjcf(path), str(path), Path(path).stem)
         return cls.from_sidecar(load_sidecar(path))
