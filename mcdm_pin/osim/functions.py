@@ -12,8 +12,8 @@ and (in :mod:`mcdm_pin.osim.paths`) moving path points.
   continuous second derivative, end conditions that match the third derivative of the cubic through
   the four end points (a straight line through two points, a parabola-free fit with three); outside
   ``[x_0, x_{n-1}]`` the straight line with the end slope (``f'' = 0``).
-- ``NaturalCubicSpline`` (``x``, ``y``): the natural cubic spline (``f'' = 0`` at both ends);
-  outside the knots the end cubic is continued.
+- ``NaturalCubicSpline`` (``x``, ``y``): despite its name, OpenSim computes it exactly as
+  ``SimmSpline`` (same end conditions, same straight-line extrapolation), and so does this module.
 - ``PiecewiseLinearFunction`` (``x``, ``y``): straight segments; outside, the end segment continued;
   ``f'' = 0``.
 
@@ -129,31 +129,6 @@ def simm_spline(x, y) -> _Cubic:
     return _Cubic(x, y, b, c, d, True)
 
 
-def natural_spline(x, y) -> _Cubic:
-    """The natural cubic spline through ``(x, y)``: second derivatives ``M_k`` from the tridiagonal
-    system with ``M_0 = M_{n-1} = 0``, then ``b_k, c_k = M_k / 2, d_k`` per segment."""
-    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
-    n = len(x)
-    h = np.diff(x)
-    M = np.zeros(n)
-    if n > 2:
-        A = np.zeros((n - 2, n - 2))
-        r = 6.0 * (np.diff(y[1:]) / h[1:] - np.diff(y[:-1]) / h[:-1])
-        for i in range(n - 2):
-            A[i, i] = 2.0 * (h[i] + h[i + 1])
-            if i > 0:
-                A[i, i - 1] = h[i]
-            if i < n - 3:
-                A[i, i + 1] = h[i + 1]
-        M[1:-1] = np.linalg.solve(A, r)
-    b = np.zeros(n)
-    b[:-1] = np.diff(y) / h - h * (2.0 * M[:-1] + M[1:]) / 6.0
-    b[-1] = b[-2] + h[-1] * (M[-2] + M[-1]) / 2.0
-    d = np.zeros(n)
-    d[:-1] = np.diff(M) / (6.0 * h)
-    return _Cubic(x, y, b, M / 2.0, d, False)
-
-
 def piecewise_linear(x, y) -> _Cubic:
     """Straight segments through ``(x, y)``, continued beyond the ends."""
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
@@ -164,7 +139,7 @@ def piecewise_linear(x, y) -> _Cubic:
     return _Cubic(x, y, b, zeros, zeros, False)
 
 
-_SPLINES = {"SimmSpline": simm_spline, "NaturalCubicSpline": natural_spline,
+_SPLINES = {"SimmSpline": simm_spline, "NaturalCubicSpline": simm_spline,
             "PiecewiseLinearFunction": piecewise_linear}
 FUNCTION_TAGS = ("Constant", "LinearFunction", "MultiplierFunction", "PolynomialFunction", *_SPLINES)
 

@@ -48,7 +48,7 @@ class OsimModel:
             coupler constraints, locked coordinates).
         angular: ``v`` indices (3,) of each ``BallJoint``/``FreeJoint``/``ScapulothoracicJoint``
             rotation whose OpenSim speeds are an angular velocity (:mod:`mcdm_pin.osim.speeds`).
-        loops: the ``PointConstraint``\ s as ``(name, frame 1 id, frame 2 id)`` (OP_FRAMEs at the two
+        loops: the ``PointConstraint`` elements as ``(name, frame 1 id, frame 2 id)`` (OP_FRAMEs at the two
             points).
         q_index: the ``q`` entry of each one-entry ``v`` entry (-1 for the ellipsoid's).
     """
