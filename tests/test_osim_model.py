@@ -314,6 +314,50 @@ def test_point_constraint_loop_matches_opensim_constrained_dynamics(workdir):
     assert worst_eq < 1e-9
 
 
+@pytest.mark.parametrize("path", [ARM26, TSM], ids=["arm26", "tsm"])
+def test_interaction_wrenches_equal_opensims_joint_reactions(workdir, path):
+    """With OpenSim's forward dynamics (gravity, forces off) giving the accelerations, RNEA's
+    ``data.f`` (with the loop force as fext on the TSM) is OpenSim's reaction on each joint's child
+    frame (``calcReactionOnChildExpressedInGround``): the physical joints' interaction wrenches sit
+    at OpenSim's child frames and the loop force acts in them."""
+    om, _, src, _ = osim_skeleton(path)
+    model, ref = om.model, Reference(path)
+    data = model.createData()
+    rng = np.random.default_rng(8)
+    cv = om.coordinate_v
+    worst = worst_tau = 0.0
+    for _ in range(STATES):
+        if src.loops is None:
+            q, v = src.configuration({}) + rng.uniform(-1.0, 1.0, model.nq), rng.normal(size=model.nv)
+        else:
+            q = src.loops.project(src.configuration({}) + rng.uniform(-0.2, 0.2, model.nq))
+            v = src.loops.basis(q) @ rng.normal(size=model.nv - 3)
+        u = speeds.to_speeds(om.angular, q, v)[cv]
+        ref.set(q[om.q_index[cv]], u)
+        ref.model.realizeAcceleration(ref.state)
+        U, Udot = np.zeros(model.nv), np.zeros(model.nv)
+        U[cv], Udot[cv] = u, [ref.state.getUDot().get(ref.slot[i]) for i in range(len(cv))]
+        _, a = speeds.from_speeds(om.angular, q, U, Udot)
+        fext = None
+        if src.loops is not None:
+            M = pin.crba(model, data, q)
+            M = np.triu(M) + np.triu(M, 1).T
+            fext = src.loops.external_forces(q, src.loops.force(q, M @ a + pin.rnea(model, data, q, v, 0 * a)))
+        tau = pin.rnea(model, data, q, v, a) if fext is None else pin.rnea(model, data, q, v, a, fext)
+        worst_tau = max(worst_tau, np.abs(tau).max())
+        pin.forwardKinematics(model, data, q)
+        for j in range(1, model.njoints):
+            joint = ref.model.getJointSet().get(model.names[j])
+            child = joint.getChildFrame().getTransformInGround(ref.state)
+            assert np.allclose(data.oMi[j].translation, _vec3(child.p()), rtol=0, atol=1e-12)
+            reaction = joint.calcReactionOnChildExpressedInGround(ref.state)
+            R = data.oMi[j].rotation
+            worst = max(worst, np.abs(R @ data.f[j].angular - _vec3(reaction.get(0))).max(),
+                        np.abs(R @ data.f[j].linear - _vec3(reaction.get(1))).max())
+    assert worst_tau < 1e-9  # no actuation: the equation of motion closes with the loop force alone
+    assert worst < 1e-9
+
+
 @pytest.mark.skipif(not RMR.is_dir(), reason="the RMR motions are in ../shared/reference/rmr (not committed)")
 def test_measured_motions_lie_on_the_loop():
     om, _, src, _ = osim_skeleton(TSM)

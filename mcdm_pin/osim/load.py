@@ -70,7 +70,7 @@ def osim_parts(path, name: str | None = None) -> RobotParts:
     if cables is None:
         raise ModelError(f"{source}: no muscle read, so the model has no cable (the muscle and path reader, "
                          f"mcdm_pin.osim.paths, is not wired into mcdm_pin.osim.load._cables yet)")
-    notes = tuple(doc.notes) + tuple(f"PointConstraint {n!r}: a closed loop (mcdm_pin.osim.constraints)"
+    notes = tuple(doc.notes) + om.notes + tuple(f"PointConstraint {n!r}: a closed loop (mcdm_pin.osim.constraints)"
                                      for n, _, _ in om.loops)
     return RobotParts(om.model, cables, physical_joints(om.model), (), name or Path(path).stem, couplings,
                       om.velocity_names, src, notes)

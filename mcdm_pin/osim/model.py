@@ -50,7 +50,9 @@ class OsimModel:
             rotation whose OpenSim speeds are an angular velocity (:mod:`mcdm_pin.osim.speeds`).
         loops: the ``PointConstraint`` elements as ``(name, frame 1 id, frame 2 id)`` (OP_FRAMEs at the two
             points).
-        q_index: the ``q`` entry of each one-entry ``v`` entry (-1 for the ellipsoid's).
+        q_index: the ``q`` entry of each ``v`` entry (every joint built here has ``nq == nv``).
+        notes: joints whose Pinocchio joint frame is not OpenSim's child frame (a constant
+            transform after the last moving axis): their interaction wrench is at the joint frame.
     """
 
     model: pin.Model
@@ -63,6 +65,7 @@ class OsimModel:
     angular: tuple
     loops: tuple
     q_index: np.ndarray
+    notes: tuple = ()
 
 
 def build(doc: Document) -> OsimModel:
@@ -72,7 +75,7 @@ def build(doc: Document) -> OsimModel:
     model.gravity = pin.Motion(np.asarray(doc.gravity, dtype=float), np.zeros(3))
     placed = {doc.ground: (0, pin.SE3.Identity())}  # body -> (pin joint, body frame in it)
     body_frame = {doc.ground: model.addFrame(pin.Frame(doc.ground, 0, 0, pin.SE3.Identity(), pin.FrameType.BODY))}
-    names, carriers, dependents, angular = [], {}, [], []
+    names, carriers, dependents, angular, notes = [], {}, [], [], []
     for joint in _ordered(doc):
         where = f"{doc.source}: {joint.tag} {joint.name!r}"
         pbody, X_PF = _frame_in_body(doc, joint.parent, where)
@@ -90,6 +93,9 @@ def build(doc: Document) -> OsimModel:
             carriers.update({c: v0 + e for c, e in p.carriers.items()})
             dependents += [(v0 + e, c, f, label) for e, c, f, label in p.dependents]
             angular += [tuple(v0 + p.carriers[c] for c in triple) for triple in p.angular]
+            if not p.end.isIdentity(0.0):
+                notes.append(f"{joint.tag} {joint.name!r}: a constant transform follows its last moving axis, so "
+                             f"its interaction wrench is at the Pinocchio joint frame, not at OpenSim's child frame")
         placed[cbody] = (jid, X_jC)
         mass, com, inertia = doc.bodies[cbody]
         frame = pin.Frame(cbody, jid, body_frame[pbody], X_jC, pin.FrameType.BODY,
@@ -101,19 +107,16 @@ def build(doc: Document) -> OsimModel:
                          f"{doc.ground!r}")
     _offset_frames(model, doc, placed, body_frame)
     coords = [c for j in doc.joints for c in j.coordinates]
-    q_index = np.array([model.joints[_joint_of_v(model, i)].idx_q + (i - model.joints[_joint_of_v(model, i)].idx_v)
-                        if model.joints[_joint_of_v(model, i)].nq == model.joints[_joint_of_v(model, i)].nv else -1
-                        for i in range(model.nv)], dtype=int)
+    if model.nq != model.nv:  # every sub-joint built here has nq == nv: q_i is the i-th v entry's
+        raise ModelError(f"{doc.source}: internal: a joint with nq != nv was built")
+    q_index = np.arange(model.nv)
     _set_limits(model, coords, carriers, q_index)
     couplings = _couplings(doc, coords, carriers, dependents)
     loops = _loops(model, doc, placed, body_frame)
     return OsimModel(model, doc.source, tuple(names), tuple(c.name for c in coords),
                      np.array([carriers[c.name] for c in coords], dtype=int),
-                     np.array([c.default for c in coords]), tuple(couplings), tuple(angular), loops, q_index)
-
-
-def _joint_of_v(model, i) -> int:
-    return next(j for j in range(1, model.njoints) if model.joints[j].idx_v <= i < model.joints[j].idx_v + model.joints[j].nv)
+                     np.array([c.default for c in coords]), tuple(couplings), tuple(angular), loops, q_index,
+                     tuple(notes))
 
 
 def _joint_model(p):
