@@ -314,6 +314,27 @@ def test_point_constraint_loop_matches_opensim_constrained_dynamics(workdir):
     assert worst_eq < 1e-9
 
 
+def test_loop_force_and_wrench_maps_are_affine_in_the_cable_forces():
+    """lambda = lambda_0 + Lambda f equals force(q, M a + h + L^T f), and W lambda is what the loop
+    force adds to every joint's RNEA wrench."""
+    om, _, src, _ = osim_skeleton(TSM)
+    model, data, loops = om.model, om.model.createData(), src.loops
+    rng = np.random.default_rng(9)
+    for _ in range(5):
+        q = loops.project(src.configuration({}) + rng.uniform(-0.2, 0.2, model.nq))
+        v, a = rng.normal(size=model.nv), rng.normal(size=model.nv)
+        L, f = rng.normal(size=(4, model.nv)), rng.uniform(0, 50, 4)
+        tau0 = pin.rnea(model, data, q, v, a)
+        lam0, Lam = loops.force_map(q, tau0, L)
+        lam = loops.force(q, tau0 + L.T @ f)
+        assert np.allclose(lam0 + Lam @ f, lam, rtol=0, atol=1e-9)
+        before = [data.f[j].vector.copy() for j in range(model.njoints)]
+        pin.rnea(model, data, q, v, a, loops.external_forces(q, lam))
+        W = loops.wrench_map(q)
+        for j in range(1, model.njoints):
+            assert np.allclose(data.f[j].vector - before[j], W[j] @ lam, rtol=0, atol=1e-9)
+
+
 @pytest.mark.parametrize("path", [ARM26, TSM], ids=["arm26", "tsm"])
 def test_interaction_wrenches_equal_opensims_joint_reactions(workdir, path):
     """With OpenSim's forward dynamics (gravity, forces off) giving the accelerations, RNEA's

@@ -28,7 +28,10 @@ equation projected on :math:`N` alone,
 affine in :math:`f` (:meth:`PointLoops.force`); it is exact (zero residual) whenever the projected
 equation holds, because the two projections together span all of :math:`N`'s columns. :math:`\lambda`
 enters the interaction wrenches as external forces on bodies 1 and 2 in RNEA
-(:meth:`PointLoops.external_forces`), so every joint between the loop's bodies carries it.
+(:meth:`PointLoops.external_forces`), so every joint between the loop's bodies carries it; as maps,
+:meth:`PointLoops.force_map` gives ``lambda = lambda_0 + Lambda f`` and :meth:`PointLoops.wrench_map`
+the joint wrenches' part ``W lambda``, so a joint's interaction wrench ``u + R^T f`` becomes
+``(u + W lambda_0) + (R^T + W Lambda) f``.
 
 A state must lie on the loop (:meth:`residual`, :meth:`velocity_residual`,
 :meth:`acceleration_residual`): measured motions of the thoracoscapular model do so only to the
@@ -125,6 +128,35 @@ class PointLoops:
                 local = R.T @ (sign * f)
                 fext[j] += pin.Force(local, np.cross(frame.placement.translation, local))
         return fext
+
+    def force_map(self, q, tau0, L=None):
+        """``(lambda_0, Lambda)`` with ``lambda = lambda_0 + Lambda f`` (:meth:`force`): ``tau0 = M qdd + h``
+        (nv), ``L`` (m, nv) the cables' ``d lengths / dq`` (``None``: no cables, ``Lambda`` empty)."""
+        N = self._coupling_basis(q)
+        pinv = np.linalg.pinv(N.T @ self.jacobian(q).T)
+        lam0 = pinv @ (N.T @ np.asarray(tau0, dtype=float))
+        Lam = np.zeros((self.k, 0)) if L is None else pinv @ (N.T @ np.asarray(L, dtype=float).T)
+        return lam0, Lam
+
+    def wrench_map(self, q) -> np.ndarray:
+        """(njoints, 6, 3k) ``W``: what the loop forces ``lambda`` add to RNEA's ``data.f[j]`` (the wrench
+        ``[F; M]`` the parent exerts on joint ``j``'s subtree, joint frame, moment about its origin):
+        ``data.f[j](lambda) - data.f[j](0) = W[j] lambda``. A force on the subtree is one the parent
+        need not exert, hence ``W[j] = -`` the sum, over the loop points in the subtree, of the point
+        force moved to joint ``j``."""
+        m, d = self.model, self.data
+        pin.framesForwardKinematics(m, d, np.asarray(q, dtype=float))
+        W = np.zeros((m.njoints, 6, self.k))
+        for i, (_, a, b) in enumerate(self.loops):
+            for fid, sign in ((b, 1.0), (a, -1.0)):
+                point = d.oMf[fid].translation
+                j = int(m.frames[fid].parentJoint)
+                while j > 0:
+                    R, o = d.oMi[j].rotation, d.oMi[j].translation
+                    W[j, :3, 3 * i:3 * i + 3] -= sign * R.T
+                    W[j, 3:, 3 * i:3 * i + 3] -= sign * R.T @ pin.skew(point - o)
+                    j = int(m.parents[j])
+        return W
 
     def project(self, q, iterations: int = 50, tol: float = 1e-13) -> np.ndarray:
         """``q`` moved onto the loops (Gauss-Newton on ``phi`` along ``N``'s directions, smallest

@@ -32,9 +32,11 @@ frame), coordinates abduction, elevation, upward rotation (body-fixed x-y-z angl
 frame ``E`` carries a massless body ``B1 = E Rz(-pi/2)``; the winging pin turns ``B1`` about the unit
 axis ``d = (-sin w, cos w, 0)`` through ``o = (o_x, o_y, 0)`` (``w``, ``o``: the winging axis
 direction and origin), and ``M`` is the pin's moving frame. Pinocchio's ``JointModelEllipsoid``
-has the same map, ``R = Rx(q0) Ry(q1) Rz(q2)`` and origin ``diag(r) R e_z``... except the speeds:
-OpenSim's three speeds are the angular velocity of ``E`` in ``F'`` expressed in ``F'`` (the same for
-``BallJoint`` and ``FreeJoint``), Pinocchio's the angle rates (:mod:`mcdm_pin.osim.speeds` maps them).
+has Simbody's map (rotation ``Rx(q0) Ry(q1) Rz(q2)``, origin ``diag(r) Rx(q0) Ry(q1) e_z``), so the
+sub-joints are: the ellipsoid (radii swapped) placed at ``F Rz(pi/2)``, then a revolute about ``d``
+placed at ``Rz(-pi/2) T(o)``, with ``end = T(-o)``. The speeds differ: OpenSim's three are the
+angular velocity of ``E`` in ``F'``, in ``F'`` axes (as for ``BallJoint`` and ``FreeJoint``),
+Pinocchio's the angle rates (:mod:`mcdm_pin.osim.speeds` maps them).
 """
 
 from __future__ import annotations
