@@ -102,6 +102,42 @@ def _speed_jacobian(om, q):
     return np.column_stack([speeds.from_speeds(om.angular, q, e) for e in np.eye(om.model.nv)])
 
 
+@pytest.fixture(scope="module")
+def chain(workdir):
+    """A chain of one body per OpenSim joint type (FreeJoint at the root, then Pin, Slider, Universal,
+    Gimbal, Ball, Weld, Pin), random offsets, orientations and inertias, written by OpenSim itself."""
+    rng = np.random.default_rng(10)
+
+    def vec(x):
+        return osim.Vec3(*[float(t) for t in x])
+
+    model = osim.Model()
+    model.setName("chain")
+    parent = model.getGround()
+    for k, kind in enumerate(["FreeJoint", "PinJoint", "SliderJoint", "UniversalJoint", "GimbalJoint", "BallJoint",
+                              "WeldJoint", "PinJoint"]):
+        inertia = [*(0.02 + 0.01 * rng.random(3)), *(0.001 * rng.normal(size=3))]
+        body = osim.Body(f"b{k}", float(rng.uniform(0.5, 2.0)), vec(0.1 * rng.normal(size=3)),
+                         osim.Inertia(*[float(t) for t in inertia]))
+        model.addBody(body)
+        model.addJoint(getattr(osim, kind)(f"j{k}", parent, vec(0.2 * rng.normal(size=3)), vec(rng.normal(size=3)),
+                                           body, vec(0.2 * rng.normal(size=3)), vec(rng.normal(size=3))))
+        parent = body
+    model.finalizeConnections()
+    path = workdir / "chain.osim"
+    model.printToXML(str(path))
+    return path
+
+
+def test_every_joint_type_matches_opensim(workdir, chain):
+    om, _, _, _ = osim_skeleton(chain)
+    assert [om.model.joints[j].shortname() for j in range(1, om.model.njoints)] == [
+        "JointModelComposite", "JointModelRZ", "JointModelPX", "JointModelComposite", "JointModelComposite",
+        "JointModelComposite", "JointModelRZ"]
+    test_body_frames_and_velocities_match_opensim(workdir, chain)
+    test_mass_matrix_and_inverse_dynamics_match_opensim(workdir, chain)
+
+
 @pytest.mark.parametrize("path", [ARM26, TSM], ids=["arm26", "tsm"])
 def test_body_frames_and_velocities_match_opensim(workdir, path):
     om, _, _, _ = osim_skeleton(path)

@@ -115,14 +115,14 @@ def _text(el, tag, where, default=None):
     return node.text.strip()
 
 
-def _vec(el, tag, where, n=3, default=None):
+def _vec(el, tag, where, n=3, default=None, finite=True):
     text = _text(el, tag, where, None if default is None else " ".join(map(str, default)))
     try:
         v = np.array([float(t) for t in text.split()])
     except ValueError:
         raise ModelError(f"{where}: <{tag}> must hold {n} numbers, got {text!r}") from None
-    if v.shape != (n,) or not np.all(np.isfinite(v)):
-        raise ModelError(f"{where}: <{tag}> must hold {n} finite numbers, got {text!r}")
+    if v.shape != (n,) or not np.all(np.isfinite(v) if finite else ~np.isnan(v)):
+        raise ModelError(f"{where}: <{tag}> must hold {n} {'finite ' if finite else ''}numbers, got {text!r}")
     return v
 
 
@@ -234,7 +234,7 @@ def _read_coordinates(doc, el, jname):
             raise ModelError(f"{where}: prescribed=true: a motion prescribed as a function of time is not "
                              f"read; give that motion as the trajectory instead")
         out.append(Coordinate(cname, jname, float(_text(c, "default_value", where, "0")),
-                              tuple(_vec(c, "range", where, 2, default=(-np.inf, np.inf))),
+                              tuple(_vec(c, "range", where, 2, default=(-np.inf, np.inf), finite=False)),
                               _flag(c, "clamped", where), _flag(c, "locked", where)))
     return tuple(out)
 
