@@ -22,9 +22,9 @@ import numpy as np
 from ..exceptions import ModelError
 from .functions import FUNCTION_TAGS, read_function
 
-# what the skeleton reader leaves to others (the forces: mcdm_pin.osim.paths) or has no use for
-IGNORED_SETS = ("ForceSet", "MarkerSet", "ContactGeometrySet", "ProbeSet", "ControllerSet",
-                "ComponentSet", "defaults", "credits", "publications", "assembly_accuracy")
+# sets the skeleton reader leaves to others (the forces: mcdm_pin.osim.paths) or has no use for
+# (listed in the notes when not empty)
+IGNORED_SETS = ("ForceSet", "ContactGeometrySet", "ProbeSet", "ControllerSet", "ComponentSet")
 
 
 @dataclass(frozen=True)
@@ -92,6 +92,7 @@ class Document:
     constraints: list
     notes: list
     root: object = None  # the parsed ``<Model>`` element (the forces' reader reads it)
+    markers: dict = field(default_factory=dict)  # name -> (frame path, location (3,))
 
 
 def rotation_xyz(angles) -> np.ndarray:
@@ -177,14 +178,18 @@ def read_osim(path) -> Document:
         c = _read_constraint(out, el)
         if c is not None:
             out.constraints.append(c)
+    for el in _objects(model, "MarkerSet"):
+        where = f"{src}: Marker {el.get('name')!r}"
+        frame = _resolve(f"/markerset/{el.get('name')}", _text(el, "socket_parent_frame", where))
+        out.markers[el.get("name")] = (frame, _vec(el, "location", where, default=(0, 0, 0)))
     for el in model:
-        if el.tag in ("Ground", "BodySet", "JointSet", "ConstraintSet", "gravity", "length_units", "force_units"):
+        count = len(_objects(model, el.tag)) if el.tag.endswith("Set") else 0
+        if el.tag in ("BodySet", "JointSet", "ConstraintSet", "MarkerSet") or not count:
             continue
-        if el.tag in IGNORED_SETS or el.tag.endswith("Set") and not _objects(model, el.tag):
-            continue
-        if el.tag.endswith("Set"):
-            raise ModelError(f"{src}: <{el.tag}> holds {len(_objects(model, el.tag))} component(s); the "
-                             f"skeleton reader does not take them")
+        if el.tag not in IGNORED_SETS:
+            raise ModelError(f"{src}: <{el.tag}> holds {count} component(s); the reader does not take them")
+        if el.tag != "ForceSet":
+            out.notes.append(f"{el.tag}: {count} component(s) not read (no use for the cable forces)")
     return out
 
 

@@ -7,7 +7,8 @@ sub-joints of :mod:`mcdm_pin.osim.joints` when there are several), placed at the
 Frames: every OpenSim body, and the ground, has a ``BODY`` frame named exactly as the body, placed at
 the OpenSim body frame and carrying the body's inertia (mass at ``mass_center``, inertia about the
 mass centre in body axes). Every ``PhysicalOffsetFrame`` has an ``OP_FRAME`` named by its OpenSim
-path (``/bodyset/scapula/cp_in_scapula``, ``/jointset/GlenoHumeral/scapula_offset``).
+path (``/bodyset/scapula/cp_in_scapula``, ``/jointset/GlenoHumeral/scapula_offset``), and so does
+every ``Marker`` (``/markerset/Glenoid_Center``, at its location, axes of its frame).
 
 Coordinates: every entry of Pinocchio's ``v`` either carries an OpenSim coordinate (its value in
 OpenSim's units, rad or m) or follows one through a function (a coupling, named
@@ -176,12 +177,14 @@ def _frame_in_body(doc, path, where):
 
 
 def _offset_frames(model, doc, placed, body_frame):
-    for path in doc.frames:
-        if doc.frames[path] is None:
-            continue
-        body, X = _frame_in_body(doc, path, doc.source)
+    """``OP_FRAME``s of the offset frames and the markers (module docstring)."""
+    frames = [(path, path, pin.SE3.Identity()) for path in doc.frames if doc.frames[path] is not None]
+    frames += [(f"/markerset/{name}", path, pin.SE3(np.eye(3), np.asarray(p, dtype=float)))
+               for name, (path, p) in doc.markers.items()]
+    for name, path, offset in frames:
+        body, X = _frame_in_body(doc, path, f"{doc.source}: {name}")
         jid, X_jB = placed[body]
-        model.addFrame(pin.Frame(path, jid, body_frame[body], X_jB * X, pin.FrameType.OP_FRAME), False)
+        model.addFrame(pin.Frame(name, jid, body_frame[body], X_jB * X * offset, pin.FrameType.OP_FRAME), False)
 
 
 def _set_limits(model, coords, carriers, q_index):
