@@ -485,3 +485,15 @@ def test_robot_load_speaks_opensim_names(monkeypatch):
     assert robot.source.coordinate_values(q)["shoulder_elv"] == 0.7
     assert q[robot.coordinate_names.index("scapula_winging")] == 0.1
     assert any("PointConstraint 'AC'" in note for note in robot.notes)
+
+
+def test_a_locked_coordinate_is_fixed_at_its_default(tmp_path):
+    path = _edited(tmp_path, [("<locked>false</locked>", "<locked>true</locked>")])  # r_shoulder_elev
+    om, couplings, src, _ = osim_skeleton(path)
+    default = om.defaults[om.coordinates.index("r_shoulder_elev")]
+    assert couplings.n == 1 and couplings.independent_names == ("r_elbow_flex",)
+    q = src.configuration({"r_elbow_flex": 0.4})
+    assert src.coordinate_values(q) == {"r_shoulder_elev": default, "r_elbow_flex": 0.4}
+    assert np.allclose(couplings.basis(q), [[0.0], [1.0]])
+    with pytest.raises(Exception, match="r_shoulder_elev"):
+        src.configuration({"r_shoulder_elev": default + 0.1})
