@@ -304,6 +304,31 @@ def test_couplings_follow_opensim(workdir, tmp_path):
         src.configuration({"r_shoulder_elev": 0.3, "r_elbow_flex": 0.0})
 
 
+def test_function_couplings_basis_and_rates_equal_finite_differences(tmp_path):
+    """N = dq/dz and the filled velocities and accelerations of spline couplings (the chain rule with
+    f' and f'') against central differences of the coupled map."""
+    om, couplings, src, _ = osim_skeleton(_coupled_arm26(tmp_path))
+    rng = np.random.default_rng(11)
+    (z_index,) = couplings.independent
+    for _ in range(10):
+        z, zd, zdd = rng.uniform(-0.5, 2.0), rng.normal(), rng.normal()
+        q = src.configuration({"r_shoulder_elev": z})
+        h = 1e-5
+
+        def at(t):
+            return src.configuration({"r_shoulder_elev": t})
+
+        N = couplings.basis(q)
+        assert np.allclose(N[:, 0], (at(z + h) - at(z - h)) / (2 * h), rtol=0, atol=1e-8)
+        v0, a0 = np.zeros(om.model.nv), np.zeros(om.model.nv)
+        v0[z_index], a0[z_index] = zd, zdd
+        _, v, a = couplings.fill(q, v0, a0)
+        # q(t) = map(z + zd t + zdd t^2 / 2): v = dq/dt, a = d2q/dt2 at t = 0
+        path = lambda t: at(z + zd * t + 0.5 * zdd * t * t)
+        assert np.allclose(v, (path(h) - path(-h)) / (2 * h), rtol=0, atol=1e-8)
+        assert np.allclose(a, (path(h) - 2 * path(0.0) + path(-h)) / h ** 2, rtol=0, atol=1e-4)
+
+
 # ------------------------------------------------------------------------------------ the AC loop
 def test_point_constraint_loop_matches_opensim_constrained_dynamics(workdir):
     """On states on the loop, the projected equation (N K)^T (M a + h - tau) = 0 with G a + gamma = 0
