@@ -522,3 +522,15 @@ def test_a_locked_coordinate_is_fixed_at_its_default(tmp_path):
     assert np.allclose(couplings.basis(q), [[0.0], [1.0]])
     with pytest.raises(Exception, match="r_shoulder_elev"):
         src.configuration({"r_shoulder_elev": default + 0.1})
+
+
+def test_the_default_pose_is_moved_onto_the_loop_by_the_shoulder_girdle_only():
+    om, _, src, _ = osim_skeleton(TSM)
+    q = src.configuration({})
+    assert np.abs(src.loops.residual(q)).max() > 1e-3  # the file's defaults are off the loop (OpenSim assembles)
+    girdle = [om.velocity_names.index(n) for n in ("clav_prot", "clav_elev", "scapula_abduction",
+                                                   "scapula_elevation", "scapula_upward_rot", "scapula_winging")]
+    on = src.loops.project(q, free=girdle)
+    assert np.abs(src.loops.residual(on)).max() < 1e-12
+    others = [i for i in range(om.model.nv) if i not in girdle]
+    assert np.array_equal(on[others], q[others])

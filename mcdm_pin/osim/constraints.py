@@ -158,18 +158,31 @@ class PointLoops:
                     j = int(m.parents[j])
         return W
 
-    def project(self, q, iterations: int = 50, tol: float = 1e-13) -> np.ndarray:
-        """``q`` moved onto the loops (Gauss-Newton on ``phi`` along ``N``'s directions, smallest
-        steps): used to make test states; raises ModelError if it does not converge."""
+    def project(self, q, free=None, iterations: int = 50, tol: float = 1e-13) -> np.ndarray:
+        """``q`` moved onto the loops: Gauss-Newton on ``phi`` along the couplings' directions, smallest
+        steps, moving only the independent coordinates ``free`` (``v`` indices; default: all). A file's
+        default pose is in general not on the loop (OpenSim assembles it when it initialises the
+        model); this is the same job. Raises ModelError if it does not converge."""
         q = np.array(q, dtype=float)
         for _ in range(iterations):
             r = self.residual(q)
             if np.max(np.abs(r)) < tol:
                 return q
             N = self._coupling_basis(q)
+            if free is not None:
+                cols = self._columns(free)
+                N = N[:, cols]
             dz = -np.linalg.pinv(self.jacobian(q) @ N) @ r
             q = pin.integrate(self.model, q, N @ dz)
             if self.couplings is not None:
                 q = self.couplings.fill(q)[0]
         raise ModelError(f"point constraint(s) {list(self.names)}: no configuration on the loop found near q "
                          f"(residual {np.max(np.abs(self.residual(q)))} m)")
+
+    def _columns(self, free) -> list:
+        """Columns of the couplings' basis of the ``v`` indices ``free`` (independent coordinates)."""
+        independent = list(range(self.model.nv)) if self.couplings is None else self.couplings.independent.tolist()
+        bad = [int(i) for i in free if int(i) not in independent]
+        if bad:
+            raise ModelError(f"project: v entries {bad} are not independent coordinates")
+        return [independent.index(int(i)) for i in free]
