@@ -241,6 +241,19 @@ def test_functions_match_opensim(tag):
             assert np.allclose(mine.value(t), want, rtol=0, atol=1e-12)
 
 
+def test_polynomial_matches_opensim():
+    coef = [0.3, -1.2, 0.5, 2.0]  # highest power first, as OpenSim's PolynomialFunction
+    vec = osim.Vector(len(coef), 0.0)
+    for i, c in enumerate(coef):
+        vec.set(i, c)
+    ref = osim.PolynomialFunction(vec)
+    for t in np.linspace(-2.0, 2.0, 9):
+        arg = osim.Vector(1, float(t))
+        want = (ref.calcValue(arg), ref.calcDerivative(osim.StdVectorInt([0]), arg),
+                ref.calcDerivative(osim.StdVectorInt([0, 0]), arg))
+        assert np.allclose(functions.Polynomial(tuple(coef)).value(t), want, rtol=0, atol=1e-12)
+
+
 # ------------------------------------------------------------------------------ couplings (a modified arm26)
 def _coupled_arm26(tmp_path) -> Path:
     """arm26 whose elbow also translates along splines of the elbow angle (SimmSpline,

@@ -9,9 +9,10 @@ and (in :mod:`mcdm_pin.osim.paths`) moving path points.
 - ``MultiplierFunction`` (``function``, ``scale s``): ``f = s g(x)``.
 - ``PolynomialFunction`` (``coefficients c_n ... c_0``, highest power first as OpenSim writes them).
 - ``SimmSpline`` (``x``, ``y``): the cubic spline of SIMM (Forsythe, Malcolm and Moler's ``spline``):
-  continuous second derivative, end conditions that match the third derivative of the cubic through
-  the four end points (a straight line through two points, a parabola-free fit with three); outside
-  ``[x_0, x_{n-1}]`` the straight line with the end slope (``f'' = 0``).
+  continuous second derivative; at each end, with four points or more, the third derivative of the
+  cubic through the four end points (divided differences), with three a zero end correction, with
+  two the straight line; outside ``[x_0, x_{n-1}]`` the straight line with the end slope
+  (``f'' = 0``).
 - ``NaturalCubicSpline`` (``x``, ``y``): despite its name, OpenSim computes it exactly as
   ``SimmSpline`` (same end conditions, same straight-line extrapolation), and so does this module.
 - ``PiecewiseLinearFunction`` (``x``, ``y``): straight segments; outside, the end segment continued;
