@@ -184,7 +184,7 @@ def fk_coordinates(model: pin.Model, space: TaskSpace, q) -> np.ndarray:
 
 
 def fk_error(model: pin.Model, space: TaskSpace, q, y_target) -> float:
-    """:math:`\|y(q) - y^*\|_\infty` by forward kinematics on ``model`` (angles wrapped); with all three
+    r""":math:`\|y(q) - y^*\|_\infty` by forward kinematics on ``model`` (angles wrapped); with all three
     angles kept, the orientation's part is the angle of :math:`R^{*T}R(q)` (rad)."""
     y_target = np.asarray(y_target, dtype=float)
     y = fk_coordinates(model, space, q)

@@ -174,7 +174,7 @@ class TaskKinematics:
         return y[self._pos], phi
 
     def residual(self, data, y_target) -> np.ndarray:
-        """The IK error at ``data`` (frame placements up to date): ``y - y*`` (angles wrapped); with all
+        r"""The IK error at ``data`` (frame placements up to date): ``y - y*`` (angles wrapped); with all
         three angles kept, the angle rows are replaced by :math:`\log(R^{*T}R)` (frame axes, rad), which
         has no gimbal lock."""
         if not self.full_rotation:
@@ -195,7 +195,7 @@ class TaskKinematics:
 
     # ------------------------------------------------------------------------------- the rates
     def rate_targets(self, y, yd, ydd):
-        """``(r1, r2)`` with :math:`J_r\dot q = r_1`, :math:`J_r\ddot q + b_r = r_2` (:meth:`rate_jacobian`,
+        r"""``(r1, r2)`` with :math:`J_r\dot q = r_1`, :math:`J_r\ddot q + b_r = r_2` (:meth:`rate_jacobian`,
         :meth:`rate_bias`): ``yd``, ``ydd``; with all three angles kept, the angle rows become the world
         angular velocity :math:`\omega = E\dot\phi` and acceleration :math:`E\ddot\phi + \dot E\dot\phi`
         at the target angles (defined at gimbal lock too)."""
