@@ -224,3 +224,22 @@ def test_sidecar_task_trajectory_poses_and_csv(tmp_path):
 
     with pytest.raises(SidecarError, match=r"trajectories\.bad\.dt: missing"):
         Robot.load(sc)
+
+
+def test_documented_task_trajectory_solves(tmp_path):
+    """The ``reach`` trajectory of docs/sidecar.md's complete example solves on its two-link arm."""
+    from mcdm_pin import load_trajectory
+    from mcdm_pin.robot import Robot
+
+    from .conftest import REPO, TWO_LINK_URDF
+
+    text = (REPO / "docs" / "sidecar.md").read_text()
+    data = yaml.safe_load(text.split("```yaml\n", 1)[1].split("```", 1)[0])
+    data["urdf"] = str(TWO_LINK_URDF)
+    (tmp_path / "robot.yaml").write_text(yaml.safe_dump(data))
+    robot = Robot.load(tmp_path / "robot.yaml")
+    spec = robot.sidecar.trajectories["reach"]
+    tr = load_trajectory(robot, "reach")
+    space = TaskSpace(spec.frame, spec.point, spec.coordinates)
+    assert len(tr.t) == 101
+    np.testing.assert_allclose(_fk(robot.model, space, tr.q[-1]), spec.poses[-1][1], atol=1e-9)

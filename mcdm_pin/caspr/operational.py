@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..exceptions import CasprError
+from ..exceptions import CasprError, TrajectoryError
 from ._xml import integer, numbers, parse_xml
 
 KINDS = {"position": ("xyz", "zyx"), "pose_euler_xyz": ("xyzabg", "zyx"), "orientation_euler_xyz": ("abg", "xyz")}
@@ -170,6 +170,12 @@ def solve(result, traj, robot):
     s = sample_operational(traj)
     space = traj.operational_set.task_space(result.bodies)
     seed = robot.configuration(result.coordinates_from_caspr(result.bodies.q_initial))
-    sol = solve_task(robot.model, space, s.t, s.q, s.qd, s.qdd, seed, name=f"trajectory {traj.id!r}")
+    opset = traj.operational_set
+    try:
+        sol = solve_task(robot.model, space, s.t, s.q, s.qd, s.qdd, seed, name=f"trajectory {traj.id!r}")
+    except TrajectoryError as exc:
+        raise TrajectoryError(f"{exc} (read as the operational set {opset.id!r} of {opset.path.name}: {opset.kind} "
+                              f"of link {opset.link}, coordinates {opset.coordinates}; another set: "
+                              f"--operational-set)") from None
     X = np.array([robot.coordinates(q) for q in sol.q]).reshape(len(s.t), robot.nv)
     return s, sol, X

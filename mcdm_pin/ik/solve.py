@@ -5,7 +5,7 @@ task Jacobian.
 :math:`y(q_k) = y^*_k` (:mod:`.space`, angles compared modulo :math:`2\pi`) by pink's differential IK
 (``pink.solve_ik``, one QP per iteration, a unit step :math:`q \leftarrow q \oplus \Delta q`) iterated
 until :math:`\|y(q) - y^*\|_\infty \le` ``tol`` (1e-12 m or rad by default), or until it stops
-decreasing (by half in an iteration) below ``check_tol`` (rounding: near gimbal lock Euler angles are
+decreasing (by half in an iteration) below 1e-2 ``check_tol`` (rounding: near gimbal lock Euler angles are
 defined to about :math:`10^{-16}/|\cos\beta|` only). Each QP minimises
 :math:`\tfrac12\|J_y\Delta q + e\|^2 + \tfrac12\mu\|\Delta q\|^2` (Levenberg-Marquardt
 :math:`\mu = 10^{-3}\|e\|^2` plus pink's Tikhonov 1e-12) under the model's joint limits (pink's
@@ -41,6 +41,7 @@ from .space import TaskKinematics, TaskSpace, euler_angles, euler_rotation, wrap
 
 LM_DAMPING = 1e-3
 TIKHONOV = 1e-12
+STALL = 1e-2  # a residual below STALL * check_tol that stops halving is taken as converged (rounding)
 
 
 def _pink():
@@ -125,6 +126,9 @@ class _Solver:
         self.kin = TaskKinematics(model, space)
         self.task = _task_class()(self.kin)
         self.limits = [pink.limits.ConfigurationLimit(self.kin.model)] if limits else []
+        if not limits:  # (the copy's) limits unbounded: pink's check of them then stays silent
+            self.kin.model.lowerPositionLimit = np.full(self.kin.model.nq, -np.inf)
+            self.kin.model.upperPositionLimit = np.full(self.kin.model.nq, np.inf)
         self.solver = solver or default_solver()
         self.tol, self.max_iter, self.check_tol = tol, max_iter, check_tol
         self.config = pink.Configuration(self.kin.model, self.kin.data, pin.neutral(self.kin.model))
@@ -143,7 +147,7 @@ class _Solver:
             res = float(np.max(np.abs(self.task.compute_error(self.config))))
             # converged; or stalled at rounding below the check's tolerance (near gimbal lock the angles
             # of a rotation are defined only to ~1e-16 / |cos b|)
-            if res <= self.tol or (res <= self.check_tol and res > 0.5 * prev):
+            if res <= self.tol or (res <= STALL * self.check_tol and res > 0.5 * prev):
                 return self.config.q.copy(), it
             if it == self.max_iter:
                 break
@@ -156,7 +160,8 @@ class _Solver:
                               f"{res:.3g} (m or rad, largest coordinate of y(q) - y*) after {self.max_iter} "
                               f"iterations, tolerance {self.tol:g}; the pose y* = {np.round(y_target, 9).tolist()} "
                               f"({self.kin.space.coordinates}) of frame {self.kin.space.frame!r} is out of "
-                              f"reach{limits}")
+                              f"reach{limits}, or the iterations are stuck at a singular configuration "
+                              f"(another seed may help)")
 
     def rates(self, q, y, yd, ydd, t: float, name: str, check_tol: float):
         yd, ydd = self.kin.rate_targets(y, yd, ydd)
