@@ -182,6 +182,15 @@ def test_caspr_unreachable_trajectory_is_refused_alone(tmp_path, capsys):
                        trajectories_xml=L / "BMArm_trajectories.xml",
                        trajectory_ids=["operational:op_space_control_traj_1", "traj_test"])
     assert set(res.trajectories) == {"operational:op_space_control_traj_1", "traj_test"}
+    from mcdm_pin.robot import Robot
+    from mcdm_pin.trajectory import load_trajectory
+
+    robot = Robot.load(res.sidecar)
+    tid = "operational:op_space_control_traj_1"
+    exact, written = res.exact_trajectory(robot, tid), load_trajectory(robot, tid)
+    for key in ("t", "q", "qd", "qdd"):  # the CSV holds the solution to the last bit
+        np.testing.assert_array_equal(getattr(exact, key), getattr(written, key))
+    assert res.samples(tid).q.shape == (201, 3)
     from mcdm_pin.exceptions import CasprError
 
     with pytest.raises(CasprError, match=r"simple_motion.*at t = 0 s the inverse kinematics did not converge: "
@@ -243,3 +252,52 @@ def test_documented_task_trajectory_solves(tmp_path):
     space = TaskSpace(spec.frame, spec.point, spec.coordinates)
     assert len(tr.t) == 101
     np.testing.assert_allclose(_fk(robot.model, space, tr.q[-1]), spec.poses[-1][1], atol=1e-9)
+
+
+def test_caspr_operational_spaces_file_types_and_refusals(tmp_path):
+    """A synthetic model (the SR arm of tests/caspr_xml.py): the operational-spaces file found beside the
+    bodies file; quintic and linear operational trajectories solved (FK against the splines written out
+    by hand), a cubic one refused as CASPR does not implement it, an unreadable file found beside the
+    bodies refuses the operational trajectories alone, and the same file given explicitly is an error."""
+    from mcdm_pin.caspr import import_caspr
+    from mcdm_pin.exceptions import CasprError
+    from mcdm_pin.robot import Robot
+    from mcdm_pin.trajectory import load_trajectory
+
+    from . import caspr_xml as X
+
+    b, c, t = X.sr_arm(tmp_path)
+    X.bodies(b, [dict(type="S_EULER_XYZ", mass=0.1, ixx=1, iyy=1, izz=1),  # the elbow starts bent: q_initial
+                 dict(type="R_X", mass=0.1, ixx=1, iyy=1, izz=1, q=[0.3])])  # off the stretched singularity
+    robot = Robot.load(import_caspr(b, c, tmp_path / "probe").sidecar)
+    space = TaskSpace("L2", (0.0, 0.0, 0.1), "zx")
+    ya, yb = (_fk(robot.model, space, robot.configuration(x)) for x in ([0.1, 0.2, 0, 0.3], [0.2, -0.1, 0, 0.5]))
+    (tmp_path / "sr_operational_spaces.xml").write_text(
+        '<operational_spaces default_operational_set="tip"><operational_set id="tip"><position marker_id="1" '
+        'name="tip"><link>2</link><offset>0 0 0.1</offset><axes active_axes="zx"/></position></operational_set>'
+        '</operational_spaces>')
+
+    def pts(rates):
+        r = "<y_dot>0 0</y_dot><y_ddot>0 0</y_ddot>" if rates else ""
+        return (f"<points><point><y>{X._nums(ya)}</y>{r}</point><point time=\"1\"><y>{X._nums(yb)}</y>{r}</point>"
+                f"</points>")
+
+    ops = [f'<{tag} id="{tid}" time_definition="absolute" time_step="0.05">{pts(tag.startswith("quintic"))}</{tag}>'
+           for tag, tid in (("quintic_spline_trajectory", "reach"), ("linear_spline_trajectory", "line"),
+                            ("cubic_spline_trajectory", "cub"))]
+    traj = X.trajectories(tmp_path / "sr_trajectories.xml", [X.trajectory("quintic_spline_trajectory", "j", [
+        X.point([0] * 4, [0] * 4, [0] * 4), X.point([0.1] * 4, [0] * 4, [0] * 4, time=1)])], ops)
+    res = import_caspr(b, c, tmp_path / "out", trajectories_xml=traj)
+    assert set(res.trajectories) == {"j", "operational:reach", "operational:line"}
+    assert "implements quintic_spline_trajectory and linear_spline_trajectory only" in res.refused["operational:cub"]
+    robot = Robot.load(res.sidecar)
+    for tid, profile in (("operational:reach", lambda s: s**3 * (10 - 15 * s + 6 * s**2)), ("operational:line", lambda s: s)):
+        tr = load_trajectory(robot, tid)
+        want = ya + np.outer(profile(tr.t), yb - ya)
+        assert np.max(np.abs(np.array([_fk(robot.model, space, q) for q in tr.q]) - want)) <= 1e-9
+    (tmp_path / "sr_operational_spaces.xml").write_text("<operational_spaces><operational_set id='x'>")
+    res = import_caspr(b, c, tmp_path / "out2", trajectories_xml=traj)
+    assert set(res.trajectories) == {"j"} and "cannot be read" in res.refused["operational:reach"]
+    with pytest.raises(CasprError, match="sr_operational_spaces.xml"):
+        import_caspr(b, c, tmp_path / "out3", trajectories_xml=traj,
+                     operational_spaces_xml=tmp_path / "sr_operational_spaces.xml")

@@ -82,14 +82,23 @@ class CasprImport:
         return coordinates_from_caspr(self.bodies, self.layout, q_caspr, self.nv)
 
     def samples(self, trajectory_id: str) -> Samples:
-        """CASPR's samples of a converted trajectory (:func:`~mcdm_pin.caspr.sampling.sample`)."""
-        return sample(self.bodies, self.trajectories[trajectory_id])
+        """CASPR's samples of a converted trajectory (:func:`~mcdm_pin.caspr.sampling.sample`; of an
+        operational-space one, ``y`` and its rates: :func:`~mcdm_pin.caspr.sampling.sample_operational`)."""
+        tr = self.trajectories[trajectory_id]
+        if isinstance(tr, CasprOperationalTrajectory):
+            from .sampling import sample_operational
+
+            return sample_operational(tr)
+        return sample(self.bodies, tr)
 
     def exact_trajectory(self, robot, trajectory_id: str):
         """The converted trajectory as a :class:`~mcdm_pin.trajectory.Trajectory` on ``robot`` (the
         imported robot), computed from CASPR's samples (not read back from a file)."""
         from ..trajectory import Trajectory
 
+        if trajectory_id in self.task_solutions:  # solved by inverse kinematics at import
+            sol = self.task_solutions[trajectory_id]
+            return Trajectory(trajectory_id, sol.t, sol.q, sol.qd, sol.qdd)
         s = self.samples(trajectory_id)
         X, V, A = to_ours(self.bodies, self.layout, s, self.nv)
         Q = np.array([robot.configuration(x) for x in X]).reshape(len(s.t), robot.nq)

@@ -136,7 +136,12 @@ def choose(bodies_xml, bodies, spaces_xml=None, set_id: str | None = None) -> Op
             raise CasprError(path, "", "the operational-spaces file is not found")
         return OperationalChoice(None, f"no operational-spaces file (looked for {path.name} beside the bodies "
                                        f"file; give one with --operational-spaces)")
-    default, sets = read_operational_spaces(path, bodies)
+    try:
+        default, sets = read_operational_spaces(path, bodies)
+    except CasprError as exc:
+        if given:
+            raise
+        return OperationalChoice(None, f"the operational-spaces file found beside the bodies file cannot be read: {exc}")
     notes = []
     if set_id is not None:
         if set_id not in sets:
