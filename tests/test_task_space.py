@@ -291,7 +291,8 @@ def test_caspr_operational_spaces_file_types_and_refusals(tmp_path):
     assert set(res.trajectories) == {"j", "operational:reach", "operational:line"}
     assert "implements quintic_spline_trajectory and linear_spline_trajectory only" in res.refused["operational:cub"]
     robot = Robot.load(res.sidecar)
-    for tid, profile in (("operational:reach", lambda s: s**3 * (10 - 15 * s + 6 * s**2)), ("operational:line", lambda s: s)):
+    quintic = lambda s: s**3 * (10 - 15 * s + 6 * s**2)  # noqa: E731
+    for tid, profile in (("operational:reach", quintic), ("operational:line", lambda s: s)):
         tr = load_trajectory(robot, tid)
         want = ya + np.outer(profile(tr.t), yb - ya)
         assert np.max(np.abs(np.array([_fk(robot.model, space, q) for q in tr.q]) - want)) <= 1e-9

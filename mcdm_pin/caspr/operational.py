@@ -141,11 +141,13 @@ def choose(bodies_xml, bodies, spaces_xml=None, set_id: str | None = None) -> Op
     except CasprError as exc:
         if given:
             raise
-        return OperationalChoice(None, f"the operational-spaces file found beside the bodies file cannot be read: {exc}")
+        return OperationalChoice(None, f"the operational-spaces file found beside the bodies file cannot be "
+                                       f"read: {exc}")
     notes = []
     if set_id is not None:
         if set_id not in sets:
-            raise CasprError(path, "operational_set", f"no set {set_id!r}; expected one of {', '.join(sets) or '(none)'}")
+            raise CasprError(path, "operational_set", f"no set {set_id!r}; expected one of "
+                                                      f"{', '.join(sets) or '(none)'}")
         chosen = set_id
     elif default:
         if default not in sets:

@@ -79,6 +79,9 @@ def task_trajectory(robot, spec):
     from .solve import solve_task
 
     where = robot.sidecar.path if robot.sidecar is not None else robot.name
+    if getattr(robot, "couplings", None) is not None:
+        raise TrajectoryError(f"{where}: {spec.key}: task trajectories on a robot with joint couplings are not "
+                              f"supported (the inverse kinematics would move coupled coordinates freely)")
     try:
         space = TaskSpace(frame=spec.frame, point=tuple(spec.point), coordinates=spec.coordinates, euler=spec.euler)
         if spec.file is not None:

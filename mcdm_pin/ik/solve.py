@@ -9,19 +9,21 @@ decreasing (by half in an iteration) below 1e-2 ``check_tol`` (rounding: near gi
 defined to about :math:`10^{-16}/|\cos\beta|` only). Each QP minimises
 :math:`\tfrac12\|J_y\Delta q + e\|^2 + \tfrac12\mu\|\Delta q\|^2` (Levenberg-Marquardt
 :math:`\mu = 10^{-3}\|e\|^2` plus pink's Tikhonov 1e-12) under the model's joint limits (pink's
-``ConfigurationLimit``; ``limits=False`` drops them; a seed outside them is first clipped into them). The first sample starts from ``q_seed``, every
-later one from the previous solution moved on by its rates,
+``ConfigurationLimit``; ``limits=False`` drops them; a seed outside them is first clipped into them).
+The first sample starts from ``q_seed``, every later one from the previous solution moved on by its
+rates,
 :math:`q_{k-1} \oplus (\dot q_{k-1} h + \tfrac12 \ddot q_{k-1} h^2)`, :math:`h = t_k - t_{k-1}`, so
 the branch of solutions is followed continuously. A sample that does not converge is refused with its
 time and its residual (unreachable pose, or one beyond the joint limits).
 
 **Rates.** (With all three angles kept, :math:`\dot y^*, \ddot y^*` are first turned into the angular
-velocity and acceleration: :mod:`.space`.) :math:`\dot q_k` solves :math:`J_y \dot q = \dot y^*` and :math:`\ddot q_k` solves
-:math:`J_y \ddot q = \ddot y^* - \dot J_y \dot q`, both in Pinocchio's tangent space (``nv``). Where the
-robot has more degrees of freedom than the task (``nv > dim``), the **least-norm** solution is taken
-(``numpy.linalg.lstsq``: the smallest Euclidean norm of :math:`\dot q`, resp. :math:`\ddot q`, no
-weighting between rad/s and m/s); the IK steps are least-norm too (the Tikhonov term), so the positions
-move along the same least-norm direction to first order. A sample where :math:`\dot y^*` is out of
+velocity and acceleration: :mod:`.space`.) :math:`\dot q_k` solves :math:`J_y \dot q = \dot y^*` and
+:math:`\ddot q_k` solves :math:`J_y \ddot q = \ddot y^* - \dot J_y \dot q`, both in Pinocchio's tangent
+space (``nv``). Where the robot has more degrees of freedom than the task (``nv > dim``), the
+**least-norm** solution is taken (``numpy.linalg.lstsq``: the smallest Euclidean norm of
+:math:`\dot q`, resp. :math:`\ddot q`, no weighting between rad/s and m/s); the IK steps are
+least-norm too (the Tikhonov term), so the positions move along the same least-norm direction to
+first order. A sample where :math:`\dot y^*` is out of
 the range of :math:`J_y` (a singular configuration) is refused with its time and residual.
 
 **Checks.** Every sample is checked by forward kinematics on the caller's model (not the copy that
@@ -132,7 +134,8 @@ class _Solver:
         self.solver = solver or default_solver()
         self.tol, self.max_iter, self.check_tol = tol, max_iter, check_tol
         self.config = pink.Configuration(self.kin.model, self.kin.data, pin.neutral(self.kin.model))
-        self.bounded = [i for j in (self.limits[0].joints if self.limits else []) for i in range(j.idx_q, j.idx_q + j.nq)]
+        joints = self.limits[0].joints if self.limits else []
+        self.bounded = [i for j in joints for i in range(j.idx_q, j.idx_q + j.nq)]  # seeds are clipped here
         self.solve_ik = pink.solve_ik
 
     def position(self, y_target, q_seed, t: float, name: str):
