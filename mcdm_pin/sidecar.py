@@ -26,7 +26,7 @@ URDF_JOINT_COUNTS = {"spherical": (1, 3), "revolute": (1,), "prismatic": (1,), "
                      "planar": (1, 3), "translation": (2, 3), "free": (1,)}
 PARAMETRIZATIONS = {1: ("quaternion", "zyx"), 3: ("euler-xyz",)}  # spherical: by URDF joint count
 SPHERICAL_MODES = ("axis-angle", "per-coordinate")
-TRAJECTORY_TYPES = ("quintic", "csv")
+TRAJECTORY_TYPES = ("quintic", "csv", "task")
 
 
 _FLOAT_RE = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
@@ -99,8 +99,10 @@ class CableSpec:
 
 @dataclass(frozen=True)
 class TrajectorySpec:
-    """A named trajectory. ``type`` is ``quintic`` (q_start, q_end, duration, dt, spherical) or
-    ``csv`` (file, resolved to an absolute path)."""
+    """A named trajectory. ``type`` is ``quintic`` (q_start, q_end, duration, dt, spherical), ``csv``
+    (file, resolved to an absolute path) or ``task`` (a task-space trajectory solved by inverse
+    kinematics, :mod:`mcdm_pin.ik`: ``frame``, ``point``, ``coordinates``, ``euler``, and ``poses``
+    ``((t, y), ...)`` with ``dt``, or a CSV ``file`` of poses; ``q_start``: the IK's first seed)."""
 
     name: str
     type: str
@@ -111,6 +113,11 @@ class TrajectorySpec:
     spherical: str = "axis-angle"
     file: Path | None = None
     key: str = ""
+    frame: str | None = None
+    point: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    coordinates: str = "xyz"
+    euler: str = "zyx"
+    poses: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -538,6 +545,10 @@ def _parse_trajectory(r: _Reader, name, spec, base_dir: Path) -> TrajectorySpec:
         raise r.fail(key, f"expected a mapping with a 'type' of {_names(TRAJECTORY_TYPES)}, "
                           f"got {_kind(spec)}")
     ttype = r.choice(spec["type"], f"{key}.type", TRAJECTORY_TYPES)
+    if ttype == "task":
+        from .sidecar_task import parse_task
+
+        return parse_task(r, name, spec, base_dir, key)
     if ttype == "csv":
         spec = r.mapping(spec, key, CSV_KEYS, required=CSV_KEYS)
         file = (base_dir / r.string(spec["file"], f"{key}.file")).resolve()
@@ -572,3 +583,4 @@ def _parse_q(r: _Reader, value, key: str):
                 out[j] = (r.number(v, f"{key}.{j}"),)
         return out
     raise r.fail(key, f"expected a list of numbers or a mapping joint: value(s), got {_kind(value)}")
+

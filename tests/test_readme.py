@@ -90,7 +90,7 @@ def test_every_imported_package_is_declared_and_every_declared_one_is_used():
     declared = {_canonical(re.split(r"[<>=!~ \[;]", d, maxsplit=1)[0]) for d in deps}
     # optional features import their package lazily and say how to install it (MissingPackageError)
     optional = {_canonical(re.split(r"[<>=!~ \[;]", d, maxsplit=1)[0])
-                for name in ("opensim", "mjcf") for d in project["optional-dependencies"][name]}
+                for name in ("opensim", "mjcf", "ik") for d in project["optional-dependencies"][name]}
     known = packages_distributions()
     used = {}
     for path in (REPO / "mcdm_pin").rglob("*.py"):

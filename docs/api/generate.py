@@ -26,6 +26,7 @@ MODULES = [
     ("mcdm_pin", "the package: what `from mcdm_pin import ...` gives"),
     ("mcdm_pin.robot", "Robot: URDF + sidecar (or a pin.Model) -> model, cables, joints"),
     ("mcdm_pin.trajectory", "trajectories: quintic, CSV, plans at any time"),
+    ("mcdm_pin.ik", "task-space trajectories -> joint trajectories by inverse kinematics (pink)"),
     ("mcdm_pin.inverse_dynamics", "InverseDynamics: state -> forces, one instant or a trajectory"),
     ("mcdm_pin.results", "InstantResult, TrajectoryResult and their files"),
     ("mcdm_pin.problem", "Problem: objectives + constraints; the paper's cases"),

@@ -63,7 +63,7 @@ def run(args) -> int:
     print(table(["cable", "f_min N", "f_max N", "route (link[point m], ~wrap~, |pulley|)"], rows))
     if sc is not None and sc.trajectories:
         print("\ntrajectories: " + ", ".join(
-            f"{n} ({t.type}{'' if t.type == 'csv' else f', {t.duration:g} s, dt {t.dt:g}'})"
+            f"{n} ({t.type}{'' if t.duration is None else f', {t.duration:g} s, dt {t.dt:g}'})"
             for n, t in sc.trajectories.items()))
     print("\nvalidation:")
     report = _inertia_report(robot) + validation_report(robot)
