@@ -141,7 +141,7 @@ class PointLoops:
     def wrench_map(self, q) -> np.ndarray:
         """(njoints, 6, 3k) ``W``: what the loop forces ``lambda`` add to RNEA's ``data.f[j]`` (the wrench
         ``[F; M]`` the parent exerts on joint ``j``'s subtree, joint frame, moment about its origin):
-        ``data.f[j](lambda) - data.f[j](0) = W[j] lambda``. A force on the subtree is one the parent
+        ``W[j] lambda`` is ``data.f[j]`` with the loop forces minus ``data.f[j]`` without. A force on the subtree is one the parent
         need not exert, hence ``W[j] = -`` the sum, over the loop points in the subtree, of the point
         force moved to joint ``j``."""
         m, d = self.model, self.data
