@@ -18,7 +18,8 @@ budget) and falls back to the previous tick's forces (docs/control.md).
 
 The table: ticks, deadline misses (wall time of law + distribution over 1 ms) and those whose CPU
 time alone was over (the rest were preempted by other processes), fallbacks by reason, p50/p99/max of
-the tick's latency, of the distribution alone and of the tick's CPU time, RMS and peak tracking error, and the load average
+the tick's latency, of the distribution alone and of the tick's CPU time, RMS and peak tracking error,
+and the load average
 and the busiest other processes before and after (the machine is shared).
 """
 
@@ -120,7 +121,8 @@ def main(argv=None) -> int:
         noise = None
         if args.noise_q is not None or args.noise_v is not None:
             base = NOISE[name]
-            noise = (base[0] if args.noise_q is None else args.noise_q, base[1] if args.noise_v is None else args.noise_v)
+            noise = (base[0] if args.noise_q is None else args.noise_q,
+                     base[1] if args.noise_v is None else args.noise_v)
         controller, plant, reference, what = setup(name, args.mass_factor, args.omega, noise, args.seed)
         before, load0 = busiest(), os.getloadavg()[0]
         t0 = time.perf_counter()
@@ -129,7 +131,8 @@ def main(argv=None) -> int:
         after, load1 = busiest(), os.getloadavg()[0]
         s = res.summary()
         print(f"\n## {name}: {what}")
-        print(f"wall {wall:.1f} s (reference sampling included); answering stages {s['stages']}")
+        print(f"wall {wall:.1f} s (reference sampling included); answering stages {s['stages']}; "
+              f"longest run of consecutive fallbacks {s['longest_fallback_run']} ticks")
         print(f"busiest processes before: {'; '.join(before)}")
         print(f"busiest processes after:  {'; '.join(after)}")
         rows.append(row(name, s, (load0, load1)))

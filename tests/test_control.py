@@ -118,6 +118,7 @@ def test_fallback_on_an_impossible_deadline(cogiro, tmp_path, monkeypatch):
     res, controller = _cogiro_loop(cogiro, 0.02, deadline_s=1e-9)
     s = res.summary()
     assert s["misses"] == 20 and s["fallbacks"] == 20 and s["fallback_reasons"] == {"late": 20}
+    assert s["longest_fallback_run"] == 20
     assert controller.misses == 20 and controller.fallbacks["late"] == 20
     assert np.all(res.f == res.f[0])
 
@@ -135,3 +136,20 @@ def test_fallback_on_an_infeasible_instant(neck):
     tick = controller.tick(q, v, q, v, np.zeros(neck.nv))
     assert tick.fallback is None and tick.status == "optimal"
     assert np.abs(tick.f - f0).max() <= 1e-6
+
+
+def test_mjcf_export_refuses_what_it_cannot_write(tmp_path, monkeypatch):
+    """A massless moving body (MuJoCo refuses it) is refused, naming its joint."""
+    from mcdm_pin.exceptions import ModelError
+    from mcdm_pin.model.cables import RoutePoint
+
+    model = pin.Model()
+    j1 = model.addJoint(0, pin.JointModelRX(), pin.SE3.Identity(), "hinge")
+    model.appendBodyToJoint(j1, pin.Inertia(1.0, np.zeros(3), np.eye(3) * 0.1), pin.SE3.Identity())
+    model.addBodyFrame("link", j1, pin.SE3.Identity(), 0)
+    j2 = model.addJoint(j1, pin.JointModelRY(), pin.SE3(np.eye(3), np.array([0.0, 0.0, 1.0])), "tip")
+    model.addBodyFrame("tip_link", j2, pin.SE3.Identity(), 0)
+    cables = [dict(name="c", f_min=0.0, f_max=100.0,
+                   route=[RoutePoint("universe", (0.1, 0.0, 0.0)), RoutePoint("link", (0.0, 0.1, 0.5))])]
+    with pytest.raises(ModelError, match="'tip'.*massless"):
+        export_mjcf(Robot.from_model(model, cables))

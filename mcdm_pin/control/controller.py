@@ -44,10 +44,10 @@ REASONS = (LATE, "budget", "infeasible", "inaccurate", "max_iter", "error")
 
 @dataclass
 class Tick:
-    """One tick's outcome: the applied forces ``f`` (N), the latency (wall time) of the whole tick and
-    of the distribution alone (s), the CPU time of the tick's thread (s: below the latency when the
-    operating system ran something else meanwhile), the solver's status and the stage that answered, and the fallback reason
-    (``None``: the solver's forces were applied)."""
+    """One tick's outcome: the applied forces ``f`` (N); the latency (wall time) of the whole tick
+    and of the distribution alone, and the CPU time of the tick's thread (s; below the latency when
+    the operating system ran something else meanwhile); the solver's status and the stage that
+    answered; the fallback reason (``None``: the solver's forces were applied)."""
 
     f: np.ndarray
     latency_s: float

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import gc
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -78,11 +78,12 @@ def back_and_forth(go, back, duration: float):
 
 @dataclass
 class LoopResult:
-    """Per tick: times ``t`` (N,), exact ``q`` (N, nq), reference ``q_ref``, applied forces ``f`` (N, m),
-    latencies ``latency_s`` (whole tick, wall time), ``distribution_s`` (the solve alone) and
-    ``cpu_s`` (the tick's CPU time: less than its latency when the process was preempted), ``status``, ``stage``
-    (the solver stage that answered) and ``fallback`` (``""``: none) strings; ``error_rot_deg``, ``error_lin_mm`` (N, J) per physical joint
-    (NaN where a joint has no such part); the deadline, the plant's ``clamped`` count, and notes."""
+    """Per tick: times ``t`` (N,), exact ``q`` (N, nq), reference ``q_ref``, applied forces ``f``
+    (N, m); latencies ``latency_s`` (whole tick, wall time), ``distribution_s`` (the solve alone) and
+    ``cpu_s`` (the tick's CPU time: less than its latency when the process was preempted);
+    ``status``, ``stage`` (the solver stage that answered) and ``fallback`` (``""``: none) strings;
+    ``error_rot_deg``, ``error_lin_mm`` (N, J) per physical joint (NaN where a joint has no such
+    part); the deadline and the plant's ``clamped`` count."""
 
     t: np.ndarray
     q: np.ndarray
@@ -98,10 +99,10 @@ class LoopResult:
     error_lin_mm: np.ndarray
     deadline_s: float
     clamped: int = 0
-    notes: dict = field(default_factory=dict)
 
     def summary(self) -> dict:
-        """Ticks, deadline misses, fallbacks by reason, latency percentiles (ms), RMS/peak errors."""
+        """Ticks, deadline misses, answering stages, fallbacks by reason and their longest run of
+        consecutive ticks, latency percentiles (ms), RMS/peak errors."""
         fb = self.fallback[self.fallback != ""]
         reasons, counts = np.unique(fb, return_counts=True)
 
@@ -112,9 +113,14 @@ class LoopResult:
         rot, lin = rms_peak(self.error_rot_deg), rms_peak(self.error_lin_mm)
         ms = lambda x, p: float(np.percentile(x, p) * 1e3)  # noqa: E731
         stages, n_st = np.unique(self.stage, return_counts=True)
+        run = longest = 0
+        for fell in self.fallback != "":  # the longest run of consecutive fallbacks
+            run = run + 1 if fell else 0
+            longest = max(longest, run)
         return dict(ticks=len(self.t), misses=int(np.sum(self.latency_s > self.deadline_s)),
                     stages=dict(zip(stages.tolist(), n_st.tolist())),
                     fallbacks=int(len(fb)), fallback_reasons=dict(zip(reasons.tolist(), counts.tolist())),
+                    longest_fallback_run=longest,
                     latency_p50_ms=ms(self.latency_s, 50), latency_p99_ms=ms(self.latency_s, 99),
                     latency_max_ms=float(self.latency_s.max() * 1e3),
                     distribution_p50_ms=ms(self.distribution_s, 50), distribution_p99_ms=ms(self.distribution_s, 99),
