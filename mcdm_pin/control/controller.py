@@ -134,8 +134,8 @@ class Controller:
             reason = LATE
         elif status != OPTIMAL:
             reason = status if status in REASONS else "error"
-        if reason is None:
-            self.f_applied = f
+        if reason is None:  # (a copy: the solver may reuse its answer's memory at the next tick)
+            self.f_applied = f.copy()
         else:
             self.fallbacks[reason] += 1
         return Tick(self.f_applied, t2 - t0, t2 - t1, c2 - c0, status, stage, reason)

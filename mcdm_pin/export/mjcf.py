@@ -165,12 +165,12 @@ def export_mjcf(robot, timestep: float = 1e-3, integrator: str = "RK4") -> MjcfE
     Raises:
         ModelError: a Pinocchio joint type MuJoCo cannot express here, a massive body inside a group,
             a free joint below a moving body, a massless moving body, a route point on a massless
-            intermediate body, a route with wraps or pulleys, or a robot with actuated joints or
-            couplings (its motors and couplings are not written).
+            intermediate body, a route with wraps or pulleys, or a robot with actuated joints,
+            couplings or joint springs and dampers (they are not written).
     """
-    if robot.actuators or robot.couplings is not None:
+    if robot.actuators or robot.couplings is not None or getattr(robot, "passive", None) is not None:
         raise ModelError(f"robot {robot.name!r}: export_mjcf writes cable-driven robots only (no joint actuators, "
-                         f"no couplings)")
+                         f"no couplings, no joint springs or dampers)")
     model = robot.model
     groups = _groups(model)
     root = ET.Element("mujoco", model=robot.name)
@@ -206,15 +206,16 @@ def _groups(model) -> list[list[int]]:
     groups, current = [], {}
     for j in range(1, model.njoints):  # parents come before children in Pinocchio's order
         chain = current.pop(model.parents[j], []) + [j]
-        if model.inertias[j].mass == 0.0 and len(children[j]) == 1 and _mergeable(model, j):
+        if model.inertias[j].mass == 0.0 and len(children[j]) == 1 and _mergeable(model, j, children[j][0]):
             current[j] = chain
         else:
             groups.append(chain)
     return groups
 
 
-def _mergeable(model, j) -> bool:
-    return model.joints[j].shortname() != "JointModelFreeFlyer"
+def _mergeable(model, j, child) -> bool:
+    """A free joint stays alone in its body (MuJoCo: a free joint is its body's only joint)."""
+    return "JointModelFreeFlyer" not in (model.joints[j].shortname(), model.joints[child].shortname())
 
 
 def _body(model, ids, parent_el, joint_order):
