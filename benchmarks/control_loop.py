@@ -106,6 +106,8 @@ def main(argv=None) -> int:
     ap.add_argument("--noise-v", type=float, default=None, help="override both robots' velocity noise")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--no-realtime", action="store_true", help="run the ticks back to back, not paced at 1 kHz")
+    ap.add_argument("--fifo", type=int, default=None, metavar="PRIORITY",
+                    help="run the paced ticks in SCHED_FIFO at this priority (Linux; needs the permission)")
     ap.add_argument("--json", type=Path, default=None, help="write the summaries here")
     args = ap.parse_args(argv)
 
@@ -115,7 +117,8 @@ def main(argv=None) -> int:
     jit.prepare(policy="wait")
     os.chdir(tempfile.mkdtemp(prefix="control_loop_"))  # MuJoCo's log, if any, goes there
     print(f"# control loop, {machine_line()}; compiled kernels: {jit.ready()}")
-    print(f"# paced at 1 kHz on the wall clock: {not args.no_realtime}")
+    print(f"# paced at 1 kHz on the wall clock: {not args.no_realtime}; ticks in SCHED_FIFO: "
+          f"{'priority ' + str(args.fifo) if args.fifo is not None else 'no'}")
     rows, out = [], {}
     for name in args.robots:
         noise = None
@@ -126,7 +129,8 @@ def main(argv=None) -> int:
         controller, plant, reference, what = setup(name, args.mass_factor, args.omega, noise, args.seed)
         before, load0 = busiest(), os.getloadavg()[0]
         t0 = time.perf_counter()
-        res = run_loop(controller, plant, reference, args.duration, realtime=not args.no_realtime)
+        res = run_loop(controller, plant, reference, args.duration, realtime=not args.no_realtime,
+                       fifo_priority=args.fifo)
         wall = time.perf_counter() - t0
         after, load1 = busiest(), os.getloadavg()[0]
         s = res.summary()

@@ -10,6 +10,9 @@ rest of each period, and a tick that starts late starts at once). A process that
 is woken promptly by the operating system's scheduler; one that computes without pause (the loop run as
 fast as possible) is preempted for whole time slices (4 ms) when the machine is loaded, and those
 ticks miss their deadline although their CPU time is well below it (``cpu_s`` tells them apart).
+``fifo_priority`` (Linux, with the permission to) runs the paced ticks, and only them, in the
+real-time class ``SCHED_FIFO``, as a controller's thread is run: the scheduler then preempts the loop
+only for higher real-time priorities; the previous class is restored afterwards.
 
 **Tracking error** at tick ``k``: ``e = q_r(t_k) (-) q(t_k)`` (``pin.difference``, exact state),
 per physical joint the norm of its rotational part (deg: a revolute angle, a ball's or free joint's
@@ -23,6 +26,7 @@ times as heavy (mass and inertia about the centre of mass scaled alike: the same
 from __future__ import annotations
 
 import gc
+import os
 import time
 from dataclasses import dataclass
 
@@ -133,7 +137,7 @@ class LoopResult:
 
 
 def run_loop(controller, plant, reference, duration: float, dt: float | None = None,
-             gc_off: bool = True, realtime: bool = False) -> LoopResult:
+             gc_off: bool = True, realtime: bool = False, fifo_priority: int | None = None) -> LoopResult:
     """Run the closed loop for ``duration`` s (module docstring).
 
     Args:
@@ -143,7 +147,15 @@ def run_loop(controller, plant, reference, duration: float, dt: float | None = N
             :func:`mcdm_pin.trajectory.plan`.
         gc_off: pause the garbage collector during the loop.
         realtime: pace the ticks on the wall clock (module docstring); off: as fast as possible.
+        fifo_priority: run the ticks in ``SCHED_FIFO`` at this priority (1-99; with ``realtime`` only:
+            a real-time loop that never sleeps would hold a core).
+
+    Raises:
+        ProblemError: ``fifo_priority`` without ``realtime``, or the system refuses the class.
     """
+    if fifo_priority is not None and not realtime:
+        raise ProblemError("run_loop: fifo_priority needs realtime=True (a SCHED_FIFO loop that never sleeps "
+                           "would hold a core)")
     dt = plant.dt if dt is None else dt
     if abs(dt - plant.dt) > 1e-15:
         raise ProblemError(f"run_loop: dt {dt!r} differs from the plant's period {plant.dt!r}")
@@ -164,6 +176,7 @@ def run_loop(controller, plant, reference, duration: float, dt: float | None = N
     gc.collect()
     if gc_off:
         gc.disable()
+    previous = _enter_fifo(fifo_priority)
     try:
         with controller.ident.blas_limit():
             start = time.perf_counter()
@@ -179,12 +192,27 @@ def run_loop(controller, plant, reference, duration: float, dt: float | None = N
                 F[k], lat[k], dist[k], cpu[k] = tick.f, tick.latency_s, tick.distribution_s, tick.cpu_s
                 status[k], stage[k], fallback[k] = tick.status, tick.stage, tick.fallback or ""
     finally:
+        if previous is not None:
+            os.sched_setscheduler(0, *previous)
         if was:
             gc.enable()
     rot, lin = tracking_errors(robot, Q, Q_r)
     return LoopResult(t, Q, Q_r, F, lat, dist, cpu, status.astype(str), stage.astype(str),
                       fallback.astype(str), rot, lin,
                       controller.deadline_s, plant.clamped)
+
+
+def _enter_fifo(priority):
+    """Switch this thread to ``SCHED_FIFO`` at ``priority``; returns the previous ``(policy, param)``
+    (``None`` when ``priority`` is ``None``)."""
+    if priority is None:
+        return None
+    try:
+        previous = (os.sched_getscheduler(0), os.sched_getparam(0))
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(int(priority)))
+    except (AttributeError, OSError, ValueError) as exc:
+        raise ProblemError(f"run_loop: cannot run the ticks in SCHED_FIFO at priority {priority!r}: {exc}") from None
+    return previous
 
 
 def tracking_errors(robot, Q, Q_r) -> tuple[np.ndarray, np.ndarray]:
