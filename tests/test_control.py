@@ -153,3 +153,15 @@ def test_mjcf_export_refuses_what_it_cannot_write(tmp_path, monkeypatch):
                    route=[RoutePoint("universe", (0.1, 0.0, 0.0)), RoutePoint("link", (0.0, 0.1, 0.5))])]
     with pytest.raises(ModelError, match="'tip'.*massless"):
         export_mjcf(Robot.from_model(model, cables))
+
+
+def test_fifo_needs_pacing(cogiro, tmp_path, monkeypatch):
+    """A SCHED_FIFO loop that never sleeps would hold a core: refused before anything runs."""
+    from mcdm_pin.exceptions import ProblemError
+
+    monkeypatch.chdir(tmp_path)
+    model = scaled_masses(cogiro, 1.05)
+    controller = Controller(model, 1, TaskSpaceLaw(model, "CoGiRo"), deadline_s=1e-3)
+    plant = MujocoPlant(cogiro)
+    with pytest.raises(ProblemError, match="realtime"):
+        run_loop(controller, plant, plan(cogiro, cogiro.sidecar.trajectories["general_1"]), 0.01, fifo_priority=10)

@@ -9,7 +9,9 @@ answer). The tick's latency is the wall time of both, from reading the state to 
 between two stages once the budget is spent (status ``budget``). A stage is not interrupted, so an
 answer can still arrive late: the tick then *misses* its deadline, the late answer is discarded and
 the fallback is applied, as a real-time system would have sent the fallback at the deadline (in this
-simulation the plant's clock does not wait for the computation; nothing here preempts it).
+simulation the plant's clock does not wait for the computation; nothing here preempts it). While the
+kernels run uncompiled the solver's budget grows as :class:`~mcdm_pin.inverse_dynamics.InverseDynamics`
+makes it grow (:data:`mcdm_pin.jit.UNCOMPILED_SLOWDOWN`); the deadline does not.
 
 **Fallback: the previous tick's forces.** Applied when the answer is late, or is not ``optimal`` (over
 budget, infeasible, inaccurate, or the state is one at which the model is undefined). Why these and
