@@ -89,6 +89,21 @@ class PulleySpec:
 
 
 @dataclass(frozen=True)
+class RotatingPulleySpec:
+    """A rotating pulley at the start or end of a route (fed from a winch on ``link``): ``radius``,
+    ``entry`` point and ``axis`` (the cable's entry direction) in the link's frame; ``screw`` ``None``
+    or ``(direction, lead, reference, outlet)`` of a screw-driven outlet (``entry`` is then the winch
+    point)."""
+
+    link: str
+    radius: float
+    entry: tuple[float, float, float]
+    axis: tuple[float, float, float]
+    screw: tuple | None = None
+    key: str = ""
+
+
+@dataclass(frozen=True)
 class CableSpec:
     name: str
     f_min: float
@@ -251,6 +266,8 @@ CABLE_KEYS = ("name", "f_min", "f_max", "route")
 POINT_KEYS = ("link", "point")
 WRAP_KEYS = ("wrap", "link", "radius", "center", "axis", "side")
 WRAP_KINDS = ("sphere", "cylinder")
+ROTATING_KEYS = ("rotating_pulley", "link", "entry", "axis", "screw")
+SCREW_KEYS = ("direction", "lead", "reference", "outlet")
 # a sidecar over an MJCF file: the robot (bodies, cables, muscles, couplings) comes from the MJCF; the
 # sidecar adds what MJCF has no words for: joint weights, cones, trajectories
 MJCF_TOP_KEYS = ("version", "name", "description", "mjcf", "joints", "trajectories", "reserves")
@@ -511,7 +528,10 @@ def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:
 
 
 def _parse_route_element(r: _Reader, p, pkey: str):
-    """``{link, point}``, ``{wrap: sphere|cylinder, link, radius, center, axis, side}`` or ``{pulley: d}``."""
+    """``{link, point}``, ``{wrap: sphere|cylinder, link, radius, center, axis, side}``, ``{pulley: d}``
+    or ``{rotating_pulley: radius, link, entry, axis, screw}``."""
+    if isinstance(p, dict) and "rotating_pulley" in p:
+        return _parse_rotating(r, p, pkey)
     if isinstance(p, dict) and "pulley" in p:
         p = r.mapping(p, pkey, ("pulley",), required=("pulley",))
         return PulleySpec(r.number(p["pulley"], f"{pkey}.pulley", lo=0.0, lo_open=True), key=pkey)
@@ -529,6 +549,27 @@ def _parse_route_element(r: _Reader, p, pkey: str):
     p = r.mapping(p, pkey, POINT_KEYS, required=POINT_KEYS)
     return RoutePoint(link=r.string(p["link"], f"{pkey}.link"), point=r.vector(p["point"], f"{pkey}.point"),
                       key=pkey)
+
+
+def _parse_rotating(r: _Reader, p, pkey: str) -> RotatingPulleySpec:
+    """``{rotating_pulley: radius, link, entry, axis[, screw: {direction, lead, reference, outlet}]}``."""
+    p = r.mapping(p, pkey, ROTATING_KEYS, required=("rotating_pulley", "link", "entry", "axis"))
+    axis = r.vector(p["axis"], f"{pkey}.axis")
+    if not math.sqrt(sum(a * a for a in axis)) > 1e-12:
+        raise r.fail(f"{pkey}.axis", f"expected a nonzero vector (the cable's entry direction), got {list(axis)}")
+    screw = None
+    if p.get("screw") is not None:
+        sk = f"{pkey}.screw"
+        sp = r.mapping(p["screw"], sk, SCREW_KEYS, required=SCREW_KEYS)
+        direction = r.vector(sp["direction"], f"{sk}.direction")
+        lead = r.number(sp["lead"], f"{sk}.lead", lo=0.0)
+        if not lead * math.sqrt(sum(a * a for a in direction)) < 1.0:
+            raise r.fail(f"{sk}.lead", f"expected lead * |direction| < 1, got lead {lead!r}")
+        screw = (direction, lead, r.number(sp["reference"], f"{sk}.reference", lo=0.0, lo_open=True),
+                 r.number(sp["outlet"], f"{sk}.outlet"))
+    return RotatingPulleySpec(link=r.string(p["link"], f"{pkey}.link"),
+                              radius=r.number(p["rotating_pulley"], f"{pkey}.rotating_pulley", lo=0.0, lo_open=True),
+                              entry=r.vector(p["entry"], f"{pkey}.entry"), axis=axis, screw=screw, key=pkey)
 
 
 def _parse_trajectory(r: _Reader, name, spec, base_dir: Path) -> TrajectorySpec:
