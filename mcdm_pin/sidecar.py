@@ -18,6 +18,7 @@ from typing import Any
 from . import yaml12
 from .exceptions import SidecarError
 from .limits import MAX_CABLES, MAX_MAGNITUDE, MAX_ROUTE_POINTS, MAX_SAMPLES, MAX_SIDECAR_BYTES, MIN_FORCE_BOUND
+from .sidecar_pulleys import RotatingPulleySpec, parse_rotating  # noqa: F401 (RotatingPulleySpec: re-exported)
 
 SUPPORTED_VERSIONS = (1,)
 JOINT_TYPES = ("spherical", "revolute", "prismatic", "universal", "planar", "translation", "free")
@@ -85,21 +86,6 @@ class PulleySpec:
     """A pulley: the route's next branch counts ``1/divisor`` of its length and tension."""
 
     divisor: float
-    key: str = ""
-
-
-@dataclass(frozen=True)
-class RotatingPulleySpec:
-    """A rotating pulley at the start or end of a route (fed from a winch on ``link``): ``radius``,
-    ``entry`` point and ``axis`` (the cable's entry direction) in the link's frame; ``screw`` ``None``
-    or ``(direction, lead, reference, outlet)`` of a screw-driven outlet (``entry`` is then the winch
-    point)."""
-
-    link: str
-    radius: float
-    entry: tuple[float, float, float]
-    axis: tuple[float, float, float]
-    screw: tuple | None = None
     key: str = ""
 
 
@@ -266,8 +252,6 @@ CABLE_KEYS = ("name", "f_min", "f_max", "route")
 POINT_KEYS = ("link", "point")
 WRAP_KEYS = ("wrap", "link", "radius", "center", "axis", "side")
 WRAP_KINDS = ("sphere", "cylinder")
-ROTATING_KEYS = ("rotating_pulley", "link", "entry", "axis", "screw")
-SCREW_KEYS = ("direction", "lead", "reference", "outlet")
 # a sidecar over an MJCF file: the robot (bodies, cables, muscles, couplings) comes from the MJCF; the
 # sidecar adds what MJCF has no words for: joint weights, cones, trajectories
 MJCF_TOP_KEYS = ("version", "name", "description", "mjcf", "joints", "trajectories", "reserves")
@@ -531,7 +515,7 @@ def _parse_route_element(r: _Reader, p, pkey: str):
     """``{link, point}``, ``{wrap: sphere|cylinder, link, radius, center, axis, side}``, ``{pulley: d}``
     or ``{rotating_pulley: radius, link, entry, axis, screw}``."""
     if isinstance(p, dict) and "rotating_pulley" in p:
-        return _parse_rotating(r, p, pkey)
+        return parse_rotating(r, p, pkey)
     if isinstance(p, dict) and "pulley" in p:
         p = r.mapping(p, pkey, ("pulley",), required=("pulley",))
         return PulleySpec(r.number(p["pulley"], f"{pkey}.pulley", lo=0.0, lo_open=True), key=pkey)
@@ -549,27 +533,6 @@ def _parse_route_element(r: _Reader, p, pkey: str):
     p = r.mapping(p, pkey, POINT_KEYS, required=POINT_KEYS)
     return RoutePoint(link=r.string(p["link"], f"{pkey}.link"), point=r.vector(p["point"], f"{pkey}.point"),
                       key=pkey)
-
-
-def _parse_rotating(r: _Reader, p, pkey: str) -> RotatingPulleySpec:
-    """``{rotating_pulley: radius, link, entry, axis[, screw: {direction, lead, reference, outlet}]}``."""
-    p = r.mapping(p, pkey, ROTATING_KEYS, required=("rotating_pulley", "link", "entry", "axis"))
-    axis = r.vector(p["axis"], f"{pkey}.axis")
-    if not math.sqrt(sum(a * a for a in axis)) > 1e-12:
-        raise r.fail(f"{pkey}.axis", f"expected a nonzero vector (the cable's entry direction), got {list(axis)}")
-    screw = None
-    if p.get("screw") is not None:
-        sk = f"{pkey}.screw"
-        sp = r.mapping(p["screw"], sk, SCREW_KEYS, required=SCREW_KEYS)
-        direction = r.vector(sp["direction"], f"{sk}.direction")
-        lead = r.number(sp["lead"], f"{sk}.lead", lo=0.0)
-        if not lead * math.sqrt(sum(a * a for a in direction)) < 1.0:
-            raise r.fail(f"{sk}.lead", f"expected lead * |direction| < 1, got lead {lead!r}")
-        screw = (direction, lead, r.number(sp["reference"], f"{sk}.reference", lo=0.0, lo_open=True),
-                 r.number(sp["outlet"], f"{sk}.outlet"))
-    return RotatingPulleySpec(link=r.string(p["link"], f"{pkey}.link"),
-                              radius=r.number(p["rotating_pulley"], f"{pkey}.rotating_pulley", lo=0.0, lo_open=True),
-                              entry=r.vector(p["entry"], f"{pkey}.entry"), axis=axis, screw=screw, key=pkey)
 
 
 def _parse_trajectory(r: _Reader, name, spec, base_dir: Path) -> TrajectorySpec:

@@ -3,8 +3,9 @@
 Only ``cable_ideal`` is converted: springs, variable-stiffness cables and muscles change the force
 with the length and are refused, naming the element and the type. Routes are lists of
 ``<attachment>`` points, the first possibly a rotating pulley (``base_rotating_pulley``,
-``screw_base_rotating_pulley``: :mod:`.pulleys`). ``attachment_reference="com"`` points are measured from the link's COM, ``"joint"`` from its
-joint point, both in the link frame; base points (link 0) are absolute in either case.
+``screw_base_rotating_pulley``: :mod:`.pulleys`). ``attachment_reference="com"`` points are measured
+from the link's COM, ``"joint"`` from its joint point, both in the link frame; base points (link 0)
+are absolute in either case.
 """
 
 from __future__ import annotations
