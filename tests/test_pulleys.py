@@ -269,15 +269,25 @@ def test_committed_models_match_their_reference(name):
 
 
 @pytest.mark.skipif(CASPR is None, reason="CASPR's XML files (../shared/reference/caspr) are not here")
-def test_terms_equal_caspr_newton_euler():
+def test_terms_equal_caspr_newton_euler(tmp_path):
     """Lengths, ``L``, ``M``, ``tau`` and the interaction wrench maps of both SpiderBot_UR3 models as
-    committed against CASPR's Newton-Euler with CASPR's pulley formulas, computed here from CASPR's XML
-    at states away from ``q_initial``, to 1e-9 relative."""
+    committed, and of CAROCA's ``with_rotating_pulleys`` set imported here, against CASPR's Newton-Euler
+    with CASPR's pulley formulas, computed here from CASPR's XML at states away from ``q_initial``, to
+    1e-9 relative."""
+    from mcdm_pin.caspr import import_caspr
+
     links = ["UR3_base", "UR3_shoulder", "UR3_upper_arm", "UR3_forearm", "UR3_wrist_1", "UR3_wrist_2", "UR3_wrist_3"]
-    for name, n_states in (("SpiderBot_UR3", 1), ("SpiderBot_UR3_Test", 3)):
+    for name, n_states, cable_set in (("SpiderBot_UR3", 1, None), ("SpiderBot_UR3_Test", 3, None),
+                                      ("CAROCA", 2, "with_rotating_pulleys")):
         bodies, cables = _model_files(name)
-        model = cn.Model.from_xml(bodies, cables)
-        robot = Robot.load(REPO / "robots" / "caspr" / name / f"{name}.yaml")
+        model = cn.Model.from_xml(bodies, cables, cable_set)
+        if cable_set is None:
+            robot = Robot.load(REPO / "robots" / "caspr" / name / f"{name}.yaml")
+        else:
+            res = import_caspr(bodies, cables, tmp_path / name, cable_set=cable_set)
+            robot = Robot.load(res.sidecar)
+            links = [link.ident for link in res.bodies.links]
+            assert len(robot.cables.rotating) == robot.m
         rng = np.random.default_rng(5)
         q0 = np.concatenate([link.q_initial for link in model.links])
         errors = []
