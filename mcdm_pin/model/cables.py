@@ -330,15 +330,18 @@ class CableSet:
     Args:
         model: the ``pin.Model`` the route frames belong to.
         cables: :class:`Cable` objects, or mappings ``{name, route, f_min, f_max}``, where a route is a
-            sequence of :class:`RoutePoint` or ``(frame, (x, y, z))`` with frame a name or an id.
+            sequence of :class:`RoutePoint` or ``(frame, (x, y, z))`` with frame a name or an id, and
+            :class:`Wrap`, :class:`Pulley` or (first or last) :class:`RotatingPulley` elements.
 
     Raises:
-        ModelError: an unknown frame, a bad bound, a route of fewer than two points, a duplicate name, or
-            a cable whose points all sit on one body (it could not move anything).
+        ModelError: an unknown frame, a bad bound, a route of fewer than two points, a duplicate name, a
+            rotating pulley elsewhere than at an end next to a route point, or a cable whose points all
+            sit on one body (it could not move anything).
 
     Attributes:
         cables: the cables, in order; ``names``, ``f_min`` (m,), ``f_max`` (m,).
-        point_frame, point_cable: (P,) the frame id and the cable of each route point.
+        point_frame, point_cable: (P,) the frame id and the cable of each route point (a rotating
+            pulley's exit point counts as one: its slot holds the entry point until an instant's pass).
         point_joint: (P,) the Pinocchio joint carrying each route point (all cables, in order).
         point_local: (P, 3) each point in its joint's frame.
         seg_a, seg_b, seg_cable: (S,) each segment's start and end point and its cable.

@@ -1,4 +1,4 @@
-r"""The compiled route pass: every wrap of a cable set at one instant in one call.
+r"""The compiled route pass: every wrap and rotating pulley of a cable set at one instant in one call.
 
 :class:`mcdm_pin.model.routes.RoutePaths` keeps the path arrays the cable-terms kernel reads (its module
 docstring gives the layout); :func:`route_pass` rewrites them from the key bodies' world placements.
@@ -27,8 +27,8 @@ Compiled by ``mcdm-pin compile`` with the other kernels and cached on disk (``ca
 registered with :mod:`mcdm_pin.jit` like :mod:`mcdm_pin.model.kernels`; until then the same code runs
 as Python (``jit.kernels("model.route_kernels").route_pass``).
 
-Packed per-wrap tables (one array each, so that a call passes few arguments: numba's dispatch costs
-about a microsecond per argument):
+Packed per-wrap and per-pulley tables (one array each, so that a call passes few arguments: numba's
+dispatch costs about a microsecond per argument):
 
 - ``wrap_int`` (W, 12) int64: key bodies of the surface, ``A``, ``B`` and the side point; has a side
   point (0/1); cylinder (0/1, else sphere); the slot of ``T_0`` (``T_1`` is the next); the segment
