@@ -242,6 +242,17 @@ def test_sidecar_rotating_pulley(tmp_path):
     (tmp_path / "bad.yaml").write_text(yaml.safe_dump(data))
     with pytest.raises(SidecarError, match=r"cables\[0\]\.route\[0\]\.screw\.lead"):
         Robot.load(tmp_path / "bad.yaml")
+    first["screw"]["lead"], first["axis"] = 0.005, [0, 0, 0]
+    (tmp_path / "bad.yaml").write_text(yaml.safe_dump(data))
+    with pytest.raises(SidecarError, match=r"cables\[0\]\.route\[0\]\.axis: expected a nonzero vector"):
+        Robot.load(tmp_path / "bad.yaml")
+    first["axis"] = [0, 0, 1]
+    route = data["cables"][0]["route"]
+    data["cables"][0]["route"] = [route[1], route[0], {"link": "base", "point": [0, 0, 0]}]
+    (tmp_path / "bad.yaml").write_text(yaml.safe_dump(data))
+    with pytest.raises(SidecarError, match=r"cables\[0\]\.route: cable 'X': route\[1\]: a rotating pulley must "
+                                           r"be the first or the last element"):
+        Robot.load(tmp_path / "bad.yaml")
 
 
 def _model_files(name):
