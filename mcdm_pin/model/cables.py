@@ -289,6 +289,9 @@ def _as_rotating(model, p: RotatingPulley, where: str) -> tuple[RotatingPulley, 
     screw = None
     if p.screw is not None:
         sd = p.screw
+        if not isinstance(sd, ScrewDrive):
+            raise ModelError(f"{where}: expected the rotating pulley's screw to be a ScrewDrive or None, got "
+                             f"{type(sd).__name__}")
         direction = _vector(sd.direction, f"{where}: screw direction")
         lead = _number(sd.lead, f"{where}: screw lead")
         reference = _number(sd.reference, f"{where}: screw reference")
