@@ -433,10 +433,10 @@ def _cables(model: pin.Model, sc: Sidecar, joints) -> CableSet:
 
 
 def _route_element(model: pin.Model, sc: Sidecar, links: set, inside: dict, p):
-    """A sidecar route element (point, wrap or pulley) as the model layer's, its link checked against
+    """A sidecar route element (point, wrap, pulley or rotating pulley) as the model layer's, its link checked against
     the model's ``links`` and the massless links ``inside`` grouped joints."""
-    from .model.cables import Pulley, Wrap, find_frame
-    from .sidecar import PulleySpec, WrapSpec
+    from .model.cables import Pulley, RotatingPulley, ScrewDrive, Wrap, find_frame
+    from .sidecar import PulleySpec, RotatingPulleySpec, WrapSpec
 
     if isinstance(p, PulleySpec):
         return Pulley(p.divisor)
@@ -451,6 +451,9 @@ def _route_element(model: pin.Model, sc: Sidecar, links: set, inside: dict, p):
         R = _frame_with_z(np.array(p.axis))
         side = None if p.side is None else RoutePoint(p.link, p.side)
         return Wrap(p.link, p.kind, p.radius, p.center, tuple(R.reshape(-1)), side, name=p.key)
+    if isinstance(p, RotatingPulleySpec):
+        screw = None if p.screw is None else ScrewDrive(*p.screw)
+        return RotatingPulley(p.link, p.entry, p.axis, p.radius, screw, name=p.key)
     return RoutePoint(p.link, p.point)
 
 

@@ -18,6 +18,7 @@ from typing import Any
 from . import yaml12
 from .exceptions import SidecarError
 from .limits import MAX_CABLES, MAX_MAGNITUDE, MAX_ROUTE_POINTS, MAX_SAMPLES, MAX_SIDECAR_BYTES, MIN_FORCE_BOUND
+from .sidecar_pulleys import RotatingPulleySpec, parse_rotating  # noqa: F401 (RotatingPulleySpec: re-exported)
 
 SUPPORTED_VERSIONS = (1,)
 JOINT_TYPES = ("spherical", "revolute", "prismatic", "universal", "planar", "translation", "free")
@@ -518,7 +519,10 @@ def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:
 
 
 def _parse_route_element(r: _Reader, p, pkey: str):
-    """``{link, point}``, ``{wrap: sphere|cylinder, link, radius, center, axis, side}`` or ``{pulley: d}``."""
+    """``{link, point}``, ``{wrap: sphere|cylinder, link, radius, center, axis, side}``, ``{pulley: d}``
+    or ``{rotating_pulley: radius, link, entry, axis, screw}``."""
+    if isinstance(p, dict) and "rotating_pulley" in p:
+        return parse_rotating(r, p, pkey)
     if isinstance(p, dict) and "pulley" in p:
         p = r.mapping(p, pkey, ("pulley",), required=("pulley",))
         return PulleySpec(r.number(p["pulley"], f"{pkey}.pulley", lo=0.0, lo_open=True), key=pkey)

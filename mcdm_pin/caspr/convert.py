@@ -23,6 +23,7 @@ import numpy as np
 from ..exceptions import CasprError, InertiaWarning, McdmError
 from .bodies import CasprBodies, read_bodies
 from .cables import read_cables
+from .pulleys import fill_screw_references
 from .sampling import SamplingError, Samples, coordinates_from_caspr, sample, to_ours
 from .trajectories import CasprOperationalTrajectory, CasprTrajectory, read_trajectories
 from .writer import (GRAVITY, chains, csv_text, sidecar_cables, sidecar_joints, sidecar_text, urdf_text)
@@ -168,6 +169,8 @@ def import_caspr(bodies_xml, cables_xml, out_dir, trajectories_xml=None, cable_s
                                                encoding="utf-8")
         robot = _load(data, tmp, urdf_name)
         layout = tuple(robot.joint(link.ident).idx_v for link in bodies.links)
+        if fill_screw_references(data["cables"], robot, bodies, layout):  # measured at q_initial
+            robot = _load(data, tmp, urdf_name)
         result = CasprImport(urdf=urdf_dir / f"{urdf_name}.urdf", sidecar=out_dir / f"{name}.yaml", cable_set=cset.id,
                              bodies=bodies, layout=layout, nv=robot.nv,
                              coordinate_names=tuple(robot.coordinate_names), notes=list(bodies.notes),
