@@ -98,6 +98,19 @@ class CableSpec:
 
 
 @dataclass(frozen=True)
+class SpringSpec:
+    """A passive spring (:mod:`mcdm_pin.model.springs`): a route as a cable's, ``stiffness`` (N/m) and
+    ``rest_length`` (m); its tension ``stiffness (length - rest_length)`` is known, not solved for."""
+
+    name: str
+    stiffness: float
+    rest_length: float
+    route: tuple
+    tension_only: bool = False
+    key: str = ""
+
+
+@dataclass(frozen=True)
 class TrajectorySpec:
     """A named trajectory. ``type`` is ``quintic`` (q_start, q_end, duration, dt, spherical) or
     ``csv`` (file, resolved to an absolute path)."""
@@ -141,6 +154,7 @@ class Sidecar:
     description: str = ""
     mjcf_path: Path | None = None  # a sidecar over an MJCF file (``mjcf:`` instead of ``urdf:``)
     reserves: tuple = ()  # ReserveSpec: coordinate actuators of an MJCF robot
+    springs: tuple = ()  # SpringSpec: passive springs (known tensions)
 
 
     def error(self, key: str, expected: str) -> SidecarError:
@@ -242,8 +256,9 @@ def _join(key: str, sub: str) -> str:
 
 # --------------------------------------------------------------------------------------------------
 
-TOP_KEYS = ("version", "name", "description", "urdf", "gravity", "joints", "cables", "locked_joints",
+TOP_KEYS = ("version", "name", "description", "urdf", "gravity", "joints", "cables", "springs", "locked_joints",
             "trajectories")
+SPRING_KEYS = ("name", "stiffness", "rest_length", "tension_only", "route")
 JOINT_KEYS = ("type", "urdf_joints", "parametrization", "socket_axis", "alpha", "beta", "cone_deg",
               "actuated")
 ACTUATED_KEYS = ("min", "max", "weight")
@@ -326,6 +341,7 @@ def parse_sidecar(data, path: Path | None = None, base_dir: Path | None = None) 
 
     joints = _parse_joints(r, data["joints"])
     cables = _parse_cables(r, data["cables"])
+    springs = _parse_springs(r, data.get("springs", []))
 
     locked_raw = data.get("locked_joints", {}) or {}
     if not isinstance(locked_raw, dict):
@@ -345,7 +361,7 @@ def parse_sidecar(data, path: Path | None = None, base_dir: Path | None = None) 
 
     return Sidecar(path=path, version=int(version), name=name, urdf=urdf, urdf_path=urdf_path,
                    gravity=gravity, joints=joints, cables=cables, locked_joints=locked,
-                   trajectories=trajectories, description=description)
+                   trajectories=trajectories, description=description, springs=springs)
 
 
 def _parse_mjcf_sidecar(r: _Reader, data: dict, path: Path | None, base_dir: Path) -> Sidecar:
@@ -463,17 +479,38 @@ def _parse_joints(r: _Reader, raw) -> tuple[JointSpec, ...]:
 
 def _parse_actuated(r: _Reader, raw, key: str) -> ActuatorSpec:
     """``{min: [...], max: [...], weight: w}``: one bound per degree of freedom (checked against the
-    joint by the loader), a single number meaning one degree of freedom."""
-    raw = r.mapping(raw, key, ACTUATED_KEYS, required=("min", "max"))
+    joint by the loader), a single number meaning one degree of freedom. A bound may be ``-.inf``
+    (``min``) or ``.inf`` (``max``): that side is unbounded; ``min`` and ``max`` left out both mean an
+    unbounded motor (CASPR's default), which needs ``weight > 0``."""
+    raw = r.mapping(raw, key, ACTUATED_KEYS)
+    weight = r.number(raw.get("weight", 1.0), f"{key}.weight", lo=0.0)
+    if "min" not in raw and "max" not in raw:
+        if weight == 0:
+            raise r.fail(f"{key}.weight", "an unbounded motor (no min, no max) needs a weight > 0: nothing "
+                                          "else keeps its torque finite")
+        return ActuatorSpec(min=(), max=(), weight=weight, key=key)
+    for k in ("min", "max"):
+        if k not in raw:
+            raise r.fail(_join(key, k), f"missing required key {k!r} (give both bounds, or neither for an "
+                                        f"unbounded motor)")
     lo = raw["min"] if isinstance(raw["min"], list) else [raw["min"]]
     hi = raw["max"] if isinstance(raw["max"], list) else [raw["max"]]
-    lo = r.vector(lo, f"{key}.min", None)
-    hi = r.vector(hi, f"{key}.max", len(lo))
+    lo = tuple(-math.inf if _is_inf(v, -1) else r.number(v, f"{key}.min[{i}]") for i, v in enumerate(lo))
+    if len(hi) != len(lo):
+        raise r.fail(f"{key}.max", f"expected a list of {len(lo)} numbers, got {len(hi)}")
+    hi = tuple(math.inf if _is_inf(v, 1) else r.number(v, f"{key}.max[{i}]") for i, v in enumerate(hi))
     for i, (a, b) in enumerate(zip(lo, hi)):
         if not a < b:
             raise r.fail(f"{key}.max[{i}]", f"expected max > min = {a!r}, got {b!r}")
-    weight = r.number(raw.get("weight", 1.0), f"{key}.weight", lo=0.0)
+    if weight == 0 and not all(math.isfinite(x) for x in lo + hi):
+        raise r.fail(f"{key}.weight", "a motor with an unbounded side needs a weight > 0: nothing else keeps "
+                                      "its torque finite")
     return ActuatorSpec(min=lo, max=hi, weight=weight, key=key)
+
+
+def _is_inf(value, sign: int) -> bool:
+    """``value`` is the float infinity of ``sign`` (YAML's ``.inf`` / ``-.inf``)."""
+    return isinstance(value, float) and math.isinf(value) and (value > 0) == (sign > 0)
 
 
 def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:
@@ -508,6 +545,36 @@ def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:
         points = [_parse_route_element(r, p, f"{key}.route[{k}]") for k, p in enumerate(route)]
         cables.append(CableSpec(name=name, f_min=f_min, f_max=f_max, route=tuple(points), key=key))
     return tuple(cables)
+
+
+def _parse_springs(r: _Reader, raw) -> tuple[SpringSpec, ...]:
+    """``springs:`` a list of ``{name, stiffness, rest_length, route[, tension_only]}``."""
+    if raw is None:
+        return ()
+    if not isinstance(raw, list):
+        raise r.fail("springs", f"expected a list of springs {{name, stiffness, rest_length, route}}, got {_kind(raw)}")
+    if len(raw) > MAX_CABLES:
+        raise r.fail("springs", f"expected at most {MAX_CABLES} springs (docs/limits.md), got {len(raw)}")
+    out, names = [], {}
+    for i, spec in enumerate(raw):
+        key = f"springs[{i}]"
+        spec = r.mapping(spec, key, SPRING_KEYS, required=("name", "stiffness", "rest_length", "route"))
+        name = r.string(spec["name"], f"{key}.name")
+        if name in names:
+            raise r.fail(f"{key}.name", f"spring name {name!r} is already used by springs[{names[name]}]")
+        names[name] = i
+        only = spec.get("tension_only", False)
+        if not isinstance(only, bool):
+            raise r.fail(f"{key}.tension_only", f"expected true or false, got {_kind(only)}")
+        route = spec["route"]
+        if not isinstance(route, list) or len(route) < 2 or len(route) > MAX_ROUTE_POINTS:
+            got = f"{len(route)} point(s)" if isinstance(route, list) else _kind(route)
+            raise r.fail(f"{key}.route", f"expected a list of 2 to {MAX_ROUTE_POINTS} {{link, point}}, got {got}")
+        out.append(SpringSpec(name=name, stiffness=r.number(spec["stiffness"], f"{key}.stiffness", lo=0.0),
+                              rest_length=r.number(spec["rest_length"], f"{key}.rest_length", lo=0.0),
+                              route=tuple(_parse_route_element(r, p, f"{key}.route[{k}]") for k, p in enumerate(route)),
+                              tension_only=only, key=key))
+    return tuple(out)
 
 
 def _parse_route_element(r: _Reader, p, pkey: str):

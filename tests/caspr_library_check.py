@@ -13,7 +13,7 @@ reference). Compared, each to ``TOL`` relative to the largest entry of the refer
   committed URDF) with CASPR's (``caspr_newton.Model.kinematics``): the import of frames, joints and
   trajectories;
 - the cable lengths;
-- ``L``, ``M`` and ``tau = M qdd + h`` with CASPR's, through the map T between the two sets of
+- ``L``, ``M`` and ``tau = M qdd + h`` (``+ L_s^T f_s`` with passive springs) with CASPR's, through the map T between the two sets of
   velocities (``W_caspr T = J``, the links' twists): ``L = L_c T``, ``M = T^T M_c T``,
   ``tau = T^T tau_c``; and the actuation matrix, ``S = T^+ A_c`` up to the actuators' order;
 - the interaction wrench maps ``u``, ``R^T`` of every joint with CASPR's, CASPR's force (parent
@@ -237,6 +237,7 @@ def reference_state(model, q, qd, qdd, **extra) -> dict:
     R, P, w, wd, v, a = model.kinematics(q, qd, qdd)
     p = len(model.links)
     M, h = model.terms(q, qd, qdd)
+    h = h + model.spring_generalized(q)  # the passive springs' known tensions join C + G (CASPR's b)
     a_c, RT_c = model.interaction_map(q, qd, qdd)
     out = dict(q_c=q, qd_c=qd, qdd_c=qdd, R=np.array(R[1:]), P=np.array(P[1:]),
                vel=np.array([np.concatenate([R[k].T @ v[k], R[k].T @ w[k]]) for k in range(1, p + 1)]),
