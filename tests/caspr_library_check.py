@@ -150,6 +150,30 @@ def compare(robot, links, state, q, v, a) -> dict:
     return errors
 
 
+def velocity_map(robot, links, state, q):
+    """``T`` with ``W_caspr T = J`` (the links' twists, our velocity -> CASPR's), at our ``q``."""
+    model = robot.model
+    data = model.createData()
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    J = np.vstack([pin.getFrameJacobian(model, data, model.getFrameId(name), pin.LOCAL) for name in links])
+    return np.linalg.lstsq(state["W_c"], J, rcond=None)[0]
+
+
+def newton_residual(robot, links, state, q, f, tau_act) -> float:
+    """Newton-Euler's residual of our answer ``(f, tau_act)`` at a reference state, relative: CASPR's
+    ``M qdd + h`` (with the passive springs' ``L_s^T f_s``) and ``L`` from ``tests/caspr_newton.py``,
+    brought to our coordinates by ``T^T``, against our actuation ``S tau_act``:
+    ``|T^T (M_c qdd_c + h_c + L_c^T f) - S tau_act| / scale``."""
+    T = velocity_map(robot, links, state, q)
+    need = T.T @ (state["M_c"] @ state["qdd_c"] + state["h_c"])
+    cab = T.T @ (state["L_c"].T @ f)
+    act = robot.actuation @ np.asarray(tau_act, dtype=float).reshape(-1) if robot.n_act else np.zeros_like(need)
+    scale = max(np.abs(need).max(initial=0.0), (np.abs(T.T @ state["L_c"].T) @ np.abs(f)).max(initial=0.0),
+                np.abs(act).max(initial=0.0), 1e-300)
+    return float(np.abs(need + cab - act).max(initial=0.0) / scale)
+
+
 def _interaction_child(state, links):
     """CASPR's interaction maps with the force turned from the parent frame into the child frame."""
     p = len(links)

@@ -75,7 +75,8 @@ def rows(lib, ref) -> tuple[list[str], dict]:
         counts["terms"] += library and m["terms_ok"]
         sets = entry["cable_sets"]
         others = [f"`{s}` refused ({_md(r.split(': ')[-1])})" for s, r in sets.items() if r != "imported"]
-        imp = f"imported, cable set `{entry['cable_set']}`" + (f"; {'; '.join(others)}" if others else "")
+        imp = f"imported, cable set `{entry['cable_set']}`" + "".join(f"; {_md(b)}" for b in entry.get("became", []))
+        imp += f"; {'; '.join(others)}" if others else ""
         refused_t = [t for t, s in entry["trajectories"].items() if s.startswith("refused")]
         if refused_t:
             imp += "; trajectories refused: " + "; ".join(f"`{t}`: {_md(entry['trajectories'][t][9:])}"
