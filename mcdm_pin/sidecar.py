@@ -18,6 +18,7 @@ from typing import Any
 from . import yaml12
 from .exceptions import SidecarError
 from .limits import MAX_CABLES, MAX_MAGNITUDE, MAX_ROUTE_POINTS, MAX_SAMPLES, MAX_SIDECAR_BYTES, MIN_FORCE_BOUND
+from .sidecar_springs import SpringSpec, parse_springs  # noqa: F401 (SpringSpec: a field's type, re-exported)
 
 SUPPORTED_VERSIONS = (1,)
 JOINT_TYPES = ("spherical", "revolute", "prismatic", "universal", "planar", "translation", "free")
@@ -94,19 +95,6 @@ class CableSpec:
     f_min: float
     f_max: float
     route: tuple[RoutePoint, ...]
-    key: str = ""
-
-
-@dataclass(frozen=True)
-class SpringSpec:
-    """A passive spring (:mod:`mcdm_pin.model.springs`): a route as a cable's, ``stiffness`` (N/m) and
-    ``rest_length`` (m); its tension ``stiffness (length - rest_length)`` is known, not solved for."""
-
-    name: str
-    stiffness: float
-    rest_length: float
-    route: tuple
-    tension_only: bool = False
     key: str = ""
 
 
@@ -258,7 +246,6 @@ def _join(key: str, sub: str) -> str:
 
 TOP_KEYS = ("version", "name", "description", "urdf", "gravity", "joints", "cables", "springs", "locked_joints",
             "trajectories")
-SPRING_KEYS = ("name", "stiffness", "rest_length", "tension_only", "route")
 JOINT_KEYS = ("type", "urdf_joints", "parametrization", "socket_axis", "alpha", "beta", "cone_deg",
               "actuated")
 ACTUATED_KEYS = ("min", "max", "weight")
@@ -341,7 +328,7 @@ def parse_sidecar(data, path: Path | None = None, base_dir: Path | None = None) 
 
     joints = _parse_joints(r, data["joints"])
     cables = _parse_cables(r, data["cables"])
-    springs = _parse_springs(r, data.get("springs", []))
+    springs = parse_springs(r, data.get("springs", []), _parse_route_element)
 
     locked_raw = data.get("locked_joints", {}) or {}
     if not isinstance(locked_raw, dict):
@@ -545,36 +532,6 @@ def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:
         points = [_parse_route_element(r, p, f"{key}.route[{k}]") for k, p in enumerate(route)]
         cables.append(CableSpec(name=name, f_min=f_min, f_max=f_max, route=tuple(points), key=key))
     return tuple(cables)
-
-
-def _parse_springs(r: _Reader, raw) -> tuple[SpringSpec, ...]:
-    """``springs:`` a list of ``{name, stiffness, rest_length, route[, tension_only]}``."""
-    if raw is None:
-        return ()
-    if not isinstance(raw, list):
-        raise r.fail("springs", f"expected a list of springs {{name, stiffness, rest_length, route}}, got {_kind(raw)}")
-    if len(raw) > MAX_CABLES:
-        raise r.fail("springs", f"expected at most {MAX_CABLES} springs (docs/limits.md), got {len(raw)}")
-    out, names = [], {}
-    for i, spec in enumerate(raw):
-        key = f"springs[{i}]"
-        spec = r.mapping(spec, key, SPRING_KEYS, required=("name", "stiffness", "rest_length", "route"))
-        name = r.string(spec["name"], f"{key}.name")
-        if name in names:
-            raise r.fail(f"{key}.name", f"spring name {name!r} is already used by springs[{names[name]}]")
-        names[name] = i
-        only = spec.get("tension_only", False)
-        if not isinstance(only, bool):
-            raise r.fail(f"{key}.tension_only", f"expected true or false, got {_kind(only)}")
-        route = spec["route"]
-        if not isinstance(route, list) or len(route) < 2 or len(route) > MAX_ROUTE_POINTS:
-            got = f"{len(route)} point(s)" if isinstance(route, list) else _kind(route)
-            raise r.fail(f"{key}.route", f"expected a list of 2 to {MAX_ROUTE_POINTS} {{link, point}}, got {got}")
-        out.append(SpringSpec(name=name, stiffness=r.number(spec["stiffness"], f"{key}.stiffness", lo=0.0),
-                              rest_length=r.number(spec["rest_length"], f"{key}.rest_length", lo=0.0),
-                              route=tuple(_parse_route_element(r, p, f"{key}.route[{k}]") for k, p in enumerate(route)),
-                              tension_only=only, key=key))
-    return tuple(out)
 
 
 def _parse_route_element(r: _Reader, p, pkey: str):

@@ -213,3 +213,15 @@ def test_caspr_cable_models(tmp_path):
     b, c = _files("SpiderBot_X52")
     robot = Robot.load(import_caspr(b, c, tmp_path / "x").sidecar)
     assert robot.n_act == 4 and all(np.isinf(a.tau_max).all() for a in robot.actuators)
+
+
+def test_replay_with_springs_reproduces_the_acceleration(tmp_path):
+    """``mcdm-pin verify``'s forward dynamics counts the springs: ABA under the solved cable forces and
+    the springs' tensions gives back the planned acceleration."""
+    from mcdm_pin.verify.replay import _Dynamics
+
+    robot = _arm(tmp_path)
+    q, qd, qdd = STATE
+    r = InverseDynamics.for_case(robot, 1).solve(q, qd, qdd)
+    assert r.found
+    assert np.allclose(_Dynamics(robot)(q, qd, r.f), qdd, rtol=0, atol=1e-8)
