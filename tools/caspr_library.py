@@ -139,12 +139,22 @@ def convert_model(m: dict, root: Path, tmp: Path) -> dict:
                 import_caspr(files["bodies"], files["cables"], out, cable_set=sid, trajectories_xml=files["trajectories"],
                              urdf_dir=urdf, name=f"{m['model']}_{sid}", urdf_name=m["model"])
                 extra.append(f"{ROBOTS}/{m['model']}/{m['model']}_{sid}.yaml")
-    entry.update(status="imported", cable_set=chosen, became=became(bodies, read_cables(files["cables"], bodies, chosen)), sidecar=f"{ROBOTS}/{m['model']}/{m['model']}.yaml",
+    entry.update(status="imported", cable_set=chosen, became=became(bodies, _chosen_set(files, bodies, chosen)), sidecar=f"{ROBOTS}/{m['model']}/{m['model']}.yaml",
                  other_sidecars=extra, urdf=f"{URDF}/{m['model']}.urdf", trajectories=tstatus, table_trajectory=table,
                  actuated=actuated, actuator_limit=None,
                  joint_types=sorted({link.joint_type for link in bodies.links}), notes=list(res.notes),
                  links=[link.ident for link in bodies.links])
     return entry
+
+
+def _chosen_set(files, bodies, chosen):
+    """The chosen cable set as import-caspr reads it without --cable-set (with its note) when that is
+    the one chosen, else as asked for."""
+    try:
+        cset = read_cables(files["cables"], bodies)
+    except CasprError:
+        cset = None
+    return cset if cset is not None and cset.id == chosen else read_cables(files["cables"], bodies, chosen)
 
 
 def became(bodies, cset) -> list[str]:
