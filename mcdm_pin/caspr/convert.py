@@ -194,10 +194,11 @@ def _caspr_error(exc: McdmError, tmp: Path, bodies: CasprBodies, cset) -> CasprE
     text = str(exc).replace(str(tmp) + os.sep, "").replace(str(tmp), "")
     key = getattr(exc, "key", "") or ""
     detail = getattr(exc, "expected", None) or text
-    m = re.match(r"cables\[(\d+)\](?:\.route\[(\d+)\])?", key)
-    if m and int(m.group(1)) < len(cset.cables):
-        cable = cset.cables[int(m.group(1))]
-        element = cable.element + (f"/attachments/attachment[{int(m.group(2)) + 1}]" if m.group(2) else "")
+    m = re.match(r"(cables|springs)\[(\d+)\](?:\.route\[(\d+)\])?", key)
+    of = {"cables": cset.cables, "springs": cset.springs}
+    if m and int(m.group(2)) < len(of[m.group(1)]):
+        cable = of[m.group(1)][int(m.group(2))]
+        element = cable.element + (f"/attachments/attachment[{int(m.group(3)) + 1}]" if m.group(3) else "")
         return CasprError(cset.path, element, f"{detail} (converted: {key})")
     m = re.match(r"joints\.([^.\[]+)", key)
     links = {link.ident: link for link in bodies.links}

@@ -1,8 +1,8 @@
 r"""Passive springs: cable-like elements whose tension is *known*, a function of their length.
 
 A spring runs along a route exactly as a cable does (:mod:`mcdm_pin.model.cables`: points fixed in
-frames, wraps, pulleys), so its length :math:`\ell_s(q)`, its row of :math:`L_s = \partial \ell_s /
-\partial q` and its interaction maps :math:`R_s^T` are a cable's. Its tension is not an unknown of the
+frames, wraps, pulleys), so its length :math:`\ell_s(q)`, its row of
+:math:`L_s = \partial \ell_s / \partial q` and its interaction maps :math:`R_s^T` are a cable's. Its tension is not an unknown of the
 problem but follows its length, CASPR's ``CableModelPassiveLinearSpring`` (``force = K_cable (length -
 l_0)``, with no sign restriction):
 
