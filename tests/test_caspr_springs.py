@@ -94,6 +94,10 @@ def test_springs_pull_in_the_interaction_wrenches_as_cables_of_the_same_tension(
     # and an answer of case 2 (interactions) balances with the springs pulling
     r = InverseDynamics.for_case(robot, 2).solve(q, qd, qdd)
     assert r.found and t.eom_residual(r.f) <= 1e-9
+    # the joints are passive: each wrench's moment about its joint's axis (y) is zero only with the
+    # springs' pull in it
+    assert np.abs(r.interaction_wrench[:, 4]).max() <= 1e-9 * np.abs(r.interaction_wrench).max()
+    assert np.abs((c.u + c.RT[:, :, :4] @ r.f)[:, 4]).max() > 1e-3 * np.abs(r.interaction_wrench).max()
 
 
 def test_a_tension_only_spring_goes_slack(tmp_path):
@@ -225,3 +229,21 @@ def test_replay_with_springs_reproduces_the_acceleration(tmp_path):
     r = InverseDynamics.for_case(robot, 1).solve(q, qd, qdd)
     assert r.found
     assert np.allclose(_Dynamics(robot)(q, qd, r.f), qdd, rtol=0, atol=1e-8)
+
+
+def test_a_trajectory_with_springs_solves_as_its_instants(tmp_path):
+    """The trajectory path (warm starts, one evaluator) gives each instant's own answer, springs in."""
+    from mcdm_pin.trajectory import Trajectory
+
+    robot = _arm(tmp_path)
+    t = np.linspace(0.0, 1.0, 5)
+    Q = np.stack([0.4 + 0.3 * t, -0.7 + 0.2 * t**2], axis=1)
+    V = np.stack([0.3 + 0 * t, 0.4 * t], axis=1)
+    A = np.stack([0 * t, 0.4 + 0 * t], axis=1)
+    solver = InverseDynamics.for_case(robot, 2)
+    run = solver.solve_trajectory(Trajectory("ramp", t, Q, V, A), progress=False)
+    for k in range(len(t)):
+        r = solver.solve(Q[k], V[k], A[k])
+        assert run.status[k] == r.status == OPTIMAL
+        assert np.allclose(run.f[k], r.f, rtol=1e-9, atol=1e-9)
+        assert np.allclose(run.interaction_wrench[k], r.interaction_wrench, rtol=1e-9, atol=1e-9)
