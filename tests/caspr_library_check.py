@@ -36,8 +36,8 @@ OBJ_TOL = 1e-6  # relative agreement of the case-1 objective, ProxQP vs Clarabel
 # forces and motor torques vs Clarabel's own answer, relative to the largest of them (at least 1 N): case
 # 1 is strictly convex, so its answer is unique, but Clarabel (an interior-point method) stops at a
 # duality gap of 1e-11, which leaves it up to about sqrt(1e-11) = 3e-6 from a bound whose multiplier
-# is zero. Measured: 1.2e-6 N at 2_DoF_VSD's rest (no force needed, f_min = 0: our answer is exactly 0,
-# Clarabel's 1.2e-6 N), 1.6e-8 at worst on the 51 instants of every other model's table state
+# is zero. Measured: 1.2e-6 N at 2_DoF_VSD's rest with its `stiff` set (no force needed, f_min = 0: our
+# answer is exactly 0, Clarabel's 1.2e-6 N), 1.6e-8 at worst on the 51 instants of every table state
 X_TOL = 1e-5
 
 
