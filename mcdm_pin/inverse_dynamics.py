@@ -535,24 +535,27 @@ def _feasible_lp(qp: QPData):
 
 
 def _elastic_bounds(qp: QPData, rel: float = 1e-9):
-    """Cables whose bounds must give, by the least total violation (relative to each bound)."""
+    """Cables whose bounds must give, by the least total violation (relative to each bound). An
+    infinite bound (an unbounded motor's) has no slack: it cannot be broken."""
     from scipy.optimize import linprog
 
     n = qp.n
-    w_lo = 1.0 / (1.0 + np.abs(qp.lb))
-    w_hi = 1.0 / (1.0 + np.abs(qp.ub))
-    c = np.concatenate([np.zeros(n), w_lo, w_hi])
-    eye = np.eye(n)
-    A_ub = np.block([[-eye, -eye, np.zeros((n, n))], [eye, np.zeros((n, n)), -eye]])
-    b_ub = np.concatenate([-qp.lb, qp.ub])
-    A_eq = np.hstack([qp.A, np.zeros((len(qp.b), 2 * n))])
-    res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=qp.b,
-                  bounds=[(None, None)] * n + [(0, None)] * (2 * n), method="highs")
+    lo_i, hi_i = np.flatnonzero(np.isfinite(qp.lb)), np.flatnonzero(np.isfinite(qp.ub))
+    k_lo, k_hi = len(lo_i), len(hi_i)
+    lb, ub = qp.lb[lo_i], qp.ub[hi_i]
+    c = np.concatenate([np.zeros(n), 1.0 / (1.0 + np.abs(lb)), 1.0 / (1.0 + np.abs(ub))])
+    A_ub = np.zeros((k_lo + k_hi, n + k_lo + k_hi))
+    A_ub[np.arange(k_lo), lo_i] = -1.0  # -x - s_lo <= -lb
+    A_ub[np.arange(k_lo), n + np.arange(k_lo)] = -1.0
+    A_ub[k_lo + np.arange(k_hi), hi_i] = 1.0  # x - s_hi <= ub
+    A_ub[k_lo + np.arange(k_hi), n + k_lo + np.arange(k_hi)] = -1.0
+    A_eq = np.hstack([qp.A, np.zeros((len(qp.b), k_lo + k_hi))])
+    res = linprog(c, A_ub=A_ub if k_lo + k_hi else None, b_ub=np.concatenate([-lb, ub]) if k_lo + k_hi else None,
+                  A_eq=A_eq, b_eq=qp.b, bounds=[(None, None)] * n + [(0, None)] * (k_lo + k_hi), method="highs")
     if res.status != 0:
         return [], []
-    s_lo, s_hi = res.x[n:2 * n], res.x[2 * n:]
-    return (np.flatnonzero(s_lo > rel * (1.0 + np.abs(qp.lb))).tolist(),
-            np.flatnonzero(s_hi > rel * (1.0 + np.abs(qp.ub))).tolist())
+    s_lo, s_hi = res.x[n:n + k_lo], res.x[n + k_lo:]
+    return (lo_i[s_lo > rel * (1.0 + np.abs(lb))].tolist(), hi_i[s_hi > rel * (1.0 + np.abs(ub))].tolist())
 
 
 def soften_cones(qp: QPData, solver, needed: float | None = None) -> tuple[Solution, float]:

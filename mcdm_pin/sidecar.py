@@ -19,6 +19,7 @@ from . import yaml12
 from .exceptions import SidecarError
 from .limits import MAX_CABLES, MAX_MAGNITUDE, MAX_ROUTE_POINTS, MAX_SAMPLES, MAX_SIDECAR_BYTES, MIN_FORCE_BOUND
 from .sidecar_pulleys import RotatingPulleySpec, parse_rotating  # noqa: F401 (RotatingPulleySpec: re-exported)
+from .sidecar_springs import SpringSpec, parse_springs  # noqa: F401 (SpringSpec: a field's type, re-exported)
 
 SUPPORTED_VERSIONS = (1,)
 JOINT_TYPES = ("spherical", "revolute", "prismatic", "universal", "planar", "translation", "free")
@@ -149,6 +150,7 @@ class Sidecar:
     description: str = ""
     mjcf_path: Path | None = None  # a sidecar over an MJCF file (``mjcf:`` instead of ``urdf:``)
     reserves: tuple = ()  # ReserveSpec: coordinate actuators of an MJCF robot
+    springs: tuple = ()  # SpringSpec: passive springs (known tensions)
 
 
     def error(self, key: str, expected: str) -> SidecarError:
@@ -250,7 +252,7 @@ def _join(key: str, sub: str) -> str:
 
 # --------------------------------------------------------------------------------------------------
 
-TOP_KEYS = ("version", "name", "description", "urdf", "gravity", "joints", "cables", "locked_joints",
+TOP_KEYS = ("version", "name", "description", "urdf", "gravity", "joints", "cables", "springs", "locked_joints",
             "trajectories")
 JOINT_KEYS = ("type", "urdf_joints", "parametrization", "socket_axis", "alpha", "beta", "cone_deg",
               "actuated")
@@ -334,6 +336,7 @@ def parse_sidecar(data, path: Path | None = None, base_dir: Path | None = None) 
 
     joints = _parse_joints(r, data["joints"])
     cables = _parse_cables(r, data["cables"])
+    springs = parse_springs(r, data.get("springs", []), _parse_route_element)
 
     locked_raw = data.get("locked_joints", {}) or {}
     if not isinstance(locked_raw, dict):
@@ -353,7 +356,7 @@ def parse_sidecar(data, path: Path | None = None, base_dir: Path | None = None) 
 
     return Sidecar(path=path, version=int(version), name=name, urdf=urdf, urdf_path=urdf_path,
                    gravity=gravity, joints=joints, cables=cables, locked_joints=locked,
-                   trajectories=trajectories, description=description)
+                   trajectories=trajectories, description=description, springs=springs)
 
 
 def _parse_mjcf_sidecar(r: _Reader, data: dict, path: Path | None, base_dir: Path) -> Sidecar:
@@ -471,17 +474,38 @@ def _parse_joints(r: _Reader, raw) -> tuple[JointSpec, ...]:
 
 def _parse_actuated(r: _Reader, raw, key: str) -> ActuatorSpec:
     """``{min: [...], max: [...], weight: w}``: one bound per degree of freedom (checked against the
-    joint by the loader), a single number meaning one degree of freedom."""
-    raw = r.mapping(raw, key, ACTUATED_KEYS, required=("min", "max"))
+    joint by the loader), a single number meaning one degree of freedom. A bound may be ``-.inf``
+    (``min``) or ``.inf`` (``max``): that side is unbounded; ``min`` and ``max`` left out both mean an
+    unbounded motor (CASPR's default), which needs ``weight > 0``."""
+    raw = r.mapping(raw, key, ACTUATED_KEYS)
+    weight = r.number(raw.get("weight", 1.0), f"{key}.weight", lo=0.0)
+    if "min" not in raw and "max" not in raw:
+        if weight == 0:
+            raise r.fail(f"{key}.weight", "an unbounded motor (no min, no max) needs a weight > 0: nothing "
+                                          "else keeps its torque finite")
+        return ActuatorSpec(min=(), max=(), weight=weight, key=key)
+    for k in ("min", "max"):
+        if k not in raw:
+            raise r.fail(_join(key, k), f"missing required key {k!r} (give both bounds, or neither for an "
+                                        f"unbounded motor)")
     lo = raw["min"] if isinstance(raw["min"], list) else [raw["min"]]
     hi = raw["max"] if isinstance(raw["max"], list) else [raw["max"]]
-    lo = r.vector(lo, f"{key}.min", None)
-    hi = r.vector(hi, f"{key}.max", len(lo))
+    lo = tuple(-math.inf if _is_inf(v, -1) else r.number(v, f"{key}.min[{i}]") for i, v in enumerate(lo))
+    if len(hi) != len(lo):
+        raise r.fail(f"{key}.max", f"expected a list of {len(lo)} numbers, got {len(hi)}")
+    hi = tuple(math.inf if _is_inf(v, 1) else r.number(v, f"{key}.max[{i}]") for i, v in enumerate(hi))
     for i, (a, b) in enumerate(zip(lo, hi)):
         if not a < b:
             raise r.fail(f"{key}.max[{i}]", f"expected max > min = {a!r}, got {b!r}")
-    weight = r.number(raw.get("weight", 1.0), f"{key}.weight", lo=0.0)
+    if weight == 0 and not all(math.isfinite(x) for x in lo + hi):
+        raise r.fail(f"{key}.weight", "a motor with an unbounded side needs a weight > 0: nothing else keeps "
+                                      "its torque finite")
     return ActuatorSpec(min=lo, max=hi, weight=weight, key=key)
+
+
+def _is_inf(value, sign: int) -> bool:
+    """``value`` is the float infinity of ``sign`` (YAML's ``.inf`` / ``-.inf``)."""
+    return isinstance(value, float) and math.isinf(value) and (value > 0) == (sign > 0)
 
 
 def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:

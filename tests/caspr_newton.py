@@ -16,6 +16,14 @@ wrench of joint k is the force and moment that link k's subtree needs from its p
 Euler for the subtree, the cables pulling): force in the parent's frame, moment about the joint point
 in the child's frame, CASPR's convention (``SystemModel.interactionWrench``).
 
+Passive springs (``cable_passive_linear_spring``, ``CableModelPassiveLinearSpring``) pull with the
+known tension :math:`K (l - l_0)` (not clipped): they are kept apart from the cables (``springs``), and
+their generalised force :math:`L_s^T f_s` joins the right-hand side as CASPR's
+``IDSolverBase.GetEoMConstraints`` adds it (``b = M q_ddot + C + G + L_passive' f_passive``); they pull on
+the bodies in every interaction wrench (``IDObjectiveMinInteractions``: ``a + H_passive' f_passive``).
+Every other cable element (ideal, linear-spring and variable-stiffness cables) is a cable: its tension is
+the unknown. :meth:`Model.residual` is Newton-Euler's residual of an answer ``(f, tau)``.
+
 Coordinates are CASPR's (``q``, ``q_dot``, ``q_ddot`` of every joint in link order).
 """
 
@@ -81,6 +89,7 @@ class Model:
     cables: list  # per cable: [(link, point from the joint point in the link frame, or base point)]
     offsets: list = field(default_factory=list)
     pulleys: list = field(default_factory=list)  # per cable: None or its first attachment, a pulley (dict)
+    springs: list = field(default_factory=list)  # per passive spring: (route as a cable's, K, l0)
 
     def __post_init__(self):
         k = 0
@@ -108,17 +117,22 @@ class Model:
         root = ET.parse(cables_xml).getroot()
         wanted = cable_set or root.get("default_cable_set")
         cset = next(s for s in root.iter("cable_set") if s.get("id") == wanted)
-        cables, pulleys = [], []
+        cables, pulleys, springs = [], [], []
         for c in cset:
             pts = []
-            pulleys.append(_pulley(c))
+            pulley = _pulley(c)
             for a in c.iter("attachment"):
                 k, loc = int(a.find("link").text), _vec(a.find("location").text)
                 if k and c.get("attachment_reference") == "com":
                     loc = loc + links[k - 1].com
                 pts.append((k, loc))
-            cables.append(pts)
-        return cls(links, cables, pulleys=pulleys)
+            if c.tag == "cable_passive_linear_spring":
+                props = c.find("properties")
+                springs.append((pts, float(props.find("K").text), float(props.find("l0").text)))
+            else:
+                cables.append(pts)
+                pulleys.append(pulley)
+        return cls(links, cables, pulleys=pulleys, springs=springs)
 
     # --------------------------------------------------------------------------------- kinematics
     def joint(self, k, q, qd, qdd):
@@ -201,11 +215,18 @@ class Model:
                              for i in range(self.n)])
         return M, h
 
-    def cable_points(self, kin):
-        """World position of every attachment point, per cable; a cable that starts at a pulley starts
-        at its exit point (on the base, CASPR's ``r_OA`` of the pulley attachment)."""
+    def _routes(self, routes):
+        """``(routes, pulleys)``: the cables with their pulleys, or ``routes`` (springs) without."""
+        if routes is None:
+            return self.cables, self.pulleys or [None] * len(self.cables)
+        return routes, [None] * len(routes)
+
+    def cable_points(self, kin, routes=None):
+        """World position of every attachment point, per cable (or per route of ``routes``); a cable
+        that starts at a pulley starts at its exit point (on the base, CASPR's ``r_OA`` of the pulley
+        attachment)."""
         out = []
-        for c, pulley in zip(self.cables, self.pulleys or [None] * len(self.cables)):
+        for c, pulley in zip(*self._routes(routes)):
             pts = [(k, self.point_motion(kin, k, pt)[0] if k else pt) for k, pt in c]
             if pulley is not None:
                 pts.insert(0, (0, self.pulley_exit(pulley, pts[0][1])[0]))
@@ -224,24 +245,38 @@ class Model:
             p["l0_offset"] = float(np.linalg.norm(B0 - p["constant_winch_point"]))
         return screw_pulley_exit(p, r_B)
 
-    def lengths(self, q):
+    def lengths(self, q, routes=None):
         kin = self.kinematics(q, np.zeros(self.n), np.zeros(self.n))
         out = []
-        for c, pulley in zip(self.cable_points(kin), self.pulleys or [None] * len(self.cables)):
+        for c, pulley in zip(self.cable_points(kin, routes), self._routes(routes)[1]):
             arc = 0.0 if pulley is None else self.pulley_exit(pulley, c[1][1])[1]
             out.append(arc + sum(np.linalg.norm(b - a) for (_, a), (_, b) in zip(c[:-1], c[1:])))
         return np.array(out)
 
-    def cable_jacobian(self, q):
+    def spring_forces(self, q):
+        """(s,) the passive springs' tensions ``K (l - l0)`` (N), CASPR's, not clipped."""
+        if not self.springs:
+            return np.zeros(0)
+        lengths = self.lengths(q, [r for r, _, _ in self.springs])
+        return np.array([K * (ln - l0) for (_, K, l0), ln in zip(self.springs, lengths)])
+
+    def spring_generalized(self, q):
+        """(n,) ``L_s^T f_s``: the springs' share of the right-hand side (CASPR's ``L_passive' f_passive``)."""
+        if not self.springs:
+            return np.zeros(self.n)
+        return self.cable_jacobian(q, [r for r, _, _ in self.springs]).T @ self.spring_forces(q)
+
+    def cable_jacobian(self, q, routes=None):
         """L = d(lengths)/dq: each segment's unit vector times its ends' relative velocity."""
+        routes = self.cables if routes is None else routes
         zero = np.zeros(self.n)
-        pts = self.cable_points(self.kinematics(q, zero, zero))
-        L = np.zeros((len(self.cables), self.n))
+        pts = self.cable_points(self.kinematics(q, zero, zero), routes)
+        L = np.zeros((len(routes), self.n))
         for i in range(self.n):
             e = np.zeros(self.n)
             e[i] = 1.0
             kin_i = self.kinematics(q, e, zero)
-            for c, (route, world) in enumerate(zip(self.cables, pts)):
+            for c, (route, world) in enumerate(zip(routes, pts)):
                 vel = [self.point_motion(kin_i, k, pt)[1] if k else np.zeros(3) for k, pt in route]
                 vel = [np.zeros(3)] * (len(world) - len(route)) + vel  # a pulley's exit point: on the base
                 for s in range(len(world) - 1):
@@ -271,7 +306,9 @@ class Model:
         R, P = kin[0], kin[1]
         forces = self.body_forces(kin)
         on = [[] for _ in range(len(self.links) + 1)]  # (point, force) the cables apply on each body
-        for fc, world in zip(f, self.cable_points(kin)):
+        routes = self.cables + [r for r, _, _ in self.springs]  # the springs at their known tensions
+        tensions = np.concatenate([np.asarray(f, dtype=float), self.spring_forces(q)])
+        for fc, world in zip(tensions, self.cable_points(kin, routes)):
             for (ka, pa), (kb, pb) in zip(world[:-1], world[1:]):
                 u = (pb - pa) / np.linalg.norm(pb - pa)
                 on[ka].append((pa, fc * u))
@@ -290,6 +327,18 @@ class Model:
                     M -= np.cross(pt - P[k], fv)
             out.append(np.concatenate([R[link.parent].T @ F, R[k].T @ M]))
         return np.concatenate(out)
+
+    def residual(self, q, qd, qdd, f, tau):
+        """Newton-Euler's residual of an answer: ``M qdd + h + L^T f + L_s^T f_s - A tau`` (n,), with
+        cable tensions ``f`` (N) and actuator forces ``tau`` (CASPR's order), and its scale (the
+        largest of ``|M qdd + h|``, ``|L^T f|`` entry by entry, ``|L_s^T f_s|`` and ``|A tau|``)."""
+        need = self.generalized(q, qd, qdd)
+        cab = self.cable_jacobian(q).T @ np.asarray(f, dtype=float)
+        spr = self.spring_generalized(q)
+        act = self.actuation() @ np.asarray(tau, dtype=float).reshape(-1)
+        scale = max(np.abs(need).max(initial=0.0), (np.abs(self.cable_jacobian(q).T) @ np.abs(f)).max(initial=0.0),
+                    np.abs(spr).max(initial=0.0), np.abs(act).max(initial=0.0), 1e-300)
+        return need + cab + spr - act, scale
 
     def subtree(self, k):
         sub = [k]

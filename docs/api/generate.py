@@ -41,6 +41,7 @@ MODULES = [
     ("mcdm_pin.model.routes", "configuration-dependent routes: paths over wraps at an instant"),
     ("mcdm_pin.model.wrapping", "MuJoCo's tendon wrapping over spheres and cylinders, and pulleys"),
     ("mcdm_pin.model.pulleys", "rotating and screw pulleys: the exit point at an instant (CASPR's)"),
+    ("mcdm_pin.model.springs", "passive springs: known tensions that follow their lengths"),
     ("mcdm_pin.model.muscles", "MuJoCo's muscle model: a cable's tension range and activation"),
     ("mcdm_pin.model.couplings", "coupled coordinates (MuJoCo's equality joint)"),
     ("mcdm_pin.mjcf", "MJCF files (MyoSuite) -> Robot, through MuJoCo's compiler"),

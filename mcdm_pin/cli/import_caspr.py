@@ -21,14 +21,15 @@ def add(sub):
                    help="the operational set the trajectories are given in (default: the file's default)")
     p.add_argument("--trajectory", action="append", dest="trajectory_ids", metavar="ID",
                    help="convert only this trajectory id (repeatable)")
-    p.add_argument("--cable-set", help="cable set id (default: the file's default_cable_set)")
+    p.add_argument("--cable-set", help="cable set id (default: the file's default_cable_set, or the first set "
+                                       "with a cable when that one is empty)")
     p.add_argument("--out", required=True, help="output folder (sidecar and trajectory CSV files)")
     p.add_argument("--urdf-dir", help="folder of the URDF (default: --out)")
     p.add_argument("--name", help="robot name and file stem (default: from the bodies file name)")
     p.add_argument("--cone-deg", type=float, help="write this stability cone on every spherical joint")
     p.add_argument("--actuator-limit", type=float, metavar="N",
-                   help="bound |tau| <= N (N m or N) on actuated joints' motors: CASPR leaves them unbounded, "
-                        "the sidecar needs a finite bound (required for models with actuated joints)")
+                   help="bound |tau| <= N (N m or N) on actuated joints' motors (default: unbounded, as in "
+                        "CASPR; their weight 1 in the objective keeps them finite)")
     p.set_defaults(func=run)
     return p
 

@@ -61,6 +61,11 @@ def run(args) -> int:
         bounds = ["muscle", "(FLV)"] if k in muscles else [f"{c.f_min:g}", f"{c.f_max:g}"]
         rows.append([c.name, *bounds, _route_text(c)])
     print(table(["cable", "f_min N", "f_max N", "route (link[point m], ~wrap~, |pulley|)"], rows))
+    if robot.springs is not None:  # known tensions k (l - l0): mcdm_pin/model/springs.py
+        print("\npassive springs (tension k (l - l0), known):")
+        rows = [[s.name, f"{s.stiffness:g}", f"{s.rest_length:g}", "yes" if s.tension_only else "no", _route_text(s)]
+                for s in robot.springs.springs]
+        print(table(["spring", "k N/m", "l0 m", "tension only", "route"], rows))
     if sc is not None and sc.trajectories:
         print("\ntrajectories: " + ", ".join(
             f"{n} ({t.type}{'' if t.duration is None else f', {t.duration:g} s, dt {t.dt:g}'})"
