@@ -41,7 +41,7 @@ class InverseDynamics:
         robot: the :class:`~mcdm_pin.robot.Robot`.
         problem: a :class:`~mcdm_pin.problem.Problem` (or use :meth:`for_case`).
         solver: a back-end name (``default``, ``compiled``, ``proxqp``, ``clarabel``; see
-            :mod:`mcdm_pin.solvers.cascade`) or a :class:`~mcdm_pin.solvers.Solver`.
+            :mod:`mcdm_pin.solvers.chains`) or a :class:`~mcdm_pin.solvers.Solver`.
         soften: for instants where the cones cannot be met, return the forces with every cone at
             least at the smallest common half-angle that makes the instant feasible (status
             ``softened``) instead of ``infeasible``.

@@ -39,7 +39,7 @@ import numpy as np
 from proxsuite import proxqp
 
 from .. import tolerances as tol
-from ..problem import QPData
+from ..qp import QPData
 from .base import BUDGET, INACCURATE, INFEASIBLE, MAX_ITER, OPTIMAL, Solution, Stage, failure, now
 
 _STATUS = proxqp.QPSolverOutput
@@ -397,24 +397,3 @@ def _parallel_cuts(cone, cuts, d) -> list[int]:
     w = (d - t * cone.axis) @ cone.G
     cos = W @ w / (np.linalg.norm(W, axis=1) * np.linalg.norm(w) + 1e-300)
     return [int(i) for i in np.flatnonzero(cos > tol.SAME_CUT_COS)]
-
-
-def ProxQPSolver(active_set: bool = True, fallback: bool = True, budget_s: float | None = tol.BUDGET_S,
-                 **options):
-    """A ProxQP-based chain (:class:`~.cascade.Cascade`), as the library's default was before the
-    compiled interior-point method: ``active_set`` adds the warm active set and the polish,
-    ``fallback`` Clarabel for the instants on which ProxQP stalls; ``options``: :class:`ProxQPStage`'s."""
-    from .active_set import Polish, WarmActiveSet
-    from .cascade import Cascade
-    from .check import Check, Project
-    from .clarabel_ import ClarabelStage
-    from .least_norm import LeastNorm
-
-    def stages():
-        first = ([WarmActiveSet()] if active_set else []) + [ProxQPStage(**options), SQPPolish()]
-        first += [ClarabelStage()] if fallback else []
-        return first + ([Polish()] if active_set else []) + [Project()]
-
-    inner = Cascade(stages(), name="proxqp (least-norm stage)", budget_s=None)
-    return Cascade(stages() + [LeastNorm(inner), Check()], name="proxqp", budget_s=budget_s,
-                   factory=lambda: ProxQPSolver(active_set, fallback, budget_s, **options))

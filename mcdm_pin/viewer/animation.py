@@ -10,6 +10,7 @@ import numpy as np
 
 from . import three
 from .colors import ARROW_RGB, CONE_OK_RGB, CONE_OUT_RGB, NO_ANSWER_RGB, tension_rgb
+from .export import label_png
 
 CONE_TOL_DEG = 1e-6
 ARROW_LENGTH = 0.5  # the run's largest interaction force is drawn this share of the robot's extent
@@ -168,8 +169,6 @@ class Labels:
 
 
 def labels(robot, height: float) -> Labels:
-    from .export import label_png
-
     pngs, widths = [], []
     for joint in robot.joints:
         w, h, png = label_png(joint.name)

@@ -14,6 +14,7 @@ import numpy as np
 
 from . import three
 from .colors import CABLE_MAP, tension_rgb
+from .three import Command
 
 
 def meshcat_dist() -> Path:
@@ -60,8 +61,6 @@ def serve(scene, zmq_url: str | None = None):
 
 
 def _legend_commands(scene) -> list:
-    from .scene import Command
-
     w_px, h_px, png = legend_png(scene.fmax, scene.arrow_scale)
     extent = scene.extent
     w, h = 0.5 * extent, 0.5 * extent * h_px / w_px

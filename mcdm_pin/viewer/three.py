@@ -11,6 +11,13 @@ import numpy as np
 RX90 = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])  # takes +y to +z (URDF cylinders lie on z)
 
 
+class Command(dict):
+    """A lowered Meshcat command (what ``meshcat.Visualizer`` sends), replayable live or in HTML."""
+
+    def lower(self):
+        return self
+
+
 def uuid() -> str:
     return str(_uuid_mod.uuid1())
 
