@@ -29,7 +29,7 @@ from .constraints import (CableForceBounds, Constraint, EquationOfMotion, Intera
 from .constraints.cone import ConeBatch
 from .exceptions import ProblemError
 from .objectives import MinActivations, MinCableForces, MinInteractions, Objective, Smoothing, Sum, objective_from_spec
-from .qp import ConeData, QPData, cone_constants
+from .qp import ConeData, QPData
 
 
 @dataclass
