@@ -30,6 +30,7 @@ from .constraints.cone import ConeBatch
 from .exceptions import ProblemError
 from .objectives import MinActivations, MinCableForces, MinInteractions, Objective, Smoothing, Sum, objective_from_spec
 from .qp import ConeData, QPData
+from .vocabulary import CASES
 
 
 @dataclass
@@ -235,7 +236,7 @@ def case_problem(robot, case: int, alpha: dict | None = None, beta: dict | None 
         smoothing: weight of ``|f - f_prev|^2`` along a trajectory (0: off).
         cable_weights: per-cable weights of case 1.
     """
-    if case not in (1, 2, 3):
+    if case not in CASES:
         raise ProblemError(f"case must be 1, 2 or 3, got {case!r}")
     if case == 1 and getattr(robot.cables, "muscles", None) is not None and cable_weights is None:
         # muscles: the activations (the biomechanics standard), the other cables' f^T f beside them

@@ -13,12 +13,12 @@ import numpy as np
 
 from .. import jit
 from ..exceptions import ProblemError
-from ..model.joints import CONE_TYPES
+from ..vocabulary import CONE_FRAMES, CONE_TYPES
 from ..qp import cone_constants
 from ..qp import ConeData, perpendicular_basis
 from .base import Constraint
 
-FRAMES = ("socket", "child")
+FRAMES = CONE_FRAMES
 
 
 class InteractionCone(Constraint):

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 from .. import tolerances as tol
 from ..exceptions import SolverError
+from ..vocabulary import BACKENDS
 from .active_set import Polish, WarmActiveSet
 from .cascade import Cascade
 from .check import Check, Project
@@ -36,9 +37,6 @@ from .clarabel_ import ClarabelStage
 from .ipm import IPMStage
 from .least_norm import LeastNorm
 from .proxqp_ import ProxQPStage, SQPPolish
-
-BACKENDS = ("default", "compiled", "proxqp", "clarabel")
-
 
 def chain(name: str, first, budget_s: float | None, factory, polish: bool = True) -> Cascade:
     """``first`` (stage factories: the answering stages), then the polish (``polish``) and the
