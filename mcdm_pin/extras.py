@@ -28,7 +28,7 @@ EXTRAS = {
     "numba": "numba", "meshcat": "viewer", "umsgpack": "viewer", "PIL": "viewer",
     "matplotlib": "plots", "dask": "workspace", "distributed": "workspace", "zarr": "workspace",
     "xarray": "workspace", "pandas": "workspace", "mujoco": "mjcf", "opensim": "opensim",
-    "tqdm": "workspace",
+    "example_robot_data": "examples",
 }
 
 

@@ -35,7 +35,7 @@ about a microsecond per argument):
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 from .wrapping import from_frame, register_jitable, wrap_in_frame
 

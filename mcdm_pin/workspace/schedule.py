@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..extras import optional
 from ..runtime import check_scheduler, close, connect
 from .errors import WorkspaceError, WorkspaceInterrupted
 from .evaluate import PoseSolver, RobotBlob, Setup, robot_digest, solve_chunk
@@ -156,7 +157,7 @@ def compute_workspace(robot, poses, out, setup: Setup | None = None, chunk: int 
 
 def _interrupted(out: Path, nchunks: int) -> WorkspaceInterrupted:
     try:
-        import zarr
+        zarr = optional("zarr", "workspaces")
 
         done = int(np.sum(zarr.open_group(str(out), mode="r", zarr_format=2)["chunk_done"][:] == 1))
     except Exception:  # noqa: BLE001 - no store yet (interrupted while starting)
@@ -186,7 +187,7 @@ def _run_dask(client, robot, poses, setup, chunk, todo, sizes, writer, bar, sche
 
 def _pump(client, robot_future, poses, setup, chunk, todo, sizes, writer, bar, in_flight):
     """Keep ``in_flight`` chunks submitted; write each as it finishes, then submit the next."""
-    from dask.distributed import as_completed
+    as_completed = optional("dask.distributed", "workspaces").as_completed
 
     queue = deque(todo)
     running = {}
