@@ -8,7 +8,7 @@ and the least-norm one where the optimum is not unique, so the results equal the
 the solver's tolerance.
 
 What travels to a worker is data: the pickled robot and problem, the solver's name (or the
-:class:`~mcdm_pin.solvers.Solver` given, fresh), the runner's options and the piece's states; the
+:class:`~mcdm_pin.solvers.Solver` given, pickled, and copied fresh per task), the runner's options and the piece's states; the
 worker builds its own :class:`~mcdm_pin.inverse_dynamics.InverseDynamics` once per task. No module
 state is shared and nothing is forked.
 """
@@ -44,8 +44,13 @@ class Recipe:
                             blas_threads=ident.blas_threads, budget_s=ident.budget_spec)
 
     def build(self):
+        """A runner of its own (a :class:`~mcdm_pin.solvers.Solver` given is copied fresh: tasks on
+        one worker share this recipe, not their warm starts)."""
         robot, problem = pickle.loads(self.data)
-        return self.runner(robot, problem, **self.options)
+        options = dict(self.options)
+        if not isinstance(options["solver"], str):
+            options["solver"] = options["solver"].fresh()
+        return self.runner(robot, problem, **options)
 
 
 def solve_piece(recipe: Recipe, traj, start: int, stop: int) -> dict:

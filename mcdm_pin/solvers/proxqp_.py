@@ -64,6 +64,11 @@ class ProxQPRunner:
         self.workspace = None  # (shape and settings, the ProxQP object) of the last solve
         self.created = 0  # ProxQP workspaces allocated (the others were updated)
 
+    def __getstate__(self):
+        # a copy (Cascade.fresh, a batch worker's solver) starts without the ProxQP workspace, which
+        # is native memory and holds nothing but the last problem
+        return {**self.__dict__, "workspace": None}
+
     def _workspace(self, H, g, A, b, C, l, u, eps_infeasible, max_iter):
         """A ProxQP object holding this problem: the last one updated when its shape and settings
         match (``reuse``), else a new one."""
