@@ -14,6 +14,7 @@ extra           what it brings
 ``workspace``   workspaces and batch trajectories (dask[distributed], zarr, xarray, pandas)
 ``mjcf``        MJCF robots (mujoco)
 ``opensim``     the OpenSim export and peer (opensim)
+``ik``          task-space trajectories by inverse kinematics (pin-pink, qpsolvers)
 ==============  ======================================================================================
 """
 
@@ -28,7 +29,7 @@ EXTRAS = {
     "numba": "numba", "meshcat": "viewer", "umsgpack": "viewer", "PIL": "viewer",
     "matplotlib": "plots", "dask": "workspace", "distributed": "workspace", "zarr": "workspace",
     "xarray": "workspace", "pandas": "workspace", "mujoco": "mjcf", "opensim": "opensim",
-    "example_robot_data": "examples",
+    "example_robot_data": "examples", "pink": "ik", "qpsolvers": "ik",
 }
 
 

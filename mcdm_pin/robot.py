@@ -25,6 +25,7 @@ from .model.cables import Cable, CableSet, RoutePoint
 from .model.joints import PhysicalJoint, group, massless_members, physical_joints
 from .model.terms import check_vector
 from .mjcf.load import compile_mjcf, is_mjcf, mjcf_parts
+from .osim.load import is_osim, osim_parts
 from .sidecar import Sidecar, _names, load_sidecar
 from .urdf import check_model_inertias, load_model, package_share_dirs, replace_joints, urdf_joint_axes
 
@@ -129,7 +130,10 @@ class Robot:
     # ----------------------------------------------------------------------------------------- load
     @classmethod
     def load(cls, path) -> "Robot":
-        """Load a robot from a sidecar YAML file (which names its URDF or MJCF) or a MuJoCo MJCF file."""
+        """Load a robot from a sidecar YAML file (which names its URDF or MJCF), a MuJoCo MJCF file or an
+        OpenSim ``.osim`` file (:mod:`mcdm_pin.osim`)."""
+        if is_osim(path):
+            return cls(**osim_parts(path)._asdict())
         if is_mjcf(path):
             return cls.from_mujoco(compile_mjcf(path), str(path), Path(path).stem)
         return cls.from_sidecar(load_sidecar(path))
@@ -429,10 +433,10 @@ def _cables(model: pin.Model, sc: Sidecar, joints) -> CableSet:
 
 
 def _route_element(model: pin.Model, sc: Sidecar, links: set, inside: dict, p):
-    """A sidecar route element (point, wrap or pulley) as the model layer's, its link checked against
+    """A sidecar route element (point, wrap, pulley or rotating pulley) as the model layer's, its link checked against
     the model's ``links`` and the massless links ``inside`` grouped joints."""
-    from .model.cables import Pulley, Wrap, find_frame
-    from .sidecar import PulleySpec, WrapSpec
+    from .model.cables import Pulley, RotatingPulley, ScrewDrive, Wrap, find_frame
+    from .sidecar import PulleySpec, RotatingPulleySpec, WrapSpec
 
     if isinstance(p, PulleySpec):
         return Pulley(p.divisor)
@@ -447,6 +451,9 @@ def _route_element(model: pin.Model, sc: Sidecar, links: set, inside: dict, p):
         R = _frame_with_z(np.array(p.axis))
         side = None if p.side is None else RoutePoint(p.link, p.side)
         return Wrap(p.link, p.kind, p.radius, p.center, tuple(R.reshape(-1)), side, name=p.key)
+    if isinstance(p, RotatingPulleySpec):
+        screw = None if p.screw is None else ScrewDrive(*p.screw)
+        return RotatingPulley(p.link, p.entry, p.axis, p.radius, screw, name=p.key)
     return RoutePoint(p.link, p.point)
 
 

@@ -18,11 +18,12 @@ from typing import Any
 from . import yaml12
 from .exceptions import SidecarError
 from .limits import MAX_CABLES, MAX_MAGNITUDE, MAX_ROUTE_POINTS, MAX_SAMPLES, MAX_SIDECAR_BYTES, MIN_FORCE_BOUND
+from .sidecar_pulleys import RotatingPulleySpec, parse_rotating  # noqa: F401 (RotatingPulleySpec: re-exported)
 from .vocabulary import (SIDECAR_JOINT_TYPES, SPHERICAL_MODES, SPHERICAL_PARAMETRIZATIONS, URDF_JOINT_COUNTS,
                          WRAP_KINDS)
 
 SUPPORTED_VERSIONS = (1,)
-TRAJECTORY_TYPES = ("quintic", "csv")
+TRAJECTORY_TYPES = ("quintic", "csv", "task")
 
 
 _FLOAT_RE = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
@@ -95,8 +96,10 @@ class CableSpec:
 
 @dataclass(frozen=True)
 class TrajectorySpec:
-    """A named trajectory. ``type`` is ``quintic`` (q_start, q_end, duration, dt, spherical) or
-    ``csv`` (file, resolved to an absolute path)."""
+    """A named trajectory. ``type`` is ``quintic`` (q_start, q_end, duration, dt, spherical), ``csv``
+    (file, resolved to an absolute path) or ``task`` (a task-space trajectory solved by inverse
+    kinematics, :mod:`mcdm_pin.ik`: ``frame``, ``point``, ``coordinates``, ``euler``, and ``poses``
+    ``((t, y), ...)`` with ``dt``, or a CSV ``file`` of poses; ``q_start``: the IK's first seed)."""
 
     name: str
     type: str
@@ -107,6 +110,11 @@ class TrajectorySpec:
     spherical: str = "axis-angle"
     file: Path | None = None
     key: str = ""
+    frame: str | None = None
+    point: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    coordinates: str = "xyz"
+    euler: str = "zyx"
+    poses: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -506,7 +514,10 @@ def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:
 
 
 def _parse_route_element(r: _Reader, p, pkey: str):
-    """``{link, point}``, ``{wrap: sphere|cylinder, link, radius, center, axis, side}`` or ``{pulley: d}``."""
+    """``{link, point}``, ``{wrap: sphere|cylinder, link, radius, center, axis, side}``, ``{pulley: d}``
+    or ``{rotating_pulley: radius, link, entry, axis, screw}``."""
+    if isinstance(p, dict) and "rotating_pulley" in p:
+        return parse_rotating(r, p, pkey)
     if isinstance(p, dict) and "pulley" in p:
         p = r.mapping(p, pkey, ("pulley",), required=("pulley",))
         return PulleySpec(r.number(p["pulley"], f"{pkey}.pulley", lo=0.0, lo_open=True), key=pkey)
@@ -533,6 +544,10 @@ def _parse_trajectory(r: _Reader, name, spec, base_dir: Path) -> TrajectorySpec:
         raise r.fail(key, f"expected a mapping with a 'type' of {_names(TRAJECTORY_TYPES)}, "
                           f"got {_kind(spec)}")
     ttype = r.choice(spec["type"], f"{key}.type", TRAJECTORY_TYPES)
+    if ttype == "task":
+        from .sidecar_task import parse_task
+
+        return parse_task(r, name, spec, base_dir, key)
     if ttype == "csv":
         spec = r.mapping(spec, key, CSV_KEYS, required=CSV_KEYS)
         file = (base_dir / r.string(spec["file"], f"{key}.file")).resolve()
@@ -567,3 +582,4 @@ def _parse_q(r: _Reader, value, key: str):
                 out[j] = (r.number(v, f"{key}.{j}"),)
         return out
     raise r.fail(key, f"expected a list of numbers or a mapping joint: value(s), got {_kind(value)}")
+

@@ -19,6 +19,9 @@ joint's position follows the scalar quintic in its parent frame (translation and
 its velocity is Pinocchio's :math:`(R^T\dot p, \omega)`. ``spherical: per-coordinate`` applies the scalar
 quintic to each coordinate instead.
 
+**Task.** A ``task`` trajectory (poses of a frame) is solved into joint samples by inverse kinematics:
+:mod:`mcdm_pin.ik`.
+
 **CSV.** Columns ``t`` and the nv coordinates, optionally followed by nv columns ``qd:NAME`` and nv
 columns ``qdd:NAME``: Pinocchio's velocity and acceleration (tangent space), taken exactly as given.
 Without them the rates are the derivatives of the interpolating quintic B-spline through the samples
@@ -419,6 +422,10 @@ def trajectory_from_spec(robot, spec: TrajectorySpec) -> Trajectory:
     the trajectory's key (a CSV's names its file)."""
     if spec.type == "csv":
         return follow_couplings(robot, csv_trajectory(robot, spec.file, name=spec.name))
+    if spec.type == "task":  # inverse kinematics (mcdm_pin.ik)
+        from .ik.samples import task_trajectory
+
+        return follow_couplings(robot, task_trajectory(robot, spec))
     x0, x1 = _ends(robot, spec)
     try:
         traj = quintic_trajectory(robot, x0, x1, spec.duration, spec.dt, spec.spherical, name=spec.name)
@@ -449,7 +456,19 @@ def _ends(robot, spec: TrajectorySpec):
 def plan(robot, spec: TrajectorySpec) -> Plan:
     """The motion of a sidecar trajectory at any time: ``t -> (q, v, a)``. Quintics are evaluated
     exactly; CSV trajectories through the quintic spline of their samples (coordinates and, when the
-    file has them, the given rates at the samples)."""
+    file has them, the given rates at the samples); task trajectories through the quintic spline of
+    their solved samples' coordinates."""
+    if spec.type == "task":
+        from scipy.interpolate import make_interp_spline
+
+        traj = trajectory_from_spec(robot, spec)
+        spline = make_interp_spline(traj.t, np.array([robot.coordinates(q) for q in traj.q]), k=5)
+
+        def state(tt):
+            return _coupled(robot, *charts.tangent(robot.model, spline(tt), spline(tt, 1), spline(tt, 2),
+                                                   robot._parts))
+
+        return state
     if spec.type == "csv":
         from scipy.interpolate import make_interp_spline
 

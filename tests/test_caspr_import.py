@@ -331,8 +331,9 @@ def test_pulleys_and_empty_sets_refused(tmp_path):
     cs[0] = cs[0].replace("<attachment><link>0</link>", "<base_rotating_pulley><link>0</link>", 1).replace(
         "</attachment><attachment><link>1", "</base_rotating_pulley><attachment><link>1", 1)
     c = X.cables(tmp_path / "c.xml", {"pulleys": cs, "Empty": [], "plain": X.star(1, 4)}, default="pulleys")
+    # a pulley is converted (tests/test_pulleys.py); this one lacks its fields
     with pytest.raises(CasprError, match=r"cable_ideal\[1, name='c1_0'\]/attachments/base_rotating_pulley\[1\]: "
-                                         r"<base_rotating_pulley> is not supported"):
+                                         r"missing <fixed_location> element"):
         _import(tmp_path, b, c)
     with pytest.raises(CasprError, match=r"cable_set\[id='Empty'\]: the set has no cable; mcdm-pin needs at least one; "
                                          r"choose another set \(pulleys, plain\) with --cable-set"):

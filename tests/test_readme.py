@@ -90,7 +90,7 @@ def test_every_imported_package_is_declared_and_every_declared_one_is_used():
     declared = {_canonical(re.split(r"[<>=!~ \[;]", d, maxsplit=1)[0]) for d in deps}
     # optional features import their package lazily and say how to install it (MissingPackageError,
     # mcdm_pin.extras.optional): the extras' packages
-    extras = ("opensim", "mjcf", "numba", "viewer", "plots", "workspace", "examples")
+    extras = ("opensim", "mjcf", "ik", "numba", "viewer", "plots", "workspace", "examples")
     optional = {_canonical(re.split(r"[<>=!~ \[;]", d, maxsplit=1)[0])
                 for name in extras for d in project["optional-dependencies"][name]}
     known = packages_distributions()

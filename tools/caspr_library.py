@@ -1,7 +1,7 @@
 """CASPR's model library -> the committed robots, the reference values, and the table of docs/caspr.md.
 
-    python tools/caspr_library.py convert [--caspr DIR] [--check]   # robots/caspr, urdf/caspr
-    python tools/caspr_library.py reference [--caspr DIR]           # tests/data/caspr_reference.npz
+    python tools/caspr_library.py convert [--caspr DIR] [--check] [--models M ...]   # robots/caspr, urdf/caspr
+    python tools/caspr_library.py reference [--caspr DIR] [--models M ...]  # tests/data/caspr_reference.npz
     python tools/caspr_library.py table                             # docs/caspr.md (plain clone)
 
 ``convert`` and ``reference`` read CASPR's XML files (default ``../shared/reference/caspr``: the 36 models
@@ -149,11 +149,22 @@ def convert_model(m: dict, root: Path, tmp: Path) -> dict:
     return entry
 
 
-def convert(caspr: Path, root: Path) -> list[dict]:
+def convert(caspr: Path, root: Path, only=None) -> list[dict]:
+    """Convert every model, or with ``only`` (model names) those alone: their files are replaced and
+    their entries of ``library.json`` rewritten, the others' kept."""
     entries = []
+    old = {}
+    if only:
+        old = {e["model"]: e for e in json.loads((root / ROBOTS / "library.json").read_text())["models"]}
     with tempfile.TemporaryDirectory() as t:
         for m in models(caspr):
+            if only and m["model"] not in only:
+                entries.append(old[m["model"]])
+                continue
             print(f"{m['model']} ...", flush=True)
+            if only:
+                shutil.rmtree(root / ROBOTS / m["model"], ignore_errors=True)
+                (root / URDF / f"{m['model']}.urdf").unlink(missing_ok=True)
             entries.append(convert_model(m, root, Path(t)))
     lib = {"caspr": {"repository": "https://github.com/darwinlau/CASPR", "commit": CASPR_COMMIT,
                      "licence": "BSD 3-Clause, Copyright (c) 2017, Darwin Lau (LICENSE_CASPR.txt)"},
@@ -181,7 +192,9 @@ def check(caspr: Path) -> int:
 
 
 # ------------------------------------------------------------------------------------- reference
-def reference(caspr: Path) -> None:
+def reference(caspr: Path, only=None) -> None:
+    """The reference values of every imported model, or with ``only`` (model names) of those alone
+    (the others' kept from the committed file)."""
     from mcdm_pin import Robot
     from tests import caspr_newton as cn
     from tests.caspr_library_check import reference_state
@@ -189,8 +202,11 @@ def reference(caspr: Path) -> None:
     lib = json.loads((REPO / ROBOTS / "library.json").read_text())
     by_model = {m["model"]: m for m in models(caspr)}
     out: dict = {}
+    if only:
+        with np.load(REPO / "tests" / "data" / "caspr_reference.npz", allow_pickle=False) as old:
+            out = {k: old[k] for k in old.files if k.split(":", 1)[0] not in only}
     for entry in lib["models"]:
-        if entry["status"] != "imported":
+        if entry["status"] != "imported" or (only and entry["model"] not in only):
             continue
         files = by_model[entry["model"]]["files"]
         model = cn.Model.from_xml(files["bodies"], files["cables"], entry["cable_set"])
@@ -236,6 +252,8 @@ def main(argv=None) -> int:
     p.add_argument("command", choices=("convert", "reference", "table"))
     p.add_argument("--caspr", type=Path, default=DEFAULT_CASPR, help="CASPR's files (library/, SR_model/)")
     p.add_argument("--check", action="store_true", help="convert: compare with the committed files")
+    p.add_argument("--models", nargs="+", metavar="MODEL",
+                   help="convert, reference: these models only (the others' files and values are kept)")
     args = p.parse_args(argv)
     if args.command == "table":
         from tools.caspr_table import write_table
@@ -247,6 +265,9 @@ def main(argv=None) -> int:
     if args.command == "convert":
         if args.check:
             return check(args.caspr)
+        if args.models:
+            convert(args.caspr, REPO, only=set(args.models))
+            return 0
         if (REPO / ROBOTS).exists():
             shutil.rmtree(REPO / ROBOTS)
         if (REPO / URDF).exists():
@@ -254,7 +275,7 @@ def main(argv=None) -> int:
         convert(args.caspr, REPO)
         _provenance()
         return 0
-    reference(args.caspr)
+    reference(args.caspr, only=set(args.models or ()))
     return 0
 
 

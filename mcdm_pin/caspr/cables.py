@@ -2,9 +2,10 @@
 
 Only ``cable_ideal`` is converted: springs, variable-stiffness cables and muscles change the force
 with the length and are refused, naming the element and the type. Routes are lists of
-``<attachment>`` points; pulleys (``base_rotating_pulley``, ``screw_base_rotating_pulley``) are
-refused. ``attachment_reference="com"`` points are measured from the link's COM, ``"joint"`` from its
-joint point, both in the link frame; base points (link 0) are absolute in either case.
+``<attachment>`` points, the first possibly a rotating pulley (``base_rotating_pulley``,
+``screw_base_rotating_pulley``: :mod:`.pulleys`). ``attachment_reference="com"`` points are measured
+from the link's COM, ``"joint"`` from its joint point, both in the link frame; base points (link 0)
+are absolute in either case.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import numpy as np
 
 from ..exceptions import CasprError
 from ._xml import child, integer, number, numbers, parse_xml, text
+from .pulleys import PULLEYS, read_pulley
 
 CABLE_TYPES = ("cable_ideal",)
 OTHER_CABLES = {"cable_linear_spring": "a linear spring in series with the cable",
@@ -25,7 +27,6 @@ OTHER_CABLES = {"cable_linear_spring": "a linear spring in series with the cable
                 "cable_vsd_polynomial": "a variable-stiffness device (polynomial)",
                 "muscle_hill_type": "a Hill-type muscle",
                 "pneumatic_artificial_muscle": "a pneumatic artificial muscle"}
-PULLEYS = ("base_rotating_pulley", "screw_base_rotating_pulley")
 
 
 @dataclass(frozen=True)
@@ -36,6 +37,7 @@ class CasprCable:
     f_max: float
     attachments: tuple[tuple[int, np.ndarray], ...]  # (link number, location as written)
     element: str
+    pulley: object = None  # a pulleys.CasprPulley before the attachments (CASPR: first only), or None
 
 
 @dataclass(frozen=True)
@@ -134,22 +136,22 @@ def _read_cable(path, el, i, set_id, n_links, names):
     if f_min < 0 or not f_max > f_min:
         raise CasprError(path, f"{where}/properties", f"expected 0 <= force_min < force_max, got "
                                                       f"force_min={f_min}, force_max={f_max}")
-    atts = []
+    atts, pulley = [], None
     for k, a in enumerate(child(path, el, "attachments", where), start=1):
         aw = f"{where}/attachments/{a.tag}[{k}]"
-        if a.tag in PULLEYS:
-            raise CasprError(path, aw, f"<{a.tag}> is not supported (a pulley changes the cable's exit "
-                                       f"point with its angle; it is not modelled); expected <attachment>")
+        if a.tag in PULLEYS:  # a rotating pulley: mcdm_pin.caspr.pulleys
+            pulley = read_pulley(path, a, aw, k)
+            continue
         if a.tag != "attachment":
             raise CasprError(path, aw, f"unknown element <{a.tag}>; expected <attachment>")
         link = integer(path, text(path, a, "link", aw), f"{aw}/link")
         if not 0 <= link <= n_links:
             raise CasprError(path, f"{aw}/link", f"expected a link number in 0..{n_links}, got {link}")
         atts.append((link, np.array(numbers(path, text(path, a, "location", aw), f"{aw}/location", 3))))
-    if len(atts) < 2:
+    if len(atts) < 2 - (pulley is not None):
         raise CasprError(path, f"{where}/attachments", f"expected at least two <attachment>, got {len(atts)}")
-    if len({link for link, _ in atts}) < 2:
+    if len({link for link, _ in atts} | ({0} if pulley else set())) < 2:
         raise CasprError(path, f"{where}/attachments", "every attachment is on the same link: the "
                                                        "cable cannot move anything")
     return CasprCable(name=name, reference=ref, f_min=f_min, f_max=f_max, attachments=tuple(atts),
-                      element=where), old
+                      element=where, pulley=pulley), old

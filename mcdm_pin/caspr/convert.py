@@ -23,8 +23,9 @@ import numpy as np
 from ..exceptions import CasprError, InertiaWarning, McdmError
 from .bodies import CasprBodies, read_bodies
 from .cables import read_cables
+from .pulleys import fill_screw_references
 from .sampling import SamplingError, Samples, coordinates_from_caspr, sample, to_ours
-from .trajectories import CasprTrajectory, read_trajectories
+from .trajectories import CasprOperationalTrajectory, CasprTrajectory, read_trajectories
 from .writer import (GRAVITY, chains, csv_text, sidecar_cables, sidecar_joints, sidecar_text, urdf_text)
 
 
@@ -55,6 +56,7 @@ class CasprImport:
     refused: dict[str, str] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
     renamed_cables: dict = field(default_factory=dict)
+    task_solutions: dict = field(default_factory=dict)  # {operational trajectory id: ik.TaskSolution}
 
     @property
     def q_index(self) -> np.ndarray:
@@ -81,14 +83,23 @@ class CasprImport:
         return coordinates_from_caspr(self.bodies, self.layout, q_caspr, self.nv)
 
     def samples(self, trajectory_id: str) -> Samples:
-        """CASPR's samples of a converted trajectory (:func:`~mcdm_pin.caspr.sampling.sample`)."""
-        return sample(self.bodies, self.trajectories[trajectory_id])
+        """CASPR's samples of a converted trajectory (:func:`~mcdm_pin.caspr.sampling.sample`; of an
+        operational-space one, ``y`` and its rates: :func:`~mcdm_pin.caspr.sampling.sample_operational`)."""
+        tr = self.trajectories[trajectory_id]
+        if isinstance(tr, CasprOperationalTrajectory):
+            from .sampling import sample_operational
+
+            return sample_operational(tr)
+        return sample(self.bodies, tr)
 
     def exact_trajectory(self, robot, trajectory_id: str):
         """The converted trajectory as a :class:`~mcdm_pin.trajectory.Trajectory` on ``robot`` (the
         imported robot), computed from CASPR's samples (not read back from a file)."""
         from ..trajectory import Trajectory
 
+        if trajectory_id in self.task_solutions:  # solved by inverse kinematics at import
+            sol = self.task_solutions[trajectory_id]
+            return Trajectory(trajectory_id, sol.t, sol.q, sol.qd, sol.qdd)
         s = self.samples(trajectory_id)
         X, V, A = to_ours(self.bodies, self.layout, s, self.nv)
         Q = np.array([robot.configuration(x) for x in X]).reshape(len(s.t), robot.nq)
@@ -97,7 +108,8 @@ class CasprImport:
 
 def import_caspr(bodies_xml, cables_xml, out_dir, trajectories_xml=None, cable_set: str | None = None,
                  name: str | None = None, trajectory_ids=None, cone_deg: float | None = None,
-                 actuator_limit: float | None = None, urdf_dir=None, urdf_name: str | None = None) -> CasprImport:
+                 actuator_limit: float | None = None, urdf_dir=None, urdf_name: str | None = None,
+                 operational_spaces_xml=None, operational_set: str | None = None) -> CasprImport:
     """Convert CASPR model files into ``out_dir/NAME.yaml`` (+ CSVs) and ``urdf_dir/NAME.urdf``.
 
     Args:
@@ -117,13 +129,22 @@ def import_caspr(bodies_xml, cables_xml, out_dir, trajectories_xml=None, cable_s
         urdf_dir: folder of the URDF (default: ``out_dir``).
         urdf_name: the URDF's file stem and robot name (default: ``name``); the URDF depends on the
             bodies file only, so several cable sets of one model can share it.
+        operational_spaces_xml: CASPR's ``*_operational_spaces.xml`` (default: the one beside the
+            bodies file, if any): operational-space trajectories are solved by inverse kinematics on
+            its set ``operational_set`` (default: the file's default) and written as CSV files
+            (:mod:`.operational`).
 
     Raises:
         CasprError: the files are malformed or use an unsupported CASPR feature.
     """
     bodies = read_bodies(bodies_xml)
     cset = read_cables(cables_xml, bodies, cable_set)
-    tfile = read_trajectories(trajectories_xml, bodies, trajectory_ids) if trajectories_xml is not None else None
+    ops = None
+    if trajectories_xml is not None:
+        from .operational import choose
+
+        ops = choose(bodies_xml, bodies, operational_spaces_xml, operational_set)
+    tfile = read_trajectories(trajectories_xml, bodies, trajectory_ids, ops) if trajectories_xml is not None else None
     name = _check_options(bodies, bodies_xml, name, cone_deg, actuator_limit)
     urdf_name = _check_name(urdf_name or name, "urdf_name")
     out_dir = Path(out_dir)
@@ -148,11 +169,15 @@ def import_caspr(bodies_xml, cables_xml, out_dir, trajectories_xml=None, cable_s
                                                encoding="utf-8")
         robot = _load(data, tmp, urdf_name)
         layout = tuple(robot.joint(link.ident).idx_v for link in bodies.links)
+        if fill_screw_references(data["cables"], robot, bodies, layout):  # measured at q_initial
+            robot = _load(data, tmp, urdf_name)
         result = CasprImport(urdf=urdf_dir / f"{urdf_name}.urdf", sidecar=out_dir / f"{name}.yaml", cable_set=cset.id,
                              bodies=bodies, layout=layout, nv=robot.nv,
                              coordinate_names=tuple(robot.coordinate_names), notes=list(bodies.notes),
                              renamed_cables=dict(cset.renamed))
         if tfile is not None:
+            result.notes += list(ops.notes) if any(isinstance(tr, CasprOperationalTrajectory)
+                                                   for tr in tfile.trajectories.values()) else []
             result.refused.update(tfile.refused)
             _trajectories(result, tfile, data, tmp, name, urdf_name, robot)
             asked = [tid for tid in (trajectory_ids or ()) if tid in result.refused]
@@ -270,13 +295,21 @@ def _trajectories(result: CasprImport, tfile, data: dict, tmp: Path, name: str, 
 
 
 def _convert_one(result, tr, tmp, name, robot, used):
-    s = sample(result.bodies, tr)
-    if tr.rest_to_rest_single:
-        p0, p1 = tr.points
-        spec = {"type": "quintic", "q_start": _by_joint(result, robot, p0.q), "q_end": _by_joint(result, robot, p1.q),
-                "duration": float(s.t[-1] - s.t[0]), "dt": tr.time_step, "spherical": "axis-angle"}
-        return spec, None, s.notes
-    X, V, A = to_ours(result.bodies, result.layout, s, result.nv)
+    if isinstance(tr, CasprOperationalTrajectory):  # solved by inverse kinematics (caspr/operational.py)
+        from .operational import solve
+
+        s, sol, X = solve(result, tr, robot)
+        result.task_solutions[tr.id] = sol
+        V, A = sol.qd, sol.qdd
+    else:
+        s = sample(result.bodies, tr)
+        if tr.rest_to_rest_single:
+            p0, p1 = tr.points
+            spec = {"type": "quintic", "q_start": _by_joint(result, robot, p0.q),
+                    "q_end": _by_joint(result, robot, p1.q), "duration": float(s.t[-1] - s.t[0]),
+                    "dt": tr.time_step, "spherical": "axis-angle"}
+            return spec, None, s.notes
+        X, V, A = to_ours(result.bodies, result.layout, s, result.nv)
     stem = f"{name}_{re.sub(r'[^A-Za-z0-9_.-]+', '_', tr.id)}"
     fname, k = f"{stem}.csv", 2
     while fname in used:

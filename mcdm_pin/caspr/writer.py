@@ -17,6 +17,7 @@ import yaml
 from ..exceptions import CasprError
 from ..urdf import CASPR_PROVENANCE
 from .bodies import CasprBodies, CasprLink
+from .pulleys import sidecar_element
 
 GRAVITY = (0.0, 0.0, -9.81)
 
@@ -152,7 +153,7 @@ def sidecar_joints(chs: list[Chain], cone_deg: float | None, actuator_limit: flo
 def sidecar_cables(bodies: CasprBodies, cset) -> list[dict]:
     out = []
     for cable in cset.cables:
-        route = []
+        route = [] if cable.pulley is None else [sidecar_element(cable.pulley)]
         for link, loc in cable.attachments:
             if link == 0:
                 point, lname = loc, "base"  # absolute in the base frame in either reference

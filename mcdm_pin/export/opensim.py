@@ -134,7 +134,7 @@ def describe(robot) -> RobotSpec:
     model = robot.model
     cables = robot.cables
     unsupported = [what for what, present in (
-        ("routes over wrapping surfaces", cables.configuration_dependent),
+        ("routes over wrapping surfaces or rotating pulleys", cables.configuration_dependent),
         ("pulleys", bool(np.any(cables.seg_scale != 1.0))), ("muscles", cables.muscles is not None),
         ("coupled coordinates", getattr(robot, "couplings", None) is not None)) if present]
     if unsupported:

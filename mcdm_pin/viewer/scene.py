@@ -197,7 +197,8 @@ def _routed_segments(robot, conf) -> tuple[np.ndarray, np.ndarray]:
         X = ev(robot.check_configuration(q), zero, zero, checked=True).points
         a = X[routes.seg_a]
         b = np.where((routes.seg_scale > 0)[:, None], X[routes.seg_b], a)
-        t0, t1 = X[routes._slot_t0], X[routes._slot_t1]
+        slot = routes.n_points + 2 * np.arange(len(wraps))  # each wrap's T_0, then T_1 (model/routes.py)
+        t0, t1 = X[slot], X[slot + 1]
         on = routes.engaged[:, None]
         out[k, :len(a), 0], out[k, :len(a), 1] = a, b
         out[k, len(a):, 0], out[k, len(a):, 1] = t0, np.where(on, t1, t0)
