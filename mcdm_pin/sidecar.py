@@ -20,14 +20,10 @@ from .exceptions import SidecarError
 from .limits import MAX_CABLES, MAX_MAGNITUDE, MAX_ROUTE_POINTS, MAX_SAMPLES, MAX_SIDECAR_BYTES, MIN_FORCE_BOUND
 from .sidecar_pulleys import RotatingPulleySpec, parse_rotating  # noqa: F401 (RotatingPulleySpec: re-exported)
 from .sidecar_springs import SpringSpec, parse_springs  # noqa: F401 (SpringSpec: a field's type, re-exported)
+from .vocabulary import (SIDECAR_JOINT_TYPES, SPHERICAL_MODES, SPHERICAL_PARAMETRIZATIONS, URDF_JOINT_COUNTS,
+                         WRAP_KINDS)
 
 SUPPORTED_VERSIONS = (1,)
-JOINT_TYPES = ("spherical", "revolute", "prismatic", "universal", "planar", "translation", "free")
-# how many URDF joints each type takes
-URDF_JOINT_COUNTS = {"spherical": (1, 3), "revolute": (1,), "prismatic": (1,), "universal": (2,),
-                     "planar": (1, 3), "translation": (2, 3), "free": (1,)}
-PARAMETRIZATIONS = {1: ("quaternion", "zyx"), 3: ("euler-xyz",)}  # spherical: by URDF joint count
-SPHERICAL_MODES = ("axis-angle", "per-coordinate")
 TRAJECTORY_TYPES = ("quintic", "csv", "task")
 
 
@@ -260,7 +256,6 @@ ACTUATED_KEYS = ("min", "max", "weight")
 CABLE_KEYS = ("name", "f_min", "f_max", "route")
 POINT_KEYS = ("link", "point")
 WRAP_KEYS = ("wrap", "link", "radius", "center", "axis", "side")
-WRAP_KINDS = ("sphere", "cylinder")
 # a sidecar over an MJCF file: the robot (bodies, cables, muscles, couplings) comes from the MJCF; the
 # sidecar adds what MJCF has no words for: joint weights, cones, trajectories
 MJCF_TOP_KEYS = ("version", "name", "description", "mjcf", "joints", "trajectories", "reserves")
@@ -430,7 +425,7 @@ def _parse_joints(r: _Reader, raw) -> tuple[JointSpec, ...]:
         key = f"joints.{jname}"
         r.string(jname, key)
         spec = r.mapping(spec, key, JOINT_KEYS, required=("type", "urdf_joints"))
-        jtype = r.choice(spec["type"], f"{key}.type", JOINT_TYPES)
+        jtype = r.choice(spec["type"], f"{key}.type", SIDECAR_JOINT_TYPES)
         uj = spec["urdf_joints"]
         counts = URDF_JOINT_COUNTS[jtype]
         if isinstance(uj, str) and 1 in counts:
@@ -454,7 +449,7 @@ def _parse_joints(r: _Reader, raw) -> tuple[JointSpec, ...]:
         beta = r.number(spec.get("beta", 0.0), f"{key}.beta", lo=0.0)
         parametrization = None
         if jtype == "spherical":
-            allowed = PARAMETRIZATIONS[len(uj)]
+            allowed = SPHERICAL_PARAMETRIZATIONS[len(uj)]
             parametrization = r.choice(spec.get("parametrization", allowed[0]), f"{key}.parametrization", allowed)
         elif "parametrization" in spec:
             raise r.fail(f"{key}.parametrization", "a parametrization is chosen for spherical joints only")

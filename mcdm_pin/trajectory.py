@@ -47,6 +47,7 @@ from .exceptions import SidecarError, StateError, TrajectoryError
 from .limits import MAX_CSV_BYTES, MAX_SAMPLES
 from .model import charts
 from .sidecar import TrajectorySpec, _names
+from .vocabulary import SPHERICAL_MODES
 
 # |det S| = |cos q2| below which a spherical joint's Euler-angle rates are refused (within 0.057 deg
 # of gimbal lock the rates, and their rounding errors, are amplified more than 1000 times)
@@ -193,8 +194,8 @@ class QuinticPlan:
     (module docstring). ``spherical``: ``axis-angle`` (default) or ``per-coordinate``."""
 
     def __init__(self, robot, x0, x1, duration: float, spherical: str = "axis-angle"):
-        if spherical not in ("axis-angle", "per-coordinate"):
-            raise TrajectoryError(f"spherical: expected 'axis-angle' or 'per-coordinate', got {spherical!r}")
+        if spherical not in SPHERICAL_MODES:
+            raise TrajectoryError(f"spherical: expected one of {', '.join(SPHERICAL_MODES)}, got {spherical!r}")
         if not (np.isfinite(duration) and duration > 0):
             raise TrajectoryError(f"expected a finite duration > 0, got {duration!r}")
         self.robot, self.T = robot, float(duration)

@@ -39,6 +39,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import MissingPackageError, TrajectoryError
+from ..extras import optional
 from .space import TaskKinematics, TaskSpace, euler_angles, euler_rotation, wrap
 
 LM_DAMPING = 1e-3
@@ -47,14 +48,9 @@ STALL = 1e-2  # a residual below STALL * check_tol that stops halving is taken a
 
 
 def _pink():
-    try:
-        import pink
-        import pink.limits
-        import pink.tasks
-    except ImportError:
-        raise MissingPackageError("task-space trajectories (inverse kinematics) need the optional package "
-                                  "'pin-pink': pip install 'mcdm-pin[ik]'") from None
-    return pink
+    for module in ("pink.limits", "pink.tasks"):
+        optional(module, "task-space trajectories (inverse kinematics)", "ik")
+    return optional("pink", "task-space trajectories (inverse kinematics)", "ik")
 
 
 _TASK_CLASS = None
@@ -88,7 +84,7 @@ def _task_class():
 
 
 def default_solver() -> str:
-    import qpsolvers
+    qpsolvers = optional("qpsolvers", "inverse kinematics", "ik")
 
     for name in ("daqp", "proxqp"):
         if name in qpsolvers.available_solvers:

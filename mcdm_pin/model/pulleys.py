@@ -65,7 +65,7 @@ from __future__ import annotations
 
 import math
 
-from numba import extending  # register_jitable: compiled inline into the njit route pass
+from ..jit import extending  # register_jitable: compiled inline into the njit route pass
 
 register_jitable = extending.register_jitable
 

@@ -49,7 +49,7 @@ why (:data:`mcdm_pin.model.pulleys.REASONS`), or ``(-1, 0)``.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 from .pulleys import REASON_OK, REASON_SCREW, rotating_exit, screw_entry
 from .wrapping import from_frame, register_jitable, to_frame, wrap_in_frame
