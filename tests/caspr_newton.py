@@ -216,10 +216,14 @@ class Model:
         return M, h
 
     def _routes(self, routes):
-        """``(routes, pulleys)``: the cables with their pulleys, or ``routes`` (springs) without."""
-        if routes is None:
-            return self.cables, self.pulleys or [None] * len(self.cables)
-        return routes, [None] * len(routes)
+        """``(routes, pulleys)``: the cables with their pulleys (``routes`` None, or starting with the
+        cables themselves), other routes (springs) without."""
+        routes = self.cables if routes is None else list(routes)
+        n = len(self.cables)
+        pulleys = [None] * len(routes)
+        if len(routes) >= n and all(a is b for a, b in zip(routes, self.cables)):
+            pulleys[:n] = self.pulleys or [None] * n
+        return routes, pulleys
 
     def cable_points(self, kin, routes=None):
         """World position of every attachment point, per cable (or per route of ``routes``); a cable
