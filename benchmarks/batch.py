@@ -1,4 +1,4 @@
-"""Batch mode on a long trajectory: sequential run against ``workers`` processes, same results.
+"""Batch mode on a long trajectory: sequential run against ``workers`` Dask workers, same results.
 
     python benchmarks/batch.py [--instants 5000] [--workers 2] [--case 1 2 3] [--repeat 3]
 
@@ -7,7 +7,7 @@ follows its roll trajectory's motion, from its first to its last pose, as a rest
 CASPR's one-axis interpolation of each ball joint, sampled at ``--instants`` instants over the same
 duration. Each case is solved sequentially (one process, every instant warm-started from the
 previous one) and in batch mode (``solve_trajectory(workers=N)``: the trajectory cut into N
-contiguous pieces, one process each); the table gives the wall time per instant of both (median of
+contiguous pieces, one Dask worker process each); the table gives the wall time per instant of both (median of
 the repeats), the speed-up, and how far the two runs' answers are apart: statuses, the objective
 (relative) and the forces (N); the last column is how far two sequential runs are apart (the
 floor: ProxQP's answer to the same problem varied at rounding level between calls in case 3). With a positive semidefinite objective (cases 2 and 3 with beta = 0)

@@ -13,8 +13,8 @@ Quick use::
 """
 
 from .constraints import CableForceBounds, EquationOfMotion, InteractionCone
-from .exceptions import (McdmError, ModelError, ProblemError, ResultsError, SidecarError, SolverError,
-                         StateError, TrajectoryError)
+from .exceptions import (McdmError, MissingPackageError, ModelError, ProblemError, ResultsError, SidecarError,
+                         SolverError, StateError, TrajectoryError)
 from .inverse_dynamics import InverseDynamics
 from .objectives import MinCableForces, MinCableForceSum, MinInteractions, Smoothing
 from .problem import Problem, case_problem
@@ -33,5 +33,5 @@ __all__ = [
     "MinCableForces", "MinCableForceSum", "MinInteractions", "Smoothing", "EquationOfMotion",
     "CableForceBounds", "InteractionCone", "get_solver", "InverseDynamics", "InstantResult",
     "TrajectoryResult", "McdmError", "SidecarError", "ModelError", "StateError", "TrajectoryError",
-    "ProblemError", "SolverError", "ResultsError",
+    "ProblemError", "SolverError", "ResultsError", "MissingPackageError",
 ]

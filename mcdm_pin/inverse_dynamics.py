@@ -4,9 +4,9 @@ Every answer is checked before it is returned: the solver chain's last stage che
 (:mod:`mcdm_pin.solvers.check`), and here the equation-of-motion residual, the bounds and the cones
 must hold on the *original* problem to the tolerances of :mod:`mcdm_pin.tolerances`, otherwise the
 instant is reported ``inaccurate`` (no point that silently breaks a constraint is returned as optimal).
-An infeasible instant is diagnosed (:func:`diagnose_infeasible`): the message says whether the cable
-bounds or the cones cannot be met, and the f_max or cone angle that would do
-(:mod:`mcdm_pin.solvers.margins`).
+An infeasible instant is diagnosed (:func:`~mcdm_pin.diagnosis.diagnose_infeasible`): the message
+says whether the cable bounds or the cones cannot be met, and the f_max or cone angle that would do.
+A trajectory is solved in order, or in pieces on Dask (:mod:`mcdm_pin.batch`).
 """
 
 from __future__ import annotations
@@ -18,16 +18,21 @@ import numpy as np
 
 from . import jit
 from . import tolerances as tol
+from .batch import solve_batch
+from .blas import BlasLimit
+from .conditioning import wrench_closure
+from .diagnosis import diagnose_infeasible, soften_cones, variable_names
 from .exceptions import ProblemError, StateError
+from .model import charts
+from .model.muscles import activation
+from .model.terms import TermsEvaluator, interaction_angles
 from .objectives import Smoothing, Sum
-from .problem import Context, Problem, QPData, case_problem
-from .results import InstantResult, TrajectoryResult, concat_columns, instant_columns
+from .problem import Context, Problem, case_problem
+from .qp import QPData
+from .results import InstantResult, TrajectoryResult, instant_columns
 from .scaling import ScaledSolver
 from .solvers import ERROR, INACCURATE, INFEASIBLE, OPTIMAL, SOFTENED, Solution, get_solver
 from .solvers.base import cone_violation_deg
-from .model import charts
-from .model.actuators import actuator_names
-from .model.terms import TermsEvaluator, interaction_angles
 
 EOM_TOL = tol.EOM_REL
 BOUND_TOL = tol.BOUND_ABS
@@ -41,7 +46,7 @@ class InverseDynamics:
         robot: the :class:`~mcdm_pin.robot.Robot`.
         problem: a :class:`~mcdm_pin.problem.Problem` (or use :meth:`for_case`).
         solver: a back-end name (``default``, ``compiled``, ``proxqp``, ``clarabel``; see
-            :mod:`mcdm_pin.solvers.cascade`) or a :class:`~mcdm_pin.solvers.Solver`.
+            :mod:`mcdm_pin.solvers.chains`) or a :class:`~mcdm_pin.solvers.Solver`.
         soften: for instants where the cones cannot be met, return the forces with every cone at
             least at the smallest common half-angle that makes the instant feasible (status
             ``softened``) instead of ``infeasible``.
@@ -63,7 +68,8 @@ class InverseDynamics:
                  diagnose: bool = True, blas_threads: int | None = 1, budget_s: float | None = tol.BUDGET_S):
         self.robot = robot
         self.blas_threads = blas_threads
-        self._blas = _BlasLimit()
+        self._blas = BlasLimit()
+        self.solver_spec, self.budget_spec = solver, budget_s  # as given (batch mode rebuilds from them)
         self.diagnose = diagnose
         self.problem = problem
         # the kernels run compiled when `mcdm-pin compile` has cached them, else as the same Python
@@ -88,7 +94,7 @@ class InverseDynamics:
         """Forget every warm start (the next instant is solved cold, as if it were the first)."""
         self.solver.reset()
 
-    def blas_limit(self) -> "_BlasLimit":
+    def blas_limit(self) -> BlasLimit:
         """A context in which BLAS runs ``blas_threads`` threads (once, when entries nest): :meth:`solve`
         enters it at every call; a caller solving many instants one by one (a workspace's chunk of
         poses) enters it once around them all."""
@@ -127,9 +133,8 @@ class InverseDynamics:
         softened = 0.0
         needed_f_max = needed_cone = float("nan")
         if sol.status == INFEASIBLE and self.diagnose:
-            message, needed_f_max, needed_cone = diagnose_infeasible(qp, _variable_names(self.robot))
+            message, needed_f_max, needed_cone = diagnose_infeasible(qp, variable_names(self.robot))
             if message.startswith("bounds"):
-                from .conditioning import wrench_closure
                 closure = wrench_closure(self.robot, terms.q, terms.L)
                 if not closure.closed:
                     message = f"{message}; {closure.message}"
@@ -165,19 +170,20 @@ class InverseDynamics:
             needed_f_max=needed_f_max, needed_cone_deg=needed_cone, unique=bool(sol.unique and sol.found),
             stage=sol.stage, tau_act=tau_act, activation=_activations(terms, f if sol.found else None, self.robot.cables))
 
-    def solve_trajectory(self, traj, progress: bool | None = None, workers: int = 1) -> TrajectoryResult:
+    def solve_trajectory(self, traj, progress: bool | None = None, workers: int = 1,
+                         scheduler: str = "local") -> TrajectoryResult:
         """Solve every instant of ``traj`` in order, warm-starting each from the previous one. An
         instant at which the model is undefined (a cable segment of zero length) gets status
         ``error`` and the reason with its time in ``message``; the others are solved.
 
         Args:
             progress: show a progress bar (after 1.5 s) on a terminal; ``None``: when stderr is a tty.
-            workers: processes to use (batch mode). The trajectory is cut into ``workers``
-                contiguous pieces solved in parallel, each warm-started along itself (a piece starts
-                solving three instants before its first own one, to warm up). Every instant's answer
-                is the verified optimum of the same problem, and the least-norm one where the optimum
-                is not unique, so the results equal the sequential run's to solver tolerance. Not with
+            workers: pieces to solve in parallel (batch mode, :mod:`mcdm_pin.batch`). The trajectory
+                is cut into ``workers`` contiguous pieces solved on Dask, each warm-started along
+                itself; the results equal the sequential run's to solver tolerance. Not with
                 smoothing, whose every instant depends on the previous one.
+            scheduler: batch mode's Dask scheduler (:mod:`mcdm_pin.runtime`): ``local`` (default: a
+                local cluster of ``workers`` processes), ``tcp://HOST:PORT`` or ``inline``.
         """
         if workers is None or workers < 1:
             raise ProblemError(f"workers must be a positive integer, got {workers!r}")
@@ -188,7 +194,7 @@ class InverseDynamics:
             if any(isinstance(t, Smoothing) for t in _terms_of(self.problem.objective)):
                 raise ProblemError("batch mode (workers > 1) cannot be used with smoothing: each "
                                    "instant depends on the previous one")
-            columns = self._solve_parallel(traj, min(workers, len(traj)), progress)
+            columns = solve_batch(self, traj, min(workers, len(traj)), scheduler)
         else:
             columns = instant_columns(self._solve_range(traj, range(len(traj)), progress))
         return TrajectoryResult.from_columns(
@@ -206,7 +212,7 @@ class InverseDynamics:
         f_prev = None
         bar = None
         if progress:
-            from tqdm import tqdm
+            from tqdm import tqdm  # (imported when a bar is shown: ~30 ms)
             bar = tqdm(total=len(indices), delay=1.5, unit="inst", leave=False, file=sys.stderr)
         try:
             for k in indices:
@@ -236,108 +242,6 @@ class InverseDynamics:
             interaction_wrench=np.full((J, 6), nan), interaction_force_socket=np.full((J, 3), nan),
             interaction_angle_deg=np.full(J, nan), iterations=0, rounds=0, time_model_s=0.0,
             time_solve_s=0.0, message=message, tau_act=np.full(self.problem.n_variables - self.robot.m, nan))
-
-    def _solve_parallel(self, traj, workers: int, progress: bool) -> dict:
-        import multiprocessing as mp
-
-        global _BATCH
-        bounds = np.linspace(0, len(traj), workers + 1).round().astype(int)
-        pieces = [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
-        _BATCH = (self, traj)
-        try:
-            # fork: the workers inherit the robot, the problem and the trajectory without pickling
-            with mp.get_context("fork").Pool(len(pieces)) as pool:
-                chunks = pool.map(_solve_piece, pieces)
-        finally:
-            _BATCH = None
-        return concat_columns(chunks)
-
-
-_BATCH = None
-
-
-class _BlasLimit:
-    """:meth:`InverseDynamics.blas_limit`'s context: each BLAS library's own setter, its count
-    restored on the way out (also after an exception; entries nest). A class, not a generator: it
-    is entered at every :meth:`~InverseDynamics.solve` (threadpoolctl's ``limit()``, which asks every
-    library for its whole description, ~15 us; a generator around the setters ~6 us; this, with the
-    libraries' own functions (:func:`_blas_setters`), ~2 us)."""
-
-    __slots__ = ("threads", "depth", "changed")
-
-    def __init__(self):
-        self.threads = None
-        self.depth = 0
-        self.changed = []
-
-    def __enter__(self):
-        if self.depth == 0 and self.threads is not None:
-            try:
-                for get, set_ in _blas_setters():
-                    old = get()
-                    if old != self.threads:
-                        set_(self.threads)
-                        self.changed.append((set_, old))
-            except BaseException:
-                self._restore()
-                raise
-        self.depth += 1
-        return self
-
-    def __exit__(self, *exc) -> bool:
-        self.depth -= 1
-        if self.depth == 0:
-            self._restore()
-        return False
-
-    def _restore(self) -> None:
-        changed = self.changed
-        while changed:
-            set_, old = changed.pop()
-            set_(old)
-
-
-_CONTROLLER = None
-
-
-def _blas_setters():
-    """``(get, set)`` of each loaded BLAS library's thread count (listed once): OpenBLAS's own C
-    functions where threadpoolctl names them (``openblas_get_num_threads``, ``..._set_...`` with the
-    library's symbol affixes, its pthreads build: one process-wide count), else threadpoolctl's
-    methods. The C functions skip threadpoolctl's check of which Python thread controls OpenBLAS;
-    the limit is set and restored within one call, so two threads solving at once with the same
-    ``blas_threads`` only run each other's BLAS calls at the limit meanwhile and leave the count as
-    they found it (with different limits at once, the last to leave restores what it found, which
-    may be the other's limit: as before, threadpoolctl's own setters did not order them either). In
-    a solve's time: ~0.2 us a call instead of ~1-3 us (an eighth of the instant's Python, measured
-    on the neck's cold instants: the limit cost 18 us of 0.52 ms)."""
-    global _BLAS_SETTERS
-    if _BLAS_SETTERS is None:
-        out = []
-        for lib in _blas_controller().select(user_api="blas").lib_controllers:
-            get = set_ = None
-            symbol = getattr(lib, "_get_symbol", None)
-            if getattr(lib, "internal_api", "") == "openblas" and getattr(lib, "threading_layer", "") == "pthreads" \
-                    and symbol is not None:
-                get, set_ = symbol("openblas_get_num_threads"), symbol("openblas_set_num_threads")
-            out.append((get, set_) if get is not None and set_ is not None else (lib.get_num_threads,
-                                                                                 lib.set_num_threads))
-        _BLAS_SETTERS = tuple(out)
-    return _BLAS_SETTERS
-
-
-_BLAS_SETTERS = None
-
-
-def _blas_controller():
-    """threadpoolctl's view of the loaded BLAS libraries (made once: it scans them, ~1.5 ms)."""
-    global _CONTROLLER
-    if _CONTROLLER is None:
-        import scipy.linalg  # noqa: F401  (load scipy's BLAS too, so that it is limited as well)
-        from threadpoolctl import ThreadpoolController
-
-        _CONTROLLER = ThreadpoolController()
-    return _CONTROLLER
 
 
 def _check_trajectory(robot, traj):
@@ -370,20 +274,6 @@ def _check_trajectory(robot, traj):
     return type(traj)(traj.name, traj.t, q, traj.qd, traj.qdd)
 
 
-_OVERLAP = 3  # instants a batch piece solves before its own first one, to warm its solver up
-
-
-def _solve_piece(piece):
-    ident, traj = _BATCH
-    start, stop = piece
-    # a piece starts a few instants early (answers discarded) so that its first own instant is
-    # warm-started like in the sequential run, not solved cold by a different path
-    lead = min(_OVERLAP, start)
-    instants = ident._solve_range(traj, range(start - lead, stop))[lead:]
-    # stacked arrays travel back to the parent far faster than a list of per-instant objects
-    return instant_columns(instants)
-
-
 def _terms_of(objective):
     return objective.terms if isinstance(objective, Sum) else [objective]
 
@@ -408,8 +298,6 @@ def _activations(terms, f, cables) -> np.ndarray:
         return np.zeros(0)
     out = np.full(cables.m, np.nan)
     if f is not None:
-        from .model.muscles import activation
-
         out[cables.muscle_index] = activation(terms.muscles, f[cables.muscle_index])
     return out
 
@@ -458,124 +346,4 @@ def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None, with_output
 _NO_1 = np.zeros(0)
 
 
-def diagnose_infeasible(qp: QPData, cable_names=None):
-    """What cannot be met at an infeasible instant, and what would make it feasible.
-
-    Returns ``(message, needed_f_max, needed_cone_deg)``:
-
-    - bounds alone (equation of motion within the bounds, an LP decided by HiGHS): the message names
-      the cables whose bounds must give (an elastic LP: the least total violation) and
-      ``needed_f_max`` is the smallest common upper bound that would do
-      (:func:`~mcdm_pin.solvers.margins.needed_f_max`; ``inf``: none would, the cables would have to
-      push);
-    - the cones: ``needed_cone_deg`` is the smallest common half-angle of all cones that makes the
-      instant feasible (:func:`~mcdm_pin.solvers.margins.needed_cone_deg`, a few cone programs), and
-      the message names the cones that bind there;
-    - neither (the bounds' LP is feasible and there is no cone): the solver's infeasibility was
-      false; the message starts with ``solver`` and the caller reports the instant ``inaccurate``.
-    """
-    from .solvers.margins import needed_cone_deg, needed_f_max
-
-    names = list(cable_names) if cable_names is not None else [f"cable {i}" for i in range(qp.n)]
-    nan = float("nan")
-    if _feasible_lp(qp) is None:
-        below, above = _elastic_bounds(qp)
-        parts = []
-        if above:
-            parts.append("above f_max: " + ", ".join(names[i] for i in above))
-        if below:
-            parts.append("below f_min: " + ", ".join(names[i] for i in below))
-        need = needed_f_max(qp.without_cones())
-        tail = (f"; a common f_max of {need:.6g} N would suffice" if np.isfinite(need) else
-                "; no f_max suffices (some cable would have to push)")
-        where = f" (the least change needs forces {'; '.join(parts)})" if parts else ""
-        return ("bounds: the equation of motion cannot be met with cable forces within "
-                f"[f_min, f_max]{where}{tail}", need, nan)
-    if not qp.cones:
-        return ("solver: reported infeasible, but the equation of motion can be met within the bounds "
-                "(a numerical failure of the solver)", nan, nan)
-    need = needed_cone_deg(qp)
-    if len(qp.cones) == 1:
-        cone = qp.cones[0]
-        where = (f"feasible from {need:.4f} deg" if need < 90.0 else
-                 "only a half-space would do: the force must lie in the socket's plane" if need == 90.0 else
-                 "no cone will do: the force must point out of the socket")
-        return (f"cone: the stability cone of {cone.joint} ({cone.angle_deg:g} deg; {where}) cannot be met "
-                f"within the cable bounds", nan, float(need))
-    names_c = ", ".join(f"{c.joint} ({c.angle_deg:g} deg)" for c in qp.cones)
-    if not need < 90.0:
-        return (f"cones: the stability cones of {names_c} cannot be met together within the cable bounds; "
-                f"{'only half-spaces would do' if need == 90.0 else 'no common cone will do: a force must point out of its socket'}",
-                nan, float(need))
-    binding = _binding_cones(qp, need)
-    return (f"cones: the stability cones of {names_c} cannot be met together within the cable bounds; "
-            f"a common half-angle of {need:.4f} deg would do (binding there: {', '.join(binding)})",
-            nan, float(need))
-
-
-def _binding_cones(qp: QPData, angle_deg: float) -> list[str]:
-    """The cones at their limit when every cone is at ``angle_deg`` (solved by Clarabel)."""
-    if not np.isfinite(angle_deg) or angle_deg >= 90.0:
-        return [c.joint for c in qp.cones]
-    from .solvers.clarabel_ import clarabel_solve
-
-    wide = qp.with_cones([c.with_angle(max(c.angle_deg, angle_deg) + 1e-6) for c in qp.cones])
-    sol = clarabel_solve(wide)
-    if sol.status != OPTIMAL:
-        return [c.joint for c in qp.cones]
-    return [c.joint for c in wide.cones if c.angle_of(sol.x) >= angle_deg - 1e-3]
-
-
-def _feasible_lp(qp: QPData):
-    from scipy.optimize import linprog
-
-    res = linprog(np.zeros(qp.n), A_eq=qp.A if len(qp.b) else None, b_eq=qp.b if len(qp.b) else None,
-                  bounds=list(zip(qp.lb, qp.ub)), method="highs")
-    return res.x if res.status == 0 else None
-
-
-def _elastic_bounds(qp: QPData, rel: float = 1e-9):
-    """Cables whose bounds must give, by the least total violation (relative to each bound)."""
-    from scipy.optimize import linprog
-
-    n = qp.n
-    w_lo = 1.0 / (1.0 + np.abs(qp.lb))
-    w_hi = 1.0 / (1.0 + np.abs(qp.ub))
-    c = np.concatenate([np.zeros(n), w_lo, w_hi])
-    eye = np.eye(n)
-    A_ub = np.block([[-eye, -eye, np.zeros((n, n))], [eye, np.zeros((n, n)), -eye]])
-    b_ub = np.concatenate([-qp.lb, qp.ub])
-    A_eq = np.hstack([qp.A, np.zeros((len(qp.b), 2 * n))])
-    res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=qp.b,
-                  bounds=[(None, None)] * n + [(0, None)] * (2 * n), method="highs")
-    if res.status != 0:
-        return [], []
-    s_lo, s_hi = res.x[n:2 * n], res.x[2 * n:]
-    return (np.flatnonzero(s_lo > rel * (1.0 + np.abs(qp.lb))).tolist(),
-            np.flatnonzero(s_hi > rel * (1.0 + np.abs(qp.ub))).tolist())
-
-
-def soften_cones(qp: QPData, solver, needed: float | None = None) -> tuple[Solution, float]:
-    """Every cone at least at the smallest common half-angle that makes the instant feasible
-    (``needed``: that angle when known), solved there. Returns the solution (status ``softened``)
-    and the largest widening, degrees."""
-    from .solvers.margins import needed_cone_deg
-
-    need = needed_cone_deg(qp) if needed is None or not np.isfinite(needed) else needed
-    if not np.isfinite(need) or need >= 90.0:
-        return Solution(np.full(qp.n, np.nan), INFEASIBLE, float("nan"),
-                        message="no force presses the balls into their sockets at all"), 0.0
-    # a hair above the limit: at exactly the limit the feasible set is a single point
-    angle = min(need + 1e-7, 89.999999)
-    cones = [c.with_angle(max(c.angle_deg, angle)) for c in qp.cones]
-    sol = solver.fresh().solve(qp.with_cones(cones))
-    widening = max(c.angle_deg - c0.angle_deg for c, c0 in zip(cones, qp.cones))
-    if sol.status != OPTIMAL:
-        return sol, widening
-    return sol.but(status=SOFTENED), widening
-
-
-def _variable_names(robot) -> list[str]:
-    """The unknowns' names: the cables, then the actuator components (hybrid robots)."""
-    return list(robot.cable_names) + actuator_names(robot)
-
+__all__ = ["InverseDynamics", "diagnose_infeasible", "soften_cones", "EOM_TOL", "BOUND_TOL", "CONE_TOL_DEG"]

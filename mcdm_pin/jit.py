@@ -33,6 +33,11 @@ own cache folder, never waits on it.
 The policy is ``MCDM_PIN_JIT`` (or ``prepare(policy=...)``): ``auto`` (default: load when stamped,
 else uncompiled), ``compile`` (``wait`` is a synonym: compile in this process when not stamped;
 tests and benchmarks use it), ``off`` (uncompiled, even when stamped).
+
+numba is the ``numba`` extra. The kernel modules take ``njit`` and ``extending`` from here: numba's
+when it is installed, else stand-ins that keep each function as its Python code (:class:`PyKernel`),
+so that the library loads and answers on the uncompiled path without numba; compiling then raises
+:class:`~mcdm_pin.exceptions.MissingPackageError` naming the extra.
 """
 
 from __future__ import annotations
@@ -48,10 +53,43 @@ import time
 import types
 from pathlib import Path
 
+from .exceptions import MissingPackageError
+from .extras import install_hint
+
 try:  # POSIX: the compile lock; elsewhere concurrent compiles each write numba's files atomically
     import fcntl
 except ImportError:  # pragma: no cover - Windows
     fcntl = None
+
+try:  # the compiled path (the numba extra); without it the kernels stay Python (module docstring)
+    import numba
+    from numba import extending, njit
+except ImportError:
+    numba = None
+
+    class PyKernel:
+        """A kernel without numba: its Python function (``py_func``), called as it is."""
+
+        def __init__(self, f):
+            self.py_func = f
+            functools.update_wrapper(self, f)
+
+        def __call__(self, *args, **kwargs):
+            return self.py_func(*args, **kwargs)
+
+        def recompile(self):  # (what _dispatchers' users call on numba's dispatchers)
+            pass
+
+        stats = None
+
+    def njit(*args, **options):
+        """numba's ``njit`` without numba: the function as a :class:`PyKernel`."""
+        if len(args) == 1 and callable(args[0]) and not options:
+            return PyKernel(args[0])
+        return PyKernel
+
+    extending = types.SimpleNamespace(register_jitable=lambda f=None, **options: f if f is not None
+                                      else (lambda g: g))
 
 MODULES = ("mcdm_pin.model.kernels", "mcdm_pin.model.route_kernels", "mcdm_pin.solvers.ipm")  # modules that register kernels
 POLICIES = ("auto", "compile", "wait", "off")
@@ -107,7 +145,7 @@ def kernel_sources() -> tuple[Path, ...]:
     (``UNIQUE_PENALTY``, ``IPM_START_BOX_WEIGHT``), so a changed constant must recompile them too."""
     root = Path(__file__).resolve().parent
     # njit kernels, and register_jitable functions compiled inline into them (numba.extending)
-    pattern = re.compile(r"^from numba(\.\w+)? import .*\b(njit|extending|register_jitable)\b", re.M)
+    pattern = re.compile(r"^from (numba(\.\w+)?|\.+jit) import .*\b(njit|extending|register_jitable)\b", re.M)
     found = {p for p in root.rglob("*.py") if pattern.search(p.read_text(encoding="utf-8"))}
     return tuple(sorted(found | {root / "tolerances.py"}))
 
@@ -212,8 +250,6 @@ def cache_dir() -> Path | None:
 
 def stamp_text() -> str:
     """What the stamp of a complete compile of the current sources holds (see the module docstring)."""
-    import numba
-
     lines = [f"digest {sources_digest()}", f"numba {numba.__version__}",
              f"python {sys.version_info[0]}.{sys.version_info[1]} {platform.machine()}"]
     for p in kernel_sources():
@@ -247,7 +283,7 @@ def load() -> bool:
     global _COMPILED
     if _COMPILED:
         return True
-    if not stamp_current():
+    if numba is None or not stamp_current():
         return False
     for disp, args in _all_calls():
         disp(*args)
@@ -291,6 +327,9 @@ def compile_now(quiet: bool = False) -> float:
     """Compile every registered kernel in this process (blocking) and stamp the cache; loads them
     instead when a complete compile is stamped already. Returns the seconds it took."""
     global _COMPILED
+    if numba is None:
+        raise MissingPackageError(f"compiling the kernels needs the optional package 'numba', which is "
+                                  f"not installed: {install_hint('numba')}")
     t0 = time.perf_counter()
     folder = cache_dir()
     with _Lock(folder, quiet):
@@ -333,7 +372,8 @@ def prepare(policy: str | None = None, quiet: bool = False) -> bool:
         return True
     if not (quiet or _NOTED):
         _NOTED = True
-        print("mcdm-pin: the numba kernels are not compiled on this install: they run as plain Python "
-              "(the same answers, slower); `mcdm-pin compile` compiles them once (about 3 minutes)",
-              file=sys.stderr, flush=True)
+        how = ("`mcdm-pin compile` compiles them once (about 3 minutes)" if numba is not None else
+               "installing numba (pip install 'mcdm-pin[numba]') and `mcdm-pin compile` compile them")
+        print(f"mcdm-pin: the numba kernels are not compiled on this install: they run as plain Python "
+              f"(the same answers, slower); {how}", file=sys.stderr, flush=True)
     return False

@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .exceptions import McdmError, ResultsError
+from .extras import optional
 
 FIGURES = ("summary", "cable_forces", "interaction_forces", "interaction_angles", "trajectory")
 FORMATS = ("png", "svg")
@@ -84,8 +85,8 @@ def load_runs(paths) -> list:
 
 # -------------------------------------------------------------------------------------- helpers
 def _new_figure(rows: int, cols: int, width_per_col=4.2, height_per_row=2.6, sharey="row"):
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
+    FigureCanvasAgg = optional("matplotlib.backends.backend_agg", "the figures").FigureCanvasAgg
+    Figure = optional("matplotlib.figure", "the figures").Figure
     fig = Figure(figsize=(1.2 + width_per_col * cols, 0.9 + height_per_row * rows), layout="constrained")
     FigureCanvasAgg(fig)
     axes = fig.subplots(rows, cols, sharex=True, sharey=sharey, squeeze=False)
@@ -93,7 +94,7 @@ def _new_figure(rows: int, cols: int, width_per_col=4.2, height_per_row=2.6, sha
 
 
 def _colors(n: int):
-    import matplotlib
+    matplotlib = optional("matplotlib", "the figures")
     if n <= 10:
         cmap = matplotlib.colormaps["tab10"]
         return [cmap(i) for i in range(n)]
@@ -362,8 +363,8 @@ def figure_workspace(grid, title: str = ""):
     every pose, ``needed_f_max`` (N, the bound ``f_max`` as a black line) and, with cones,
     ``needed_cone_deg`` (degrees, the cone as a black line). Poses that no bound or no cone makes
     feasible (``inf``) are hatched."""
-    from matplotlib.colors import ListedColormap
-    from matplotlib.patches import Patch
+    ListedColormap = optional("matplotlib.colors", "the figures").ListedColormap
+    Patch = optional("matplotlib.patches", "the figures").Patch
 
     attrs = grid.attrs["workspace"]
     axes_spec = [a for a in attrs["poses"]["axes"] if a["n"] > 1]

@@ -25,6 +25,7 @@ from .model.cables import Cable, CableSet, RoutePoint
 from .model.joints import PhysicalJoint, group, massless_members, physical_joints
 from .model.terms import check_vector
 from .mjcf.load import compile_mjcf, is_mjcf, mjcf_parts
+from .osim.load import is_osim, osim_parts
 from .sidecar import Sidecar, _names, load_sidecar
 from .urdf import check_model_inertias, load_model, package_share_dirs, replace_joints, urdf_joint_axes
 
@@ -72,14 +73,18 @@ class Robot:
         coordinate_names (nv), configuration_names (nq): see :mod:`mcdm_pin.model.charts` (a robot
             loaded from MJCF names its coordinates after MuJoCo's joints).
         couplings: the :class:`~mcdm_pin.model.couplings.Couplings` of coupled coordinates, or ``None``.
+        springs: the passive springs (:class:`~mcdm_pin.model.springs.SpringSet`), or ``None``: known
+            tensions on the right-hand side of the equation of motion and in the interaction wrenches.
         source: what a loader keeps of its source format (an MJCF robot's maps), or ``None``.
         notes: what the loader left out of the source and why (shown by ``mcdm-pin info``).
     """
 
     def __init__(self, model: pin.Model, cables: CableSet, joints, actuators=(), name: str = "robot",
                  sidecar: Sidecar | None = None, urdf_path: Path | None = None, couplings=None,
-                 coordinate_names=None, source=None, notes=()):
+                 coordinate_names=None, source=None, notes=(), springs=None):
         cables.check_model(model)
+        if springs is not None:
+            springs.check_model(model)
         self.model = model
         self.cables = cables
         self.joints = tuple(joints)
@@ -91,6 +96,8 @@ class Robot:
         self.source = source
         # known joint forces (N, N m) at (q, v): an MJCF model's joint springs and dampers
         self.passive = getattr(source, "passive", None)
+        # passive springs: known tensions that follow their lengths (mcdm_pin.model.springs), or None
+        self.springs = springs if springs is not None and len(springs) else None
         self.notes = tuple(notes)
         self.nq, self.nv = model.nq, model.nv
         self._parts = charts.chart_parts(model)
@@ -129,7 +136,10 @@ class Robot:
     # ----------------------------------------------------------------------------------------- load
     @classmethod
     def load(cls, path) -> "Robot":
-        """Load a robot from a sidecar YAML file (which names its URDF or MJCF) or a MuJoCo MJCF file."""
+        """Load a robot from a sidecar YAML file (which names its URDF or MJCF), a MuJoCo MJCF file or an
+        OpenSim ``.osim`` file (:mod:`mcdm_pin.osim`)."""
+        if is_osim(path):
+            return cls(**osim_parts(path)._asdict())
         if is_mjcf(path):
             return cls.from_mujoco(compile_mjcf(path), str(path), Path(path).stem)
         return cls.from_sidecar(load_sidecar(path))
@@ -145,15 +155,22 @@ class Robot:
             raise ModelError(msg if msg.startswith(source) else f"{source}: {msg}") from None
 
     @classmethod
-    def from_model(cls, model: pin.Model, cables, joints=None, actuators=(), name: str = "robot") -> "Robot":
+    def from_model(cls, model: pin.Model, cables, joints=None, actuators=(), name: str = "robot",
+                   springs=None) -> "Robot":
         """A robot from a model built in code. ``cables``: a :class:`CableSet` or what its constructor
         takes; ``joints``: physical joints (default: every Pinocchio joint on its own,
         :func:`~mcdm_pin.model.joints.physical_joints`). Bodies whose inertia no body can have are
-        refused (:func:`~mcdm_pin.urdf.check_model_inertias`)."""
+        refused (:func:`~mcdm_pin.urdf.check_model_inertias`). ``springs``: a
+        :class:`~mcdm_pin.model.springs.SpringSet` or :class:`~mcdm_pin.model.springs.Spring` objects."""
+        from .model.springs import SpringSet
+
         check_model_inertias(model)
         if not isinstance(cables, CableSet):
             cables = CableSet(model, cables)
-        return cls(model, cables, physical_joints(model) if joints is None else joints, actuators, name)
+        if springs is not None and not isinstance(springs, SpringSet):
+            springs = SpringSet(model, springs)
+        return cls(model, cables, physical_joints(model) if joints is None else joints, actuators, name,
+                   springs=springs)
 
     @classmethod
     def from_sidecar(cls, sidecar: Sidecar) -> "Robot":
@@ -172,9 +189,10 @@ class Robot:
         model = _native_joints(model, sc, urdf_path)
         joints = _physical_joints(model, sc, urdf_path)
         cables = _cables(model, sc, joints)
+        springs = _springs(model, sc, joints)
         actuators = _actuators(sc, joints)
         try:
-            return cls(model, cables, joints, actuators, sc.name, sc, urdf_path)
+            return cls(model, cables, joints, actuators, sc.name, sc, urdf_path, springs=springs)
         except ModelError as exc:
             raise sc.error("joints", str(exc)) from None
 
@@ -278,7 +296,8 @@ class Robot:
     def __repr__(self) -> str:
         where = f", urdf={str(self.urdf_path)!r}" if self.urdf_path is not None else ""
         act = f", {self.n_act} actuators" if self.actuators else ""
-        return f"Robot({self.name!r}: {len(self.joints)} joints, {self.nv} DoF, {self.m} cables{act}{where})"
+        spr = f", {len(self.springs)} springs" if self.springs is not None else ""
+        return f"Robot({self.name!r}: {len(self.joints)} joints, {self.nv} DoF, {self.m} cables{spr}{act}{where})"
 
 
 # ------------------------------------------------------------------------------------ sidecar helpers
@@ -428,11 +447,30 @@ def _cables(model: pin.Model, sc: Sidecar, joints) -> CableSet:
         raise sc.error("cables", str(exc)) from None
 
 
+def _springs(model: pin.Model, sc: Sidecar, joints):
+    """The sidecar's ``springs:`` as a :class:`~mcdm_pin.model.springs.SpringSet` (``None``: none)."""
+    from .model.springs import Spring, SpringSet
+
+    if not sc.springs:
+        return None
+    links = {f.name for f in model.frames if f.type == pin.FrameType.BODY}
+    inside = massless_members(joints)
+    springs = [Spring(spec.name, tuple(_route_element(model, sc, links, inside, p) for p in spec.route),
+                      spec.stiffness, spec.rest_length, spec.tension_only) for spec in sc.springs]
+    try:
+        return SpringSet(model, springs)
+    except ModelError as exc:
+        for spec in sc.springs:
+            if repr(spec.name) in str(exc):
+                raise sc.error(f"{spec.key}.route", str(exc)) from None
+        raise sc.error("springs", str(exc)) from None
+
+
 def _route_element(model: pin.Model, sc: Sidecar, links: set, inside: dict, p):
-    """A sidecar route element (point, wrap or pulley) as the model layer's, its link checked against
+    """A sidecar route element (point, wrap, pulley or rotating pulley) as the model layer's, its link checked against
     the model's ``links`` and the massless links ``inside`` grouped joints."""
-    from .model.cables import Pulley, Wrap, find_frame
-    from .sidecar import PulleySpec, WrapSpec
+    from .model.cables import Pulley, RotatingPulley, ScrewDrive, Wrap, find_frame
+    from .sidecar import PulleySpec, RotatingPulleySpec, WrapSpec
 
     if isinstance(p, PulleySpec):
         return Pulley(p.divisor)
@@ -447,6 +485,9 @@ def _route_element(model: pin.Model, sc: Sidecar, links: set, inside: dict, p):
         R = _frame_with_z(np.array(p.axis))
         side = None if p.side is None else RoutePoint(p.link, p.side)
         return Wrap(p.link, p.kind, p.radius, p.center, tuple(R.reshape(-1)), side, name=p.key)
+    if isinstance(p, RotatingPulleySpec):
+        screw = None if p.screw is None else ScrewDrive(*p.screw)
+        return RotatingPulley(p.link, p.entry, p.axis, p.radius, screw, name=p.key)
     return RoutePoint(p.link, p.point)
 
 
@@ -466,6 +507,9 @@ def _actuators(sc: Sidecar, joints) -> tuple[Actuator, ...]:
         if a is None:
             continue
         j = by_name[spec.name]
+        if not a.min:  # unbounded (no min, no max)
+            out.append(Actuator(j.name, j.idx_v, np.full(j.nv, -np.inf), np.full(j.nv, np.inf), a.weight))
+            continue
         if len(a.min) != j.nv:
             raise sc.error(f"{a.key}.min", f"expected {j.nv} bound(s), one per degree of freedom of the "
                                           f"{j.type} joint {j.name!r}, got {len(a.min)}")

@@ -18,15 +18,13 @@ from typing import Any
 from . import yaml12
 from .exceptions import SidecarError
 from .limits import MAX_CABLES, MAX_MAGNITUDE, MAX_ROUTE_POINTS, MAX_SAMPLES, MAX_SIDECAR_BYTES, MIN_FORCE_BOUND
+from .sidecar_pulleys import RotatingPulleySpec, parse_rotating  # noqa: F401 (RotatingPulleySpec: re-exported)
+from .sidecar_springs import SpringSpec, parse_springs  # noqa: F401 (SpringSpec: a field's type, re-exported)
+from .vocabulary import (SIDECAR_JOINT_TYPES, SPHERICAL_MODES, SPHERICAL_PARAMETRIZATIONS, URDF_JOINT_COUNTS,
+                         WRAP_KINDS)
 
 SUPPORTED_VERSIONS = (1,)
-JOINT_TYPES = ("spherical", "revolute", "prismatic", "universal", "planar", "translation", "free")
-# how many URDF joints each type takes
-URDF_JOINT_COUNTS = {"spherical": (1, 3), "revolute": (1,), "prismatic": (1,), "universal": (2,),
-                     "planar": (1, 3), "translation": (2, 3), "free": (1,)}
-PARAMETRIZATIONS = {1: ("quaternion", "zyx"), 3: ("euler-xyz",)}  # spherical: by URDF joint count
-SPHERICAL_MODES = ("axis-angle", "per-coordinate")
-TRAJECTORY_TYPES = ("quintic", "csv")
+TRAJECTORY_TYPES = ("quintic", "csv", "task")
 
 
 _FLOAT_RE = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
@@ -99,8 +97,10 @@ class CableSpec:
 
 @dataclass(frozen=True)
 class TrajectorySpec:
-    """A named trajectory. ``type`` is ``quintic`` (q_start, q_end, duration, dt, spherical) or
-    ``csv`` (file, resolved to an absolute path)."""
+    """A named trajectory. ``type`` is ``quintic`` (q_start, q_end, duration, dt, spherical), ``csv``
+    (file, resolved to an absolute path) or ``task`` (a task-space trajectory solved by inverse
+    kinematics, :mod:`mcdm_pin.ik`: ``frame``, ``point``, ``coordinates``, ``euler``, and ``poses``
+    ``((t, y), ...)`` with ``dt``, or a CSV ``file`` of poses; ``q_start``: the IK's first seed)."""
 
     name: str
     type: str
@@ -111,6 +111,11 @@ class TrajectorySpec:
     spherical: str = "axis-angle"
     file: Path | None = None
     key: str = ""
+    frame: str | None = None
+    point: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    coordinates: str = "xyz"
+    euler: str = "zyx"
+    poses: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -141,6 +146,7 @@ class Sidecar:
     description: str = ""
     mjcf_path: Path | None = None  # a sidecar over an MJCF file (``mjcf:`` instead of ``urdf:``)
     reserves: tuple = ()  # ReserveSpec: coordinate actuators of an MJCF robot
+    springs: tuple = ()  # SpringSpec: passive springs (known tensions)
 
 
     def error(self, key: str, expected: str) -> SidecarError:
@@ -242,7 +248,7 @@ def _join(key: str, sub: str) -> str:
 
 # --------------------------------------------------------------------------------------------------
 
-TOP_KEYS = ("version", "name", "description", "urdf", "gravity", "joints", "cables", "locked_joints",
+TOP_KEYS = ("version", "name", "description", "urdf", "gravity", "joints", "cables", "springs", "locked_joints",
             "trajectories")
 JOINT_KEYS = ("type", "urdf_joints", "parametrization", "socket_axis", "alpha", "beta", "cone_deg",
               "actuated")
@@ -250,7 +256,6 @@ ACTUATED_KEYS = ("min", "max", "weight")
 CABLE_KEYS = ("name", "f_min", "f_max", "route")
 POINT_KEYS = ("link", "point")
 WRAP_KEYS = ("wrap", "link", "radius", "center", "axis", "side")
-WRAP_KINDS = ("sphere", "cylinder")
 # a sidecar over an MJCF file: the robot (bodies, cables, muscles, couplings) comes from the MJCF; the
 # sidecar adds what MJCF has no words for: joint weights, cones, trajectories
 MJCF_TOP_KEYS = ("version", "name", "description", "mjcf", "joints", "trajectories", "reserves")
@@ -326,6 +331,7 @@ def parse_sidecar(data, path: Path | None = None, base_dir: Path | None = None) 
 
     joints = _parse_joints(r, data["joints"])
     cables = _parse_cables(r, data["cables"])
+    springs = parse_springs(r, data.get("springs", []), _parse_route_element)
 
     locked_raw = data.get("locked_joints", {}) or {}
     if not isinstance(locked_raw, dict):
@@ -345,7 +351,7 @@ def parse_sidecar(data, path: Path | None = None, base_dir: Path | None = None) 
 
     return Sidecar(path=path, version=int(version), name=name, urdf=urdf, urdf_path=urdf_path,
                    gravity=gravity, joints=joints, cables=cables, locked_joints=locked,
-                   trajectories=trajectories, description=description)
+                   trajectories=trajectories, description=description, springs=springs)
 
 
 def _parse_mjcf_sidecar(r: _Reader, data: dict, path: Path | None, base_dir: Path) -> Sidecar:
@@ -419,7 +425,7 @@ def _parse_joints(r: _Reader, raw) -> tuple[JointSpec, ...]:
         key = f"joints.{jname}"
         r.string(jname, key)
         spec = r.mapping(spec, key, JOINT_KEYS, required=("type", "urdf_joints"))
-        jtype = r.choice(spec["type"], f"{key}.type", JOINT_TYPES)
+        jtype = r.choice(spec["type"], f"{key}.type", SIDECAR_JOINT_TYPES)
         uj = spec["urdf_joints"]
         counts = URDF_JOINT_COUNTS[jtype]
         if isinstance(uj, str) and 1 in counts:
@@ -443,7 +449,7 @@ def _parse_joints(r: _Reader, raw) -> tuple[JointSpec, ...]:
         beta = r.number(spec.get("beta", 0.0), f"{key}.beta", lo=0.0)
         parametrization = None
         if jtype == "spherical":
-            allowed = PARAMETRIZATIONS[len(uj)]
+            allowed = SPHERICAL_PARAMETRIZATIONS[len(uj)]
             parametrization = r.choice(spec.get("parametrization", allowed[0]), f"{key}.parametrization", allowed)
         elif "parametrization" in spec:
             raise r.fail(f"{key}.parametrization", "a parametrization is chosen for spherical joints only")
@@ -463,17 +469,38 @@ def _parse_joints(r: _Reader, raw) -> tuple[JointSpec, ...]:
 
 def _parse_actuated(r: _Reader, raw, key: str) -> ActuatorSpec:
     """``{min: [...], max: [...], weight: w}``: one bound per degree of freedom (checked against the
-    joint by the loader), a single number meaning one degree of freedom."""
-    raw = r.mapping(raw, key, ACTUATED_KEYS, required=("min", "max"))
+    joint by the loader), a single number meaning one degree of freedom. A bound may be ``-.inf``
+    (``min``) or ``.inf`` (``max``): that side is unbounded; ``min`` and ``max`` left out both mean an
+    unbounded motor (CASPR's default), which needs ``weight > 0``."""
+    raw = r.mapping(raw, key, ACTUATED_KEYS)
+    weight = r.number(raw.get("weight", 1.0), f"{key}.weight", lo=0.0)
+    if "min" not in raw and "max" not in raw:
+        if weight == 0:
+            raise r.fail(f"{key}.weight", "an unbounded motor (no min, no max) needs a weight > 0: nothing "
+                                          "else keeps its torque finite")
+        return ActuatorSpec(min=(), max=(), weight=weight, key=key)
+    for k in ("min", "max"):
+        if k not in raw:
+            raise r.fail(_join(key, k), f"missing required key {k!r} (give both bounds, or neither for an "
+                                        f"unbounded motor)")
     lo = raw["min"] if isinstance(raw["min"], list) else [raw["min"]]
     hi = raw["max"] if isinstance(raw["max"], list) else [raw["max"]]
-    lo = r.vector(lo, f"{key}.min", None)
-    hi = r.vector(hi, f"{key}.max", len(lo))
+    lo = tuple(-math.inf if _is_inf(v, -1) else r.number(v, f"{key}.min[{i}]") for i, v in enumerate(lo))
+    if len(hi) != len(lo):
+        raise r.fail(f"{key}.max", f"expected a list of {len(lo)} numbers, got {len(hi)}")
+    hi = tuple(math.inf if _is_inf(v, 1) else r.number(v, f"{key}.max[{i}]") for i, v in enumerate(hi))
     for i, (a, b) in enumerate(zip(lo, hi)):
         if not a < b:
             raise r.fail(f"{key}.max[{i}]", f"expected max > min = {a!r}, got {b!r}")
-    weight = r.number(raw.get("weight", 1.0), f"{key}.weight", lo=0.0)
+    if weight == 0 and not all(math.isfinite(x) for x in lo + hi):
+        raise r.fail(f"{key}.weight", "a motor with an unbounded side needs a weight > 0: nothing else keeps "
+                                      "its torque finite")
     return ActuatorSpec(min=lo, max=hi, weight=weight, key=key)
+
+
+def _is_inf(value, sign: int) -> bool:
+    """``value`` is the float infinity of ``sign`` (YAML's ``.inf`` / ``-.inf``)."""
+    return isinstance(value, float) and math.isinf(value) and (value > 0) == (sign > 0)
 
 
 def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:
@@ -511,7 +538,10 @@ def _parse_cables(r: _Reader, raw) -> tuple[CableSpec, ...]:
 
 
 def _parse_route_element(r: _Reader, p, pkey: str):
-    """``{link, point}``, ``{wrap: sphere|cylinder, link, radius, center, axis, side}`` or ``{pulley: d}``."""
+    """``{link, point}``, ``{wrap: sphere|cylinder, link, radius, center, axis, side}``, ``{pulley: d}``
+    or ``{rotating_pulley: radius, link, entry, axis, screw}``."""
+    if isinstance(p, dict) and "rotating_pulley" in p:
+        return parse_rotating(r, p, pkey)
     if isinstance(p, dict) and "pulley" in p:
         p = r.mapping(p, pkey, ("pulley",), required=("pulley",))
         return PulleySpec(r.number(p["pulley"], f"{pkey}.pulley", lo=0.0, lo_open=True), key=pkey)
@@ -538,6 +568,10 @@ def _parse_trajectory(r: _Reader, name, spec, base_dir: Path) -> TrajectorySpec:
         raise r.fail(key, f"expected a mapping with a 'type' of {_names(TRAJECTORY_TYPES)}, "
                           f"got {_kind(spec)}")
     ttype = r.choice(spec["type"], f"{key}.type", TRAJECTORY_TYPES)
+    if ttype == "task":
+        from .sidecar_task import parse_task
+
+        return parse_task(r, name, spec, base_dir, key)
     if ttype == "csv":
         spec = r.mapping(spec, key, CSV_KEYS, required=CSV_KEYS)
         file = (base_dir / r.string(spec["file"], f"{key}.file")).resolve()
@@ -572,3 +606,4 @@ def _parse_q(r: _Reader, value, key: str):
                 out[j] = (r.number(v, f"{key}.{j}"),)
         return out
     raise r.fail(key, f"expected a list of numbers or a mapping joint: value(s), got {_kind(value)}")
+

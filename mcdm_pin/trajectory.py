@@ -19,6 +19,9 @@ joint's position follows the scalar quintic in its parent frame (translation and
 its velocity is Pinocchio's :math:`(R^T\dot p, \omega)`. ``spherical: per-coordinate`` applies the scalar
 quintic to each coordinate instead.
 
+**Task.** A ``task`` trajectory (poses of a frame) is solved into joint samples by inverse kinematics:
+:mod:`mcdm_pin.ik`.
+
 **CSV.** Columns ``t`` and the nv coordinates, optionally followed by nv columns ``qd:NAME`` and nv
 columns ``qdd:NAME``: Pinocchio's velocity and acceleration (tangent space), taken exactly as given.
 Without them the rates are the derivatives of the interpolating quintic B-spline through the samples
@@ -44,6 +47,7 @@ from .exceptions import SidecarError, StateError, TrajectoryError
 from .limits import MAX_CSV_BYTES, MAX_SAMPLES
 from .model import charts
 from .sidecar import TrajectorySpec, _names
+from .vocabulary import SPHERICAL_MODES
 
 # |det S| = |cos q2| below which a spherical joint's Euler-angle rates are refused (within 0.057 deg
 # of gimbal lock the rates, and their rounding errors, are amplified more than 1000 times)
@@ -190,8 +194,8 @@ class QuinticPlan:
     (module docstring). ``spherical``: ``axis-angle`` (default) or ``per-coordinate``."""
 
     def __init__(self, robot, x0, x1, duration: float, spherical: str = "axis-angle"):
-        if spherical not in ("axis-angle", "per-coordinate"):
-            raise TrajectoryError(f"spherical: expected 'axis-angle' or 'per-coordinate', got {spherical!r}")
+        if spherical not in SPHERICAL_MODES:
+            raise TrajectoryError(f"spherical: expected one of {', '.join(SPHERICAL_MODES)}, got {spherical!r}")
         if not (np.isfinite(duration) and duration > 0):
             raise TrajectoryError(f"expected a finite duration > 0, got {duration!r}")
         self.robot, self.T = robot, float(duration)
@@ -418,6 +422,10 @@ def trajectory_from_spec(robot, spec: TrajectorySpec) -> Trajectory:
     the trajectory's key (a CSV's names its file)."""
     if spec.type == "csv":
         return follow_couplings(robot, csv_trajectory(robot, spec.file, name=spec.name))
+    if spec.type == "task":  # inverse kinematics (mcdm_pin.ik)
+        from .ik.samples import task_trajectory
+
+        return follow_couplings(robot, task_trajectory(robot, spec))
     x0, x1 = _ends(robot, spec)
     try:
         traj = quintic_trajectory(robot, x0, x1, spec.duration, spec.dt, spec.spherical, name=spec.name)
@@ -448,7 +456,19 @@ def _ends(robot, spec: TrajectorySpec):
 def plan(robot, spec: TrajectorySpec) -> Plan:
     """The motion of a sidecar trajectory at any time: ``t -> (q, v, a)``. Quintics are evaluated
     exactly; CSV trajectories through the quintic spline of their samples (coordinates and, when the
-    file has them, the given rates at the samples)."""
+    file has them, the given rates at the samples); task trajectories through the quintic spline of
+    their solved samples' coordinates."""
+    if spec.type == "task":
+        from scipy.interpolate import make_interp_spline
+
+        traj = trajectory_from_spec(robot, spec)
+        spline = make_interp_spline(traj.t, np.array([robot.coordinates(q) for q in traj.q]), k=5)
+
+        def state(tt):
+            return _coupled(robot, *charts.tangent(robot.model, spline(tt), spline(tt, 1), spline(tt, 2),
+                                                   robot._parts))
+
+        return state
     if spec.type == "csv":
         from scipy.interpolate import make_interp_spline
 

@@ -13,7 +13,7 @@ reference). Compared, each to ``TOL`` relative to the largest entry of the refer
   committed URDF) with CASPR's (``caspr_newton.Model.kinematics``): the import of frames, joints and
   trajectories;
 - the cable lengths;
-- ``L``, ``M`` and ``tau = M qdd + h`` with CASPR's, through the map T between the two sets of
+- ``L``, ``M`` and ``tau = M qdd + h`` (``+ L_s^T f_s`` with passive springs) with CASPR's, through the map T between the two sets of
   velocities (``W_caspr T = J``, the links' twists): ``L = L_c T``, ``M = T^T M_c T``,
   ``tau = T^T tau_c``; and the actuation matrix, ``S = T^+ A_c`` up to the actuators' order;
 - the interaction wrench maps ``u``, ``R^T`` of every joint with CASPR's, CASPR's force (parent
@@ -36,8 +36,8 @@ OBJ_TOL = 1e-6  # relative agreement of the case-1 objective, ProxQP vs Clarabel
 # forces and motor torques vs Clarabel's own answer, relative to the largest of them (at least 1 N): case
 # 1 is strictly convex, so its answer is unique, but Clarabel (an interior-point method) stops at a
 # duality gap of 1e-11, which leaves it up to about sqrt(1e-11) = 3e-6 from a bound whose multiplier
-# is zero. Measured: 1.2e-6 N at 2_DoF_VSD's rest (no force needed, f_min = 0: our answer is exactly 0,
-# Clarabel's 1.2e-6 N), 1.6e-8 at worst on the 51 instants of every other model's table state
+# is zero. Measured: 1.2e-6 N at 2_DoF_VSD's rest with its `stiff` set (no force needed, f_min = 0: our
+# answer is exactly 0, Clarabel's 1.2e-6 N), 1.6e-8 at worst on the 51 instants of every table state
 X_TOL = 1e-5
 
 
@@ -150,6 +150,30 @@ def compare(robot, links, state, q, v, a) -> dict:
     return errors
 
 
+def velocity_map(robot, links, state, q):
+    """``T`` with ``W_caspr T = J`` (the links' twists, our velocity -> CASPR's), at our ``q``."""
+    model = robot.model
+    data = model.createData()
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    J = np.vstack([pin.getFrameJacobian(model, data, model.getFrameId(name), pin.LOCAL) for name in links])
+    return np.linalg.lstsq(state["W_c"], J, rcond=None)[0]
+
+
+def newton_residual(robot, links, state, q, f, tau_act) -> float:
+    """Newton-Euler's residual of our answer ``(f, tau_act)`` at a reference state, relative: CASPR's
+    ``M qdd + h`` (with the passive springs' ``L_s^T f_s``) and ``L`` from ``tests/caspr_newton.py``,
+    brought to our coordinates by ``T^T``, against our actuation ``S tau_act``:
+    ``|T^T (M_c qdd_c + h_c + L_c^T f) - S tau_act| / scale``."""
+    T = velocity_map(robot, links, state, q)
+    need = T.T @ (state["M_c"] @ state["qdd_c"] + state["h_c"])
+    cab = T.T @ (state["L_c"].T @ f)
+    act = robot.actuation @ np.asarray(tau_act, dtype=float).reshape(-1) if robot.n_act else np.zeros_like(need)
+    scale = max(np.abs(need).max(initial=0.0), (np.abs(T.T @ state["L_c"].T) @ np.abs(f)).max(initial=0.0),
+                np.abs(act).max(initial=0.0), 1e-300)
+    return float(np.abs(need + cab - act).max(initial=0.0) / scale)
+
+
 def _interaction_child(state, links):
     """CASPR's interaction maps with the force turned from the parent frame into the child frame."""
     p = len(links)
@@ -237,6 +261,7 @@ def reference_state(model, q, qd, qdd, **extra) -> dict:
     R, P, w, wd, v, a = model.kinematics(q, qd, qdd)
     p = len(model.links)
     M, h = model.terms(q, qd, qdd)
+    h = h + model.spring_generalized(q)  # the passive springs' known tensions join C + G (CASPR's b)
     a_c, RT_c = model.interaction_map(q, qd, qdd)
     out = dict(q_c=q, qd_c=qd, qdd_c=qdd, R=np.array(R[1:]), P=np.array(P[1:]),
                vel=np.array([np.concatenate([R[k].T @ v[k], R[k].T @ w[k]]) for k in range(1, p + 1)]),

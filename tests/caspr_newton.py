@@ -10,10 +10,19 @@ motion by Newton's and Euler's laws for each body, in world coordinates:
    M = \sum_k J_{G,k}^T m_k J_{G,k} + J_{\omega,k}^T I_k J_{\omega,k},
 
 :math:`h` the same sum applied to the bias accelerations and gravity (:math:`g = 9.81` m/s^2 along -z),
-:math:`L = \partial \dot l / \partial \dot q` from the attachment points' velocities. The interaction
+:math:`L = \partial \dot l / \partial \dot q` from the attachment points' velocities (a rotating pulley's
+exit point, computed by CASPR's formulas, counts as a base point: CASPR's ``V``). The interaction
 wrench of joint k is the force and moment that link k's subtree needs from its parent (Newton and
 Euler for the subtree, the cables pulling): force in the parent's frame, moment about the joint point
 in the child's frame, CASPR's convention (``SystemModel.interactionWrench``).
+
+Passive springs (``cable_passive_linear_spring``, ``CableModelPassiveLinearSpring``) pull with the
+known tension :math:`K (l - l_0)` (not clipped): they are kept apart from the cables (``springs``), and
+their generalised force :math:`L_s^T f_s` joins the right-hand side as CASPR's
+``IDSolverBase.GetEoMConstraints`` adds it (``b = M q_ddot + C + G + L_passive' f_passive``); they pull on
+the bodies in every interaction wrench (``IDObjectiveMinInteractions``: ``a + H_passive' f_passive``).
+Every other cable element (ideal, linear-spring and variable-stiffness cables) is a cable: its tension is
+the unknown. :meth:`Model.residual` is Newton-Euler's residual of an answer ``(f, tau)``.
 
 Coordinates are CASPR's (``q``, ``q_dot``, ``q_ddot`` of every joint in link order).
 """
@@ -79,6 +88,8 @@ class Model:
     links: list
     cables: list  # per cable: [(link, point from the joint point in the link frame, or base point)]
     offsets: list = field(default_factory=list)
+    pulleys: list = field(default_factory=list)  # per cable: None or its first attachment, a pulley (dict)
+    springs: list = field(default_factory=list)  # per passive spring: (route as a cable's, K, l0)
 
     def __post_init__(self):
         k = 0
@@ -106,16 +117,22 @@ class Model:
         root = ET.parse(cables_xml).getroot()
         wanted = cable_set or root.get("default_cable_set")
         cset = next(s for s in root.iter("cable_set") if s.get("id") == wanted)
-        cables = []
+        cables, pulleys, springs = [], [], []
         for c in cset:
             pts = []
+            pulley = _pulley(c)
             for a in c.iter("attachment"):
                 k, loc = int(a.find("link").text), _vec(a.find("location").text)
                 if k and c.get("attachment_reference") == "com":
                     loc = loc + links[k - 1].com
                 pts.append((k, loc))
-            cables.append(pts)
-        return cls(links, cables)
+            if c.tag == "cable_passive_linear_spring":
+                props = c.find("properties")
+                springs.append((pts, float(props.find("K").text), float(props.find("l0").text)))
+            else:
+                cables.append(pts)
+                pulleys.append(pulley)
+        return cls(links, cables, pulleys=pulleys, springs=springs)
 
     # --------------------------------------------------------------------------------- kinematics
     def joint(self, k, q, qd, qdd):
@@ -198,27 +215,75 @@ class Model:
                              for i in range(self.n)])
         return M, h
 
-    def cable_points(self, kin):
-        """World position of every attachment point, per cable."""
-        return [[(k, self.point_motion(kin, k, pt)[0] if k else pt) for k, pt in c] for c in self.cables]
+    def _routes(self, routes):
+        """``(routes, pulleys)``: the cables with their pulleys (``routes`` None, or starting with the
+        cables themselves), other routes (springs) without."""
+        routes = self.cables if routes is None else list(routes)
+        n = len(self.cables)
+        pulleys = [None] * len(routes)
+        if len(routes) >= n and all(a is b for a, b in zip(routes, self.cables)):
+            pulleys[:n] = self.pulleys or [None] * n
+        return routes, pulleys
 
-    def lengths(self, q):
+    def cable_points(self, kin, routes=None):
+        """World position of every attachment point, per cable (or per route of ``routes``); a cable
+        that starts at a pulley starts at its exit point (on the base, CASPR's ``r_OA`` of the pulley
+        attachment)."""
+        out = []
+        for c, pulley in zip(*self._routes(routes)):
+            pts = [(k, self.point_motion(kin, k, pt)[0] if k else pt) for k, pt in c]
+            if pulley is not None:
+                pts.insert(0, (0, self.pulley_exit(pulley, pts[0][1])[0]))
+            out.append(pts)
+        return out
+
+    def pulley_exit(self, p, r_B):
+        """``(exit point, arc length)`` of CASPR's pulley attachment ``p`` facing ``r_B`` (world)."""
+        if p["tag"] == "base_rotating_pulley":
+            return base_pulley_exit(p["fixed_location"], p["cable_entry_vector"], r_B, p["pulley_radius"])
+        if "l0_offset" not in p:  # CASPR's first update, at q_initial
+            q0 = np.concatenate([link.q_initial for link in self.links])
+            kin0 = self.kinematics(q0, np.zeros(self.n), np.zeros(self.n))
+            c = self.cables[self.pulleys.index(p)]
+            B0 = self.point_motion(kin0, c[0][0], c[0][1])[0] if c[0][0] else c[0][1]
+            p["l0_offset"] = float(np.linalg.norm(B0 - p["constant_winch_point"]))
+        return screw_pulley_exit(p, r_B)
+
+    def lengths(self, q, routes=None):
         kin = self.kinematics(q, np.zeros(self.n), np.zeros(self.n))
-        return np.array([sum(np.linalg.norm(b - a) for (_, a), (_, b) in zip(c[:-1], c[1:]))
-                         for c in self.cable_points(kin)])
+        out = []
+        for c, pulley in zip(self.cable_points(kin, routes), self._routes(routes)[1]):
+            arc = 0.0 if pulley is None else self.pulley_exit(pulley, c[1][1])[1]
+            out.append(arc + sum(np.linalg.norm(b - a) for (_, a), (_, b) in zip(c[:-1], c[1:])))
+        return np.array(out)
 
-    def cable_jacobian(self, q):
+    def spring_forces(self, q):
+        """(s,) the passive springs' tensions ``K (l - l0)`` (N), CASPR's, not clipped."""
+        if not self.springs:
+            return np.zeros(0)
+        lengths = self.lengths(q, [r for r, _, _ in self.springs])
+        return np.array([K * (ln - l0) for (_, K, l0), ln in zip(self.springs, lengths)])
+
+    def spring_generalized(self, q):
+        """(n,) ``L_s^T f_s``: the springs' share of the right-hand side (CASPR's ``L_passive' f_passive``)."""
+        if not self.springs:
+            return np.zeros(self.n)
+        return self.cable_jacobian(q, [r for r, _, _ in self.springs]).T @ self.spring_forces(q)
+
+    def cable_jacobian(self, q, routes=None):
         """L = d(lengths)/dq: each segment's unit vector times its ends' relative velocity."""
+        routes = self.cables if routes is None else routes
         zero = np.zeros(self.n)
-        pts = self.cable_points(self.kinematics(q, zero, zero))
-        L = np.zeros((len(self.cables), self.n))
+        pts = self.cable_points(self.kinematics(q, zero, zero), routes)
+        L = np.zeros((len(routes), self.n))
         for i in range(self.n):
             e = np.zeros(self.n)
             e[i] = 1.0
             kin_i = self.kinematics(q, e, zero)
-            for c, (route, world) in enumerate(zip(self.cables, pts)):
+            for c, (route, world) in enumerate(zip(routes, pts)):
                 vel = [self.point_motion(kin_i, k, pt)[1] if k else np.zeros(3) for k, pt in route]
-                for s in range(len(route) - 1):
+                vel = [np.zeros(3)] * (len(world) - len(route)) + vel  # a pulley's exit point: on the base
+                for s in range(len(world) - 1):
                     u = world[s + 1][1] - world[s][1]
                     L[c, i] += u @ (vel[s + 1] - vel[s]) / np.linalg.norm(u)
         return L
@@ -245,7 +310,9 @@ class Model:
         R, P = kin[0], kin[1]
         forces = self.body_forces(kin)
         on = [[] for _ in range(len(self.links) + 1)]  # (point, force) the cables apply on each body
-        for fc, world in zip(f, self.cable_points(kin)):
+        routes = self.cables + [r for r, _, _ in self.springs]  # the springs at their known tensions
+        tensions = np.concatenate([np.asarray(f, dtype=float), self.spring_forces(q)])
+        for fc, world in zip(tensions, self.cable_points(kin, routes)):
             for (ka, pa), (kb, pb) in zip(world[:-1], world[1:]):
                 u = (pb - pa) / np.linalg.norm(pb - pa)
                 on[ka].append((pa, fc * u))
@@ -265,6 +332,18 @@ class Model:
             out.append(np.concatenate([R[link.parent].T @ F, R[k].T @ M]))
         return np.concatenate(out)
 
+    def residual(self, q, qd, qdd, f, tau):
+        """Newton-Euler's residual of an answer: ``M qdd + h + L^T f + L_s^T f_s - A tau`` (n,), with
+        cable tensions ``f`` (N) and actuator forces ``tau`` (CASPR's order), and its scale (the
+        largest of ``|M qdd + h|``, ``|L^T f|`` entry by entry, ``|L_s^T f_s|`` and ``|A tau|``)."""
+        need = self.generalized(q, qd, qdd)
+        cab = self.cable_jacobian(q).T @ np.asarray(f, dtype=float)
+        spr = self.spring_generalized(q)
+        act = self.actuation() @ np.asarray(tau, dtype=float).reshape(-1)
+        scale = max(np.abs(need).max(initial=0.0), (np.abs(self.cable_jacobian(q).T) @ np.abs(f)).max(initial=0.0),
+                    np.abs(spr).max(initial=0.0), np.abs(act).max(initial=0.0), 1e-300)
+        return need + cab + spr - act, scale
+
     def subtree(self, k):
         sub = [k]
         for j in range(k + 1, len(self.links) + 1):
@@ -278,6 +357,81 @@ class Model:
         a = self.interaction(q, qd, qdd, np.zeros(m))
         RT = np.column_stack([self.interaction(q, qd, qdd, np.eye(m)[i]) - a for i in range(m)])
         return a, RT
+
+
+# ------------------------------------------------------------------------------------------ pulleys
+# CASPR's BaseRotatingPulleyAttachment and ScrewDriveRotatingPulleyAttachment (src/Model/Cables/
+# CableAttachments at a6971ee), written out as CASPR computes them: the exit point r_A from the pulley
+# centre and the tangent formula, the arc R acos(.) (its length_offset, added to the cable's length),
+# and for the screw the paid-out length from MATLAB's roots() with CASPR's root selection and its
+# plane-intersection construction of the exit point.
+PULLEY_TAGS = ("base_rotating_pulley", "screw_base_rotating_pulley")
+SCREW_OUTLET = 28032e-6 + 0.038819  # obtainInitialOutletPose
+
+
+def _pulley(cable_el):
+    atts = cable_el.find("attachments")
+    first = atts[0] if atts is not None and len(atts) else None
+    if first is None or first.tag not in PULLEY_TAGS:
+        return None
+    p = {"tag": first.tag}
+    for el in first:
+        p[el.tag] = float(el.text) if len(el.text.split()) == 1 else _vec(el.text)
+    return p
+
+
+def base_pulley_exit(r_F, v_F, r_B, R):
+    """BaseRotatingPulleyAttachment.ComputePulleyLeavingLocation: ``(r_A, l_arc)``."""
+    n_plane = np.cross(v_F, r_B - r_F)
+    n_unit = n_plane / np.linalg.norm(n_plane)
+    v_FC = np.cross(n_plane, v_F)
+    r_C = r_F + R * v_FC / np.linalg.norm(v_FC)
+    rho = R / np.linalg.norm(r_B - r_C)
+    r_A = r_C + rho ** 2 * (r_B - r_C) - rho * math.sqrt(1 - rho ** 2) * np.cross(n_unit, r_B - r_C)
+    n1 = (r_F - r_C) / np.linalg.norm(r_F - r_C)
+    n2 = (r_A - r_C) / np.linalg.norm(r_A - r_C)
+    return r_A, R * math.acos(np.clip(n1 @ n2, -1.0, 1.0))
+
+
+def _plane_intersection(N1, A1, N2, A2):
+    """PlaneOperations.PlaneIntersection: a point of the line and its direction."""
+    N = np.cross(N1, N2)
+    d1, d2 = -N1 @ A1, -N2 @ A2
+    P = np.zeros(3)
+    m = int(np.flatnonzero(np.abs(N) == np.abs(N).max())[0])
+    if m == 0:
+        P[1], P[2] = (d2 * N1[2] - d1 * N2[2]) / N[0], (d1 * N2[1] - d2 * N1[1]) / N[0]
+    elif m == 1:
+        P[0], P[2] = (d1 * N2[2] - d2 * N1[2]) / N[1], (d2 * N1[0] - d1 * N2[0]) / N[1]
+    else:
+        P[0], P[1] = (d2 * N1[1] - d1 * N2[1]) / N[2], (d1 * N2[0] - d2 * N1[0]) / N[2]
+    return P, N
+
+
+def _line_circle(P, V, R):
+    a, b, c = V @ V, 2 * P @ V, P @ P - R ** 2
+    return P + (-b - math.sqrt(b * b - 4 * a * c)) / (2 * a) * V
+
+
+def screw_pulley_exit(p, r_B):
+    """ScrewDriveRotatingPulleyAttachment.update after its first call: ComputeVaryingPulleyPoint, then
+    its own ComputePulleyLeavingLocation. ``(r_D, l_arc)``."""
+    h, D = p["winch_groove_width"], 2 * p["winch_radius"]
+    r_A0, v, l0 = p["constant_winch_point"], p["winch_vector"], p["l0_offset"]
+    c = r_B - r_A0
+    k = h / math.pi / D
+    roots = np.roots([1 - k ** 2 * (v @ v), 2 * l0 + 2 * k * (c @ v), l0 ** 2 - c @ c])
+    delta = float(np.real(roots[np.argmin(-np.real(roots))]))  # deltaSelection: min(approx - l0 - delta)
+    r_A = r_A0 + (SCREW_OUTLET + delta * k) * v
+    v_A, R = p["cable_pulley_entry_vector"], p["pulley_radius"]
+    n_plane = np.cross(v_A, r_B - r_A)
+    P, V = _plane_intersection(v_A, np.zeros(3), n_plane, np.zeros(3))
+    r_C = r_A + _line_circle(P, V, R)
+    n_d = r_C - r_B
+    P, V = _plane_intersection(n_d, np.array([0.0, 0.0, -R ** 2 / n_d[2]]), n_plane, np.zeros(3))
+    r_D = r_C + _line_circle(P, V, R)
+    n1 = (r_B - r_D) / np.linalg.norm(r_B - r_D)
+    return r_D, R * math.acos(np.clip(n1 @ (v_A / np.linalg.norm(v_A)), -1.0, 1.0))
 
 
 # ------------------------------------------------------------------------------------- trajectories

@@ -14,6 +14,8 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
+from mcdm_pin import compute_terms
+
 from . import caspr_newton as cn
 from . import caspr_xml as X
 from .caspr_library_check import TOL, compare, ours_from_caspr, reference_state, worst
@@ -296,7 +298,6 @@ def test_a_bad_trajectory_is_refused_alone(tmp_path):
     ([dict(type="R_X", q=[0, 0])], "joint@q_initial: expected 1 number, got 2"),
     ([dict(type="R_X", ref="CoM")], "inertia@ref: expected 'com' or 'joint', got 'CoM'"),
     ([dict(type="R_X", parent=1)], "parent/num: expected a parent number in 0..0"),
-    ([dict(type="R_X", actuated=True)], "actuated joint(s): CASPR leaves joint motors unbounded"),
 ])
 def test_bodies_refused_naming_the_element(tmp_path, links, needle):
     from mcdm_pin.exceptions import CasprError, McdmError
@@ -309,9 +310,7 @@ def test_bodies_refused_naming_the_element(tmp_path, links, needle):
     assert isinstance(exc.value, McdmError)
 
 
-@pytest.mark.parametrize("tag", ["cable_linear_spring", "cable_passive_linear_spring", "cable_vsd_torsion_spring",
-                                 "cable_vsd_flexure_linear", "cable_vsd_polynomial", "muscle_hill_type",
-                                 "pneumatic_artificial_muscle"])
+@pytest.mark.parametrize("tag", ["muscle_hill_type", "pneumatic_artificial_muscle"])
 def test_other_cable_types_refused_naming_element_and_type(tmp_path, tag):
     from mcdm_pin.exceptions import CasprError
 
@@ -323,6 +322,46 @@ def test_other_cable_types_refused_naming_element_and_type(tmp_path, tag):
         _import(tmp_path, b, c)
 
 
+@pytest.mark.parametrize("tag", ["cable_linear_spring", "cable_vsd_torsion_spring", "cable_vsd_flexure_linear",
+                                 "cable_vsd_polynomial"])
+def test_stiffness_cables_are_cables(tmp_path, tag):
+    """CASPR's linear-spring and variable-stiffness cables are active: their tension is the unknown
+    within [force_min, force_max]; their stiffness parameters are read, named, and not used."""
+    from mcdm_pin.caspr import STIFFNESS_CABLES
+
+    b = X.bodies(tmp_path / "b.xml", [dict(type="R_X")])
+    cs = X.star(1, 4)
+    params = "".join(f"<{k}>1 2 3</{k}>" if k == "vsd_force_deformation_relation" else f"<{k}>4</{k}>"
+                     for k in STIFFNESS_CABLES[tag])
+    cs[2] = X.cable("vs 1", [(0, [1, 0, 0]), (1, [0, 0, 0])], tag=tag, f_min=2.0, f_max=70.0).replace(
+        "<properties>", f"<properties>{params}")
+    c = X.cables(tmp_path / "c.xml", {"s": cs})
+    res, robot = _import(tmp_path, b, c)
+    assert robot.m == 4 and robot.cables["vs 1"].f_min == 2.0 and robot.cables["vs 1"].f_max == 70.0
+    assert f"<{tag}>" in robot.sidecar.description and STIFFNESS_CABLES[tag][0] in robot.sidecar.description
+
+
+def test_passive_springs_become_sidecar_springs(tmp_path):
+    """``cable_passive_linear_spring``: a known tension K (l - l0) (the spring's attachments as a
+    cable's, here relative to the COM); a spring without K is refused by element."""
+    from mcdm_pin.exceptions import CasprError
+
+    b = X.bodies(tmp_path / "b.xml", [dict(type="R_X")])
+    cs = X.star(1, 4) + [X.cable("spring 1", [(0, [1, 0, 0]), (1, [0, 0.1, 0])]).replace(
+        "cable_ideal", "cable_passive_linear_spring").replace(
+        "<force_min>0.1</force_min><force_max>100.0</force_max>", "<K>7.5</K><l0>0.25</l0>")]
+    c = X.cables(tmp_path / "c.xml", {"s": cs})
+    res, robot = _import(tmp_path, b, c)
+    assert robot.m == 4 and robot.springs.names == ("spring 1",)
+    assert robot.springs.stiffness[0] == 7.5 and robot.springs.rest_length[0] == 0.25
+    model = cn.Model.from_xml(b, c)
+    q = np.array([0.3])
+    np.testing.assert_allclose(compute_terms(robot, q).spring_forces, model.spring_forces(q), rtol=1e-13)
+    c = X.cables(tmp_path / "c2.xml", {"s": cs[:4] + [cs[4].replace("<K>7.5</K>", "")]})
+    with pytest.raises(CasprError, match=r"cable_passive_linear_spring\[5, name='spring 1'\]/properties: missing <K>"):
+        _import(tmp_path, b, c)
+
+
 def test_pulleys_and_empty_sets_refused(tmp_path):
     from mcdm_pin.exceptions import CasprError
 
@@ -331,22 +370,33 @@ def test_pulleys_and_empty_sets_refused(tmp_path):
     cs[0] = cs[0].replace("<attachment><link>0</link>", "<base_rotating_pulley><link>0</link>", 1).replace(
         "</attachment><attachment><link>1", "</base_rotating_pulley><attachment><link>1", 1)
     c = X.cables(tmp_path / "c.xml", {"pulleys": cs, "Empty": [], "plain": X.star(1, 4)}, default="pulleys")
+    # a pulley is converted (tests/test_pulleys.py); this one lacks its fields
     with pytest.raises(CasprError, match=r"cable_ideal\[1, name='c1_0'\]/attachments/base_rotating_pulley\[1\]: "
-                                         r"<base_rotating_pulley> is not supported"):
+                                         r"missing <fixed_location> element"):
         _import(tmp_path, b, c)
     with pytest.raises(CasprError, match=r"cable_set\[id='Empty'\]: the set has no cable; mcdm-pin needs at least one; "
                                          r"choose another set \(pulleys, plain\) with --cable-set"):
         _import(tmp_path, b, c, cable_set="Empty")
     res, robot = _import(tmp_path, b, c, cable_set="plain")
     assert robot.m == 4 and res.cable_set == "plain"
+    # an empty *default* set (PlanarSnakeArm's): the first set with cables, said in the notes
+    c = X.cables(tmp_path / "c3.xml", {"Empty": [], "plain": X.star(1, 4)}, default="Empty")
+    res, robot = _import(tmp_path, b, c)
+    assert res.cable_set == "plain" and any("'Empty' has no cable; took the first set with cables, 'plain'" in n
+                                            for n in res.notes)
 
 
-def test_actuated_joints_become_bounded_motors(tmp_path):
+def test_actuated_joints_become_motors(tmp_path):
     """HCDM: CASPR's actuated joints have unbounded motors weighted like a cable in its case-1 objective
-    (IDObjectiveMinQuadCableForce(ones(numActuatorsActive))); the sidecar gets +-limit and weight 1."""
+    (IDObjectiveMinQuadCableForce(ones(numActuatorsActive))); by default the sidecar gets -.inf/.inf and
+    weight 1, with --actuator-limit +-limit."""
     b = X.bodies(tmp_path / "b.xml", [dict(type="PLANAR_XY", actuated=True), dict(type="R_X"),
                                       dict(type="R_Z", actuated=True, parent=1)])
     c = X.cables(tmp_path / "c.xml", {"s": X.star(3, 4)})
+    res, robot = _import(tmp_path, b, c)
+    specs = {j.name: j.actuated for j in robot.sidecar.joints}
+    assert specs["L1"].min == (-np.inf,) * 3 and specs["L1"].max == (np.inf,) * 3 and specs["L1"].weight == 1.0
+    assert "-.inf" in res.sidecar.read_text()
     res, robot = _import(tmp_path, b, c, actuator_limit=250.0)
     specs = {j.name: j.actuated for j in robot.sidecar.joints}
     assert specs["L1"].min == (-250.0,) * 3 and specs["L1"].max == (250.0,) * 3 and specs["L1"].weight == 1.0

@@ -72,3 +72,17 @@ def test_pinocchio_plugin(tmp_path):
     diffs = [float(x) for x in re.findall(r"case \d: optimal, max \|f_code - f_sidecar\| = ([0-9.e+-]+) N", text)]
     assert len(diffs) == 3 and max(diffs) < 1e-9, text
     assert "solved 41/41 instants" in text
+
+
+def test_control_loop(tmp_path):
+    """One simulated second of CoGiRo's 1 kHz loop against MuJoCo: the platform tracks to the
+    millimetre and the figure is written."""
+    import re
+
+    pytest.importorskip("mujoco", reason="pip install -e '.[mjcf]'")
+    nb = _run("control_loop", tmp_path)
+    text = _text(nb)
+    assert "ticks 1000" in text, text
+    rms = float(re.search(r"position RMS ([0-9.]+) mm", text).group(1))
+    assert rms < 1.0, text
+    assert (tmp_path / "out" / "control_loop.png").stat().st_size > 20_000

@@ -88,15 +88,20 @@ def test_every_imported_package_is_declared_and_every_declared_one_is_used():
     project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
     deps = project["dependencies"]
     declared = {_canonical(re.split(r"[<>=!~ \[;]", d, maxsplit=1)[0]) for d in deps}
-    # optional features import their package lazily and say how to install it (MissingPackageError)
+    # optional features import their package lazily and say how to install it (MissingPackageError,
+    # mcdm_pin.extras.optional): the extras' packages
+    extras = ("opensim", "mjcf", "ik", "numba", "viewer", "plots", "workspace", "examples")
     optional = {_canonical(re.split(r"[<>=!~ \[;]", d, maxsplit=1)[0])
-                for name in ("opensim", "mjcf") for d in project["optional-dependencies"][name]}
+                for name in extras for d in project["optional-dependencies"][name]}
     known = packages_distributions()
     used = {}
     for path in (REPO / "mcdm_pin").rglob("*.py"):
         for node in ast.walk(ast.parse(path.read_text())):
             names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
                      [node.module] if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module else [])
+            if (isinstance(node, ast.Call) and getattr(node.func, "id", None) == "optional" and node.args
+                    and isinstance(node.args[0], ast.Constant)):  # extras.optional("module", ...)
+                names = [node.args[0].value]
             for name in names:
                 top = name.split(".")[0]
                 if top in sys.stdlib_module_names or top == "mcdm_pin":

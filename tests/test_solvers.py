@@ -310,7 +310,7 @@ def _weak_factor_problem(seed: int, cone: bool):
 def test_ipm_answers_with_a_nearly_rank_deficient_objective_factor(cone):
     """The compiled interior-point method answers these (it stopped at its iteration limit or with a
     vanishing step on 19 of these 40 before the fix, and Clarabel answered) at Clarabel's optimum."""
-    from mcdm_pin.solvers.cascade import make_solver
+    from mcdm_pin.solvers import make_solver
     from mcdm_pin.solvers.ipm import ipm_solve
 
     for seed in range(20):
@@ -352,7 +352,7 @@ def test_ipm_crosses_over_on_the_myoarm_with_its_cone():
     failed the KKT check at the optimum's active set, every crossover was refused, and the method
     ran on to the rounding floor of the active cone: "numerical breakdown (the step vanished)" on
     8 of 41 instants."""
-    from mcdm_pin.solvers.cascade import make_solver
+    from mcdm_pin.solvers import make_solver
     from mcdm_pin.solvers.ipm import ipm_solve
 
     for k, qp in enumerate(_myoarm_cone_problems()):

@@ -1,7 +1,7 @@
 """CASPR's model library -> the committed robots, the reference values, and the table of docs/caspr.md.
 
-    python tools/caspr_library.py convert [--caspr DIR] [--check]   # robots/caspr, urdf/caspr
-    python tools/caspr_library.py reference [--caspr DIR]           # tests/data/caspr_reference.npz
+    python tools/caspr_library.py convert [--caspr DIR] [--check] [--models M ...]   # robots/caspr, urdf/caspr
+    python tools/caspr_library.py reference [--caspr DIR] [--models M ...]  # tests/data/caspr_reference.npz
     python tools/caspr_library.py table                             # docs/caspr.md (plain clone)
 
 ``convert`` and ``reference`` read CASPR's XML files (default ``../shared/reference/caspr``: the 36 models
@@ -32,7 +32,7 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from mcdm_pin.caspr import cable_sets, import_caspr, read_bodies  # noqa: E402
+from mcdm_pin.caspr import cable_sets, import_caspr, read_bodies, read_cables  # noqa: E402
 from mcdm_pin.exceptions import CasprError  # noqa: E402
 
 DEFAULT_CASPR = REPO.parent / "shared" / "reference" / "caspr"
@@ -44,7 +44,6 @@ SHIPPED = {"8S_neck": None, "SR_model": None, "IPAnema_1": 300_000, "Example_pla
            "FASTKIT_Planar": 300_000}
 # the trajectory the table solves along when the first sidecar quintic is not the one to show
 TABLE_TRAJECTORY = {"Example_2R_planar_XZ": "setpoint_eMPC_finer"}
-ACTUATOR_LIMIT = 1e4  # N m or N: CASPR's motors are unbounded; a bound the library's motions never reach
 # reference states on each model's table trajectory, as fractions of its samples (0.47, not 0.5: many
 # of CASPR's motions are symmetric, and their middle is a rest pose or a degenerate one)
 TRAJECTORY_FRACTIONS = (0.2, 0.47, 0.8)
@@ -78,8 +77,7 @@ def _try_sets(m: dict, tmp: Path) -> tuple[dict, str | None, str | None]:
     status = {}
     for sid in ids:
         try:
-            import_caspr(files["bodies"], files["cables"], tmp / "sets" / m["model"], cable_set=sid, name="probe",
-                         actuator_limit=ACTUATOR_LIMIT)
+            import_caspr(files["bodies"], files["cables"], tmp / "sets" / m["model"], cable_set=sid, name="probe")
             status[sid] = "imported"
         except CasprError as exc:
             status[sid] = _short(exc)
@@ -102,7 +100,10 @@ def _choose_trajectories(m: dict, probe) -> tuple[list[str], str | None, dict]:
               for tid, reason in probe.refused.items()}
     quintic = [tid for tid in probe.trajectories if tid not in probe.csv_files]
     csvs = sorted(probe.csv_files, key=lambda tid: (probe.csv_files[tid].stat().st_size, tid))
-    table = TABLE_TRAJECTORY.get(m["model"], quintic[0] if quintic else (csvs[0] if csvs else None))
+    # the table solves along a joint-space trajectory: tests/caspr_newton.py samples it independently
+    # (an operational one goes through our inverse kinematics first)
+    joint = [tid for tid in quintic + csvs if not tid.startswith("operational:")]
+    table = TABLE_TRAJECTORY.get(m["model"], joint[0] if joint else None)
     budget = SHIPPED.get(m["model"], 0)
     keep, used = list(quintic), 0
     for tid in csvs:
@@ -127,7 +128,7 @@ def convert_model(m: dict, root: Path, tmp: Path) -> dict:
         return entry
     bodies = read_bodies(files["bodies"])
     actuated = any(link.actuated for link in bodies.links)
-    kw = dict(actuator_limit=ACTUATOR_LIMIT if actuated else None)
+    kw: dict = {}  # import-caspr's defaults: CASPR's motors unbounded (weight 1), as CASPR leaves them
     probe = import_caspr(files["bodies"], files["cables"], tmp / "probe" / m["model"], cable_set=chosen,
                          trajectories_xml=files["trajectories"], **kw)
     keep, table, tstatus = _choose_trajectories(m, probe)
@@ -141,19 +142,60 @@ def convert_model(m: dict, root: Path, tmp: Path) -> dict:
                 import_caspr(files["bodies"], files["cables"], out, cable_set=sid, trajectories_xml=files["trajectories"],
                              urdf_dir=urdf, name=f"{m['model']}_{sid}", urdf_name=m["model"])
                 extra.append(f"{ROBOTS}/{m['model']}/{m['model']}_{sid}.yaml")
-    entry.update(status="imported", cable_set=chosen, sidecar=f"{ROBOTS}/{m['model']}/{m['model']}.yaml",
+    entry.update(status="imported", cable_set=chosen, became=became(bodies, _chosen_set(files, bodies, chosen)), sidecar=f"{ROBOTS}/{m['model']}/{m['model']}.yaml",
                  other_sidecars=extra, urdf=f"{URDF}/{m['model']}.urdf", trajectories=tstatus, table_trajectory=table,
-                 actuated=actuated, actuator_limit=kw["actuator_limit"],
+                 actuated=actuated, actuator_limit=None,
                  joint_types=sorted({link.joint_type for link in bodies.links}), notes=list(res.notes),
                  links=[link.ident for link in bodies.links])
     return entry
 
 
-def convert(caspr: Path, root: Path) -> list[dict]:
+def _chosen_set(files, bodies, chosen):
+    """The chosen cable set as import-caspr reads it without --cable-set (with its note) when that is
+    the one chosen, else as asked for."""
+    try:
+        cset = read_cables(files["cables"], bodies)
+    except CasprError:
+        cset = None
+    return cset if cset is not None and cset.id == chosen else read_cables(files["cables"], bodies, chosen)
+
+
+def became(bodies, cset) -> list[str]:
+    """What the model's cables, springs and motors became (docs/caspr.md's table)."""
+    out = []
+    kinds: dict = {}
+    for c in cset.cables:
+        kinds.setdefault(c.kind, []).append(c.name)
+    for kind, names in kinds.items():
+        if kind != "cable_ideal":
+            out.append(f"{len(names)} <{kind}> as cables (tension unknown in [force_min, force_max]; stiffness "
+                       f"not used by inverse dynamics)")
+    if cset.springs:
+        out.append(f"{len(cset.springs)} passive spring(s) (known tension K (l - l0), right-hand side)")
+    n_act = sum(link.n_q for link in bodies.links if link.actuated)
+    if n_act:
+        out.append(f"{n_act} unbounded joint motor(s) (unknowns, weight 1 as CASPR's)")
+    if cset.note:
+        out.append(cset.note)
+    return out
+
+
+def convert(caspr: Path, root: Path, only=None) -> list[dict]:
+    """Convert every model, or with ``only`` (model names) those alone: their files are replaced and
+    their entries of ``library.json`` rewritten, the others' kept."""
     entries = []
+    old = {}
+    if only:
+        old = {e["model"]: e for e in json.loads((root / ROBOTS / "library.json").read_text())["models"]}
     with tempfile.TemporaryDirectory() as t:
         for m in models(caspr):
+            if only and m["model"] not in only:
+                entries.append(old[m["model"]])
+                continue
             print(f"{m['model']} ...", flush=True)
+            if only:
+                shutil.rmtree(root / ROBOTS / m["model"], ignore_errors=True)
+                (root / URDF / f"{m['model']}.urdf").unlink(missing_ok=True)
             entries.append(convert_model(m, root, Path(t)))
     lib = {"caspr": {"repository": "https://github.com/darwinlau/CASPR", "commit": CASPR_COMMIT,
                      "licence": "BSD 3-Clause, Copyright (c) 2017, Darwin Lau (LICENSE_CASPR.txt)"},
@@ -181,7 +223,9 @@ def check(caspr: Path) -> int:
 
 
 # ------------------------------------------------------------------------------------- reference
-def reference(caspr: Path) -> None:
+def reference(caspr: Path, only=None) -> None:
+    """The reference values of every imported model, or with ``only`` (model names) of those alone
+    (the others' kept from the committed file)."""
     from mcdm_pin import Robot
     from tests import caspr_newton as cn
     from tests.caspr_library_check import reference_state
@@ -189,8 +233,11 @@ def reference(caspr: Path) -> None:
     lib = json.loads((REPO / ROBOTS / "library.json").read_text())
     by_model = {m["model"]: m for m in models(caspr)}
     out: dict = {}
+    if only:
+        with np.load(REPO / "tests" / "data" / "caspr_reference.npz", allow_pickle=False) as old:
+            out = {k: old[k] for k in old.files if k.split(":", 1)[0] not in only}
     for entry in lib["models"]:
-        if entry["status"] != "imported":
+        if entry["status"] != "imported" or (only and entry["model"] not in only):
             continue
         files = by_model[entry["model"]]["files"]
         model = cn.Model.from_xml(files["bodies"], files["cables"], entry["cable_set"])
@@ -236,6 +283,8 @@ def main(argv=None) -> int:
     p.add_argument("command", choices=("convert", "reference", "table"))
     p.add_argument("--caspr", type=Path, default=DEFAULT_CASPR, help="CASPR's files (library/, SR_model/)")
     p.add_argument("--check", action="store_true", help="convert: compare with the committed files")
+    p.add_argument("--models", nargs="+", metavar="MODEL",
+                   help="convert, reference: these models only (the others' files and values are kept)")
     args = p.parse_args(argv)
     if args.command == "table":
         from tools.caspr_table import write_table
@@ -247,6 +296,9 @@ def main(argv=None) -> int:
     if args.command == "convert":
         if args.check:
             return check(args.caspr)
+        if args.models:
+            convert(args.caspr, REPO, only=set(args.models))
+            return 0
         if (REPO / ROBOTS).exists():
             shutil.rmtree(REPO / ROBOTS)
         if (REPO / URDF).exists():
@@ -254,7 +306,7 @@ def main(argv=None) -> int:
         convert(args.caspr, REPO)
         _provenance()
         return 0
-    reference(args.caspr)
+    reference(args.caspr, only=set(args.models or ()))
     return 0
 
 

@@ -75,7 +75,8 @@ def rows(lib, ref) -> tuple[list[str], dict]:
         counts["terms"] += library and m["terms_ok"]
         sets = entry["cable_sets"]
         others = [f"`{s}` refused ({_md(r.split(': ')[-1])})" for s, r in sets.items() if r != "imported"]
-        imp = f"imported, cable set `{entry['cable_set']}`" + (f"; {'; '.join(others)}" if others else "")
+        imp = f"imported, cable set `{entry['cable_set']}`" + "".join(f"; {_md(b)}" for b in entry.get("became", []))
+        imp += f"; {'; '.join(others)}" if others else ""
         refused_t = [t for t, s in entry["trajectories"].items() if s.startswith("refused")]
         if refused_t:
             imp += "; trajectories refused: " + "; ".join(f"`{t}`: {_md(entry['trajectories'][t][9:])}"
@@ -104,7 +105,7 @@ def write_table() -> int:
     lib, ref = load_library(), load_reference()
     lines, c = rows(lib, ref)
     summary = (f"Of the {c['models']} models of CASPR's model list, **{c['imported']} import**; "
-               f"{c['models'] - c['imported']} are refused (the element and the reason are in the table). Of "
+               f"{c['models'] - c['imported']} {'is' if c['models'] - c['imported'] == 1 else 'are'} refused (the element and the reason are in the table). Of "
                f"the imported models, the terms of **{c['terms']}** agree with the independent Newton-Euler "
                f"implementation to 1e-9 (relative); case 1 is solved at every instant of the model's trajectory "
                f"(or at rest at `q_initial`) for **{c['solved_all']}** and at some instants for "

@@ -9,7 +9,9 @@ Read from the source with :mod:`ast` (nothing is imported or run):
   ``__init__``). A circle is a strongly connected component of two or more modules (or a module
   importing itself); each is listed with its modules and one shortest cycle through them. Imports
   inside functions (the usual way around a circle) are counted apart, and the circles they would
-  close at module level are listed too.
+  close at module level are listed too, with the imports that **dodge a circle**: an import inside a
+  function of module ``a`` of a module ``b`` that imports ``a`` (directly or through others, at
+  module level or inside functions), i.e. one that closes a circle once every import counts.
 - **files over 600 lines** and **functions over 80 lines** (``def`` line to last line, docstring
   included; methods and nested functions by their dotted names);
 - **lines in ``solvers/``**: per file and in all, beside the package's total.
@@ -89,10 +91,10 @@ def targets(name: str, node, known: dict, is_package: bool) -> set[str]:
     return out
 
 
-def import_graph(mods: dict[str, Path]) -> tuple[dict[str, set[str]], dict[str, set[str]], int]:
+def import_graph(mods: dict[str, Path]) -> tuple[dict[str, set[str]], dict[str, set[str]], list]:
     """(module -> modules it imports at module level, the same with the imports inside functions
-    added, count of the package's imports inside functions)."""
-    graph, full, inner = {}, {}, 0
+    added, the package's imports inside functions as ``(module, line, imported modules)``)."""
+    graph, full, inner = {}, {}, []
     for name, path in mods.items():
         tree = ast.parse(path.read_text(), str(path))
         is_package = path.name == "__init__.py"
@@ -103,9 +105,30 @@ def import_graph(mods: dict[str, Path]) -> tuple[dict[str, set[str]], dict[str, 
         for n in ast.walk(tree):
             if isinstance(n, (ast.Import, ast.ImportFrom)) and id(n) not in top_ids:
                 t = targets(name, n, mods, is_package)
-                inner += bool(t)
+                if t:
+                    inner.append((name, n.lineno, sorted(t)))
                 full[name] |= t
     return graph, full, inner
+
+
+def reaches(graph: dict[str, set[str]], start: str, goal: str) -> bool:
+    """Whether ``goal`` is reachable from ``start`` along ``graph``'s edges."""
+    seen, todo = {start}, [start]
+    while todo:
+        v = todo.pop()
+        if v == goal:
+            return True
+        for w in graph.get(v, ()):
+            if w not in seen:
+                seen.add(w)
+                todo.append(w)
+    return False
+
+
+def dodging(full: dict[str, set[str]], inner: list) -> list[tuple[str, int, str]]:
+    """The imports inside functions that dodge a circle (module docstring): ``(module, line, target)``
+    (``full``: the graph with the imports inside functions)."""
+    return [(a, line, b) for a, line, ts in inner for b in ts if b != a and reaches(full, b, a)]
 
 
 def circles(graph: dict[str, set[str]]) -> list[list[str]]:
@@ -194,7 +217,8 @@ def measure(package: Path, max_file: int, max_function: int) -> dict:
     solvers = {rel(p): n for p, n in lines.items() if "solvers" in p.relative_to(package).parts}
     return dict(
         package=str(package), modules=len(mods), lines_total=sum(lines.values()),
-        import_edges=sum(len(v) for v in graph.values()), function_level_imports=inner,
+        import_edges=sum(len(v) for v in graph.values()), function_level_imports=len(inner),
+        dodging_imports=dodging(full, inner),
         circles=[dict(modules=c, cycle=shortest_cycle(graph, c)) for c in comps],
         circles_with_function_imports=[dict(modules=c, cycle=shortest_cycle(full, c)) for c in dodged],
         long_files=sorted(((rel(p), n) for p, n in lines.items() if n > max_file), key=lambda x: -x[1]),
@@ -212,6 +236,8 @@ def report(m: dict) -> str:
         out.append(f"  {i}. {len(c['modules'])} modules: {', '.join(c['modules'])}")
         out.append(f"     shortest cycle: {' -> '.join(c['cycle'])}")
     out.append(f"imports of package modules inside functions: {m['function_level_imports']}")
+    out.append(f"imports inside functions that dodge a circle: {len(m['dodging_imports'])}")
+    out += [f"  {a}:{line} imports {b}" for a, line, b in m["dodging_imports"]]
     out.append(f"circles once the imports inside functions count too: "
                f"{len(m['circles_with_function_imports'])}")
     for i, c in enumerate(m["circles_with_function_imports"], 1):

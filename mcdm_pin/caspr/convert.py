@@ -23,9 +23,11 @@ import numpy as np
 from ..exceptions import CasprError, InertiaWarning, McdmError
 from .bodies import CasprBodies, read_bodies
 from .cables import read_cables
+from .pulleys import fill_screw_references
 from .sampling import SamplingError, Samples, coordinates_from_caspr, sample, to_ours
-from .trajectories import CasprTrajectory, read_trajectories
-from .writer import (GRAVITY, chains, csv_text, sidecar_cables, sidecar_joints, sidecar_text, urdf_text)
+from .trajectories import CasprOperationalTrajectory, CasprTrajectory, read_trajectories
+from .writer import (GRAVITY, chains, csv_text, sidecar_cables, sidecar_joints, sidecar_springs, sidecar_text,
+                     urdf_text)
 
 
 @dataclass
@@ -55,6 +57,7 @@ class CasprImport:
     refused: dict[str, str] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
     renamed_cables: dict = field(default_factory=dict)
+    task_solutions: dict = field(default_factory=dict)  # {operational trajectory id: ik.TaskSolution}
 
     @property
     def q_index(self) -> np.ndarray:
@@ -81,14 +84,23 @@ class CasprImport:
         return coordinates_from_caspr(self.bodies, self.layout, q_caspr, self.nv)
 
     def samples(self, trajectory_id: str) -> Samples:
-        """CASPR's samples of a converted trajectory (:func:`~mcdm_pin.caspr.sampling.sample`)."""
-        return sample(self.bodies, self.trajectories[trajectory_id])
+        """CASPR's samples of a converted trajectory (:func:`~mcdm_pin.caspr.sampling.sample`; of an
+        operational-space one, ``y`` and its rates: :func:`~mcdm_pin.caspr.sampling.sample_operational`)."""
+        tr = self.trajectories[trajectory_id]
+        if isinstance(tr, CasprOperationalTrajectory):
+            from .sampling import sample_operational
+
+            return sample_operational(tr)
+        return sample(self.bodies, tr)
 
     def exact_trajectory(self, robot, trajectory_id: str):
         """The converted trajectory as a :class:`~mcdm_pin.trajectory.Trajectory` on ``robot`` (the
         imported robot), computed from CASPR's samples (not read back from a file)."""
         from ..trajectory import Trajectory
 
+        if trajectory_id in self.task_solutions:  # solved by inverse kinematics at import
+            sol = self.task_solutions[trajectory_id]
+            return Trajectory(trajectory_id, sol.t, sol.q, sol.qd, sol.qdd)
         s = self.samples(trajectory_id)
         X, V, A = to_ours(self.bodies, self.layout, s, self.nv)
         Q = np.array([robot.configuration(x) for x in X]).reshape(len(s.t), robot.nq)
@@ -97,7 +109,8 @@ class CasprImport:
 
 def import_caspr(bodies_xml, cables_xml, out_dir, trajectories_xml=None, cable_set: str | None = None,
                  name: str | None = None, trajectory_ids=None, cone_deg: float | None = None,
-                 actuator_limit: float | None = None, urdf_dir=None, urdf_name: str | None = None) -> CasprImport:
+                 actuator_limit: float | None = None, urdf_dir=None, urdf_name: str | None = None,
+                 operational_spaces_xml=None, operational_set: str | None = None) -> CasprImport:
     """Convert CASPR model files into ``out_dir/NAME.yaml`` (+ CSVs) and ``urdf_dir/NAME.urdf``.
 
     Args:
@@ -111,19 +124,29 @@ def import_caspr(bodies_xml, cables_xml, out_dir, trajectories_xml=None, cable_s
         name: robot name and file stem (default: the bodies file name without ``_bodies.xml``).
         trajectory_ids: convert only these trajectory ids.
         cone_deg: stability cone written on every spherical joint (default: none).
-        actuator_limit: the bound (N m or N) written on actuated joints' motors, ``-limit <= tau <=
-            limit``: CASPR leaves them unbounded, the sidecar needs finite bounds, so a model with
-            actuated joints needs it.
+        actuator_limit: a bound (N m or N) written on actuated joints' motors, ``-limit <= tau <=
+            limit``; default: none, the motors are unbounded as in CASPR (``JointBase``: ``tau_min =
+            -Inf``, ``tau_max = Inf``), kept finite by their weight 1 in the objective (CASPR's
+            ``IDObjectiveMinQuadCableForce(ones(numActuatorsActive, 1))``).
         urdf_dir: folder of the URDF (default: ``out_dir``).
         urdf_name: the URDF's file stem and robot name (default: ``name``); the URDF depends on the
             bodies file only, so several cable sets of one model can share it.
+        operational_spaces_xml: CASPR's ``*_operational_spaces.xml`` (default: the one beside the
+            bodies file, if any): operational-space trajectories are solved by inverse kinematics on
+            its set ``operational_set`` (default: the file's default) and written as CSV files
+            (:mod:`.operational`).
 
     Raises:
         CasprError: the files are malformed or use an unsupported CASPR feature.
     """
     bodies = read_bodies(bodies_xml)
     cset = read_cables(cables_xml, bodies, cable_set)
-    tfile = read_trajectories(trajectories_xml, bodies, trajectory_ids) if trajectories_xml is not None else None
+    ops = None
+    if trajectories_xml is not None:
+        from .operational import choose
+
+        ops = choose(bodies_xml, bodies, operational_spaces_xml, operational_set)
+    tfile = read_trajectories(trajectories_xml, bodies, trajectory_ids, ops) if trajectories_xml is not None else None
     name = _check_options(bodies, bodies_xml, name, cone_deg, actuator_limit)
     urdf_name = _check_name(urdf_name or name, "urdf_name")
     out_dir = Path(out_dir)
@@ -136,6 +159,8 @@ def import_caspr(bodies_xml, cables_xml, out_dir, trajectories_xml=None, cable_s
     chs = chains(bodies)
     data = {"version": 1, "name": name, "description": "", "urdf": f"{urdf_name}.urdf", "gravity": list(GRAVITY),
             "joints": sidecar_joints(chs, cone_deg, actuator_limit), "cables": sidecar_cables(bodies, cset)}
+    if cset.springs:
+        data["springs"] = sidecar_springs(bodies, cset)
     parent = _existing_parent(out_dir)
     for key, folder in (("--out", out_dir), ("--urdf-dir", urdf_dir)):
         _check_writable(folder, key)
@@ -148,11 +173,16 @@ def import_caspr(bodies_xml, cables_xml, out_dir, trajectories_xml=None, cable_s
                                                encoding="utf-8")
         robot = _load(data, tmp, urdf_name)
         layout = tuple(robot.joint(link.ident).idx_v for link in bodies.links)
+        if fill_screw_references(data["cables"], robot, bodies, layout):  # measured at q_initial
+            robot = _load(data, tmp, urdf_name)
         result = CasprImport(urdf=urdf_dir / f"{urdf_name}.urdf", sidecar=out_dir / f"{name}.yaml", cable_set=cset.id,
                              bodies=bodies, layout=layout, nv=robot.nv,
-                             coordinate_names=tuple(robot.coordinate_names), notes=list(bodies.notes),
+                             coordinate_names=tuple(robot.coordinate_names),
+                             notes=list(bodies.notes) + ([cset.note] if cset.note else []),
                              renamed_cables=dict(cset.renamed))
         if tfile is not None:
+            result.notes += list(ops.notes) if any(isinstance(tr, CasprOperationalTrajectory)
+                                                   for tr in tfile.trajectories.values()) else []
             result.refused.update(tfile.refused)
             _trajectories(result, tfile, data, tmp, name, urdf_name, robot)
             asked = [tid for tid in (trajectory_ids or ()) if tid in result.refused]
@@ -189,10 +219,11 @@ def _caspr_error(exc: McdmError, tmp: Path, bodies: CasprBodies, cset) -> CasprE
     text = str(exc).replace(str(tmp) + os.sep, "").replace(str(tmp), "")
     key = getattr(exc, "key", "") or ""
     detail = getattr(exc, "expected", None) or text
-    m = re.match(r"cables\[(\d+)\](?:\.route\[(\d+)\])?", key)
-    if m and int(m.group(1)) < len(cset.cables):
-        cable = cset.cables[int(m.group(1))]
-        element = cable.element + (f"/attachments/attachment[{int(m.group(2)) + 1}]" if m.group(2) else "")
+    m = re.match(r"(cables|springs)\[(\d+)\](?:\.route\[(\d+)\])?", key)
+    of = {"cables": cset.cables, "springs": cset.springs}
+    if m and int(m.group(2)) < len(of[m.group(1)]):
+        cable = of[m.group(1)][int(m.group(2))]
+        element = cable.element + (f"/attachments/attachment[{int(m.group(3)) + 1}]" if m.group(3) else "")
         return CasprError(cset.path, element, f"{detail} (converted: {key})")
     m = re.match(r"joints\.([^.\[]+)", key)
     links = {link.ident: link for link in bodies.links}
@@ -207,12 +238,6 @@ def _check_options(bodies, bodies_xml, name, cone_deg, actuator_limit) -> str:
     _check_name(name, "--name")
     if cone_deg is not None and not 0 < cone_deg < 90:
         raise CasprError(None, "--cone-deg", f"expected an angle in (0, 90) degrees, got {cone_deg!r}")
-    actuated = [link for link in bodies.links if link.actuated]
-    if actuated and actuator_limit is None:
-        raise CasprError(bodies.path, f"{actuated[0].element}/joint@actuated",
-                         f"{len(actuated)} actuated joint(s): CASPR leaves joint motors unbounded "
-                         f"(JointBase: tau_min = -Inf, tau_max = Inf) but the sidecar needs finite bounds; give "
-                         f"the bound with --actuator-limit N (N m or N), e.g. one the motors never reach")
     if actuator_limit is not None and not (math.isfinite(actuator_limit) and actuator_limit > 0):
         raise CasprError(None, "--actuator-limit", f"expected a finite bound > 0, got {actuator_limit!r}")
     return name
@@ -270,13 +295,21 @@ def _trajectories(result: CasprImport, tfile, data: dict, tmp: Path, name: str, 
 
 
 def _convert_one(result, tr, tmp, name, robot, used):
-    s = sample(result.bodies, tr)
-    if tr.rest_to_rest_single:
-        p0, p1 = tr.points
-        spec = {"type": "quintic", "q_start": _by_joint(result, robot, p0.q), "q_end": _by_joint(result, robot, p1.q),
-                "duration": float(s.t[-1] - s.t[0]), "dt": tr.time_step, "spherical": "axis-angle"}
-        return spec, None, s.notes
-    X, V, A = to_ours(result.bodies, result.layout, s, result.nv)
+    if isinstance(tr, CasprOperationalTrajectory):  # solved by inverse kinematics (caspr/operational.py)
+        from .operational import solve
+
+        s, sol, X = solve(result, tr, robot)
+        result.task_solutions[tr.id] = sol
+        V, A = sol.qd, sol.qdd
+    else:
+        s = sample(result.bodies, tr)
+        if tr.rest_to_rest_single:
+            p0, p1 = tr.points
+            spec = {"type": "quintic", "q_start": _by_joint(result, robot, p0.q),
+                    "q_end": _by_joint(result, robot, p1.q), "duration": float(s.t[-1] - s.t[0]),
+                    "dt": tr.time_step, "spherical": "axis-angle"}
+            return spec, None, s.notes
+        X, V, A = to_ours(result.bodies, result.layout, s, result.nv)
     stem = f"{name}_{re.sub(r'[^A-Za-z0-9_.-]+', '_', tr.id)}"
     fname, k = f"{stem}.csv", 2
     while fname in used:
@@ -303,7 +336,24 @@ def _description(result: CasprImport, source: str, cset) -> str:
     renamed = "".join(f" Cable {k} is named {a!r} in CASPR like an earlier one; renamed {b!r}."
                       for k, (a, b) in cset.renamed.items())
     return (f"Imported from CASPR: {source}. {order} Spherical joints: alpha 1, beta 0, socket axis +z of the "
-            f"parent frame; other joints: alpha = beta = 0.{renamed}")
+            f"parent frame; other joints: alpha = beta = 0.{renamed}{_kinds(cset)}"
+            + (f" Note: {cset.note}." if cset.note else ""))
+
+
+def _kinds(cset) -> str:
+    """What the cables that are not ideal became (mcdm_pin/caspr/cables.py)."""
+    out = ""
+    kinds = sorted({c.kind for c in cset.cables} - {"cable_ideal"})
+    for kind in kinds:
+        names = [c.name for c in cset.cables if c.kind == kind]
+        params = ", ".join(dict.fromkeys(k for c in cset.cables if c.kind == kind for k in c.stiffness))
+        out += (f" Cables {', '.join(names)} are CASPR <{kind}>: active cables whose tension is the unknown within "
+                f"[force_min, force_max]; their stiffness parameters ({params}) set the cable's stiffness, which "
+                f"inverse dynamics does not use.")
+    if cset.springs:
+        out += (f" Springs {', '.join(s.name for s in cset.springs)} are CASPR <cable_passive_linear_spring>: "
+                f"known tensions K (l - l0), not clipped at zero, on the right-hand side of the equation of motion.")
+    return out
 
 
 def _move(tmp: Path, result: CasprImport) -> None:

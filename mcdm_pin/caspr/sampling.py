@@ -313,3 +313,36 @@ def coordinates_from_caspr(bodies, layout, q_caspr, nv: int) -> np.ndarray:
     if not np.all(np.isfinite(x)):
         raise CasprError(bodies.path, "", "internal: a coordinate of the model was not mapped")
     return x
+
+
+# -------------------------------------------------------------------------- operational space
+def sample_operational(traj) -> Samples:
+    """An operational-space trajectory (:class:`~mcdm_pin.caspr.trajectories.CasprOperationalTrajectory`)
+    at CASPR's sample times: ``OperationalTrajectory.*Create`` samples every segment on the grid of
+    :func:`sample` and splines every coordinate of ``y`` alone (``Spline.QuinticInterpolation`` or
+    ``LinearInterpolation``, through the segment's grid); ``q``, ``qd``, ``qdd`` of the result hold
+    ``y``, ``y_dot``, ``y_ddot``."""
+    from ..limits import MAX_SAMPLES
+
+    kind = _KIND[traj.type]
+    dt = traj.time_step
+    span = traj.points[-1].time - traj.points[0].time
+    if not (dt > 0 and span / dt <= MAX_SAMPLES):
+        raise SamplingError(f"time_step = {dt:g} s over {span:g} s gives {span / dt:.3g} samples; at most "
+                            f"{MAX_SAMPLES:,} per trajectory (docs/limits.md)")
+    ts, ys, notes = [], [], []
+    for p in range(len(traj.points) - 1):
+        a, b = traj.points[p], traj.points[p + 1]
+        grid = matlab_colon(a.time, dt, b.time)
+        if len(grid) < 2:
+            raise SamplingError(f"segment {p + 1} ({a.time:g} s to {b.time:g} s) is shorter than time_step = "
+                                f"{dt:g} s: CASPR's spline through a single sample is undefined")
+        if abs(grid[-1] - b.time) > 1e-9 * max(1.0, abs(b.time)):
+            notes.append(f"segment {p + 1} lasts {b.time - a.time:g} s, not a whole number of time steps "
+                         f"({dt:g} s): as in CASPR, its spline ends at its last sample, t = {grid[-1]:.9g} s")
+        seg = spline(kind, grid, grid[0], grid[-1], a.q, a.q_dot, a.q_ddot, b.q, b.q_dot, b.q_ddot)
+        keep = slice(0, None) if p == 0 else slice(1, None)
+        ts.append(grid[keep])
+        ys.append([x[keep] for x in seg])
+    y, yd, ydd = (np.vstack([s[i] for s in ys]) for i in range(3))
+    return Samples(np.concatenate(ts), y, yd, ydd, {}, notes)

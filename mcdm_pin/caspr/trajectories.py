@@ -10,8 +10,13 @@ there); ``cubic_spline_average_velocity_trajectory`` points ``q``, the first and
 ``.traj`` file next to the XML (``time_step,dt`` then ``t,T,p,q...,v,q_dot...,a,q_ddot...`` lines).
 
 A trajectory that cannot be converted is refused alone (:attr:`TrajectoryFile.refused`, with its
-reason); the others are kept. Operational-space trajectories (poses of an operational space, not
-joint coordinates) would need inverse kinematics and are listed as refused.
+reason); the others are kept.
+
+``<operational_trajectories>`` (``OperationalTrajectory.*LoadXmlObj``): points give ``y`` (and, for
+``quintic_spline_trajectory``, ``y_dot``, ``y_ddot``), the coordinates of the model's operational set
+(:mod:`.operational`), one number per coordinate of the set; times as for joint trajectories. CASPR
+implements the quintic and linear splines only (the other types raise "Function has not been
+implemented yet" there): the others are refused. With no operational set they are refused too.
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ RATES = {"quintic_spline_trajectory": ("q_dot", "q_ddot"), "cubic_spline_traject
          "linear_spline_trajectory": (), "parabolic_blend_trajectory": (),
          "cubic_spline_average_velocity_trajectory": ()}
 RATE_TOL = 0.0  # CASPR's isequal(q_dot, zeros): exactly zero
+OPERATIONAL_TYPES = {"quintic_spline_trajectory": ("y_dot", "y_ddot"), "linear_spline_trajectory": ()}
 
 
 @dataclass(frozen=True)
@@ -65,6 +71,20 @@ class CasprTrajectory:
 
 
 @dataclass(frozen=True)
+class CasprOperationalTrajectory:
+    """An operational-space trajectory: ``points`` hold ``y``, ``y_dot``, ``y_ddot`` (in the ``q``,
+    ``q_dot``, ``q_ddot`` fields of :class:`CasprPoint`) in the coordinates of ``operational_set``
+    (an :class:`~mcdm_pin.caspr.operational.OperationalSet`)."""
+
+    id: str
+    type: str
+    time_step: float
+    points: tuple[CasprPoint, ...]
+    element: str
+    operational_set: object
+
+
+@dataclass(frozen=True)
 class TrajectoryFile:
     """The joint trajectories of a file that can be converted, and the others with the reason."""
 
@@ -95,18 +115,22 @@ def matlab_colon(a: float, d: float, b: float) -> np.ndarray:
     return out
 
 
-def read_trajectories(path, bodies, only=None) -> TrajectoryFile:
-    """Read a CASPR ``*_trajectories.xml`` (``only``: the ids to keep; an unknown id is an error)."""
+def read_trajectories(path, bodies, only=None, operational=None) -> TrajectoryFile:
+    """Read a CASPR ``*_trajectories.xml`` (``only``: the ids to keep, ``operational:ID`` for an
+    operational-space trajectory; an unknown id is an error). ``operational``: the model's
+    :class:`~mcdm_pin.caspr.operational.OperationalChoice` (its set, or why there is none)."""
     path, root = parse_xml(path)
     if root.tag != "trajectories":
         raise CasprError(path, f"<{root.tag}>", "expected the root element <trajectories>")
     jt = root.find("joint_trajectories")
     elements = list(jt) if jt is not None else []
     ids = [el.get("id") for el in elements]
+    op_root = root.find("operational_trajectories")
+    ids += [f"operational:{el.get('id')}" for el in (list(op_root) if op_root is not None else [])]
     if only is not None:
         missing = [i for i in only if i not in ids]
         if missing:
-            raise CasprError(path, "joint_trajectories", f"no joint trajectory {missing[0]!r}; expected one of "
+            raise CasprError(path, "joint_trajectories", f"no trajectory {missing[0]!r}; expected one of "
                                                          f"{', '.join(map(str, ids)) or '(none)'}")
     kept: dict[str, CasprTrajectory] = {}
     refused: dict[str, str] = {}
@@ -125,11 +149,17 @@ def read_trajectories(path, bodies, only=None) -> TrajectoryFile:
         except _Refused as exc:
             refused.setdefault(tid, str(exc))
     op = root.find("operational_trajectories")
-    for k, el in enumerate(list(op) if op is not None and only is None else [], start=1):
-        tid = el.get("id") or f"{el.tag}[{k}]"
-        refused.setdefault(f"operational:{tid}", f"operational_trajectories/{el.tag}[id={tid!r}]: an "
-                                                 f"operational-space trajectory (poses of an operational space, "
-                                                 f"not joint coordinates) needs inverse kinematics; not converted")
+    for k, el in enumerate(list(op) if op is not None else [], start=1):
+        tid = f"operational:{el.get('id') or f'{el.tag}[{k}]'}"
+        if only is not None and tid not in only:
+            continue
+        where = f"operational_trajectories/{el.tag}[id={el.get('id')!r}]"
+        try:
+            if tid in kept or tid in refused:
+                raise _Refused(f"{where}: duplicate id (ids must be unique)")
+            kept[tid] = _read_operational(path, el, tid, where, operational)
+        except _Refused as exc:
+            refused.setdefault(tid, str(exc))
     return TrajectoryFile(path=path, trajectories=kept, refused=refused)
 
 
@@ -282,3 +312,49 @@ def _read_file(path, el, tid, where, bodies) -> CasprTrajectory:
         _fail(fw, "no samples")
     samples = (matlab_colon(0.0, dt, (len(ts) - 1) * dt), np.array(qs), np.array(vs), np.array(accs))
     return CasprTrajectory(id=tid, type=el.tag, time_step=dt, points=(), element=where, samples=samples)
+
+
+def _read_operational(path, el, tid, where, operational) -> CasprOperationalTrajectory:
+    """An operational-space trajectory's points, checked against the model's operational set."""
+    if el.tag not in OPERATIONAL_TYPES:
+        _fail(where, f"CASPR's OperationalTrajectory implements {' and '.join(OPERATIONAL_TYPES)} only (for "
+                     f"<{el.tag}> it raises 'Function has not been implemented yet')")
+    opset = getattr(operational, "set", None)
+    if opset is None:
+        _fail(where, "an operational-space trajectory is solved by inverse kinematics on the model's operational "
+                     f"space, and there is none: {getattr(operational, 'reason', 'no operational-spaces file given')}")
+    tdef = el.get("time_definition")
+    if tdef not in ("absolute", "relative"):
+        _fail(f"{where}@time_definition", f"expected 'absolute' or 'relative', got {tdef!r}")
+    dt = _num(path, el.get("time_step"), f"{where}@time_step")
+    if not dt > 0:
+        _fail(f"{where}@time_step", f"expected a positive time step, got {dt}")
+    pts_el = el.find("points")
+    if pts_el is None:
+        _fail(where, "missing <points> element")
+    n = opset.dim
+    points = []
+    for i, pt in enumerate(pts_el, start=1):
+        pw = f"{where}/points/point[{i}]"
+        if pt.tag != "point":
+            _fail(pw, f"unknown element <{pt.tag}>; expected <point>")
+        try:
+            y = _vec(path, pt, "y", pw, n)
+            rates = [_vec(path, pt, tag, pw, n) for tag in OPERATIONAL_TYPES[el.tag]] or [np.zeros(n)] * 2
+        except _Refused as exc:
+            raise _Refused(f"{exc} (operational set {opset.id!r}: {n} coordinates, {opset.coordinates})") from None
+        if i == 1:
+            t = 0.0
+        else:
+            raw = pt.get("time")
+            if raw is None:
+                _fail(f"{pw}@time", "missing; every point after the first needs a time")
+            tv = _num(path, raw, f"{pw}@time")
+            t = tv if tdef == "absolute" else points[-1].time + tv
+            if not t > points[-1].time:
+                _fail(f"{pw}@time", f"expected a time after {points[-1].time:g} s, got {raw}")
+        points.append(CasprPoint(time=t, q=y, q_dot=rates[0], q_ddot=rates[1]))
+    if len(points) < 2:
+        _fail(f"{where}/points", f"expected at least two <point>, got {len(points)}")
+    return CasprOperationalTrajectory(id=tid, type=el.tag, time_step=dt, points=tuple(points), element=where,
+                                      operational_set=opset)

@@ -17,6 +17,7 @@ import yaml
 from ..exceptions import CasprError
 from ..urdf import CASPR_PROVENANCE
 from .bodies import CasprBodies, CasprLink
+from .pulleys import sidecar_element
 
 GRAVITY = (0.0, 0.0, -9.81)
 
@@ -141,28 +142,37 @@ def sidecar_joints(chs: list[Chain], cone_deg: float | None, actuator_limit: flo
                 spec["cone_deg"] = float(cone_deg)
         else:
             spec.update(alpha=0.0, beta=0.0)
-        if link.actuated:
+        if link.actuated:  # CASPR's motors are unbounded unless a limit is given; weight 1 as CASPR's
             n = link.kind.n_q
-            spec["actuated"] = {"min": [-float(actuator_limit)] * n, "max": [float(actuator_limit)] * n,
-                                "weight": 1.0}
+            limit = math.inf if actuator_limit is None else float(actuator_limit)
+            spec["actuated"] = {"min": [-limit] * n, "max": [limit] * n, "weight": 1.0}
         joints[link.ident] = spec
     return joints
 
 
+def _route(bodies: CasprBodies, cable) -> list[dict]:
+    """A CASPR cable's route as sidecar elements: its rotating pulley if any, then its attachments as
+    points (link frames, from the joint point)."""
+    route = [] if getattr(cable, "pulley", None) is None else [sidecar_element(cable.pulley)]
+    for link, loc in cable.attachments:
+        if link == 0:
+            point, lname = loc, "base"  # absolute in the base frame in either reference
+        else:
+            L = bodies.links[link - 1]
+            point = L.com + loc if cable.reference == "com" else loc
+            lname = L.ident
+        route.append({"link": lname, "point": [float(x) + 0.0 for x in point]})
+    return route
+
+
 def sidecar_cables(bodies: CasprBodies, cset) -> list[dict]:
-    out = []
-    for cable in cset.cables:
-        route = []
-        for link, loc in cable.attachments:
-            if link == 0:
-                point, lname = loc, "base"  # absolute in the base frame in either reference
-            else:
-                L = bodies.links[link - 1]
-                point = L.com + loc if cable.reference == "com" else loc
-                lname = L.ident
-            route.append({"link": lname, "point": [float(x) + 0.0 for x in point]})
-        out.append({"name": cable.name, "f_min": cable.f_min, "f_max": cable.f_max, "route": route})
-    return out
+    return [{"name": c.name, "f_min": c.f_min, "f_max": c.f_max, "route": _route(bodies, c)} for c in cset.cables]
+
+
+def sidecar_springs(bodies: CasprBodies, cset) -> list[dict]:
+    """CASPR's passive linear springs: ``K (l - l0)``, not clipped (``CableModelPassiveLinearSpring``)."""
+    return [{"name": s.name, "stiffness": s.stiffness["K"], "rest_length": s.stiffness["l0"],
+             "route": _route(bodies, s)} for s in cset.springs]
 
 
 class _Dumper(yaml.SafeDumper):

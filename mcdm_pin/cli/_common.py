@@ -7,7 +7,7 @@ import argparse
 import numpy as np
 
 from ..exceptions import McdmError
-from ..model.joints import CONE_TYPES
+from ..vocabulary import CONE_TYPES
 
 
 class UsageError(McdmError):

@@ -14,6 +14,7 @@ WHAT = {
     "sidecar": "a cable sidecar (YAML)",
     "urdf": "a URDF (XML robot description)",
     "mjcf": "a MuJoCo MJCF file",
+    "osim": "an OpenSim model (.osim)",
     "xml": "an XML file",
     "csv": "a CSV file",
     "binary": "a binary file",
@@ -43,7 +44,9 @@ def file_kind(path) -> str:
     if "\x00" in text:
         return "binary"
     stripped = text.lstrip("\ufeff \t\r\n")
-    if stripped.startswith("<") or suffix in (".urdf", ".xml", ".mjcf"):
+    if stripped.startswith("<") or suffix in (".urdf", ".xml", ".mjcf", ".osim"):
+        if suffix == ".osim" or "<OpenSimDocument" in text:
+            return "osim"
         if re.search(r"<mujoco[\s>]", text):
             return "mjcf"
         return "urdf" if "<robot" in text or suffix == ".urdf" else "xml"
@@ -71,7 +74,7 @@ def robot_file(path, where: str = "ROBOT") -> str:
     """``path`` if it can be a robot's sidecar; otherwise a :class:`UsageError` saying what it is and
     what to pass instead."""
     kind = file_kind(path)
-    if kind in ("sidecar", "missing", "mjcf"):  # missing: the loader's own message names the file
+    if kind in ("sidecar", "missing", "mjcf", "osim"):  # missing: the loader's own message names the file
         return str(path)
     if kind == "urdf":
         near = _sidecars_naming(Path(path))

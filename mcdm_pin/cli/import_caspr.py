@@ -13,16 +13,23 @@ def add(sub):
     p.add_argument("cables", help="CASPR *_cables.xml")
     p.add_argument("--trajectories", help="CASPR *_trajectories.xml (every joint trajectory that can be "
                                           "converted is; the others are listed with the reason)")
+    p.add_argument("--operational-spaces", metavar="FILE",
+                   help="CASPR *_operational_spaces.xml (default: the one beside the bodies file): its set's "
+                        "operational-space trajectories are solved by inverse kinematics (needs pin-pink: "
+                        "pip install 'mcdm-pin[ik]')")
+    p.add_argument("--operational-set", metavar="ID",
+                   help="the operational set the trajectories are given in (default: the file's default)")
     p.add_argument("--trajectory", action="append", dest="trajectory_ids", metavar="ID",
                    help="convert only this trajectory id (repeatable)")
-    p.add_argument("--cable-set", help="cable set id (default: the file's default_cable_set)")
+    p.add_argument("--cable-set", help="cable set id (default: the file's default_cable_set, or the first set "
+                                       "with a cable when that one is empty)")
     p.add_argument("--out", required=True, help="output folder (sidecar and trajectory CSV files)")
     p.add_argument("--urdf-dir", help="folder of the URDF (default: --out)")
     p.add_argument("--name", help="robot name and file stem (default: from the bodies file name)")
     p.add_argument("--cone-deg", type=float, help="write this stability cone on every spherical joint")
     p.add_argument("--actuator-limit", type=float, metavar="N",
-                   help="bound |tau| <= N (N m or N) on actuated joints' motors: CASPR leaves them unbounded, "
-                        "the sidecar needs a finite bound (required for models with actuated joints)")
+                   help="bound |tau| <= N (N m or N) on actuated joints' motors (default: unbounded, as in "
+                        "CASPR; their weight 1 in the objective keeps them finite)")
     p.set_defaults(func=run)
     return p
 
@@ -30,7 +37,8 @@ def add(sub):
 def run(args) -> int:
     res = import_caspr(args.bodies, args.cables, args.out, trajectories_xml=args.trajectories,
                        cable_set=args.cable_set, name=args.name, trajectory_ids=args.trajectory_ids,
-                       cone_deg=args.cone_deg, actuator_limit=args.actuator_limit, urdf_dir=args.urdf_dir)
+                       cone_deg=args.cone_deg, actuator_limit=args.actuator_limit, urdf_dir=args.urdf_dir,
+                       operational_spaces_xml=args.operational_spaces, operational_set=args.operational_set)
     from ..robot import Robot
 
     robot = Robot.load(res.sidecar)
@@ -48,6 +56,11 @@ def run(args) -> int:
     if res.trajectories:
         kinds = [f"{tid} ({'csv' if tid in res.csv_files else 'quintic'})" for tid in res.trajectories]
         print("trajectories: " + ", ".join(kinds))
+    for tid, sol in res.task_solutions.items():
+        if tid in res.trajectories:
+            print(f"trajectory {tid}: inverse kinematics, {len(sol.t)} samples; forward kinematics misses the "
+                  f"poses by {sol.fk_error:.2g}, |J qd - yd| <= {sol.velocity_residual:.2g}, "
+                  f"|J qdd + Jd qd - ydd| <= {sol.acceleration_residual:.2g}")
     for tid, reason in res.refused.items():
         print(f"refused trajectory {tid!r}: {reason}")
     return 0

@@ -61,9 +61,14 @@ def run(args) -> int:
         bounds = ["muscle", "(FLV)"] if k in muscles else [f"{c.f_min:g}", f"{c.f_max:g}"]
         rows.append([c.name, *bounds, _route_text(c)])
     print(table(["cable", "f_min N", "f_max N", "route (link[point m], ~wrap~, |pulley|)"], rows))
+    if robot.springs is not None:  # known tensions k (l - l0): mcdm_pin/model/springs.py
+        print("\npassive springs (tension k (l - l0), known):")
+        rows = [[s.name, f"{s.stiffness:g}", f"{s.rest_length:g}", "yes" if s.tension_only else "no", _route_text(s)]
+                for s in robot.springs.springs]
+        print(table(["spring", "k N/m", "l0 m", "tension only", "route"], rows))
     if sc is not None and sc.trajectories:
         print("\ntrajectories: " + ", ".join(
-            f"{n} ({t.type}{'' if t.type == 'csv' else f', {t.duration:g} s, dt {t.dt:g}'})"
+            f"{n} ({t.type}{'' if t.duration is None else f', {t.duration:g} s, dt {t.dt:g}'})"
             for n, t in sc.trajectories.items()))
     print("\nvalidation:")
     report = _inertia_report(robot) + validation_report(robot)
@@ -79,12 +84,15 @@ def run(args) -> int:
 
 def _route_text(cable) -> str:
     """A route in one line: points as ``frame[x, y, z]``, wraps as ``~kind name r=radius~``, pulleys as
-    ``|/divisor|``."""
-    from ..model.cables import Pulley, Wrap
+    ``|/divisor|``, rotating pulleys as ``(rotating pulley frame[entry] r=radius)``."""
+    from ..model.cables import Pulley, RotatingPulley, Wrap
 
     parts = []
     for e in cable.route:
-        if isinstance(e, Wrap):
+        if isinstance(e, RotatingPulley):
+            parts.append(f"({'screw ' if e.screw else ''}rotating pulley {e.frame}{np.round(e.entry, 4).tolist()} "
+                         f"r={e.radius:g})")
+        elif isinstance(e, Wrap):
             parts.append(f"~{e.kind} {e.name or e.frame} r={e.radius:g}~")
         elif isinstance(e, Pulley):
             parts.append(f"|/{e.divisor:g}|")

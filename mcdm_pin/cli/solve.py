@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..vocabulary import CASES, CONE_FRAMES
 from ._common import UsageError, check_outputs, parse_cones, parse_weights, printable, table
 from ._files import robot_file
 from .view import html_file, solve_html_hook
@@ -15,11 +16,11 @@ def add(sub):
     p = sub.add_parser("solve", help="cable forces along a trajectory (cases 1-3)")
     p.add_argument("robot", help="cable sidecar (YAML) or MuJoCo MJCF file")
     p.add_argument("--trajectory", "-t", required=True, help="a trajectory named in the sidecar")
-    p.add_argument("--case", type=int, choices=(1, 2, 3), default=1,
+    p.add_argument("--case", type=int, choices=CASES, default=1,
                    help="1: min f^T f; 2: min interactions; 3: case 2 + stability cones (default 1)")
     p.add_argument("--weights", help="alpha (and beta) per joint: JOINT=ALPHA[:BETA],...")
     p.add_argument("--cone", help="cone half-angle per joint: JOINT=DEG,... or all=DEG (case 3)")
-    p.add_argument("--frame", choices=("socket", "child"), default="socket",
+    p.add_argument("--frame", choices=CONE_FRAMES, default="socket",
                    help="frame of the cone's force (default socket, the source paper's)")
     p.add_argument("--solver", default="default",
                    help="default (the compiled active set and interior-point method, ProxQP and "

@@ -7,6 +7,7 @@ import sys
 
 import numpy as np
 
+from ..vocabulary import CASES, CONE_FRAMES
 from ._files import robot_file
 from ._common import UsageError, parse_cones, parse_float, parse_pairs, parse_weights
 
@@ -15,11 +16,11 @@ def add(sub):
     p = sub.add_parser("workspace", help="where the robot can hold itself: many poses into a Zarr store "
                                          "(this machine's cores or a Dask cluster)")
     p.add_argument("robot", help="cable sidecar (YAML) or MuJoCo MJCF file")
-    p.add_argument("--case", type=int, choices=(1, 2, 3), default=1,
+    p.add_argument("--case", type=int, choices=CASES, default=1,
                    help="1: min f^T f; 2: min interactions; 3: case 2 + stability cones (default 1)")
     p.add_argument("--cone", help="cone half-angle per joint: JOINT=DEG,... or all=DEG (case 3)")
     p.add_argument("--weights", help="alpha (and beta) per joint: JOINT=ALPHA[:BETA],...")
-    p.add_argument("--frame", choices=("socket", "child"), default="socket",
+    p.add_argument("--frame", choices=CONE_FRAMES, default="socket",
                    help="frame of the cone's force (default socket)")
     p.add_argument("--solver", default="default", help="default (the full chain), compiled, proxqp or clarabel")
     poses = p.add_mutually_exclusive_group(required=True)

@@ -1,7 +1,8 @@
 """Constraints: the equation of motion, cable bounds and interaction cones."""
 
 from ..exceptions import ProblemError
-from .base import ConeData, Constraint, perpendicular_basis
+from ..qp import ConeData, perpendicular_basis
+from .base import Constraint
 from .bounds import CableForceBounds
 from .cone import InteractionCone
 from .equation_of_motion import EquationOfMotion

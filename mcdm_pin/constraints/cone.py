@@ -13,10 +13,12 @@ import numpy as np
 
 from .. import jit
 from ..exceptions import ProblemError
-from ..model.joints import CONE_TYPES
-from .base import ConeData, Constraint, perpendicular_basis
+from ..vocabulary import CONE_FRAMES, CONE_TYPES
+from ..qp import cone_constants
+from ..qp import ConeData, perpendicular_basis
+from .base import Constraint
 
-FRAMES = ("socket", "child")
+FRAMES = CONE_FRAMES
 
 
 class InteractionCone(Constraint):
@@ -83,8 +85,6 @@ class ConeBatch:
     compiled)."""
 
     def __init__(self, cones: list[InteractionCone]):
-        from ..problem import cone_constants
-
         self.cones = cones
         self.index = np.array([c.index for c in cones], dtype=np.int64)
         self.socket = np.array([c.frame == "socket" for c in cones], dtype=np.bool_)

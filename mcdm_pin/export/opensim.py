@@ -43,7 +43,8 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import MissingPackageError, ModelError
+from ..exceptions import MissingPackageError, ModelError  # noqa: F401 (MissingPackageError: re-exported)
+from ..extras import optional
 from .osim_names import check_written, legal_names
 
 INSTALL_HINT = "pip install 'mcdm-pin[opensim]'  (or: pip install opensim)"
@@ -52,12 +53,7 @@ GROUND = "ground"
 
 def require_opensim():
     """The ``opensim`` module, or :class:`MissingPackageError` with the install command."""
-    try:
-        import opensim
-    except ImportError:
-        raise MissingPackageError(f"the OpenSim export and peer need the optional package 'opensim' "
-                                  f"(OpenSim 4.6), which is not installed; install it with: "
-                                  f"{INSTALL_HINT}") from None
+    opensim = optional("opensim", "the OpenSim export and peer (OpenSim 4.6)")
     opensim.Logger.setLevelString("error")  # OpenSim logs every model it builds at 'info'
     opensim.Logger.removeFileSink()  # and would leave an opensim.log in the working directory
     return opensim
@@ -138,7 +134,7 @@ def describe(robot) -> RobotSpec:
     model = robot.model
     cables = robot.cables
     unsupported = [what for what, present in (
-        ("routes over wrapping surfaces", cables.configuration_dependent),
+        ("routes over wrapping surfaces or rotating pulleys", cables.configuration_dependent),
         ("pulleys", bool(np.any(cables.seg_scale != 1.0))), ("muscles", cables.muscles is not None),
         ("coupled coordinates", getattr(robot, "couplings", None) is not None)) if present]
     if unsupported:

@@ -11,7 +11,8 @@ A Pinocchio user who holds a ``model`` and its ``data`` gets the cable terms wit
 
 Modules: :mod:`.cables` (routes on frames), :mod:`.joints` (physical joints of any type, groups such as
 Euler triples), :mod:`.charts` (coordinates <-> configuration), :mod:`.terms` (the functions and
-:class:`~.terms.TermsEvaluator`), :mod:`.actuators` (hybrid robots), :mod:`.geometry` and
+:class:`~.terms.TermsEvaluator`), :mod:`.actuators` (hybrid robots), :mod:`.springs` (passive springs:
+known tensions that follow their lengths), :mod:`.geometry` and
 :mod:`.kernels` (the numpy reference and the compiled pass).
 """
 
@@ -19,6 +20,7 @@ from .actuators import Actuator, actuation_matrix
 from .cables import Cable, CableSet, RoutePoint, find_frame
 from .charts import configuration, configuration_names, coordinate_names, coordinates, tangent
 from .joints import JOINT_TYPES, PhysicalJoint, classify, group, physical_joints, single
+from .springs import Spring, SpringSet
 from .terms import (Terms, TermsEvaluator, cable_generalized_force, cable_jacobian, cable_lengths,
                     cable_terms, interaction_angles, interaction_map)
 
@@ -26,4 +28,4 @@ __all__ = ["Actuator", "actuation_matrix", "Cable", "CableSet", "RoutePoint", "f
            "configuration_names", "coordinate_names", "coordinates", "tangent", "JOINT_TYPES",
            "PhysicalJoint", "classify", "group", "physical_joints", "single", "Terms", "TermsEvaluator",
            "cable_generalized_force", "cable_jacobian", "cable_lengths", "cable_terms", "interaction_angles",
-           "interaction_map"]
+           "interaction_map", "Spring", "SpringSet"]

@@ -26,7 +26,8 @@ class Actuator:
     Attributes:
         joint: the physical joint's name.
         idx_v: (k,) the velocity columns it drives.
-        tau_min, tau_max: (k,) bounds, N m or N (may be negative).
+        tau_min, tau_max: (k,) bounds, N m or N (may be negative; ``-inf``/``inf``: unbounded, CASPR's
+            default for a joint motor: the weight in the objective alone then keeps the torque finite).
         weight: weight of ``|tau|^2`` in the objectives that weigh the unknowns (case 1).
         names: a name per component (``JOINT`` or ``JOINT[i]``).
     """
@@ -43,11 +44,14 @@ class Actuator:
         k = len(self.idx_v)
         if lo.shape != (k,) or hi.shape != (k,):
             raise ModelError(f"actuator of joint {self.joint!r}: expected {k} lower and {k} upper bounds")
-        if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(lo < hi)):
-            raise ModelError(f"actuator of joint {self.joint!r}: expected finite bounds with min < max, got "
-                             f"min={lo.tolist()}, max={hi.tolist()}")
+        if not (np.all(lo < hi) and np.all(lo < math.inf) and np.all(hi > -math.inf)):
+            raise ModelError(f"actuator of joint {self.joint!r}: expected bounds with min < max (min may be -inf, "
+                             f"max inf: unbounded), got min={lo.tolist()}, max={hi.tolist()}")
         if not (math.isfinite(self.weight) and self.weight >= 0):
             raise ModelError(f"actuator of joint {self.joint!r}: weight must be finite and >= 0, got {self.weight!r}")
+        if self.weight == 0 and not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+            raise ModelError(f"actuator of joint {self.joint!r}: an unbounded actuator needs a weight > 0 (with "
+                             f"weight 0 nothing keeps its torque finite and case 1 has no unique answer)")
         object.__setattr__(self, "tau_min", lo)
         object.__setattr__(self, "tau_max", hi)
         object.__setattr__(self, "idx_v", np.asarray(self.idx_v, dtype=int))

@@ -6,7 +6,11 @@ of the model (a link's body frame, a joint frame, an operational frame, the ``un
 pass over several links. Between two points a route may pass over a :class:`Wrap` (a sphere or a
 cylinder fixed in a frame: the cable takes the shortest path over it when the straight segment would
 cut through it, MuJoCo's definition, :mod:`mcdm_pin.model.wrapping`); a :class:`Pulley` starts a new
-branch whose length and tension count ``1/divisor`` (MuJoCo's ``pulley divisor``). Such a route
+branch whose length and tension count ``1/divisor`` (MuJoCo's ``pulley divisor``). A route may start or
+end at a :class:`RotatingPulley` (a swivelling pulley fed from a winch on its body, optionally on a
+screw-driven outlet, :class:`ScrewDrive`: CASPR's ``base_rotating_pulley`` and
+``screw_base_rotating_pulley``, :mod:`mcdm_pin.model.pulleys`): its exit point moves with the cable's
+other end. Such a route
 depends on the configuration; its length, ``L`` and wrenches follow from its path at each instant
 (:mod:`mcdm_pin.model.routes`). Cables can only pull: ``0 <= f_min <= f <= f_max``.
 
@@ -133,6 +137,50 @@ class Pulley:
 
 
 @dataclass(frozen=True)
+class ScrewDrive:
+    """A screw-driven winch outlet carrying a :class:`RotatingPulley`'s entry point (CASPR's
+    ``screw_base_rotating_pulley``; the rule is in :mod:`mcdm_pin.model.pulleys`).
+
+    Attributes:
+        direction: (3,) the drum's travel direction ``v`` in the pulley's frame (used as given, not
+            normalised, as CASPR does).
+        lead: ``k``, metres of travel per metre of cable paid out (groove width / (pi * drum
+            diameter)), ``0 <= k |v| < 1``.
+        reference: ``l_0``, metres: the distance from the winch point to the cable's other end at the
+            model's initial configuration.
+        outlet: ``t_0``, metres along ``v``: the outlet's position at that configuration.
+    """
+
+    direction: tuple[float, float, float]
+    lead: float
+    reference: float
+    outlet: float
+
+
+@dataclass(frozen=True)
+class RotatingPulley:
+    """A pulley that swivels about its entry line, at the start or the end of a route (its exit point
+    faces the neighbouring route point at every instant: :mod:`mcdm_pin.model.pulleys`).
+
+    Attributes:
+        frame: the frame it is fixed in (with the winch that feeds it).
+        entry: (3,) the entry point ``F`` in ``frame``, metres (with ``screw``: the fixed winch point
+            ``W``; the entry point then rides on the screw).
+        axis: (3,) the direction the cable runs in as it reaches ``F`` (the swivel axis), in ``frame``.
+        radius: metres, > 0.
+        screw: a :class:`ScrewDrive` moving the entry point, or ``None``.
+        name: for messages.
+    """
+
+    frame: str
+    entry: tuple[float, float, float]
+    axis: tuple[float, float, float]
+    radius: float
+    screw: ScrewDrive | None = None
+    name: str = ""
+
+
+@dataclass(frozen=True)
 class Cable:
     """One cable: a name, an ordered route (points, and wraps and pulleys between them) of at least
     two points, force bounds in newtons."""
@@ -144,7 +192,7 @@ class Cable:
 
     @property
     def route_points(self) -> tuple[RoutePoint, ...]:
-        """The route's fixed points (wraps and pulleys left out)."""
+        """The route's fixed points (wraps, pulleys and rotating pulleys left out)."""
         return tuple(p for p in self.route if isinstance(p, RoutePoint))
 
     @property
@@ -159,7 +207,7 @@ class Cable:
 
     @property
     def configuration_dependent(self) -> bool:
-        """The route holds a wrap or a pulley."""
+        """The route holds a wrap, a pulley or a rotating pulley."""
         return any(not isinstance(p, RoutePoint) for p in self.route)
 
 
@@ -205,6 +253,10 @@ def _as_cable(model, item, k: int) -> tuple[Cable, list]:
             w, fid, side_fid = _as_wrap(model, p, where)
             route.append(w)
             resolved.append(("wrap", fid, side_fid))
+        elif isinstance(p, RotatingPulley):
+            rp, fid = _as_rotating(model, p, where)
+            route.append(rp)
+            resolved.append(("rotating", fid))
         elif isinstance(p, Pulley):
             d = _number(p.divisor, f"{where}: pulley divisor")
             if not d > 0:
@@ -223,7 +275,7 @@ def _as_cable(model, item, k: int) -> tuple[Cable, list]:
         raise ModelError(f"cable {cable.name!r}: expected bounds of 0 or at least {MIN_FORCE_BOUND:g} N "
                          f"(docs/limits.md: smaller forces' squares underflow), got f_min={f_min!r}, "
                          f"f_max={f_max!r}")
-    n_points = sum(1 for r in resolved if r[0] == "point")
+    n_points = sum(1 for r in resolved if r[0] in ("point", "rotating"))
     if n_points < 2:
         raise ModelError(f"cable {cable.name!r}: expected a route of at least two points, got {n_points}")
     kinds = [r[0] for r in resolved]
@@ -235,8 +287,13 @@ def _as_cable(model, item, k: int) -> tuple[Cable, list]:
                              f"all of the route's points, with no other wrap or pulley in the route")
         kinds = kinds[:len(kinds) - len(osim)]
     for i, kind in enumerate(kinds):
-        if kind != "point" and (i == 0 or i == len(kinds) - 1 or kinds[i - 1] != "point"
-                                or kinds[i + 1] != "point"):
+        if kind == "rotating":
+            end = i == 0 or i == len(kinds) - 1
+            if not end or kinds[1 if i == 0 else i - 1] != "point":
+                raise ModelError(f"cable {cable.name!r}: route[{i}]: a rotating pulley must be the first or the "
+                                 f"last element of a route, next to a route point (its exit point faces it)")
+        elif kind != "point" and (i == 0 or i == len(kinds) - 1 or kinds[i - 1] != "point"
+                                  or kinds[i + 1] != "point"):
             raise ModelError(f"cable {cable.name!r}: route[{i}]: a {kind} must stand between two route points "
                              f"(MuJoCo's rule for spatial tendons: site, geom, site; site, pulley, site)")
     return Cable(str(cable.name), tuple(route), f_min, f_max), resolved
@@ -272,6 +329,7 @@ def _as_point(model, p, where: str) -> tuple[RoutePoint, int]:
     return RoutePoint(frame if isinstance(frame, str) else model.frames[fid].name, xyz), fid
 
 
+<<<<<<< HEAD
 def _check_osim_point(model, p, xyz, where: str):
     """A checked :class:`ConditionalPoint` or :class:`MovingPoint` (coordinates in range, functions
     of the right shape)."""
@@ -295,6 +353,46 @@ def _check_osim_point(model, p, xyz, where: str):
             raise ModelError(f"{where}: a moving point's function needs knots x (increasing) and "
                              f"coefficients y, b, c, d of one length, all finite")
     return dataclasses.replace(p, point=xyz)
+=======
+def _vector(value, what: str) -> tuple[float, float, float]:
+    try:
+        xyz = tuple(_number(v, what) for v in value)
+    except TypeError:
+        raise ModelError(f"{what}: expected 3 numbers, got {value!r}") from None
+    if len(xyz) != 3:
+        raise ModelError(f"{what}: expected 3 numbers, got {value!r}")
+    return xyz
+
+
+def _as_rotating(model, p: RotatingPulley, where: str) -> tuple[RotatingPulley, int]:
+    radius = _number(p.radius, f"{where}: rotating pulley radius")
+    if not radius > 0:
+        raise ModelError(f"{where}: expected a rotating pulley radius > 0, got {p.radius!r}")
+    fid = find_frame(model, p.frame)
+    entry = _vector(p.entry, f"{where}: rotating pulley entry")
+    axis = _vector(p.axis, f"{where}: rotating pulley axis")
+    if not math.hypot(*axis) > 1e-12:
+        raise ModelError(f"{where}: expected a nonzero rotating pulley axis (the cable's entry direction), got "
+                         f"{p.axis!r}")
+    screw = None
+    if p.screw is not None:
+        sd = p.screw
+        if not isinstance(sd, ScrewDrive):
+            raise ModelError(f"{where}: expected the rotating pulley's screw to be a ScrewDrive or None, got "
+                             f"{type(sd).__name__}")
+        direction = _vector(sd.direction, f"{where}: screw direction")
+        lead = _number(sd.lead, f"{where}: screw lead")
+        reference = _number(sd.reference, f"{where}: screw reference")
+        outlet = _number(sd.outlet, f"{where}: screw outlet")
+        if not (lead >= 0 and lead * math.hypot(*direction) < 1):
+            raise ModelError(f"{where}: expected a screw lead with 0 <= lead * |direction| < 1, got lead "
+                             f"{sd.lead!r} and direction {sd.direction!r}")
+        if not reference > 0:
+            raise ModelError(f"{where}: expected a screw reference length > 0 (metres), got {sd.reference!r}")
+        screw = ScrewDrive(direction, lead, reference, outlet)
+    frame = p.frame if isinstance(p.frame, str) else model.frames[fid].name
+    return RotatingPulley(frame, entry, axis, radius, screw, str(p.name)), fid
+>>>>>>> main
 
 
 def _as_wrap(model, w: Wrap, where: str) -> tuple[Wrap, int, int | None]:
@@ -333,15 +431,18 @@ class CableSet:
     Args:
         model: the ``pin.Model`` the route frames belong to.
         cables: :class:`Cable` objects, or mappings ``{name, route, f_min, f_max}``, where a route is a
-            sequence of :class:`RoutePoint` or ``(frame, (x, y, z))`` with frame a name or an id.
+            sequence of :class:`RoutePoint` or ``(frame, (x, y, z))`` with frame a name or an id, and
+            :class:`Wrap`, :class:`Pulley` or (first or last) :class:`RotatingPulley` elements.
 
     Raises:
-        ModelError: an unknown frame, a bad bound, a route of fewer than two points, a duplicate name, or
-            a cable whose points all sit on one body (it could not move anything).
+        ModelError: an unknown frame, a bad bound, a route of fewer than two points, a duplicate name, a
+            rotating pulley elsewhere than at an end next to a route point, or a cable whose points all
+            sit on one body (it could not move anything).
 
     Attributes:
         cables: the cables, in order; ``names``, ``f_min`` (m,), ``f_max`` (m,).
-        point_frame, point_cable: (P,) the frame id and the cable of each route point.
+        point_frame, point_cable: (P,) the frame id and the cable of each route point (a rotating
+            pulley's exit point counts as one: its slot holds the entry point until an instant's pass).
         point_joint: (P,) the Pinocchio joint carrying each route point (all cables, in order).
         point_local: (P, 3) each point in its joint's frame; ``point_frame_rotation`` (P, 3, 3) and
             ``point_frame_translation`` (P, 3) the placement of its frame in that joint's frame.
@@ -350,9 +451,14 @@ class CableSet:
         seg_scale: (S,) the share of length and tension of each segment (``1/divisor`` past a pulley).
         wraps: the :class:`ResolvedWrap` of every wrap, in route order; the segment ``seg`` each one
             sits on is the straight segment its path replaces when it engages (:mod:`.routes`).
+<<<<<<< HEAD
         osim_wraps: the :class:`ResolvedWrap` of every OpenSim wrap (``a`` the cable's first point,
             ``seg`` -1), in route order; ``osim_cables`` the cables whose path follows OpenSim's rules
             (:mod:`mcdm_pin.model.route_osim`).
+=======
+        rotating: the :class:`ResolvedRotatingPulley` of every rotating pulley, in route order; each
+            has a route point slot (on the pulley's body) that holds its exit point at each instant.
+>>>>>>> main
         muscles: the :class:`~mcdm_pin.model.muscles.MuscleParams` of the cables that are muscles
             (``None``: none), ``muscle_index`` (k,) those cables; a muscle's tension range at an
             instant follows its length and speed, and its ``f_min``/``f_max`` here only bound it.
@@ -373,19 +479,26 @@ class CableSet:
         self.f_min = np.array([c.f_min for c in self.cables])
         self.f_max = np.array([c.f_max for c in self.cables])
         jid, local, seg_a, seg_b, seg_c, seg_s, fids_all, wraps = [], [], [], [], [], [], [], []
+<<<<<<< HEAD
         osim_wraps, frame_R, frame_p = [], [], []
+=======
+        rotating = []
+>>>>>>> main
         for k, (cable, res) in enumerate(resolved):
             start = len(jid)
             bodies = set()
             scale = 1.0
             prev = None  # index of the last point, None right after a pulley
             for i, (elem, r) in enumerate(zip(cable.route, res)):
-                if r[0] == "point":
+                if r[0] in ("point", "rotating"):  # a rotating pulley's slot holds its exit point
                     frame = model.frames[r[1]]
                     frame_R.append(frame.placement.rotation.copy())
                     frame_p.append(frame.placement.translation.copy())
                     jid.append(int(frame.parentJoint))
-                    local.append(frame.placement.act(np.array(elem.point)))
+                    local.append(frame.placement.act(np.array(elem.point if r[0] == "point" else elem.entry)))
+                    if r[0] == "rotating":
+                        b = len(jid) if i == 0 else len(jid) - 2  # the neighbouring route point
+                        rotating.append(_resolve_rotating(model, k, elem, r[1], len(jid) - 1, b, scale))
                     fids_all.append(r[1])
                     bodies.add(jid[-1])
                     if prev is not None:
@@ -408,7 +521,8 @@ class CableSet:
                                  f"point is fixed to the body of joint {model.names[jid[start]]!r}), so it "
                                  f"cannot move anything")
         self.point_frame = np.array(fids_all, dtype=int)
-        self.point_cable = np.repeat(np.arange(len(resolved)), [len(c.route_points) for c, _ in resolved])
+        self.point_cable = np.repeat(np.arange(len(resolved)),
+                                     [sum(r[0] in ("point", "rotating") for r in res) for _, res in resolved])
         self.point_joint = np.array(jid, dtype=int)
         self.point_frame_rotation = np.array(frame_R, dtype=float).reshape(-1, 3, 3)
         self.point_frame_translation = np.array(frame_p, dtype=float).reshape(-1, 3)
@@ -419,10 +533,14 @@ class CableSet:
         self.seg_scale = np.array(seg_s, dtype=float)
         self.seg_active = self.point_joint[self.seg_a] != self.point_joint[self.seg_b]
         self.wraps = tuple(wraps)
+<<<<<<< HEAD
         self.osim_wraps = tuple(osim_wraps)
         self.osim_cables = tuple(k for k, c in enumerate(self.cables) if any(
             isinstance(p, (ConditionalPoint, MovingPoint)) or (isinstance(p, Wrap) and p.kind in OPENSIM_WRAPS)
             for p in c.route))
+=======
+        self.rotating = tuple(rotating)
+>>>>>>> main
         self.muscles, self.muscle_index = None, np.zeros(0, dtype=int)
         if muscles is not None:
             names = list(muscle_cables)
@@ -436,9 +554,15 @@ class CableSet:
 
     @property
     def configuration_dependent(self) -> bool:
+<<<<<<< HEAD
         """Some route wraps over a surface or follows OpenSim's conditional or moving points (its path
         depends on the configuration)."""
         return bool(self.wraps) or bool(self.osim_cables)
+=======
+        """Some route wraps over a surface or leaves a rotating pulley (its path depends on the
+        configuration)."""
+        return bool(self.wraps or self.rotating)
+>>>>>>> main
 
     @property
     def m(self) -> int:
@@ -501,6 +625,37 @@ def _resolve_wrap(model, k: int, w: Wrap, r, a: int, seg: int, scale: float) -> 
         side_local = sframe.placement.act(np.array(w.side.point))
     return ResolvedWrap(k, a, a + 1, seg, int(frame.parentJoint), placement, w.kind, float(w.radius),
                         side_joint, side_local, scale, w.name)
+
+
+@dataclass(frozen=True)
+class ResolvedRotatingPulley:
+    """A rotating pulley bound to the model: on cable ``cable``, its exit point is route point ``point``
+    (on Pinocchio joint ``joint``), facing route point ``b``. ``entry``, ``axis`` (and the screw's
+    ``screw_direction``) in that joint's frame; ``scale``: the branch's share (``1/divisor``);
+    ``screw`` ``None`` or ``(lead, reference, outlet)``."""
+
+    cable: int
+    point: int
+    b: int
+    joint: int
+    entry: np.ndarray
+    axis: np.ndarray
+    radius: float
+    scale: float
+    screw_direction: np.ndarray
+    screw: tuple | None
+    name: str
+
+
+def _resolve_rotating(model, k: int, p: RotatingPulley, fid: int, point: int, b: int,
+                      scale: float) -> ResolvedRotatingPulley:
+    placement = model.frames[fid].placement
+    R = placement.rotation
+    screw, direction = None, np.zeros(3)
+    if p.screw is not None:
+        screw, direction = (p.screw.lead, p.screw.reference, p.screw.outlet), R @ np.array(p.screw.direction)
+    return ResolvedRotatingPulley(k, point, b, int(model.frames[fid].parentJoint), placement.act(np.array(p.entry)),
+                                  R @ np.array(p.axis), float(p.radius), scale, direction, screw, p.name)
 
 
 def _signature(model: pin.Model) -> tuple:

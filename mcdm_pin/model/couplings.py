@@ -1,8 +1,12 @@
-r"""Coupled coordinates: a coordinate that is a polynomial of another (MuJoCo's ``equality joint``).
+r"""Coupled coordinates: a coordinate that is a function of another (MuJoCo's ``equality joint``,
+OpenSim's ``CustomJoint`` transform axes and ``CoordinateCouplerConstraint``).
 
-A coupling ties a *dependent* coordinate :math:`y` to an *independent* one :math:`x`,
+A coupling ties a *dependent* coordinate :math:`y` to an *independent* one :math:`x`, by a polynomial
 
 .. math:: y = a_0 + a_1 x + a_2 x^2 + a_3 x^3 + a_4 x^4,
+
+or by any function of one variable with two derivatives (``Coupling.function``: OpenSim's linear,
+multiplier and spline functions, :mod:`mcdm_pin.osim.functions`),
 
 both measured as Pinocchio's configuration entries of one-degree-of-freedom joints (a MuJoCo hinge or
 slide ``q = qpos - qpos0``, so MuJoCo's ``y - y_0 = p(x - x_0)`` is this polynomial unchanged); without an
@@ -41,17 +45,22 @@ class Coupling:
     Attributes:
         dependent, independent: indices into ``v`` (coordinates of one-DoF joints); ``independent``
             -1 for a fixed coordinate.
-        coef: (5,) ``a_0 .. a_4``.
+        coef: (5,) ``a_0 .. a_4`` (ignored when ``function`` is given).
         name: the source's name of the coupling (MuJoCo's equality name), for messages.
+        function: ``None`` (the polynomial), or an object whose ``value(x)`` returns
+            ``(f(x), f'(x), f''(x))``.
     """
 
     dependent: int
     independent: int
     coef: tuple
     name: str = ""
+    function: object = None
 
     def value(self, x: float) -> tuple[float, float, float]:
         """``(p(x), p'(x), p''(x))``."""
+        if self.function is not None:
+            return tuple(float(t) for t in self.function.value(x))
         a0, a1, a2, a3, a4 = self.coef
         return (a0 + x * (a1 + x * (a2 + x * (a3 + x * a4))),
                 a1 + x * (2 * a2 + x * (3 * a3 + x * 4 * a4)),
@@ -82,7 +91,7 @@ class Couplings:
                 if i >= nv or (i >= 0 and self.q_index[i] < 0) or (i < 0 and i != c.independent):
                     raise ModelError(f"coupling {c.name!r}: coordinate {i} is not the angle or position of a "
                                      f"one-degree-of-freedom joint")
-            if len(c.coef) != 5 or not all(math.isfinite(a) for a in c.coef):
+            if c.function is None and (len(c.coef) != 5 or not all(math.isfinite(a) for a in c.coef)):
                 raise ModelError(f"coupling {c.name!r}: expected 5 finite polynomial coefficients, got {c.coef!r}")
         self.items = tuple(_ordered(items, self.names))
         self.dependent = np.array([c.dependent for c in self.items], dtype=int)
@@ -108,7 +117,7 @@ class Couplings:
         qi = self.q_index
         for c in self.items:
             if c.independent < 0:
-                q[qi[c.dependent]] = c.coef[0]
+                q[qi[c.dependent]] = c.value(0.0)[0]
                 if v is not None:
                     v[c.dependent] = 0.0
                 if a is not None:
@@ -153,6 +162,9 @@ class Couplings:
         qv = np.asarray(q, dtype=float)[self.q_index[src]].tolist() if len(dep_rows) else []
         value = [1.0] * self.nv  # each row's entry (1 for the independent rows)
         for k, (d, i, x) in enumerate(zip(dep_rows, src, qv)):
+            if callable(coef[k]):  # a function's f'
+                value[d] = coef[k](x)[1] * value[i]
+                continue
             a0, a1, a2, a3, a4 = coef[k]
             value[d] = (a1 + x * (2 * a2 + x * (3 * a3 + x * 4 * a4))) * value[i]  # Coupling.value's p'
         N = np.zeros((self.nv, self.n))
@@ -166,7 +178,8 @@ def _chain(cs: Couplings):
     """:meth:`Couplings.basis`'s lists, in the couplings' order, for those with an independent
     coordinate at the root of its chain (not a fixed one): ``(rows, columns, sources, coefficients)``:
     each dependent's row, the column of that independent coordinate, the row it multiplies (whose
-    ``q`` entry is also the polynomial's ``x``) and its polynomial."""
+    ``q`` entry is also the polynomial's ``x``) and its polynomial (or, for a function, its
+    ``value`` method)."""
     col = {int(i): k for k, i in enumerate(cs.independent)}
     rows, cols, src, coef = [], [], [], []
     for c in cs.items:
@@ -178,7 +191,7 @@ def _chain(cs: Couplings):
         rows.append(c.dependent)
         cols.append(root)
         src.append(c.independent)
-        coef.append(tuple(float(a) for a in c.coef))
+        coef.append(c.value if c.function is not None else tuple(float(a) for a in c.coef))
     return rows, cols, np.array(src, dtype=int), coef
 
 

@@ -29,13 +29,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ModelError
+from ..vocabulary import CONE_TYPES, JOINT_TYPES
 
-JOINT_TYPES = ("spherical", "revolute", "prismatic", "universal", "planar", "translation", "free",
-               "helical", "ellipsoid", "composite")
-PARAMETRIZATIONS = ("euler-xyz", "quaternion", "zyx")
-# joints a stability cone may bound: ball joints, and composite joints (an MJCF body's several joints,
-# e.g. a shoulder's rotations about one point, where the cone bounds the reaction force's direction)
-CONE_TYPES = ("spherical", "composite")
 GEOM_TOL = 1e-9  # m and rad: members "meet" and axes are "orthogonal" within this
 _MASS_TOL = 0.0  # intermediate bodies of a group must be exactly massless
 

@@ -15,7 +15,7 @@ Python (:mod:`mcdm_pin.jit`), so every run gives the same answers.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 
 @njit(cache=True, nogil=True)

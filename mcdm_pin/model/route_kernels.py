@@ -1,4 +1,4 @@
-r"""The compiled route pass: every wrap of a cable set at one instant in one call.
+r"""The compiled route pass: every wrap and rotating pulley of a cable set at one instant in one call.
 
 :class:`mcdm_pin.model.routes.RoutePaths` keeps the path arrays the cable-terms kernel reads (its module
 docstring gives the layout); :func:`route_pass` rewrites them from the key bodies' world placements.
@@ -17,12 +17,18 @@ the surface's body, :math:`R_w t + p_w` (metres). The wrap maths is ``wrapping.p
 compiled inline here: one implementation (the helpers below are ``register_jitable`` too, so
 the uncompiled path is Python throughout).
 
+Then every rotating pulley (:mod:`mcdm_pin.model.pulleys`): the cable's other end :math:`B` (on key
+body ``b``) is taken into the frame of the pulley's body ``k``, :math:`{}^0R_k^T(B - {}^0p_k)`; a screw
+outlet moves the entry point there (:func:`~mcdm_pin.model.pulleys.screw_entry`), the exit point
+(:func:`~mcdm_pin.model.pulleys.rotating_exit`) goes into the pulley's route point slot, in the frame of
+the pulley's body, and the arc, times the branch's scale, into its cable's ``arc_length``.
+
 Compiled by ``mcdm-pin compile`` with the other kernels and cached on disk (``cache=True``),
 registered with :mod:`mcdm_pin.jit` like :mod:`mcdm_pin.model.kernels`; until then the same code runs
 as Python (``jit.kernels("model.route_kernels").route_pass``).
 
-Packed per-wrap tables (one array each, so that a call passes few arguments: numba's dispatch costs
-about a microsecond per argument):
+Packed per-wrap and per-pulley tables (one array each, so that a call passes few arguments: numba's
+dispatch costs about a microsecond per argument):
 
 - ``wrap_int`` (W, 12) int64: key bodies of the surface, ``A``, ``B`` and the side point; has a side
   point (0/1); cylinder (0/1, else sphere); the slot of ``T_0`` (``T_1`` is the next); the segment
@@ -30,15 +36,28 @@ about a microsecond per argument):
   ``AB`` does.
 - ``wrap_float`` (W, 23): ``A``, ``B`` and the side point in their bodies' frames; ``R_w``
   (row-major), ``p_w``; the radius; the branch's scale ``1/divisor``.
+- ``pulley_int`` (Q, 5) int64: key bodies of the pulley and of ``B``; the exit point's slot; the
+  cable; has a screw outlet (0/1).
+- ``pulley_float`` (Q, 17): ``B`` in its body's frame; the entry point (the winch point with a screw),
+  the entry direction, the screw's direction, all in the pulley body's frame; the radius; the
+  branch's scale; the screw's lead, reference length and outlet position.
+
+It returns ``(q, reason)``: the first rotating pulley without an exit point at these placements and
+why (:data:`mcdm_pin.model.pulleys.REASONS`), or ``(-1, 0)``.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
+<<<<<<< HEAD
 from .route_osim import osim_routes
 from .wrapping import from_frame, register_jitable, wrap_in_frame
+=======
+from .pulleys import REASON_OK, REASON_SCREW, rotating_exit, screw_entry
+from .wrapping import from_frame, register_jitable, to_frame, wrap_in_frame
+>>>>>>> main
 
 # columns of wrap_int
 W_KEY, A_KEY, B_KEY, S_KEY, HAS_SIDE, CYLINDER, SLOT, SEG, B_POINT, CABLE, ACTIVE_AT0, ACTIVE_AB = range(12)
@@ -46,6 +65,12 @@ N_INT = 12
 # columns of wrap_float
 A_LOCAL, B_LOCAL, S_LOCAL, R_W, P_W, RADIUS, SCALE = 0, 3, 6, 9, 18, 21, 22
 N_FLOAT = 23
+# columns of pulley_int
+Q_KEY, QB_KEY, Q_SLOT, Q_CABLE, Q_SCREW = range(5)
+NQ_INT = 5
+# columns of pulley_float
+QB_LOCAL, Q_ENTRY, Q_AXIS, Q_DIR, Q_RADIUS, Q_SCALE, Q_LEAD, Q_REF, Q_OUTLET = 0, 3, 6, 9, 12, 13, 14, 15, 16
+NQ_FLOAT = 17
 
 
 @register_jitable
@@ -85,15 +110,45 @@ def _surface(oM, k, f):
     return Rg, pg, Rw, pw
 
 
+@register_jitable
+def _vec(f, c):
+    return (f[c], f[c + 1], f[c + 2])
+
+
+@register_jitable
+def _pulleys(oM, pulley_int, pulley_float, point_local, arc_length):
+    """Every rotating pulley's exit point into its slot and its arc into ``arc_length``: ``(q,
+    reason)`` of the first one without an exit point, or ``(-1, 0)``."""
+    for q in range(pulley_int.shape[0]):
+        qi = pulley_int[q]
+        f = pulley_float[q]
+        k = qi[Q_KEY]
+        pk = (oM[k, 0, 3], oM[k, 1, 3], oM[k, 2, 3])
+        B = to_frame(_rotation(oM, k), pk, _world(oM, qi[QB_KEY], f, QB_LOCAL))
+        F = _vec(f, Q_ENTRY)
+        if qi[Q_SCREW] != 0:
+            ok, F = screw_entry(F, _vec(f, Q_DIR), f[Q_LEAD], f[Q_REF], f[Q_OUTLET], B)
+            if not ok:
+                return q, REASON_SCREW
+        reason, arc, A = rotating_exit(F, _vec(f, Q_AXIS), f[Q_RADIUS], B)
+        if reason != REASON_OK:
+            return q, reason
+        slot = qi[Q_SLOT]
+        for i in range(3):
+            point_local[slot, i] = A[i]
+        arc_length[qi[Q_CABLE]] += f[Q_SCALE] * arc
+    return -1, 0
+
+
 @njit(cache=True, nogil=True)
-def route_pass(oM, wrap_int, wrap_float, point_local, seg_b, seg_active, seg_scale, arc_length, engaged,
-               n_segments):
+def route_pass(oM, wrap_int, wrap_float, pulley_int, pulley_float, point_local, seg_b, seg_active, seg_scale,
+               arc_length, engaged, n_segments):
     """Rewrite the path arrays for the placements ``oM`` (K, 4, 4) (module docstring), in place:
-    ``point_local`` (P + 2W, 3) the tangent slots (zeros when not engaged), ``seg_b`` and
-    ``seg_active`` of each wrap's segment (``T_0`` and ``A T_0`` when engaged, else ``B`` and
-    ``AB``), ``seg_scale`` of the slot segments ``T_1 B`` (index ``n_segments + w``: the branch's
-    scale when engaged, else 0), ``arc_length`` (m,) each cable's arcs times their scales and
-    ``engaged`` (W,)."""
+    ``point_local`` (P + 2W, 3) the tangent slots (zeros when not engaged) and the rotating pulleys'
+    exit points, ``seg_b`` and ``seg_active`` of each wrap's segment (``T_0`` and ``A T_0`` when
+    engaged, else ``B`` and ``AB``), ``seg_scale`` of the slot segments ``T_1 B`` (index
+    ``n_segments + w``: the branch's scale when engaged, else 0), ``arc_length`` (m,) each cable's
+    arcs times their scales and ``engaged`` (W,). Returns ``(q, reason)`` (module docstring)."""
     arc_length[:] = 0.0
     for w in range(wrap_int.shape[0]):
         wi = wrap_int[w]
@@ -121,6 +176,7 @@ def route_pass(oM, wrap_int, wrap_float, point_local, seg_b, seg_active, seg_sca
             seg_b[seg] = wi[B_POINT]
             seg_active[seg] = wi[ACTIVE_AB] != 0
             seg_scale[n_segments + w] = 0.0
+    return _pulleys(oM, pulley_int, pulley_float, point_local, arc_length)
 
 
 @njit(cache=True, nogil=True)
@@ -144,6 +200,7 @@ def warm_calls():
     wf = np.zeros((1, N_FLOAT))
     wf[0, R_W:R_W + 9] = np.eye(3).ravel()
     wf[0, A_LOCAL], wf[0, B_LOCAL + 1], wf[0, RADIUS], wf[0, SCALE] = 1.0, 1.0, 0.1, 1.0
+<<<<<<< HEAD
     from . import route_osim as ro
 
     route = np.array([[0, 0, 2, 0, 0, 0, 1, 2]], dtype=i64)  # one OpenSim route of two fixed points
@@ -155,6 +212,15 @@ def warm_calls():
     return [(route_pass, (oM, wi, wf, np.zeros((4, 3)), np.array([1], dtype=i64), np.array([False]),
                           np.zeros(2), np.zeros(1), np.zeros(1, dtype=np.bool_), 1)),
             (osim_route_pass, osim_args)]
+=======
+    qi = np.zeros((1, NQ_INT), dtype=i64)
+    qi[0, Q_SCREW] = 1
+    qf = np.zeros((1, NQ_FLOAT))
+    qf[0, QB_LOCAL], qf[0, Q_AXIS + 2], qf[0, Q_DIR + 1] = 1.0, 1.0, 1.0
+    qf[0, Q_RADIUS], qf[0, Q_SCALE], qf[0, Q_LEAD], qf[0, Q_REF] = 0.05, 1.0, 0.005, 1.0
+    return [(route_pass, (oM, wi, wf, qi, qf, np.zeros((4, 3)), np.array([1], dtype=i64), np.array([False]),
+                          np.zeros(2), np.zeros(1), np.zeros(1, dtype=np.bool_), 1))]
+>>>>>>> main
 
 
 def _register() -> None:

@@ -50,13 +50,15 @@ class Terms:
 
     Attributes:
         q: the configuration (nq); qd, qdd: velocity and acceleration (nv each).
-        tau: (nv,) ``M qdd + h - tau_passive`` (RNEA, less the known joint forces of springs and
-            dampers, where the model has them); the equation of motion is ``L^T f = -tau``.
+        tau: (nv,) ``M qdd + h - tau_passive + L_s^T f_s`` (RNEA, less the known joint forces of springs
+            and dampers, plus the passive springs' known tensions, where the model has them); the
+            equation of motion is ``L^T f = -tau``.
         M: (nv, nv) joint-space inertia matrix (property, computed on first use).
         h: (nv,) Coriolis, centrifugal and gravity terms (property, computed on first use).
         lengths: (m,) cable lengths, m.
         L: (m, nv) ``d lengths / dq``.
-        u: (J, 6) interaction wrenches ``[F; M]`` with zero cable force (child frame).
+        u: (J, 6) interaction wrenches ``[F; M]`` with zero cable force (child frame; the passive
+            springs at their known tensions).
         RT: (J, 6, m) their derivative with respect to the cable forces.
         R_socket: (J, 3, 3) rotation from the child frame to the socket frame of each joint.
         socket_axes: (J, 3) unit socket axes (socket frame).
@@ -64,6 +66,9 @@ class Terms:
         f_min, f_max: (m,) the cables' tension bounds at this instant (a muscle's follow its length and
             speed, :mod:`mcdm_pin.model.muscles`; the others' are fixed).
         muscles: the muscles' :class:`~mcdm_pin.model.muscles.MuscleState` (``None``: no muscles).
+        spring_lengths, spring_forces: (s,) the passive springs' lengths (m) and known tensions (N)
+            (:mod:`mcdm_pin.model.springs`), already in ``tau`` (``+ L_s^T f_s``) and ``u``
+            (``+ R_s^T f_s``); ``None`` without springs.
         basis: with coupled coordinates, ``N`` (nv, n) (:mod:`mcdm_pin.model.couplings`): then ``L``
             is ``d lengths / dz`` (m, n) and ``tau`` is ``N^T (M qdd + h)`` (n,), over the independent
             coordinates ``z``; ``L_full`` is ``d lengths / dq`` (m, nv) either way.
@@ -88,6 +93,8 @@ class Terms:
     muscles: object = None
     basis: np.ndarray | None = None
     L_full: np.ndarray | None = None
+    spring_lengths: np.ndarray | None = None
+    spring_forces: np.ndarray | None = None
 
     # --- M and h on demand: the problem needs only tau = M qdd + h, which RNEA gives directly ----
     @property
@@ -176,10 +183,11 @@ class TermsEvaluator:
     """
 
     def __init__(self, model, cables: CableSet | None = None, joints=None, compiled: bool = True,
-                 couplings=None, passive=None):
+                 couplings=None, passive=None, springs=None):
         if cables is None and hasattr(model, "cables") and hasattr(model, "model"):  # a Robot
             couplings = getattr(model, "couplings", None)
             passive = getattr(model, "passive", None)
+            springs = getattr(model, "springs", None)
             model, cables, joints = model.model, model.cables, model.joints
         if not isinstance(cables, CableSet):
             raise ModelError(f"expected a CableSet, got {type(cables).__name__}")
@@ -197,6 +205,12 @@ class TermsEvaluator:
         self.couplings = couplings if couplings is not None and len(couplings) else None
         self.passive = passive
         self.joints = js
+        # passive springs (mcdm_pin.model.springs): their routes' terms, computed as a cable set's
+        self.springs = springs if springs is not None and len(springs) else None
+        self._springs_ev = None
+        if self.springs is not None:
+            self.springs.check_model(model)
+            self._springs_ev = TermsEvaluator(model, self.springs.geometry, js, compiled=compiled)
         self.data = model.createData()
         nj = model.njoints
         keys = sorted({0} | set(cables.point_joint.tolist()) | {j.child_id for j in js}
@@ -339,6 +353,12 @@ class TermsEvaluator:
             u = np.array([data.f[c].vector for c in self._child]).reshape(len(self._child), 6)
         if self.passive is not None:  # known joint forces (springs, dampers) help the cables
             tau -= self.passive(q, qd)
+        spring_lengths = spring_forces = None
+        if self._springs_ev is not None:  # known spring tensions: to the right-hand side, into p
+            st = self._springs_ev(q, qd, qdd, checked=True)
+            spring_lengths, spring_forces = st.lengths, self.springs.forces(st.lengths)
+            tau += st.L.T @ spring_forces
+            u = u + st.RT @ spring_forces
         f_min, f_max, state = self._tension_bounds(lengths, L, qd)
         basis, L_full = None, L
         if self.couplings is not None:
@@ -347,7 +367,8 @@ class TermsEvaluator:
         return Terms(q=q.copy(), qd=qd.copy(), qdd=qdd.copy(), tau=tau, lengths=lengths, L=L, u=u,
                      RT=RT, R_socket=R_socket, socket_axes=self._axes, points=X, _evaluator=self,
                      finite=bad != -2 and bool(np.isfinite(tau.sum())), f_min=f_min, f_max=f_max,
-                     muscles=state, basis=basis, L_full=L_full)
+                     muscles=state, basis=basis, L_full=L_full, spring_lengths=spring_lengths,
+                     spring_forces=spring_forces)
 
     def _tension_bounds(self, lengths, L, qd):
         """The cables' bounds at this instant and the muscles' state (``None`` without muscles)."""

@@ -78,8 +78,8 @@ the length itself jumps where an end point crosses the ray opposite the side poi
 ``register_jitable``: called from Python (:func:`wrap_sphere`, :func:`wrap_cylinder`,
 :func:`tendon_path`, the route kernel's uncompiled path) they run as Python; called from the njit
 route kernel (:mod:`mcdm_pin.model.route_kernels`: every wrap of a cable set in one pass) numba
-compiles them inline. So this file imports numba (and :mod:`mcdm_pin.jit` counts it among the kernel
-sources whose digest stamps the compiled cache); only the route machinery imports it.
+compiles them inline. So this file imports numba's ``extending`` (through :mod:`mcdm_pin.jit`, which
+counts it among the kernel sources whose digest stamps the compiled cache).
 """
 
 from __future__ import annotations
@@ -89,9 +89,9 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from numba import extending  # register_jitable: compiled inline into the njit route kernel
 
 from ..exceptions import ModelError
+from ..jit import extending  # register_jitable: compiled inline into the njit route kernel
 
 register_jitable = extending.register_jitable
 

@@ -1,12 +1,12 @@
-"""Solvers: stages behind one signature, chained into back-ends (:mod:`.cascade`)."""
+"""Solvers: stages behind one signature, chained into back-ends (:mod:`.chains`)."""
 
 from __future__ import annotations
 
 from .. import tolerances as _tol
 from .base import (BUDGET, ERROR, INACCURATE, INFEASIBLE, MAX_ITER, OPTIMAL, SOFTENED, STATUSES, Solution,
                    Solver, Stage)
-from .cascade import BACKENDS, Cascade, make_solver
-from .proxqp_ import ProxQPSolver
+from .cascade import Cascade
+from .chains import BACKENDS, ClarabelSolver, ProxQPSolver, make_solver
 
 
 def get_solver(name="default", budget_s: float | None = _tol.BUDGET_S, **options) -> Solver:
@@ -18,5 +18,5 @@ def get_solver(name="default", budget_s: float | None = _tol.BUDGET_S, **options
     return make_solver(name, budget_s=budget_s, **options)
 
 
-__all__ = ["get_solver", "Solver", "Solution", "Stage", "Cascade", "ProxQPSolver", "BACKENDS", "STATUSES",
-           "OPTIMAL", "INFEASIBLE", "MAX_ITER", "SOFTENED", "INACCURATE", "BUDGET", "ERROR"]
+__all__ = ["get_solver", "make_solver", "Solver", "Solution", "Stage", "Cascade", "ProxQPSolver", "ClarabelSolver",
+           "BACKENDS", "STATUSES", "OPTIMAL", "INFEASIBLE", "MAX_ITER", "SOFTENED", "INACCURATE", "BUDGET", "ERROR"]

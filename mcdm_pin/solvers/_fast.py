@@ -19,7 +19,7 @@ forces and angles); :func:`answer_check_outputs` calls both at once (the runner'
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 from ..model.kernels import gram_lower
 from ..tolerances import UNIQUE_PENALTY

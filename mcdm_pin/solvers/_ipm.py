@@ -54,7 +54,7 @@ Otherwise the run ends at the iteration limit and the caller falls back to anoth
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 from ..tolerances import IPM_START_BOX_WEIGHT
 from . import _ipm_linalg as la

@@ -83,7 +83,7 @@ primal residual never fell, and the step vanished after 6-7 iterations or the it
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 from ..model.kernels import gram_lower
 

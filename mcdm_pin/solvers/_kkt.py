@@ -9,7 +9,7 @@ The state of a cable is an int8 code: 0 free, 1 at its lower bound, 2 at its upp
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 from ._ipm_linalg import dot
 

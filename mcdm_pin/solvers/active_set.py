@@ -30,7 +30,7 @@ import numpy as np
 
 from .. import jit
 from .. import tolerances as tol
-from ..problem import QPData
+from ..qp import QPData
 from . import _fast
 from . import _kkt as K
 from .base import OPTIMAL, Solution, Stage

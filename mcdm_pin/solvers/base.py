@@ -1,7 +1,7 @@
 r"""What every stage and back-end returns, and the one signature they share.
 
 A :class:`Solution` is modelled on qpsolvers' ``Solution``: the point, the duals, the objective, the
-status. Duals follow one convention for every back-end (the Lagrangian of :class:`~mcdm_pin.problem.QPData`):
+status. Duals follow one convention for every back-end (the Lagrangian of :class:`~mcdm_pin.qp.QPData`):
 
 .. math::
 

@@ -2,7 +2,7 @@ r"""The answer check every back-end's answer passes before it is called optimal,
 onto the bounds.
 
 :func:`kkt_residuals` measures, at a :class:`~.base.Solution`, the Karush-Kuhn-Tucker conditions of the
-convex problem (:class:`~mcdm_pin.problem.QPData`; duals as in :mod:`.base`):
+convex problem (:class:`~mcdm_pin.qp.QPData`; duals as in :mod:`.base`):
 
 - primal: equation of motion (relative), bounds (absolute), cones (degrees);
 - stationarity: ``|P x + c + A^T y + z - sum_k T_k^T z_k|_inf`` relative to the largest of its terms,

@@ -3,7 +3,7 @@ reference back-end, and the last resort of the default chain.
 
 Each cone :math:`\|F_\perp\| \le \tan\rho^*\, a^T F` is the cone
 :math:`(\sin\rho^*\,a^T F,\; \cos\rho^*\,e_1^T F,\; \cos\rho^*\,e_2^T F) \in \mathcal{Q}^3`
-(:meth:`~mcdm_pin.problem.QPData.cone_rows`: rows of norm at most one for any half-angle; with
+(:meth:`~mcdm_pin.qp.QPData.cone_rows`: rows of norm at most one for any half-angle; with
 ``tan`` in the first row a cone of 89.99 degrees had rows 5730 times larger than the others).
 Clarabel's duals are returned in :mod:`.base`'s convention.
 """
@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import tolerances as tol
 from ..exceptions import SolverError
-from ..problem import QPData
+from ..qp import QPData
 from .base import BUDGET, INACCURATE, INFEASIBLE, MAX_ITER, OPTIMAL, Solution, Stage, failure, now
 
 
@@ -139,10 +139,3 @@ class ClarabelStage(Stage):
         elif sol is not None and out.status == OPTIMAL and sol.stage and sol.stage != self.name:
             out = out.but(message=f"{sol.stage} failed ({sol.message}); answered by Clarabel")
         return out
-
-
-def ClarabelSolver(tol: float = tol.CLARABEL_TOL, max_iter: int = 200):
-    """The Clarabel-only chain (:func:`~.cascade.make_solver` ``("clarabel")``)."""
-    from .cascade import make_solver
-
-    return make_solver("clarabel", tol=tol, max_iter=max_iter)

@@ -14,6 +14,7 @@ import numpy as np
 
 from .. import jit
 from .. import tolerances as tol
+from ..qp import ConeData, QPData, perpendicular_basis
 from . import _fast, _ipm
 from .active_set import _AS_TOLS, compiled_answer, unique_args
 from .base import INACCURATE, INFEASIBLE, OPTIMAL, Solution, Stage, failure
@@ -92,9 +93,6 @@ def warm_calls():
     """The solvers' kernels with example arguments of the types the library passes (registered
     with :mod:`mcdm_pin.jit`): the Python code calls :func:`._fast.ipm_answer`, and the kernels it
     calls are compiled with it."""
-    from ..problem import QPData
-    from ..constraints import ConeData, perpendicular_basis
-
     n = 2
     axis = np.array([0.0, 0.0, 1.0])
     cone = ConeData("j", np.ones((3, n)), np.zeros(3), axis, 30.0, perpendicular_basis(axis))

@@ -46,7 +46,9 @@ import numpy as np
 
 from .. import jit
 from .. import tolerances as tol
+from .active_set import ActiveSet
 from .base import OPTIMAL, Solution, Stage
+from .check import project_to_bounds
 
 
 def _strongly_active(qp, sol: Solution, curvature: bool = True):
@@ -223,15 +225,12 @@ class LeastNorm(Stage):
             return sol.but(unique=True)
         stage2 = stage2_problem(qp, sol)
         if sol.active is None:
-            from .active_set import ActiveSet
             sol = sol.but(active=ActiveSet.from_duals(qp, sol))
         out = self.inner.solve(stage2, hint=sol, deadline=deadline)
         if out.status != OPTIMAL:
             note = (f"least-norm stage failed ({out.status}: {out.message}); the answer is optimal but "
                     f"may not be the least-norm one")
             return sol.but(unique=False, message=f"{sol.message}; {note}" if sol.message else note)
-        from .check import project_to_bounds
-
         x = project_to_bounds(qp, out).x
         # stage 2's multipliers of the original rows are not those of the original problem: the
         # first stage's duals stay (they certify x too: x lies on the same optimal face)

@@ -1,4 +1,4 @@
-r"""Margins of an instant as functions of the assembled problem (a :class:`~mcdm_pin.problem.QPData`):
+r"""Margins of an instant as functions of the assembled problem (a :class:`~mcdm_pin.qp.QPData`):
 how far the force limit or the cones would have to move for it to be feasible, or how much room a
 feasible instant has. Each costs a few cold cone-program solves (Clarabel, on the scaled problem),
 whatever the answer, feasible or not.

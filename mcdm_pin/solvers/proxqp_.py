@@ -39,7 +39,7 @@ import numpy as np
 from proxsuite import proxqp
 
 from .. import tolerances as tol
-from ..problem import QPData
+from ..qp import QPData
 from .base import BUDGET, INACCURATE, INFEASIBLE, MAX_ITER, OPTIMAL, Solution, Stage, failure, now
 
 _STATUS = proxqp.QPSolverOutput
@@ -47,13 +47,45 @@ _STATUS = proxqp.QPSolverOutput
 
 class ProxQPRunner:
     """One ProxQP solve of ``min 1/2 x^T H x + g^T x, A x = b, l <= C x <= u`` with the fallbacks of the
-    module docstring. Args: tolerances and iteration limits (defaults from :mod:`mcdm_pin.tolerances`)."""
+    module docstring. Args: tolerances and iteration limits (defaults from :mod:`mcdm_pin.tolerances`);
+    ``reuse``: keep the last ProxQP workspace and pass a problem of the same shape (variables,
+    equations, rows of ``C``) to it through ProxQP's ``update``, the proximal parameters reset to
+    their defaults, instead of allocating a new workspace per solve. The preconditioner (Ruiz
+    scaling) is kept while ``C`` holds the bounds alone (its scaling barely moves between instants)
+    and recomputed when cone cuts are among its rows (a stale one slowed the cutting planes
+    tenfold, docs/speed.md)."""
 
     def __init__(self, eps_abs=tol.PROXQP_EPS_ABS, eps_rel=tol.PROXQP_EPS_REL, max_iter=1000,
-                 eps_infeasible=tol.PROXQP_EPS_INFEASIBLE, max_iter_retry=5_000):
+                 eps_infeasible=tol.PROXQP_EPS_INFEASIBLE, max_iter_retry=5_000, reuse: bool = True):
         self.eps_abs, self.eps_rel = eps_abs, eps_rel
         self.max_iter, self.max_iter_retry = max_iter, max_iter_retry
         self.eps_infeasible = eps_infeasible
+        self.reuse = reuse
+        self.workspace = None  # (shape and settings, the ProxQP object) of the last solve
+        self.created = 0  # ProxQP workspaces allocated (the others were updated)
+
+    def __getstate__(self):
+        # a copy (Cascade.fresh, a batch worker's solver) starts without the ProxQP workspace, which
+        # is native memory and holds nothing but the last problem
+        return {**self.__dict__, "workspace": None}
+
+    def _workspace(self, H, g, A, b, C, l, u, eps_infeasible, max_iter):
+        """A ProxQP object holding this problem: the last one updated when its shape and settings
+        match (``reuse``), else a new one."""
+        key = (H.shape[0], A.shape[0], C.shape[0], eps_infeasible)
+        if self.reuse and self.workspace is not None and self.workspace[0] == key:
+            qp = self.workspace[1]
+            s = qp.settings
+            s.max_iter, s.max_iter_in = max_iter, self._max_iter_in  # (_solve_until changes both)
+            qp.update(H, g, A, b, C, l, u, update_preconditioner=C.shape[0] > H.shape[0], rho=s.default_rho,
+                      mu_eq=s.default_mu_eq, mu_in=s.default_mu_in)
+            return qp
+        qp = self._new_qp(H, g, A, b, C, l, u, eps_infeasible, max_iter)
+        self.created += 1
+        self._max_iter_in = qp.settings.max_iter_in
+        if self.reuse:
+            self.workspace = (key, qp)
+        return qp
 
     def _new_qp(self, H, g, A, b, C, l, u, eps_infeasible, max_iter):
         qp = proxqp.dense.QP(H.shape[0], A.shape[0], C.shape[0])
@@ -71,7 +103,7 @@ class ProxQPRunner:
     def solve(self, H, g, A, b, C, l, u, warm=None, deadline: float = float("inf")):
         """Returns ``(x, y, z, status, iterations)``; ``status`` ``None``: proven infeasible (HiGHS);
         :data:`OUT_OF_TIME`: ``deadline`` (:func:`~.base.now`) passed inside the solve."""
-        qp = self._new_qp(H, g, A, b, C, l, u, self.eps_infeasible, self.max_iter)
+        qp = self._workspace(H, g, A, b, C, l, u, self.eps_infeasible, self.max_iter)
         n = H.shape[0]
         start = None
         if warm is not None and warm[0].shape == (n,) and warm[1].shape == (A.shape[0],):
@@ -88,7 +120,7 @@ class ProxQPRunner:
             x0 = feasible_point(A, b, C, l, u)
             if x0 is None:
                 return None, None, None, None, iterations
-            qp = self._new_qp(H, g, A, b, C, l, u, 0.0, self.max_iter_retry)
+            qp = self._workspace(H, g, A, b, C, l, u, 0.0, self.max_iter_retry)
             start = (x0, np.zeros(A.shape[0]), np.zeros(C.shape[0]))
             status, it = _solve_until(qp, start, self.max_iter_retry, deadline)
             iterations += it
@@ -170,6 +202,7 @@ class ProxQPStage(Stage):
     def reset(self):
         self._warm = None
         self._cuts: dict[str, list[np.ndarray]] = {}
+        self.runner.workspace = None  # a reset chain answers as a new one
 
     def learn(self, qp, sol):
         # the previous forces as the starting point but not the previous multipliers: next to a
@@ -397,24 +430,3 @@ def _parallel_cuts(cone, cuts, d) -> list[int]:
     w = (d - t * cone.axis) @ cone.G
     cos = W @ w / (np.linalg.norm(W, axis=1) * np.linalg.norm(w) + 1e-300)
     return [int(i) for i in np.flatnonzero(cos > tol.SAME_CUT_COS)]
-
-
-def ProxQPSolver(active_set: bool = True, fallback: bool = True, budget_s: float | None = tol.BUDGET_S,
-                 **options):
-    """A ProxQP-based chain (:class:`~.cascade.Cascade`), as the library's default was before the
-    compiled interior-point method: ``active_set`` adds the warm active set and the polish,
-    ``fallback`` Clarabel for the instants on which ProxQP stalls; ``options``: :class:`ProxQPStage`'s."""
-    from .active_set import Polish, WarmActiveSet
-    from .cascade import Cascade
-    from .check import Check, Project
-    from .clarabel_ import ClarabelStage
-    from .least_norm import LeastNorm
-
-    def stages():
-        first = ([WarmActiveSet()] if active_set else []) + [ProxQPStage(**options), SQPPolish()]
-        first += [ClarabelStage()] if fallback else []
-        return first + ([Polish()] if active_set else []) + [Project()]
-
-    inner = Cascade(stages(), name="proxqp (least-norm stage)", budget_s=None)
-    return Cascade(stages() + [LeastNorm(inner), Check()], name="proxqp", budget_s=budget_s,
-                   factory=lambda: ProxQPSolver(active_set, fallback, budget_s, **options))

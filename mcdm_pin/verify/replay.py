@@ -111,7 +111,8 @@ def _num(x, fmt: str) -> str:
 
 
 class _Dynamics:
-    """``a = ABA(q, v, -L(q)^T f + tau_passive(q, v))`` for one robot (reuses Pinocchio data). ``L``
+    """``a = ABA(q, v, -L(q)^T f + tau_passive(q, v) - L_s^T f_s(q))`` for one robot (``f_s``: the
+    passive springs' known tensions) (reuses Pinocchio data). ``L``
     comes from the numpy reference of the cable geometry (:mod:`mcdm_pin.model.geometry`), not from the
     compiled kernels that computed the forces: the replay checks them independently. Routes over wraps
     take their path from :mod:`mcdm_pin.model.routes` (checked against MuJoCo on its own). A robot
@@ -128,7 +129,12 @@ class _Dynamics:
         self.model = robot.model
         self.data = robot.model.createData()
         self.passive = getattr(robot, "passive", None)
-        self._routed = None
+        self._routed = self._springs = None
+        springs = getattr(robot, "springs", None)
+        if springs is not None:  # passive springs: known tensions k (l - l0) at every state
+            from ..model.terms import TermsEvaluator
+
+            self._springs = (springs, TermsEvaluator(robot.model, springs.geometry, robot.joints, compiled=False))
         if robot.cables.configuration_dependent:
             from ..model.terms import TermsEvaluator
 
@@ -153,6 +159,11 @@ class _Dynamics:
         tau = self.generalised_cable_force(q, f)
         if self.passive is not None:
             tau = tau + self.passive(q, v)
+        if self._springs is not None:
+            springs, ev = self._springs
+            zero = np.zeros(self.model.nv)
+            st = ev(q, zero, zero, checked=True)
+            tau = tau - st.L.T @ springs.forces(st.lengths)
         return np.array(pin.aba(self.model, self.data, q, v, tau))
 
     def growth_rate(self, q, v, f, eps: float = 1e-6) -> float:

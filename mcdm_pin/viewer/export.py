@@ -12,19 +12,21 @@ from pathlib import Path
 
 import numpy as np
 
+from ..extras import optional
 from . import three
 from .colors import CABLE_MAP, tension_rgb
+from .three import Command
 
 
 def meshcat_dist() -> Path:
-    import meshcat
+    meshcat = optional("meshcat", "the viewer")
 
     return Path(meshcat.__file__).parent / "viewer" / "dist"
 
 
 def scene_html(scene) -> str:
     """One self-contained HTML page of ``scene`` (a :class:`~mcdm_pin.viewer.scene.Scene`)."""
-    import umsgpack
+    umsgpack = optional("umsgpack", "the viewer")
 
     js = (meshcat_dist() / "main.min.js").read_text(encoding="utf-8")
     blobs = [base64.b64encode(umsgpack.packb(dict(c))).decode("ascii") for c in scene.all_commands()]
@@ -46,7 +48,7 @@ def send(scene, vis) -> None:
 def serve(scene, zmq_url: str | None = None):
     """Start (or connect to) a Meshcat server, send the scene, return the ``meshcat.Visualizer``
     (the live viewer shows the colour bar as a small panel beside the robot)."""
-    import meshcat
+    meshcat = optional("meshcat", "the viewer")
 
     vis = meshcat.Visualizer(zmq_url=zmq_url)
     commands = list(scene.commands)
@@ -60,8 +62,6 @@ def serve(scene, zmq_url: str | None = None):
 
 
 def _legend_commands(scene) -> list:
-    from .scene import Command
-
     w_px, h_px, png = legend_png(scene.fmax, scene.arrow_scale)
     extent = scene.extent
     w, h = 0.5 * extent, 0.5 * extent * h_px / w_px
@@ -78,7 +78,7 @@ def _legend_commands(scene) -> list:
 
 
 def _font(size: int):
-    from PIL import ImageFont
+    ImageFont = optional("PIL.ImageFont", "the viewer")
 
     try:
         return ImageFont.load_default(size=size)
@@ -88,7 +88,7 @@ def _font(size: int):
 
 def legend_png(fmax: float, arrow_scale: float = 0.0, width: int = 512) -> tuple[int, int, bytes]:
     """The colour bar as a PNG: (width, height, bytes)."""
-    from PIL import Image, ImageDraw
+    Image, ImageDraw = optional("PIL.Image", "the viewer"), optional("PIL.ImageDraw", "the viewer")
 
     height = width // 4
     img = Image.new("RGB", (width, height), (255, 255, 255))
@@ -112,7 +112,7 @@ def legend_png(fmax: float, arrow_scale: float = 0.0, width: int = 512) -> tuple
 def label_png(text: str, height: int = 40) -> tuple[int, int, bytes]:
     """A joint's name as a PNG label (dark text on a white, slightly transparent box):
     (width, height, bytes)."""
-    from PIL import Image, ImageDraw
+    Image, ImageDraw = optional("PIL.Image", "the viewer"), optional("PIL.ImageDraw", "the viewer")
 
     font = _font(int(height * 0.62))
     probe = ImageDraw.Draw(Image.new("RGBA", (1, 1)))

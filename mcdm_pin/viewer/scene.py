@@ -10,12 +10,13 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import McdmError, ResultsError
-from . import three
+from . import export, three
 from .animation import (ARROW_LENGTH, Track, arrow_share, draw_cables, draw_cones, draw_forces, draw_labels,
                         drawn_forces, force_arrows, labels, safe, track_pose)
 from .camera import (ASPECT, LABEL_HEIGHT, VIEW, camera_basis, camera_position, label_layout, robot_box,
                      up_rotation, view_direction)
 from .colors import ANCHOR_RGB, BACKGROUND, GRID_RGB, LINK_RGB, PLATFORM_RGB, mute, nice_ceil
+from .three import Command
 from .visuals import fallback_bones, platforms, robot_visuals
 
 GHOST_OPACITY = 0.3
@@ -25,13 +26,6 @@ LINK_STYLES = ("auto", "solid", "ghost")
 
 class ViewerError(McdmError):
     """The viewer cannot be built, served or rendered (e.g. no browser for a screenshot)."""
-
-
-class Command(dict):
-    """A lowered Meshcat command (what ``meshcat.Visualizer`` sends), replayable live or in HTML."""
-
-    def lower(self):
-        return self
 
 
 @dataclass
@@ -103,9 +97,7 @@ class Scene:
     # ------------------------------------------------------------------------------------- output
     def html(self) -> str:
         """One self-contained HTML page (Meshcat's browser client inlined, no network)."""
-        from .export import scene_html
-
-        return scene_html(self)
+        return export.scene_html(self)
 
     def write_html(self, path) -> Path:
         path = Path(path)
@@ -118,16 +110,12 @@ class Scene:
         return path
 
     def send(self, vis) -> None:
-        from .export import send
-
-        send(self, vis)
+        export.send(self, vis)
 
     def serve(self, zmq_url: str | None = None):
         """Start (or connect to) a Meshcat server, send the scene, return the ``meshcat.Visualizer``.
         Meshcat prints the URL to open. The server lives as long as this Python process."""
-        from .export import serve
-
-        return serve(self, zmq_url)
+        return export.serve(self, zmq_url)
 
 
 # ------------------------------------------------------------------------------------------ checks
@@ -209,7 +197,8 @@ def _routed_segments(robot, conf) -> tuple[np.ndarray, np.ndarray]:
         X = ev(robot.check_configuration(q), zero, zero, checked=True).points
         a = X[routes.seg_a]
         b = np.where((routes.seg_scale > 0)[:, None], X[routes.seg_b], a)
-        t0, t1 = X[routes._slot_t0], X[routes._slot_t1]
+        slot = routes.n_points + 2 * np.arange(len(wraps))  # each wrap's T_0, then T_1 (model/routes.py)
+        t0, t1 = X[slot], X[slot + 1]
         on = routes.engaged[:, None]
         out[k, :len(a), 0], out[k, :len(a), 1] = a, b
         out[k, len(a):, 0], out[k, len(a):, 1] = t0, np.where(on, t1, t0)

@@ -8,7 +8,16 @@ import uuid as _uuid_mod
 
 import numpy as np
 
+from ..extras import optional
+
 RX90 = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])  # takes +y to +z (URDF cylinders lie on z)
+
+
+class Command(dict):
+    """A lowered Meshcat command (what ``meshcat.Visualizer`` sends), replayable live or in HTML."""
+
+    def lower(self):
+        return self
 
 
 def uuid() -> str:
@@ -22,7 +31,7 @@ def hex_color(rgb) -> int:
 
 def pack(x: np.ndarray, dtype) -> dict:
     """A typed array as Meshcat packs it (msgpack extension types)."""
-    import umsgpack
+    umsgpack = optional("umsgpack", "the viewer")
 
     x = np.asarray(x, dtype=dtype)
     code, name = {np.dtype(np.float32): (0x17, "Float32Array"),

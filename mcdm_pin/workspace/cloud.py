@@ -22,6 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ResultsError
+from ..extras import optional
 from .errors import WorkspaceError
 
 PAST_LIMIT_RGB = (1.0, 0.0, 0.0)
@@ -75,7 +76,7 @@ def cloud_scene(robot, ds, frame: str, color_by: str = "needed_f_max", pose: int
     """The viewer's scene of the robot at pose ``pose`` (default: the optimal pose with the largest
     margin, i.e. the smallest ``color_by``, and of equals the nearest to the mean pose) with every
     pose of the store ``ds`` as a point (see the module docstring)."""
-    import meshcat.geometry as mg
+    mg = optional("meshcat.geometry", "the workspace's point cloud")
 
     from ..results import TrajectoryResult, instant_columns
     from ..trajectory import Trajectory

@@ -21,19 +21,16 @@ how many chunks the store keeps (``--resume`` completes it).
 from __future__ import annotations
 
 import json
-import logging
-import os
-import signal
 import sys
-import threading
 import time
 from collections import deque
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from ..extras import optional
+from ..runtime import check_scheduler, close, connect
 from .errors import WorkspaceError, WorkspaceInterrupted
 from .evaluate import PoseSolver, RobotBlob, Setup, robot_digest, solve_chunk
 from .store import FORMAT, Writer, create_store, open_for_resume, open_workspace
@@ -111,12 +108,7 @@ def compute_workspace(robot, poses, out, setup: Setup | None = None, chunk: int 
     if int(chunk) != chunk or chunk < 1:
         raise WorkspaceError(f"chunk: expected a positive number of poses, got {chunk!r}")
     chunk = min(int(chunk), len(poses))
-    if workers is not None and (int(workers) != workers or workers < 1):
-        raise WorkspaceError(f"workers: expected a positive number, got {workers!r}")
-    if scheduler not in ("local", "inline") and not str(scheduler).startswith("tcp://"):
-        raise WorkspaceError(f"scheduler: expected local, inline or tcp://HOST:PORT, got {scheduler!r}")
-    if scheduler == "inline" and workers not in (None, 1):
-        raise WorkspaceError("scheduler inline runs in this process: workers must be 1")
+    check_scheduler(scheduler, workers, WorkspaceError)
     out = Path(out)
     wanted = settings(robot, poses, setup, chunk)
     nchunks = -(-len(poses) // chunk)
@@ -135,7 +127,7 @@ def compute_workspace(robot, poses, out, setup: Setup | None = None, chunk: int 
     client = cluster = bar = None
     try:  # the scheduler is reached before the store is made: an unreachable one leaves nothing
         if scheduler != "inline":
-            client, cluster = _connect(scheduler, workers)
+            client, cluster = connect(scheduler, workers, CONNECT_TIMEOUT_S, WorkspaceError)
         if not resuming:
             create_store(out, robot, poses, chunk, wanted)
         writer = Writer(out, chunk)
@@ -158,29 +150,19 @@ def compute_workspace(robot, poses, out, setup: Setup | None = None, chunk: int 
     finally:
         if bar is not None:
             bar.close()
-        _close(client, cluster)
+        close(client, cluster)
     return RunReport(out, len(poses), nchunks, len(todo), sum(sizes.values()), threads, scheduler,
                      startup, elapsed, damaged)
 
 
 def _interrupted(out: Path, nchunks: int) -> WorkspaceInterrupted:
     try:
-        import zarr
+        zarr = optional("zarr", "workspaces")
 
         done = int(np.sum(zarr.open_group(str(out), mode="r", zarr_format=2)["chunk_done"][:] == 1))
     except Exception:  # noqa: BLE001 - no store yet (interrupted while starting)
         done = -1
     return WorkspaceInterrupted(out, done, nchunks)
-
-
-def _close(client, cluster) -> None:
-    """Close the Dask client and local cluster, quietly (also after Ctrl-C)."""
-    for thing in (client, cluster):
-        if thing is not None:
-            try:
-                thing.close()
-            except (Exception, KeyboardInterrupt):  # noqa: BLE001 - best effort on the way out
-                pass
 
 
 def _bar(total: int, initial: int):
@@ -203,49 +185,9 @@ def _run_dask(client, robot, poses, setup, chunk, todo, sizes, writer, bar, sche
     return startup, t0, threads
 
 
-@contextmanager
-def _workers_ignore_ctrl_c():
-    """Start local worker processes with SIGINT ignored (a disposition a child inherits, and Python
-    keeps at start-up): Ctrl-C in a terminal reaches the whole process group, and only this process,
-    which then closes the cluster, should act on it."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
-
-
-def _connect(scheduler: str, workers: int | None):
-    from dask.distributed import Client, LocalCluster
-
-    if scheduler == "local":
-        with _workers_ignore_ctrl_c():
-            cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                                   processes=True, host="127.0.0.1", dashboard_address="127.0.0.1:0",
-                                   silence_logs=logging.ERROR)
-        return Client(cluster), cluster
-    try:
-        client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT_S}s")
-    except OSError as exc:
-        raise WorkspaceError(f"scheduler {scheduler}: cannot connect ({exc}); start one with "
-                             f"dask scheduler, and workers with dask worker {scheduler}") from None
-    if workers:
-        try:
-            client.wait_for_workers(workers, timeout=120)
-        except TimeoutError:
-            have = len(client.scheduler_info()["workers"])
-            client.close()
-            raise WorkspaceError(f"scheduler {scheduler}: {have} workers connected after 120 s, "
-                                 f"{workers} requested") from None
-    return client, None
-
-
 def _pump(client, robot_future, poses, setup, chunk, todo, sizes, writer, bar, in_flight):
     """Keep ``in_flight`` chunks submitted; write each as it finishes, then submit the next."""
-    from dask.distributed import as_completed
+    as_completed = optional("dask.distributed", "workspaces").as_completed
 
     queue = deque(todo)
     running = {}

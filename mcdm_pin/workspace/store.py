@@ -45,6 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..extras import optional
 from .errors import WorkspaceError
 from .evaluate import COMPONENTS, STATUS_DTYPE
 from .poses import coordinate_units
@@ -102,7 +103,7 @@ def _array(group, name, data_or_shape, dims, dtype, chunks, fill, attrs=None):
 
 def create_store(path, robot, poses, chunk: int, settings: dict) -> None:
     """Create the empty store at ``path`` (an error if something is there)."""
-    import zarr
+    zarr = optional("zarr", "workspaces")
 
     path = Path(path)
     if path.exists():
@@ -159,7 +160,7 @@ def open_for_resume(path, settings: dict) -> tuple[list[int], dict[int, str]]:
     """The chunks of the store at ``path`` still to compute, and those among them that were flagged
     done but are damaged (:func:`damaged_chunks`; their flags are cleared); the store's settings must
     equal ``settings`` (same robot, problem, poses and chunk size)."""
-    import zarr
+    zarr = optional("zarr", "workspaces")
 
     path = Path(path)
     if not path.exists():
@@ -193,7 +194,7 @@ def _flags(path: Path, group) -> np.ndarray:
 def damaged_chunks(path, group=None) -> dict[int, str]:
     """The chunks flagged done that cannot be trusted: ``{chunk: what is wrong}``, where a variable's
     file is missing (stores that record ``chunk_files``) or does not decode."""
-    import zarr
+    zarr = optional("zarr", "workspaces")
 
     path = Path(path)
     group = zarr.open_group(str(path), mode="r", zarr_format=2) if group is None else group
@@ -231,7 +232,7 @@ class Writer:
     """Writes chunks of results into an existing store, then flags them done."""
 
     def __init__(self, path, chunk: int):
-        import zarr
+        zarr = optional("zarr", "workspaces")
 
         self.group = zarr.open_group(str(path), mode="r+", zarr_format=2)
         whole = {"write_empty_chunks": True}  # a file per chunk, even of fill values: see damaged_chunks
@@ -251,7 +252,7 @@ def open_workspace(path, check: bool = True):
     """The store as an ``xarray.Dataset`` (lazy, backed by Dask arrays). ``check``: first read every
     chunk flagged done (:func:`damaged_chunks`); an error names the store, chunk and variable that
     cannot be trusted."""
-    import xarray as xr
+    xr = optional("xarray", "workspaces")
 
     path = Path(path)
     if not (path / ".zgroup").is_file():
@@ -278,8 +279,8 @@ def is_complete(ds) -> bool:
 def as_grid(ds):
     """A grid store with its poses unstacked onto the grid axes (dims ``axis1, axis2, ...`` instead of
     ``pose``); an error for random or file poses."""
-    import pandas as pd
-    import xarray as xr
+    pd = optional("pandas", "workspaces")
+    xr = optional("xarray", "workspaces")
 
     spec = ds.attrs["workspace"]["poses"]
     if spec["kind"] != "grid":

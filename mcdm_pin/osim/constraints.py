@@ -1,0 +1,188 @@
+r"""Closed loops: OpenSim's ``PointConstraint`` (the thoracoscapular model's acromioclavicular joint).
+
+A point constraint holds point :math:`p_1` of body 1 on point :math:`p_2` of body 2:
+:math:`\phi(q) = x_2(q) - x_1(q) = 0` (world axes, m), so the motion obeys
+
+.. math:: G \dot q = 0, \qquad G \ddot q + \gamma = 0, \qquad G = J_2 - J_1 \ (3k \times n_v),
+          \quad \gamma = \dot G \dot q
+
+(:math:`J_i` the linear rows of the frame Jacobians at the points, world axes; :math:`\gamma` the
+points' relative classical acceleration at zero :math:`\ddot q`). Its force is an unknown
+:math:`\lambda` (N, world axes): :math:`+\lambda` on body 2 at :math:`p_2`, :math:`-\lambda` on body 1
+at :math:`p_1`, the generalized force :math:`G^T\lambda`, and the equation of motion with cable forces
+:math:`f` reads :math:`M\ddot q + h = -L^T f + G^T\lambda`.
+
+**Projection (exact).** With the couplings' basis :math:`N` (:mod:`mcdm_pin.model.couplings`,
+identity without couplings), the velocities the loop allows are :math:`\dot q = N K w` with
+:math:`K` an orthonormal basis of the null space of :math:`G N` (``n x (n - 3k)``). The loop force
+does no work along them, so the equation the cables must satisfy is
+
+.. math:: (N K)^T (M\ddot q + h) = -(N K)^T L^T f,
+
+the couplings' projection (``L N``, ``N^T \tau``) with :math:`N K` in place of :math:`N`
+(:meth:`PointLoops.basis`). **Recovery.** Once :math:`f` is known the loop force follows from the
+equation projected on :math:`N` alone,
+
+.. math:: \lambda = (N^T G^T)^{+}\, N^T (M\ddot q + h + L^T f),
+
+affine in :math:`f` (:meth:`PointLoops.force`); it is exact (zero residual) whenever the projected
+equation holds, because the two projections together span all of :math:`N`'s columns. :math:`\lambda`
+enters the interaction wrenches as external forces on bodies 1 and 2 in RNEA
+(:meth:`PointLoops.external_forces`), so every joint between the loop's bodies carries it; as maps,
+:meth:`PointLoops.force_map` gives ``lambda = lambda_0 + Lambda f`` and :meth:`PointLoops.wrench_map`
+the joint wrenches' part ``W lambda``, so a joint's interaction wrench ``u + R^T f`` becomes
+``(u + W lambda_0) + (R^T + W Lambda) f``.
+
+A state must lie on the loop (:meth:`residual`, :meth:`velocity_residual`,
+:meth:`acceleration_residual`): measured motions of the thoracoscapular model do so only to the
+accuracy of the tracking that produced them, which these functions report.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import ModelError
+
+RANK_TOL = 1e-10  # relative singular-value threshold of G N's rank
+
+
+class PointLoops:
+    """The point constraints of a model (module docstring).
+
+    Args:
+        model: the Pinocchio model.
+        loops: ``(name, frame id at p1, frame id at p2)`` per constraint.
+        couplings: the model's :class:`~mcdm_pin.model.couplings.Couplings`, or ``None``.
+    """
+
+    def __init__(self, model: pin.Model, loops, couplings=None):
+        self.model, self.loops, self.couplings = model, tuple(loops), couplings
+        self.names = tuple(n for n, _, _ in self.loops)
+        self.k = 3 * len(self.loops)
+        self.data = model.createData()
+
+    def residual(self, q) -> np.ndarray:
+        """(3k,) ``x_2 - x_1`` per loop, world axes (m)."""
+        pin.framesForwardKinematics(self.model, self.data, np.asarray(q, dtype=float))
+        return np.concatenate([self.data.oMf[b].translation - self.data.oMf[a].translation for _, a, b in self.loops])
+
+    def jacobian(self, q) -> np.ndarray:
+        """(3k, nv) ``G``."""
+        m, d = self.model, self.data
+        pin.computeJointJacobians(m, d, np.asarray(q, dtype=float))
+        pin.updateFramePlacements(m, d)
+        rows = [pin.getFrameJacobian(m, d, b, pin.LOCAL_WORLD_ALIGNED)[:3]
+                - pin.getFrameJacobian(m, d, a, pin.LOCAL_WORLD_ALIGNED)[:3] for _, a, b in self.loops]
+        return np.vstack(rows)
+
+    def bias(self, q, v) -> np.ndarray:
+        """(3k,) ``gamma``: the relative classical acceleration of the points at zero ``qdd``."""
+        m, d = self.model, self.data
+        pin.forwardKinematics(m, d, np.asarray(q, dtype=float), np.asarray(v, dtype=float), np.zeros(m.nv))
+        pin.updateFramePlacements(m, d)
+        acc = lambda f: pin.getFrameClassicalAcceleration(m, d, f, pin.LOCAL_WORLD_ALIGNED).linear
+        return np.concatenate([acc(b) - acc(a) for _, a, b in self.loops])
+
+    def velocity_residual(self, q, v) -> np.ndarray:
+        return self.jacobian(q) @ np.asarray(v, dtype=float)
+
+    def acceleration_residual(self, q, v, a) -> np.ndarray:
+        return self.jacobian(q) @ np.asarray(a, dtype=float) + self.bias(q, v)
+
+    def _coupling_basis(self, q) -> np.ndarray:
+        return np.eye(self.model.nv) if self.couplings is None else self.couplings.basis(q)
+
+    def basis(self, q) -> np.ndarray:
+        """(nv, n - 3k) ``N K``: the velocities the couplings and the loops allow (orthonormal ``K``).
+
+        Raises ModelError if ``G N`` loses rank (the loop's constraints are then not independent)."""
+        N = self._coupling_basis(q)
+        GN = self.jacobian(q) @ N
+        _, s, Vt = np.linalg.svd(GN)
+        if s.size and s[-1] <= RANK_TOL * max(1.0, s[0]):
+            raise ModelError(f"point constraint(s) {list(self.names)}: G N has rank < {self.k} at this "
+                             f"configuration (singular values {s.tolist()})")
+        return N @ Vt[self.k:].T
+
+    def force(self, q, generalized) -> np.ndarray:
+        """(3k,) ``lambda`` (N, world) from ``generalized = M qdd + h + L^T f`` (nv): the least-squares
+        solution of ``N^T G^T lambda = N^T generalized`` (exact when the projected equation holds)."""
+        N = self._coupling_basis(q)
+        A = N.T @ self.jacobian(q).T
+        return np.linalg.lstsq(A, N.T @ np.asarray(generalized, dtype=float), rcond=None)[0]
+
+    def external_forces(self, q, lam) -> list:
+        """Pinocchio's ``fext`` (one ``pin.Force`` per joint, joint frame) of the loop forces ``lam``:
+        ``+lambda`` on body 2 at ``p_2``, ``-lambda`` on body 1 at ``p_1``."""
+        m, d = self.model, self.data
+        pin.framesForwardKinematics(m, d, np.asarray(q, dtype=float))
+        fext = [pin.Force.Zero() for _ in range(m.njoints)]
+        lam = np.asarray(lam, dtype=float).reshape(-1, 3)
+        for (_, a, b), f in zip(self.loops, lam):
+            for fid, sign in ((b, 1.0), (a, -1.0)):
+                frame = m.frames[fid]
+                j = int(frame.parentJoint)
+                R = d.oMi[j].rotation
+                local = R.T @ (sign * f)
+                fext[j] += pin.Force(local, np.cross(frame.placement.translation, local))
+        return fext
+
+    def force_map(self, q, tau0, L=None):
+        """``(lambda_0, Lambda)`` with ``lambda = lambda_0 + Lambda f`` (:meth:`force`): ``tau0 = M qdd + h``
+        (nv), ``L`` (m, nv) the cables' ``d lengths / dq`` (``None``: no cables, ``Lambda`` empty)."""
+        N = self._coupling_basis(q)
+        pinv = np.linalg.pinv(N.T @ self.jacobian(q).T)
+        lam0 = pinv @ (N.T @ np.asarray(tau0, dtype=float))
+        Lam = np.zeros((self.k, 0)) if L is None else pinv @ (N.T @ np.asarray(L, dtype=float).T)
+        return lam0, Lam
+
+    def wrench_map(self, q) -> np.ndarray:
+        """(njoints, 6, 3k) ``W``: what the loop forces ``lambda`` add to RNEA's ``data.f[j]`` (the wrench
+        ``[F; M]`` the parent exerts on joint ``j``'s subtree, joint frame, moment about its origin):
+        ``W[j] lambda`` is ``data.f[j]`` with the loop forces minus ``data.f[j]`` without. A force on the subtree is one the parent
+        need not exert, hence ``W[j] = -`` the sum, over the loop points in the subtree, of the point
+        force moved to joint ``j``."""
+        m, d = self.model, self.data
+        pin.framesForwardKinematics(m, d, np.asarray(q, dtype=float))
+        W = np.zeros((m.njoints, 6, self.k))
+        for i, (_, a, b) in enumerate(self.loops):
+            for fid, sign in ((b, 1.0), (a, -1.0)):
+                point = d.oMf[fid].translation
+                j = int(m.frames[fid].parentJoint)
+                while j > 0:
+                    R, o = d.oMi[j].rotation, d.oMi[j].translation
+                    W[j, :3, 3 * i:3 * i + 3] -= sign * R.T
+                    W[j, 3:, 3 * i:3 * i + 3] -= sign * R.T @ pin.skew(point - o)
+                    j = int(m.parents[j])
+        return W
+
+    def project(self, q, free=None, iterations: int = 50, tol: float = 1e-13) -> np.ndarray:
+        """``q`` moved onto the loops: Gauss-Newton on ``phi`` along the couplings' directions, smallest
+        steps, moving only the independent coordinates ``free`` (``v`` indices; default: all). A file's
+        default pose is in general not on the loop (OpenSim assembles it when it initialises the
+        model); this is the same job. Raises ModelError if it does not converge."""
+        q = np.array(q, dtype=float)
+        for _ in range(iterations):
+            r = self.residual(q)
+            if np.max(np.abs(r)) < tol:
+                return q
+            N = self._coupling_basis(q)
+            if free is not None:
+                cols = self._columns(free)
+                N = N[:, cols]
+            dz = -np.linalg.pinv(self.jacobian(q) @ N) @ r
+            q = pin.integrate(self.model, q, N @ dz)
+            if self.couplings is not None:
+                q = self.couplings.fill(q)[0]
+        raise ModelError(f"point constraint(s) {list(self.names)}: no configuration on the loop found near q "
+                         f"(residual {np.max(np.abs(self.residual(q)))} m)")
+
+    def _columns(self, free) -> list:
+        """Columns of the couplings' basis of the ``v`` indices ``free`` (independent coordinates)."""
+        independent = list(range(self.model.nv)) if self.couplings is None else self.couplings.independent.tolist()
+        bad = [int(i) for i in free if int(i) not in independent]
+        if bad:
+            raise ModelError(f"project: v entries {bad} are not independent coordinates")
+        return [independent.index(int(i)) for i in free]

@@ -1,0 +1,91 @@
+r"""The solver chains the library uses, each built here and nowhere else.
+
+A chain is a :class:`~.cascade.Cascade` of named stages; a stage either *answers* (tries when there is
+no final answer yet) or *refines* (improves an optimal answer). The default chain:
+
+==================  =======  ==========================================================================
+stage               kind     what it does
+==================  =======  ==========================================================================
+``warm_active_set``  answer  the previous instant's active set, corrected by block pivoting; a
+                             verified KKT point or nothing (:mod:`.active_set`)
+``ipm``              answer  the compiled interior-point method with crossover to the active set
+                             (:mod:`.ipm`): every cold instant
+``clarabel``         answer  Clarabel's exact cone program (:mod:`.clarabel_`), on the scaled problem
+``proxqp``           answer  ProxQP with the cones by cutting planes (:mod:`.proxqp_`)
+``sqp_polish``       answer  SQP from the cutting planes' point once the cuts crowd (:mod:`.proxqp_`)
+``polish``           refine  the exact KKT point of the answer's active set (:mod:`.active_set`)
+``project``          refine  onto the bounds when the miss is within tolerance (:mod:`.check`)
+``least_norm``       refine  among equally optimal answers, the one of least ``|x|^2`` (:mod:`.least_norm`)
+``check``            refine  the KKT check: an answer that fails it becomes ``inaccurate`` (:mod:`.check`)
+==================  =======  ==========================================================================
+
+``get_solver("proxqp")``, ``("clarabel")``, ``("compiled")`` are single-method chains (no other
+method answers for them: the ``stage`` field of every answer says which stage produced it).
+:func:`ProxQPSolver` and :func:`ClarabelSolver` build the ProxQP and Clarabel chains with their
+options.
+"""
+
+from __future__ import annotations
+
+from .. import tolerances as tol
+from ..exceptions import SolverError
+from ..vocabulary import BACKENDS
+from .active_set import Polish, WarmActiveSet
+from .cascade import Cascade
+from .check import Check, Project
+from .clarabel_ import ClarabelStage
+from .ipm import IPMStage
+from .least_norm import LeastNorm
+from .proxqp_ import ProxQPStage, SQPPolish
+
+def chain(name: str, first, budget_s: float | None, factory, polish: bool = True) -> Cascade:
+    """``first`` (stage factories: the answering stages), then the polish (``polish``) and the
+    projection, then the least-norm stage (running the same stages on the least-norm problem) and
+    the check; ``factory`` makes a fresh copy (:meth:`Cascade.fresh`)."""
+
+    # the polish gives the exact KKT point of the answer's active set: the least-norm stage pins
+    # P x at the first stage's answer, and an interior point's P x is accurate to ~1e-5 only where
+    # the objective is flat
+    def stages():
+        return [f() for f in first] + ([Polish()] if polish else []) + [Project()]
+
+    inner = Cascade(stages(), name=f"{name} (least-norm stage)", budget_s=None)
+    return Cascade(stages() + [LeastNorm(inner), Check()], name=name, budget_s=budget_s, factory=factory)
+
+
+def make_solver(name: str = "default", budget_s: float | None = tol.BUDGET_S, **options) -> Cascade:
+    """The chain called ``name`` (:data:`BACKENDS`; ``options``: the named back-end's stage's)."""
+    factory = lambda: make_solver(name, budget_s, **options)  # noqa: E731
+    if name == "default":
+        # Clarabel before ProxQP: where the compiled method breaks down (an instant infeasible by a
+        # few micro-degrees of cone) Clarabel's exact cone program answers in milliseconds, where
+        # the cutting planes' SQP polish may run millions of ProxQP iterations before failing
+        first = [WarmActiveSet, IPMStage, ClarabelStage, lambda: ProxQPStage(**options), SQPPolish]
+    elif name == "compiled":
+        first = [WarmActiveSet, IPMStage]
+    elif name == "proxqp":
+        first = [lambda: ProxQPStage(**options), SQPPolish]
+    elif name == "clarabel":
+        first = [lambda: ClarabelStage(**options)]
+    else:
+        raise SolverError(f"unknown solver {name!r}; expected one of {', '.join(BACKENDS)}")
+    return chain(name, first, budget_s, factory)
+
+
+def ProxQPSolver(active_set: bool = True, fallback: bool = True, budget_s: float | None = tol.BUDGET_S,
+                 **options) -> Cascade:
+    """A ProxQP-based chain, as the library's default was before the compiled interior-point method:
+    ``active_set`` adds the warm active set and the polish, ``fallback`` Clarabel for the instants on
+    which ProxQP stalls; ``options``: :class:`~.proxqp_.ProxQPStage`'s."""
+    first = ([WarmActiveSet] if active_set else []) + [lambda: ProxQPStage(**options), SQPPolish]
+    first += [ClarabelStage] if fallback else []
+    return chain("proxqp", first, budget_s, polish=active_set,
+                 factory=lambda: ProxQPSolver(active_set, fallback, budget_s, **options))
+
+
+def ClarabelSolver(tol: float = tol.CLARABEL_TOL, max_iter: int = 200) -> Cascade:
+    """The Clarabel-only chain (``make_solver("clarabel")``)."""
+    return make_solver("clarabel", tol=tol, max_iter=max_iter)
+
+
+__all__ = ["BACKENDS", "chain", "make_solver", "ProxQPSolver", "ClarabelSolver"]
