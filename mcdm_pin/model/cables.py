@@ -329,7 +329,6 @@ def _as_point(model, p, where: str) -> tuple[RoutePoint, int]:
     return RoutePoint(frame if isinstance(frame, str) else model.frames[fid].name, xyz), fid
 
 
-<<<<<<< HEAD
 def _check_osim_point(model, p, xyz, where: str):
     """A checked :class:`ConditionalPoint` or :class:`MovingPoint` (coordinates in range, functions
     of the right shape)."""
@@ -353,7 +352,8 @@ def _check_osim_point(model, p, xyz, where: str):
             raise ModelError(f"{where}: a moving point's function needs knots x (increasing) and "
                              f"coefficients y, b, c, d of one length, all finite")
     return dataclasses.replace(p, point=xyz)
-=======
+
+
 def _vector(value, what: str) -> tuple[float, float, float]:
     try:
         xyz = tuple(_number(v, what) for v in value)
@@ -392,7 +392,6 @@ def _as_rotating(model, p: RotatingPulley, where: str) -> tuple[RotatingPulley, 
         screw = ScrewDrive(direction, lead, reference, outlet)
     frame = p.frame if isinstance(p.frame, str) else model.frames[fid].name
     return RotatingPulley(frame, entry, axis, radius, screw, str(p.name)), fid
->>>>>>> main
 
 
 def _as_wrap(model, w: Wrap, where: str) -> tuple[Wrap, int, int | None]:
@@ -451,14 +450,11 @@ class CableSet:
         seg_scale: (S,) the share of length and tension of each segment (``1/divisor`` past a pulley).
         wraps: the :class:`ResolvedWrap` of every wrap, in route order; the segment ``seg`` each one
             sits on is the straight segment its path replaces when it engages (:mod:`.routes`).
-<<<<<<< HEAD
         osim_wraps: the :class:`ResolvedWrap` of every OpenSim wrap (``a`` the cable's first point,
             ``seg`` -1), in route order; ``osim_cables`` the cables whose path follows OpenSim's rules
             (:mod:`mcdm_pin.model.route_osim`).
-=======
         rotating: the :class:`ResolvedRotatingPulley` of every rotating pulley, in route order; each
             has a route point slot (on the pulley's body) that holds its exit point at each instant.
->>>>>>> main
         muscles: the :class:`~mcdm_pin.model.muscles.MuscleParams` of the cables that are muscles
             (``None``: none), ``muscle_index`` (k,) those cables; a muscle's tension range at an
             instant follows its length and speed, and its ``f_min``/``f_max`` here only bound it.
@@ -479,11 +475,8 @@ class CableSet:
         self.f_min = np.array([c.f_min for c in self.cables])
         self.f_max = np.array([c.f_max for c in self.cables])
         jid, local, seg_a, seg_b, seg_c, seg_s, fids_all, wraps = [], [], [], [], [], [], [], []
-<<<<<<< HEAD
         osim_wraps, frame_R, frame_p = [], [], []
-=======
         rotating = []
->>>>>>> main
         for k, (cable, res) in enumerate(resolved):
             start = len(jid)
             bodies = set()
@@ -533,14 +526,11 @@ class CableSet:
         self.seg_scale = np.array(seg_s, dtype=float)
         self.seg_active = self.point_joint[self.seg_a] != self.point_joint[self.seg_b]
         self.wraps = tuple(wraps)
-<<<<<<< HEAD
         self.osim_wraps = tuple(osim_wraps)
         self.osim_cables = tuple(k for k, c in enumerate(self.cables) if any(
             isinstance(p, (ConditionalPoint, MovingPoint)) or (isinstance(p, Wrap) and p.kind in OPENSIM_WRAPS)
             for p in c.route))
-=======
         self.rotating = tuple(rotating)
->>>>>>> main
         self.muscles, self.muscle_index = None, np.zeros(0, dtype=int)
         if muscles is not None:
             names = list(muscle_cables)
@@ -554,15 +544,9 @@ class CableSet:
 
     @property
     def configuration_dependent(self) -> bool:
-<<<<<<< HEAD
-        """Some route wraps over a surface or follows OpenSim's conditional or moving points (its path
-        depends on the configuration)."""
-        return bool(self.wraps) or bool(self.osim_cables)
-=======
-        """Some route wraps over a surface or leaves a rotating pulley (its path depends on the
-        configuration)."""
-        return bool(self.wraps or self.rotating)
->>>>>>> main
+        """Some route wraps over a surface, leaves a rotating pulley or follows OpenSim's conditional or
+        moving points (its path depends on the configuration)."""
+        return bool(self.wraps or self.rotating or self.osim_cables)
 
     @property
     def m(self) -> int:

@@ -51,13 +51,9 @@ from __future__ import annotations
 import numpy as np
 from ..jit import njit
 
-<<<<<<< HEAD
-from .route_osim import osim_routes
-from .wrapping import from_frame, register_jitable, wrap_in_frame
-=======
 from .pulleys import REASON_OK, REASON_SCREW, rotating_exit, screw_entry
+from .route_osim import osim_routes
 from .wrapping import from_frame, register_jitable, to_frame, wrap_in_frame
->>>>>>> main
 
 # columns of wrap_int
 W_KEY, A_KEY, B_KEY, S_KEY, HAS_SIDE, CYLINDER, SLOT, SEG, B_POINT, CABLE, ACTIVE_AT0, ACTIVE_AB = range(12)
@@ -200,7 +196,6 @@ def warm_calls():
     wf = np.zeros((1, N_FLOAT))
     wf[0, R_W:R_W + 9] = np.eye(3).ravel()
     wf[0, A_LOCAL], wf[0, B_LOCAL + 1], wf[0, RADIUS], wf[0, SCALE] = 1.0, 1.0, 0.1, 1.0
-<<<<<<< HEAD
     from . import route_osim as ro
 
     route = np.array([[0, 0, 2, 0, 0, 0, 1, 2]], dtype=i64)  # one OpenSim route of two fixed points
@@ -209,18 +204,14 @@ def warm_calls():
                  np.zeros((0, ro.N_OINT), dtype=i64), np.zeros((0, ro.N_OFLOAT)), np.array([[0.0, 0, 0], [1, 0, 0]]),
                  np.zeros(2, dtype=i64), np.array([0], dtype=i64), np.array([1], dtype=i64), np.array([False]),
                  np.ones(1), np.zeros(1), np.zeros((1, 1)), np.zeros(0), np.zeros((2, 3)), np.zeros((2, 3)))
-    return [(route_pass, (oM, wi, wf, np.zeros((4, 3)), np.array([1], dtype=i64), np.array([False]),
-                          np.zeros(2), np.zeros(1), np.zeros(1, dtype=np.bool_), 1)),
-            (osim_route_pass, osim_args)]
-=======
     qi = np.zeros((1, NQ_INT), dtype=i64)
     qi[0, Q_SCREW] = 1
     qf = np.zeros((1, NQ_FLOAT))
     qf[0, QB_LOCAL], qf[0, Q_AXIS + 2], qf[0, Q_DIR + 1] = 1.0, 1.0, 1.0
     qf[0, Q_RADIUS], qf[0, Q_SCALE], qf[0, Q_LEAD], qf[0, Q_REF] = 0.05, 1.0, 0.005, 1.0
     return [(route_pass, (oM, wi, wf, qi, qf, np.zeros((4, 3)), np.array([1], dtype=i64), np.array([False]),
-                          np.zeros(2), np.zeros(1), np.zeros(1, dtype=np.bool_), 1))]
->>>>>>> main
+                          np.zeros(2), np.zeros(1), np.zeros(1, dtype=np.bool_), 1)),
+            (osim_route_pass, osim_args)]
 
 
 def _register() -> None:

@@ -78,7 +78,7 @@ class RoutePaths:
         self.arc_length = np.zeros(cables.m)
         self.engaged = np.zeros(n_w, dtype=np.bool_)
         self._wrap_int, self._wrap_float = _tables(rk, cables, key, base_key, wkey, slot_t0)
-<<<<<<< HEAD
+        self._pulley_int, self._pulley_float = _pulley_tables(rk, cables, key)
         self._osim = self._osim_layout(cables, key) if cables.osim_cables else None
 
     def _osim_layout(self, cables, key):
@@ -102,18 +102,6 @@ class RoutePaths:
         return OsimTables(cables, okey, len(self.point_local), slot0, seg0)
 
     def __call__(self, oM: np.ndarray, q: np.ndarray | None = None):
-        self._pass(oM, self._wrap_int, self._wrap_float, self.point_local, self.seg_b, self.seg_active,
-                   self.seg_scale, self.arc_length, self.engaged, self.n_segments)
-        if self._osim is not None:  # OpenSim's routes read the configuration too
-            t = self._osim
-            self._osim_pass(oM, q, t.route_int, t.pt_kind, t.pt_q, t.pt_v, t.pt_fun, t.pt_float, t.fun_ptr,
-                            t.knots, t.wrap_int, t.wrap_float, self.point_local, self.point_key, self.seg_a,
-                            self.seg_b, self.seg_active, self.seg_scale, self.arc_length, self.L_extra,
-                            t.wrap_len, t.pt_dP, self.lever)
-=======
-        self._pulley_int, self._pulley_float = _pulley_tables(rk, cables, key)
-
-    def __call__(self, oM: np.ndarray):
         bad, reason = self._pass(oM, self._wrap_int, self._wrap_float, self._pulley_int, self._pulley_float,
                                  self.point_local, self.seg_b, self.seg_active, self.seg_scale, self.arc_length,
                                  self.engaged, self.n_segments)
@@ -124,7 +112,12 @@ class RoutePaths:
             name = f" {rp.name!r}" if rp.name else ""
             raise StateError(f"cable {self.cables.names[rp.cable]!r}: rotating pulley{name}: {REASONS[int(reason)]} "
                              f"at this configuration")
->>>>>>> main
+        if self._osim is not None:  # OpenSim's routes read the configuration too
+            t = self._osim
+            self._osim_pass(oM, q, t.route_int, t.pt_kind, t.pt_q, t.pt_v, t.pt_fun, t.pt_float, t.fun_ptr,
+                            t.knots, t.wrap_int, t.wrap_float, self.point_local, self.point_key, self.seg_a,
+                            self.seg_b, self.seg_active, self.seg_scale, self.arc_length, self.L_extra,
+                            t.wrap_len, t.pt_dP, self.lever)
         return (self.point_local, self.point_key, self.seg_a, self.seg_b, self.seg_cable, self.seg_active,
                 self.seg_scale, self.arc_length)
 
@@ -154,7 +147,24 @@ def _tables(rk, cables, key, base_key, wkey, slot_t0):
     return wi, wf
 
 
-<<<<<<< HEAD
+def _pulley_tables(rk, cables, key):
+    """The route pass's packed per-pulley tables ``(pulley_int, pulley_float)`` (columns: route_kernels)."""
+    n_q = len(cables.rotating)
+    qi = np.zeros((n_q, rk.NQ_INT), dtype=np.int64)
+    qf = np.zeros((n_q, rk.NQ_FLOAT))
+    for q, rp in enumerate(cables.rotating):
+        qi[q, rk.Q_KEY], qi[q, rk.QB_KEY] = key[rp.joint], key[cables.point_joint[rp.b]]
+        qi[q, rk.Q_SLOT], qi[q, rk.Q_CABLE], qi[q, rk.Q_SCREW] = rp.point, rp.cable, rp.screw is not None
+        qf[q, rk.QB_LOCAL:rk.QB_LOCAL + 3] = cables.point_local[rp.b]
+        qf[q, rk.Q_ENTRY:rk.Q_ENTRY + 3] = rp.entry
+        qf[q, rk.Q_AXIS:rk.Q_AXIS + 3] = rp.axis
+        qf[q, rk.Q_DIR:rk.Q_DIR + 3] = rp.screw_direction
+        qf[q, rk.Q_RADIUS], qf[q, rk.Q_SCALE] = rp.radius, rp.scale
+        if rp.screw is not None:
+            qf[q, rk.Q_LEAD], qf[q, rk.Q_REF], qf[q, rk.Q_OUTLET] = rp.screw
+    return qi, qf
+
+
 def add_levers(routes, L, RT, J, X, oM, sub_v, sub_phys, child_key) -> None:
     r"""OpenSim's forces act where a wrap last put its tangent points while their directions (and the
     lengths) use the points' cached positions (:mod:`mcdm_pin.model.route_osim`). For each straight
@@ -182,21 +192,3 @@ def add_levers(routes, L, RT, J, X, oM, sub_v, sub_phys, child_key) -> None:
                 L[c, cols] += m @ J[3:6, cols]
                 for j in np.flatnonzero(sub_phys[:, k]):
                     RT[j, 3:6, c] += oM[child_key[j], :3, :3].T @ m
-=======
-def _pulley_tables(rk, cables, key):
-    """The route pass's packed per-pulley tables ``(pulley_int, pulley_float)`` (columns: route_kernels)."""
-    n_q = len(cables.rotating)
-    qi = np.zeros((n_q, rk.NQ_INT), dtype=np.int64)
-    qf = np.zeros((n_q, rk.NQ_FLOAT))
-    for q, rp in enumerate(cables.rotating):
-        qi[q, rk.Q_KEY], qi[q, rk.QB_KEY] = key[rp.joint], key[cables.point_joint[rp.b]]
-        qi[q, rk.Q_SLOT], qi[q, rk.Q_CABLE], qi[q, rk.Q_SCREW] = rp.point, rp.cable, rp.screw is not None
-        qf[q, rk.QB_LOCAL:rk.QB_LOCAL + 3] = cables.point_local[rp.b]
-        qf[q, rk.Q_ENTRY:rk.Q_ENTRY + 3] = rp.entry
-        qf[q, rk.Q_AXIS:rk.Q_AXIS + 3] = rp.axis
-        qf[q, rk.Q_DIR:rk.Q_DIR + 3] = rp.screw_direction
-        qf[q, rk.Q_RADIUS], qf[q, rk.Q_SCALE] = rp.radius, rp.scale
-        if rp.screw is not None:
-            qf[q, rk.Q_LEAD], qf[q, rk.Q_REF], qf[q, rk.Q_OUTLET] = rp.screw
-    return qi, qf
->>>>>>> main
