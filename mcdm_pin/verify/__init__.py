@@ -7,7 +7,7 @@ Starting from the first solved state of a :class:`~mcdm_pin.results.TrajectoryRe
 (Pinocchio's articulated-body algorithm, the cables' generalised force evaluated at the *integrated*
 configuration, not the planned one; actuators' torques ``tau_act`` join :math:`\tau` on hybrid robots
 and reserves; on robots with coupled coordinates the full equation of motion is solved with the
-couplings' constraint forces as unknowns, :class:`mcdm_pin.verify.replay._Dynamics`) and compare :math:`q` with the plan at the sample instants
+couplings' constraint forces as unknowns) and compare :math:`q` with the plan at the sample instants
 (:mod:`mcdm_pin.verify.replay`). Robots with quaternion joints (native ball or free joints) are
 integrated on their configuration manifold (Runge-Kutta-Munthe-Kaas through ``pin.integrate``), and
 the error is ``pin.difference`` between the replayed and the planned configuration (rad or m).

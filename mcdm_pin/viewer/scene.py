@@ -190,30 +190,11 @@ def kinematics(robot, result) -> Kinematics:
     if not cables.configuration_dependent:
         ends = np.stack([points[:, cables.seg_a], points[:, cables.seg_b]], axis=2)
         return Kinematics(links, joint_T, points, ends, cables.seg_cable)
-    segments, seg_cable = _routed_segments(robot, conf)
+    from .arcs import route_polylines  # imported here: the route maths import numba
+
+    # wrapped routes: each engaged wrap's path on its surface, sampled (mcdm_pin/viewer/arcs.py)
+    segments, seg_cable, _ = route_polylines(robot, conf)
     return Kinematics(links, joint_T, points, segments, seg_cable)
-
-
-def _routed_segments(robot, conf) -> tuple[np.ndarray, np.ndarray]:
-    """The drawn segments of wrapped routes at every instant: the path's straight pieces, and each
-    engaged wrap's arc as the chord between its tangent points (:mod:`mcdm_pin.model.routes`)."""
-    from ..model.terms import TermsEvaluator
-
-    ev = TermsEvaluator(robot, compiled=False)
-    routes = ev._routes
-    wraps = robot.cables.wraps
-    zero = np.zeros(robot.nv)
-    n_seg = len(routes.seg_a) + len(wraps)
-    out = np.empty((len(conf), n_seg, 2, 3))
-    for k, q in enumerate(conf):
-        X = ev(robot.check_configuration(q), zero, zero, checked=True).points
-        a = X[routes.seg_a]
-        b = np.where((routes.seg_scale > 0)[:, None], X[routes.seg_b], a)
-        t0, t1 = X[routes._slot_t0], X[routes._slot_t1]
-        on = routes.engaged[:, None]
-        out[k, :len(a), 0], out[k, :len(a), 1] = a, b
-        out[k, len(a):, 0], out[k, len(a):, 1] = t0, np.where(on, t1, t0)
-    return out, np.concatenate([routes.seg_cable, [w.cable for w in wraps]]).astype(int)
 
 
 # ----------------------------------------------------------------------------------------- build
