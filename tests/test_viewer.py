@@ -391,8 +391,11 @@ def test_wrapped_routes_are_drawn_on_their_surfaces_with_the_routes_length(tmp_p
     chords, *_ = drawn(1e3)  # the rule then gives one piece per wrap: the chord
     assert ((ref - chords) / ref).max() > 1e-2
     # the scene's cables are these polylines
-    kin = kinematics(robot, type("Run", (), {"configuration": conf, "q": None})())
+    run = type("Run", (), {"configuration": conf, "q": None})()
+    kin = kinematics(robot, run)
     assert np.array_equal(kin.segments, seg) and np.array_equal(kin.seg_cable, cable)
+    coarse = kinematics(robot, run, arc_tol=1e-3).segments.shape[1]  # view --arc-tol: a smaller file
+    assert robot.m < coarse < seg.shape[1]
     # every vertex on its surface: the sphere's centre at distance r; the cylinder's axis at distance r,
     # its height linear in the angle (a helix)
     data = robot.model.createData()

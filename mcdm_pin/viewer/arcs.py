@@ -67,13 +67,15 @@ class SurfacePath(NamedTuple):
     length: float
 
 
-def route_polylines(robot, conf, tol: float = ARC_TOL):
-    """The drawn segments of a robot with wrapped routes at configurations ``conf`` (N, nq).
+def route_polylines(robot, conf, tol: float | None = None):
+    """The drawn segments of a robot with wrapped routes at configurations ``conf`` (N, nq); ``tol``:
+    the relative tolerance of the sampling rule (default :data:`ARC_TOL`).
 
     Returns ``(segments, seg_cable, seg_scale)``: (N, S, 2, 3) the ends of every drawn segment (world,
     m; a segment not on the path at an instant has both ends at one point), (S,) its cable, and (N, S)
     its branch scale (``1/divisor``; 0 where it is not on the path), so that each cable's
     ``sum(seg_scale * |b - a|)`` is its route's length to ``tol`` relative (module docstring)."""
+    tol = ARC_TOL if tol is None else float(tol)
     model, data = robot.model, robot.model.createData()
     cables = robot.cables
     wraps = cables.wraps
