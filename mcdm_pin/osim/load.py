@@ -23,6 +23,7 @@ from ..model.cables import CableSet
 from ..model.couplings import Couplings
 from ..model.joints import physical_joints
 from . import speeds
+from .actuators import read_coordinate_actuators
 from .constraints import PointLoops
 from .document import read_osim
 from .model import OsimModel, build
@@ -57,12 +58,16 @@ def osim_skeleton(path):
     return om, couplings, OsimSource(om, couplings), doc
 
 
-def osim_parts(path, name: str | None = None) -> RobotParts:
-    """The robot of the ``.osim`` file ``path``, in parts (``Robot(**parts._asdict())``)."""
+def osim_parts(path, name: str | None = None, actuator_weights: dict | None = None) -> RobotParts:
+    """The robot of the ``.osim`` file ``path``, in parts (``Robot(**parts._asdict())``): its muscles
+    as cables, its ``CoordinateActuator``\ s as actuators (:mod:`.actuators`; ``actuator_weights``
+    ``{name: w}`` of their ``w c^2``)."""
     source = str(path)
     om, couplings, src, doc = osim_skeleton(path)
+    joints = physical_joints(om.model)
     try:
         cables = _cables(doc.root, source, om)
+        actuators, act_notes = read_coordinate_actuators(doc.root, om, joints, actuator_weights)
     except ModelError as exc:
         msg = str(exc)
         msg = msg if msg.startswith(source) else f"{source}: {msg}"
@@ -71,8 +76,8 @@ def osim_parts(path, name: str | None = None) -> RobotParts:
         raise ModelError(f"{source}: no muscle read, so the model has no cable (the muscle and path reader, "
                          f"mcdm_pin.osim.paths, is not wired into mcdm_pin.osim.load._cables yet)")
     notes = tuple(doc.notes) + om.notes + tuple(f"PointConstraint {n!r}: a closed loop (mcdm_pin.osim.constraints)"
-                                     for n, _, _ in om.loops)
-    return RobotParts(om.model, cables, physical_joints(om.model), (), name or Path(path).stem, couplings,
+                                     for n, _, _ in om.loops) + tuple(act_notes)
+    return RobotParts(om.model, cables, joints, actuators, name or Path(path).stem, couplings,
                       om.velocity_names, src, notes)
 
 
