@@ -162,7 +162,7 @@ class Robot:
     @classmethod
     def from_sidecar(cls, sidecar: Sidecar) -> "Robot":
         sc = sidecar
-        if sc.mjcf_path is not None:
+        if sc.mjcf_path is not None or sc.osim_path is not None:
             return _from_mjcf_sidecar(sc)
         if sc.urdf_path is None:
             urdf_path = resolve_package_uri(sc.urdf, sc.path)
@@ -287,18 +287,22 @@ class Robot:
 
 # ------------------------------------------------------------------------------------ sidecar helpers
 def _from_mjcf_sidecar(sc: Sidecar) -> Robot:
-    """The MJCF file's robot with the sidecar's joint settings and trajectories."""
-    if not sc.mjcf_path.is_file():
-        raise sc.error("mjcf", f"MJCF file not found: {sc.mjcf_path}")
+    """The MJCF (or OpenSim) file's robot with the sidecar's joint settings and trajectories."""
+    key, path = ("osim", sc.osim_path) if sc.osim_path is not None else ("mjcf", sc.mjcf_path)
+    if not path.is_file():
+        raise sc.error(key, f"{key.upper() if key == 'mjcf' else 'OpenSim'} file not found: {path}")
     try:
-        robot = Robot.from_mujoco(compile_mjcf(sc.mjcf_path), str(sc.mjcf_path), sc.name)
+        if sc.osim_path is not None:
+            robot = Robot(**osim_parts(path, sc.name, sc.actuator_weights)._asdict())
+        else:
+            robot = Robot.from_mujoco(compile_mjcf(path), str(path), sc.name)
     except ModelError as exc:
-        raise sc.error("mjcf", str(exc)) from None
+        raise sc.error(key, str(exc)) from None
     joints = {j.name: j for j in robot.joints}
     for spec in sc.joints:
         if spec.name not in joints:
-            raise sc.error(spec.key, f"unknown joint {spec.name!r}; the MJCF's physical joints are its moving "
-                                     f"bodies: {_names(list(joints))}")
+            raise sc.error(spec.key, f"unknown joint {spec.name!r}; the {key.upper()} file's physical joints are "
+                                     f"{_names(list(joints))}")
         try:
             joints[spec.name] = joints[spec.name].with_settings(alpha=spec.alpha, beta=spec.beta,
                                                                 cone_deg=spec.cone_deg,
@@ -306,7 +310,8 @@ def _from_mjcf_sidecar(sc: Sidecar) -> Robot:
         except ModelError as exc:
             raise sc.error(spec.key, str(exc)) from None
     try:
-        return Robot(robot.model, robot.cables, tuple(joints.values()), _reserves(sc, robot), name=sc.name,
+        actuators = robot.actuators + _reserves(sc, robot)
+        return Robot(robot.model, robot.cables, tuple(joints.values()), actuators, name=sc.name,
                      sidecar=sc, couplings=robot.couplings, coordinate_names=robot.coordinate_names,
                      source=robot.source, notes=robot.notes)
     except ModelError as exc:
