@@ -43,7 +43,47 @@ class RoutePoint:
     point: tuple[float, float, float]
 
 
-WRAP_KINDS = ("sphere", "cylinder")
+WRAP_KINDS = ("sphere", "cylinder", "opensim_sphere", "opensim_cylinder", "opensim_ellipsoid")
+OPENSIM_WRAPS = ("opensim_sphere", "opensim_cylinder", "opensim_ellipsoid")
+PATH_WRAP_METHODS = ("hybrid", "midpoint", "axial")
+"""Wraps with OpenSim's semantics (:mod:`mcdm_pin.model.route_osim`): they follow the route's points
+and apply over the span of points their ``span`` names, as an OpenSim ``PathWrap`` does."""
+QUADRANTS = ("all", "+x", "-x", "+y", "-y", "+z", "-z")
+
+
+@dataclass(frozen=True)
+class ConditionalPoint(RoutePoint):
+    """OpenSim's ``ConditionalPathPoint``: on the path only while ``q[q_index]`` lies in ``range``
+    (widened by 1e-5 each side, as OpenSim does)."""
+
+    q_index: int = 0
+    range: tuple[float, float] = (-math.inf, math.inf)
+
+
+@dataclass(frozen=True)
+class MovingPoint(RoutePoint):
+    """OpenSim's ``MovingPathPoint``: its position in ``frame`` is ``(f_x(c), f_y(c), f_z(c))`` with
+    ``c = q[q_index]`` clamped to ``clamp`` (OpenSim clamps the coordinate to its range); the
+    functions' slopes at the unclamped ``c`` give the point's own term of ``L`` in column
+    ``v_index`` (OpenSim's ``getdPointdQ``). ``point`` holds the position at ``c = 0`` (for display).
+    ``functions``: three :class:`PiecewiseCubic`."""
+
+    q_index: int = 0
+    v_index: int = 0
+    clamp: tuple[float, float] = (-math.inf, math.inf)
+    functions: tuple = ()
+
+
+@dataclass(frozen=True)
+class PiecewiseCubic:
+    """``y_k + dx (b_k + dx (c_k + dx d_k))`` with ``dx = x - x_k`` on ``[x_k, x_{k+1}]``, linear with
+    slope ``b`` beyond the ends (SIMM's spline evaluation; a constant or a line is one knot)."""
+
+    x: tuple
+    y: tuple
+    b: tuple
+    c: tuple
+    d: tuple
 
 
 @dataclass(frozen=True)
@@ -59,6 +99,10 @@ class Wrap:
         side: a :class:`RoutePoint` on the side the cable must pass (MuJoCo's ``sidesite``), or
             ``None`` (the shorter way round).
         name: the surface's name (MuJoCo's geom name), for messages.
+        quadrant, length, span, radii, method: for the ``opensim_*`` kinds only: OpenSim's
+            ``quadrant``, the cylinder's ``length`` (m), the ``PathWrap``'s ``range`` (1-based route
+            point indices, -1: the first or the last point), the ellipsoid's semi-axes ``radii`` (m;
+            ``radius`` then their largest) and the ``PathWrap``'s ``method`` (ellipsoids).
     """
 
     frame: str
@@ -68,6 +112,11 @@ class Wrap:
     rotation: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
     side: RoutePoint | None = None
     name: str = ""
+    quadrant: str = "all"
+    length: float = 0.0
+    span: tuple[int, int] = (-1, -1)
+    radii: tuple = ()
+    method: str = "hybrid"
 
 
 @dataclass(frozen=True)
@@ -173,6 +222,13 @@ def _as_cable(model, item, k: int) -> tuple[Cable, list]:
     if n_points < 2:
         raise ModelError(f"cable {cable.name!r}: expected a route of at least two points, got {n_points}")
     kinds = [r[0] for r in resolved]
+    osim = [i for i, p in enumerate(route) if isinstance(p, Wrap) and p.kind in OPENSIM_WRAPS]
+    if osim:
+        if osim != list(range(len(kinds) - len(osim), len(kinds))) or "pulley" in kinds or len(osim) < sum(
+                1 for k in kinds if k == "wrap"):
+            raise ModelError(f"cable {cable.name!r}: OpenSim wraps ({', '.join(OPENSIM_WRAPS)}) must follow "
+                             f"all of the route's points, with no other wrap or pulley in the route")
+        kinds = kinds[:len(kinds) - len(osim)]
     for i, kind in enumerate(kinds):
         if kind != "point" and (i == 0 or i == len(kinds) - 1 or kinds[i - 1] != "point"
                                 or kinds[i + 1] != "point"):
@@ -206,12 +262,47 @@ def _as_point(model, p, where: str) -> tuple[RoutePoint, int]:
         raise ModelError(f"{where}: expected 3 numbers, got {point!r}") from None
     if len(xyz) != 3 or not all(math.isfinite(v) for v in xyz):
         raise ModelError(f"{where}: expected 3 finite numbers, got {point!r}")
+    if isinstance(p, (ConditionalPoint, MovingPoint)):
+        return _check_osim_point(model, p, xyz, where), fid
     return RoutePoint(frame if isinstance(frame, str) else model.frames[fid].name, xyz), fid
+
+
+def _check_osim_point(model, p, xyz, where: str):
+    """A checked :class:`ConditionalPoint` or :class:`MovingPoint` (coordinates in range, functions
+    of the right shape)."""
+    import dataclasses
+
+    if not 0 <= int(p.q_index) < model.nq:
+        raise ModelError(f"{where}: q_index {p.q_index!r} is out of range [0, {model.nq})")
+    if isinstance(p, ConditionalPoint):
+        lo, hi = (float(v) for v in p.range)
+        if not lo <= hi:
+            raise ModelError(f"{where}: expected a range lo <= hi, got {p.range!r}")
+        return dataclasses.replace(p, point=xyz, range=(lo, hi))
+    if not 0 <= int(p.v_index) < model.nv:
+        raise ModelError(f"{where}: v_index {p.v_index!r} is out of range [0, {model.nv})")
+    if len(p.functions) != 3 or not all(isinstance(f, PiecewiseCubic) for f in p.functions):
+        raise ModelError(f"{where}: expected three PiecewiseCubic functions (x, y, z), got {p.functions!r}")
+    for f in p.functions:
+        arrs = [np.asarray(getattr(f, k), dtype=float) for k in ("x", "y", "b", "c", "d")]
+        if len({a.shape for a in arrs}) != 1 or arrs[0].ndim != 1 or not arrs[0].size or not all(
+                np.isfinite(a).all() for a in arrs) or np.any(np.diff(arrs[0]) <= 0):
+            raise ModelError(f"{where}: a moving point's function needs knots x (increasing) and "
+                             f"coefficients y, b, c, d of one length, all finite")
+    return dataclasses.replace(p, point=xyz)
 
 
 def _as_wrap(model, w: Wrap, where: str) -> tuple[Wrap, int, int | None]:
     if w.kind not in WRAP_KINDS:
         raise ModelError(f"{where}: expected a wrap kind in {WRAP_KINDS}, got {w.kind!r}")
+    if w.kind in OPENSIM_WRAPS and (w.quadrant not in QUADRANTS or w.side is not None or (
+            w.kind == "opensim_cylinder" and not float(w.length) > 0) or len(w.span) != 2 or (
+            w.kind == "opensim_ellipsoid" and (len(w.radii) != 3 or not min(w.radii) > 0
+                                               or w.method not in PATH_WRAP_METHODS))):
+        raise ModelError(f"{where}: an OpenSim wrap needs a quadrant in {QUADRANTS}, no side point, a "
+                         f"span of two point indices, (cylinder) a length > 0, (ellipsoid) three radii > 0 and a "
+                         f"method in {PATH_WRAP_METHODS}; got quadrant={w.quadrant!r}, length={w.length!r}, "
+                         f"span={w.span!r}, radii={w.radii!r}, method={w.method!r}")
     radius = _number(w.radius, f"{where}: wrap radius")
     if not radius > 0:
         raise ModelError(f"{where}: expected a wrap radius > 0, got {w.radius!r}")
@@ -227,7 +318,8 @@ def _as_wrap(model, w: Wrap, where: str) -> tuple[Wrap, int, int | None]:
     if w.side is not None:
         side, side_fid = _as_point(model, w.side, f"{where}: side")
     frame = w.frame if isinstance(w.frame, str) else model.frames[fid].name
-    return Wrap(frame, w.kind, radius, center, tuple(rot), side, str(w.name)), fid, side_fid
+    return Wrap(frame, w.kind, radius, center, tuple(rot), side, str(w.name), w.quadrant, float(w.length),
+                tuple(int(i) for i in w.span), tuple(float(r) for r in w.radii), w.method), fid, side_fid
 
 
 class CableSet:
@@ -246,12 +338,16 @@ class CableSet:
         cables: the cables, in order; ``names``, ``f_min`` (m,), ``f_max`` (m,).
         point_frame, point_cable: (P,) the frame id and the cable of each route point.
         point_joint: (P,) the Pinocchio joint carrying each route point (all cables, in order).
-        point_local: (P, 3) each point in its joint's frame.
+        point_local: (P, 3) each point in its joint's frame; ``point_frame_rotation`` (P, 3, 3) and
+            ``point_frame_translation`` (P, 3) the placement of its frame in that joint's frame.
         seg_a, seg_b, seg_cable: (S,) each segment's start and end point and its cable.
         seg_active: (S,) the segment spans two bodies (a segment within one body adds length only).
         seg_scale: (S,) the share of length and tension of each segment (``1/divisor`` past a pulley).
         wraps: the :class:`ResolvedWrap` of every wrap, in route order; the segment ``seg`` each one
             sits on is the straight segment its path replaces when it engages (:mod:`.routes`).
+        osim_wraps: the :class:`ResolvedWrap` of every OpenSim wrap (``a`` the cable's first point,
+            ``seg`` -1), in route order; ``osim_cables`` the cables whose path follows OpenSim's rules
+            (:mod:`mcdm_pin.model.route_osim`).
         muscles: the :class:`~mcdm_pin.model.muscles.MuscleParams` of the cables that are muscles
             (``None``: none), ``muscle_index`` (k,) those cables; a muscle's tension range at an
             instant follows its length and speed, and its ``f_min``/``f_max`` here only bound it.
@@ -272,6 +368,7 @@ class CableSet:
         self.f_min = np.array([c.f_min for c in self.cables])
         self.f_max = np.array([c.f_max for c in self.cables])
         jid, local, seg_a, seg_b, seg_c, seg_s, fids_all, wraps = [], [], [], [], [], [], [], []
+        osim_wraps, frame_R, frame_p = [], [], []
         for k, (cable, res) in enumerate(resolved):
             start = len(jid)
             bodies = set()
@@ -280,6 +377,8 @@ class CableSet:
             for i, (elem, r) in enumerate(zip(cable.route, res)):
                 if r[0] == "point":
                     frame = model.frames[r[1]]
+                    frame_R.append(frame.placement.rotation.copy())
+                    frame_p.append(frame.placement.translation.copy())
                     jid.append(int(frame.parentJoint))
                     local.append(frame.placement.act(np.array(elem.point)))
                     fids_all.append(r[1])
@@ -293,6 +392,9 @@ class CableSet:
                 elif r[0] == "pulley":
                     scale = 1.0 / elem.divisor
                     prev = None
+                elif elem.kind in OPENSIM_WRAPS:
+                    osim_wraps.append(_resolve_wrap(model, k, elem, r, start, -1, 1.0))
+                    bodies.add(osim_wraps[-1].joint)
                 else:
                     wraps.append(_resolve_wrap(model, k, elem, r, len(jid) - 1, len(seg_a), scale))
                     bodies.add(wraps[-1].joint)
@@ -303,6 +405,8 @@ class CableSet:
         self.point_frame = np.array(fids_all, dtype=int)
         self.point_cable = np.repeat(np.arange(len(resolved)), [len(c.route_points) for c, _ in resolved])
         self.point_joint = np.array(jid, dtype=int)
+        self.point_frame_rotation = np.array(frame_R, dtype=float).reshape(-1, 3, 3)
+        self.point_frame_translation = np.array(frame_p, dtype=float).reshape(-1, 3)
         self.point_local = np.array(local, dtype=float).reshape(-1, 3)
         self.seg_a = np.array(seg_a, dtype=int)
         self.seg_b = np.array(seg_b, dtype=int)
@@ -310,6 +414,10 @@ class CableSet:
         self.seg_scale = np.array(seg_s, dtype=float)
         self.seg_active = self.point_joint[self.seg_a] != self.point_joint[self.seg_b]
         self.wraps = tuple(wraps)
+        self.osim_wraps = tuple(osim_wraps)
+        self.osim_cables = tuple(k for k, c in enumerate(self.cables) if any(
+            isinstance(p, (ConditionalPoint, MovingPoint)) or (isinstance(p, Wrap) and p.kind in OPENSIM_WRAPS)
+            for p in c.route))
         self.muscles, self.muscle_index = None, np.zeros(0, dtype=int)
         if muscles is not None:
             names = list(muscle_cables)
@@ -323,8 +431,9 @@ class CableSet:
 
     @property
     def configuration_dependent(self) -> bool:
-        """Some route wraps over a surface (its path depends on the configuration)."""
-        return bool(self.wraps)
+        """Some route wraps over a surface or follows OpenSim's conditional or moving points (its path
+        depends on the configuration)."""
+        return bool(self.wraps) or bool(self.osim_cables)
 
     @property
     def m(self) -> int:

@@ -319,7 +319,12 @@ def force_range(params: MuscleParams, tendon_lengths, tendon_velocities) -> Musc
     ``passive = g F0^p F_P(l^p)``, ``gain = g F0 F_L(l) F_V(v)``, ``f_min = passive + gain * act_min``,
     ``f_max = passive + gain * act_max``. Where ``gain`` is 0 the range collapses to the passive force
     (``f_min == f_max``): the muscle can neither add nor withhold tension there.
+
+    OpenSim's muscles (:class:`~mcdm_pin.model.muscles_osim.OpenSimMuscles`, the other kind of
+    ``params``) answer with their own curves, in the same :class:`MuscleState`.
     """
+    if not isinstance(params, MuscleParams):  # the OpenSim kind
+        return params.force_range(tendon_lengths, tendon_velocities)
     ell = _lengths(params, tendon_lengths, "tendon_lengths")
     ell_dot = _lengths(params, tendon_velocities, "tendon_velocities")
     k = params._curves

@@ -37,6 +37,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .route_osim import osim_routes
 from .wrapping import from_frame, register_jitable, wrap_in_frame
 
 # columns of wrap_int
@@ -120,6 +121,17 @@ def route_pass(oM, wrap_int, wrap_float, point_local, seg_b, seg_active, seg_sca
             seg_b[seg] = wi[B_POINT]
             seg_active[seg] = wi[ACTIVE_AB] != 0
             seg_scale[n_segments + w] = 0.0
+
+
+@njit(cache=True, nogil=True)
+def osim_route_pass(oM, q, route_int, pt_kind, pt_q, pt_v, pt_fun, pt_float, fun_ptr, knots, wrap_int,
+                    wrap_float, point_local, point_key, seg_a, seg_b, seg_active, seg_scale, arc_length,
+                    L_extra, wrap_len, pt_dP):
+    """The routes that follow OpenSim's rules, after :func:`route_pass` at the same instant:
+    :func:`mcdm_pin.model.route_osim.osim_routes` (its tables: ``route_osim.OsimTables``)."""
+    osim_routes(oM, q, route_int, pt_kind, pt_q, pt_v, pt_fun, pt_float, fun_ptr, knots, wrap_int, wrap_float,
+                point_local, point_key, seg_a, seg_b, seg_active, seg_scale, arc_length, L_extra, wrap_len,
+                pt_dP)
 
 
 def warm_calls():

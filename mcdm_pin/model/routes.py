@@ -43,7 +43,9 @@ class RoutePaths:
     Call with the world placements ``oM`` (K, 4, 4) of those joints; returns ``(point_local,
     point_key, seg_a, seg_b, seg_cable, seg_active, seg_scale, arc_length)``, the last (m,) the arc
     lengths (branch-scaled) to add to each cable's length. The arrays are owned by this object and
-    rewritten at every call; ``engaged`` (W,) says which wraps engaged.
+    rewritten at every call; ``engaged`` (W,) says which wraps engaged. Routes that follow OpenSim's
+    rules (:mod:`mcdm_pin.model.route_osim`) need the configuration ``q`` too, and then ``L_extra``
+    (m, nv) holds their moving points' own terms, to add to ``L``.
     """
 
     def __init__(self, cables, key_of_joint: np.ndarray):
@@ -71,10 +73,36 @@ class RoutePaths:
         self.arc_length = np.zeros(cables.m)
         self.engaged = np.zeros(n_w, dtype=np.bool_)
         self._wrap_int, self._wrap_float = _tables(rk, cables, key, base_key, wkey, slot_t0)
+        self._osim = self._osim_layout(cables, key) if cables.osim_cables else None
 
-    def __call__(self, oM: np.ndarray):
+    def _osim_layout(self, cables, key):
+        """Two tangent slots and one segment slot per OpenSim wrap after the MuJoCo wraps' slots, and
+        the tables of :func:`mcdm_pin.model.route_osim.osim_routes` (OpenSim's path rules)."""
+        from .. import jit
+        from .route_osim import OsimTables
+
+        okey = np.array([key[w.joint] for w in cables.osim_wraps], dtype=np.int64)
+        n_o, slot0, seg0 = len(okey), len(self.point_local), len(self.seg_a)
+        self.point_key = np.concatenate([self.point_key, np.repeat(okey, 2)]).astype(np.int64)
+        self.point_local = np.concatenate([self.point_local, np.zeros((2 * n_o, 3))])
+        self.seg_a = np.concatenate([self.seg_a, np.zeros(n_o, dtype=np.int64)])
+        self.seg_b = np.concatenate([self.seg_b, np.ones(n_o, dtype=np.int64)])
+        self.seg_cable = np.concatenate([self.seg_cable, [w.cable for w in cables.osim_wraps]]).astype(np.int64)
+        self.seg_active = np.concatenate([self.seg_active, np.zeros(n_o, dtype=np.bool_)])
+        self.seg_scale = np.concatenate([self.seg_scale, np.zeros(n_o)])
+        self.L_extra = np.zeros((cables.m, cables.model_signature[1]))
+        self._osim_pass = jit.kernels("model.route_kernels").osim_route_pass
+        return OsimTables(cables, okey, len(self.point_local), slot0, seg0)
+
+    def __call__(self, oM: np.ndarray, q: np.ndarray | None = None):
         self._pass(oM, self._wrap_int, self._wrap_float, self.point_local, self.seg_b, self.seg_active,
                    self.seg_scale, self.arc_length, self.engaged, self.n_segments)
+        if self._osim is not None:  # OpenSim's routes read the configuration too
+            t = self._osim
+            self._osim_pass(oM, q, t.route_int, t.pt_kind, t.pt_q, t.pt_v, t.pt_fun, t.pt_float, t.fun_ptr,
+                            t.knots, t.wrap_int, t.wrap_float, self.point_local, self.point_key, self.seg_a,
+                            self.seg_b, self.seg_active, self.seg_scale, self.arc_length, self.L_extra,
+                            t.wrap_len, t.pt_dP)
         return (self.point_local, self.point_key, self.seg_a, self.seg_b, self.seg_cable, self.seg_active,
                 self.seg_scale, self.arc_length)
 

@@ -232,7 +232,8 @@ class TermsEvaluator:
         nj = model.njoints
         keys = sorted({0} | set(cables.point_joint.tolist()) | {j.child_id for j in js}
                       | {j.parent_id for j in js} | {w.joint for w in cables.wraps}
-                      | {w.side_joint for w in cables.wraps if w.side_joint >= 0})
+                      | {w.side_joint for w in cables.wraps if w.side_joint >= 0}
+                      | {w.joint for w in getattr(cables, "osim_wraps", ())})
         pos = np.full(nj, -1, dtype=int)
         pos[keys] = np.arange(len(keys))
         self._keys = keys
@@ -344,7 +345,7 @@ class TermsEvaluator:
             if self._routes is None:
                 route, arc = self._route_args, None
             else:
-                *route, arc = self._routes(oMi)
+                *route, arc = self._routes(oMi, q)
             X, _, lengths, L, RT, R_socket, bad = self._kernel(oMi, np.ascontiguousarray(J.T), *route,
                                                                *self._kernel_args)
             if bad >= 0:
@@ -352,6 +353,8 @@ class TermsEvaluator:
                                  f"length at this configuration, so its direction is undefined")
             if arc is not None:
                 lengths += arc
+                if self._routes._osim is not None:  # OpenSim's moving points' own terms
+                    L += self._routes.L_extra
         else:
             oR, op = oMi[:, :3, :3], oMi[:, :3, 3]
             geo = cable_geometry(cables, oR, op, self._maps)

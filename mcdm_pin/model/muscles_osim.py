@@ -1,0 +1,312 @@
+r"""OpenSim's muscles (``Millard2012EquilibriumMuscle``, ``DeGrooteFregly2016Muscle``) with a rigid tendon
+as the force range of a cable: the OpenSim kind of :mod:`mcdm_pin.model.muscles` (same
+:class:`~mcdm_pin.model.muscles.MuscleState`, same use as per-instant bounds).
+
+At muscle-tendon length :math:`\ell` (m) and lengthening speed :math:`\dot\ell` (m/s), with optimal
+fiber length :math:`l_o`, tendon slack length :math:`l_s`, pennation :math:`\alpha_o` at :math:`l_o`,
+maximum contraction velocity :math:`v_{max}` (:math:`l_o`/s), maximum isometric force :math:`F_0`:
+
+- rigid tendon, constant fiber thickness :math:`h = l_o \sin\alpha_o`: the fiber length along the
+  tendon is :math:`\ell - l_s`, the fiber length :math:`l = \sqrt{h^2 + (\ell - l_s)^2}`,
+  :math:`\cos\alpha = (\ell - l_s)/l`, the fiber velocity :math:`\dot l = \dot\ell \cos\alpha`;
+  normalised :math:`\tilde l = l/l_o`, :math:`\tilde v = \dot l/(l_o v_{max})`;
+- tendon tension :math:`t = F_0 (a f_L(\tilde l) f_V(\tilde v) + f_P(\tilde l) + \beta\tilde v)\cos\alpha`
+  with the activation :math:`a` and the fiber damping :math:`\beta`: affine in :math:`a`, so
+  ``passive`` :math:`= F_0 (f_P + \beta\tilde v)\cos\alpha` and ``gain`` :math:`= F_0 f_L f_V \cos\alpha`.
+
+**Millard2012EquilibriumMuscle** (``ignore_tendon_compliance``): :math:`f_L`, :math:`f_V`, :math:`f_P` are
+OpenSim's quintic Bézier curves (``SmoothSegmentedFunctionFactory``: active force-length, force-velocity,
+fiber force-length, from the curves' properties; linear beyond their ends), evaluated as OpenSim does
+(Newton's method on the Bézier parameter, OpenSim to 2.2e-14 in ``x``, we to machine precision). With
+damping (``fiber_damping`` >= 0.001, OpenSim's default 0.1) OpenSim sets the active curve's
+``minimum_value`` to 0 and the force-velocity slopes at ``vmax`` to 0, as we do. The fiber is clamped
+at its minimum length (the larger of ``min_norm_active_fiber_length`` :math:`l_o` and the pennation
+model's :math:`h/\sin\alpha_{max}`, or :math:`0.01 l_o` without pennation): at or below it while
+shortening the muscle has no force; a tendon shorter than its slack length (a clamped fiber) has
+:math:`\tilde v = 0`, :math:`f_V = 1`. With a rigid tendon OpenSim saturates the fiber force at 0
+(the damping cannot push): ``f_min``, ``f_max`` are clipped at 0 where ``passive + gain a < 0``.
+The activation lies in ``[minimum_activation, 1]``.
+
+**DeGrooteFregly2016Muscle** (``ignore_tendon_compliance``): the analytic curves of De Groote et al.
+(2016) as OpenSim 4.6 writes them: :math:`f_L` the sum of three Gaussian-like terms in
+:math:`x = (\tilde l - 1)/w + 1` (``active_force_width_scale`` :math:`w`), :math:`f_V = d_1
+\ln(d_2\tilde v + d_3 + \sqrt{(d_2\tilde v + d_3)^2 + 1}) + d_4`, :math:`f_P = (e^{k(\tilde l - 1)/e_0} -
+o)/(e^k - o)`, :math:`o = e^{k(0.2 - 1)/e_0}`, :math:`k = 4` (0 with ``ignore_passive_fiber_force``),
+no clamps; the activation in ``[min_control, max_control]`` (0 and 1 by default).
+
+Thelen2003Muscle is not modelled: OpenSim 4.6 has no rigid tendon for it, and its force-velocity
+relation depends on the activation (the tension is not affine in it).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..exceptions import ModelError, StateError
+
+SIGNIFICANT = 1.0 / 2 ** 46  # SimTK::SignificantReal (eps^(7/8)) for doubles: about 1.9e-14
+MIN_DAMPING = 0.001  # Millard's MIN_NONZERO_DAMPING_COEFFICIENT
+
+
+# ------------------------------------------------------------------ quintic Bézier curves (OpenSim)
+
+def _corner(x0, y0, dydx0, x1, y1, dydx1, curviness):
+    """SegmentedQuinticBezierToolkit::calcQuinticBezierCornerControlPoints: six x and six y."""
+    if abs(dydx0 - dydx1) > math.sqrt(np.finfo(float).eps):
+        xc = (y1 - y0 - x1 * dydx1 + x0 * dydx0) / (dydx0 - dydx1)
+    else:
+        xc = (x1 + x0) / 2
+    yc = (xc - x1) * dydx1 + y1
+    x0m, y0m = x0 + curviness * (xc - x0), y0 + curviness * (yc - y0)
+    x1m, y1m = x1 + curviness * (xc - x1), y1 + curviness * (yc - y1)
+    return (x0, x0m, x0m, x1m, x1m, x1), (y0, y0m, y0m, y1m, y1m, y1)
+
+
+def _scale_curviness(c):
+    return 0.1 + 0.8 * c
+
+
+_BINOM5 = np.array([1.0, 5.0, 10.0, 10.0, 5.0, 1.0])
+_BINOM4 = np.array([1.0, 4.0, 6.0, 4.0, 1.0])
+
+
+def _bezier(u, P):
+    """Quintic Bézier value at parameters ``u`` (n,) for control points ``P`` (n, 6)."""
+    i = np.arange(6)
+    basis = _BINOM5 * (1 - u[:, None]) ** (5 - i) * u[:, None] ** i
+    return (basis * P).sum(axis=1)
+
+
+def _bezier_du(u, P):
+    i = np.arange(5)
+    basis = _BINOM4 * (1 - u[:, None]) ** (4 - i) * u[:, None] ** i
+    return 5.0 * (basis * np.diff(P, axis=1)).sum(axis=1)
+
+
+@dataclass(frozen=True)
+class BezierCurve:
+    """OpenSim's ``SmoothSegmentedFunction``: quintic Bézier segments (control points ``px``, ``py``
+    (k, 6)) on ``[x0, x1]``, lines of slopes ``dydx0``, ``dydx1`` through ``(x0, y0)``, ``(x1, y1)``
+    beyond."""
+
+    px: np.ndarray
+    py: np.ndarray
+    x0: float
+    x1: float
+    y0: float
+    y1: float
+    dydx0: float
+    dydx1: float
+
+    def __call__(self, x) -> np.ndarray:
+        x = np.atleast_1d(np.asarray(x, dtype=float))
+        out = np.empty_like(x)
+        lo, hi = x < self.x0, x > self.x1
+        out[lo] = self.y0 + self.dydx0 * (x[lo] - self.x0)
+        out[hi] = self.y1 + self.dydx1 * (x[hi] - self.x1)
+        mid = ~(lo | hi)
+        if mid.any():
+            xm = x[mid]
+            seg = np.clip(np.searchsorted(self.px[:, 5], xm, side="left"), 0, len(self.px) - 1)
+            PX, PY = self.px[seg], self.py[seg]
+            u = np.clip((xm - PX[:, 0]) / (PX[:, 5] - PX[:, 0]), 0.0, 1.0)
+            for _ in range(60):  # Newton's method on u (x(u) is monotone on each segment)
+                f = _bezier(u, PX) - xm
+                d = _bezier_du(u, PX)
+                step = np.where(d != 0, f / np.where(d != 0, d, 1.0), 0.0)
+                u = np.clip(u - step, 0.0, 1.0)
+                if np.all(np.abs(f) <= 4 * np.finfo(float).eps * np.maximum(1.0, np.abs(xm))):
+                    break
+            out[mid] = _bezier(u, PY)
+        return out
+
+
+def _curve(points, x0, x1, y0, y1, dydx0, dydx1) -> BezierCurve:
+    return BezierCurve(np.array([p[0] for p in points]), np.array([p[1] for p in points]), x0, x1, y0, y1,
+                       dydx0, dydx1)
+
+
+def active_force_length_curve(x0, x1, x3, ylow, dydx, x2=1.0, curviness=1.0) -> BezierCurve:
+    """``createFiberActiveForceLengthCurve(x0, x1, x2 = 1, x3, ylow, dydx, curviness = 1)``."""
+    c = _scale_curviness(curviness)
+    dx = 0.05 * x2
+    xs = x2 - dx
+    y0, dydx0 = 0.0, 0.0
+    y1 = 1 - dydx * (xs - x1)
+    dydx01 = 1.25 * (y1 - y0) / (x1 - x0)
+    x01, y01 = x0 + 0.5 * (x1 - x0), y0 + 0.5 * (y1 - y0)
+    x1s, y1s = x1 + 0.5 * (xs - x1), y1 + 0.5 * (1 - y1)
+    y2, dydx2, y3, dydx3 = 1.0, 0.0, 0.0, 0.0
+    x23 = (x2 + dx) + 0.5 * (x3 - (x2 + dx))
+    y23 = y2 + 0.5 * (y3 - y2)
+    dydx23 = (y3 - y2) / ((x3 - dx) - (x2 + dx))
+    pts = [_corner(x0, ylow, dydx0, x01, y01, dydx01, c), _corner(x01, y01, dydx01, x1s, y1s, dydx, c),
+           _corner(x1s, y1s, dydx, x2, y2, dydx2, c), _corner(x2, y2, dydx2, x23, y23, dydx23, c),
+           _corner(x23, y23, dydx23, x3, ylow, dydx3, c)]
+    return _curve(pts, x0, x3, ylow, ylow, 0.0, 0.0)
+
+
+def force_velocity_curve(fmax_e, dydx_c, dydx_near_c, dydx_iso, dydx_e, dydx_near_e, conc_curv,
+                         ecc_curv) -> BezierCurve:
+    """``createFiberForceVelocityCurve``."""
+    cc, ce = _scale_curviness(conc_curv), _scale_curviness(ecc_curv)
+    xc, yc, xnc = -1.0, 0.0, -0.9
+    ync = yc + 0.5 * dydx_near_c * (xnc - xc) + 0.5 * dydx_c * (xnc - xc)
+    xi, yi, xe, ye, xne = 0.0, 1.0, 1.0, fmax_e, 0.9
+    yne = ye + 0.5 * dydx_near_e * (xne - xe) + 0.5 * dydx_e * (xne - xe)
+    pts = [_corner(xc, yc, dydx_c, xnc, ync, dydx_near_c, cc), _corner(xnc, ync, dydx_near_c, xi, yi, dydx_iso, cc),
+           _corner(xi, yi, dydx_iso, xne, yne, dydx_near_e, ce), _corner(xne, yne, dydx_near_e, xe, ye, dydx_e, ce)]
+    return _curve(pts, xc, xe, yc, ye, dydx_c, dydx_e)
+
+
+def fiber_force_length_curve(e_zero, e_iso, k_low, k_iso, curviness) -> BezierCurve:
+    """``createFiberForceLengthCurve``."""
+    c = _scale_curviness(curviness)
+    x_zero, x_iso = 1 + e_zero, 1 + e_iso
+    dx = min(0.1 * (1.0 / k_iso), 0.1 * (x_iso - x_zero))
+    x_low = x_zero + dx
+    x_foot = x_zero + 0.5 * (x_low - x_zero)
+    y_low = k_low * (x_low - x_foot)
+    pts = [_corner(x_zero, 0.0, 0.0, x_low, y_low, k_low, c), _corner(x_low, y_low, k_low, x_iso, 1.0, k_iso, c)]
+    return _curve(pts, x_zero, x_iso, 0.0, 1.0, 0.0, k_iso)
+
+
+# ------------------------------------------------------------------ De Groote & Fregly (2016)
+
+_B = ((0.8150671134243542, 1.055033428970575, 0.162384573599574, 0.063303448465465),
+      (0.433004984392647, 0.716775413397760, -0.029947116970696, 0.200356847296188),
+      (0.1, 1.0, 0.353553390593274, 0.0))
+_D1, _D2, _D3, _D4 = -0.3211346127989808, -8.149, -0.374, 0.8825327733249912
+_KPE, _MIN_NORM_FIBER = 4.0, 0.2
+
+
+def degroote_fl(l, width=1.0):
+    x = (np.asarray(l, dtype=float) - 1.0) / width + 1.0
+    return sum(b1 * np.exp(-0.5 * (x - b2) ** 2 / (b3 + b4 * x) ** 2) for b1, b2, b3, b4 in _B)
+
+
+def degroote_fv(v):
+    t = _D2 * np.asarray(v, dtype=float) + _D3
+    return _D1 * np.log(t + np.sqrt(t * t + 1.0)) + _D4
+
+
+def degroote_fp(l, e0=0.6):
+    offset = math.exp(_KPE * (_MIN_NORM_FIBER - 1.0) / e0)
+    return (np.exp(_KPE * (np.asarray(l, dtype=float) - 1.0) / e0) - offset) / (math.exp(_KPE) - offset)
+
+
+# ------------------------------------------------------------------ the muscles
+
+KINDS = ("Millard2012EquilibriumMuscle", "DeGrooteFregly2016Muscle")
+
+
+@dataclass(frozen=True)
+class OpenSimMuscle:
+    """One OpenSim muscle with a rigid tendon (module docstring). Lengths in metres, ``vmax`` in optimal
+    fiber lengths per second, ``alpha0`` radians, ``f0`` newtons; ``curves``: Millard's
+    ``(f_L, f_V, f_P)`` :class:`BezierCurve`\\ s, or De Groote's ``(width, e0, passive)``;
+    ``min_fiber``: Millard's minimum fiber length (m)."""
+
+    name: str
+    kind: str
+    f0: float
+    lo: float
+    ls: float
+    alpha0: float
+    vmax: float
+    damping: float
+    a_min: float
+    a_max: float
+    curves: tuple
+    max_pennation: float = math.acos(0.1)
+    min_fiber: float = 0.0
+
+
+class OpenSimMuscles:
+    """The OpenSim kind of muscle parameters (:mod:`mcdm_pin.model.muscles` dispatches
+    ``force_range`` to :meth:`force_range`). ``names``, ``size``, ``muscles``."""
+
+    def __init__(self, muscles):
+        self.muscles = tuple(muscles)
+        self.names = tuple(m.name for m in self.muscles)
+        for m in self.muscles:
+            if m.kind not in KINDS:
+                raise ModelError(f"muscle {m.name!r}: kind {m.kind!r} is not modelled; expected one of {KINDS}")
+            if not (m.f0 >= 0 and m.lo > 0 and m.ls >= 0 and 0 <= m.alpha0 < math.pi / 2 and m.vmax > 0
+                    and 0 <= m.a_min <= m.a_max):
+                raise ModelError(f"muscle {m.name!r}: expected F0 >= 0, optimal fiber length > 0, tendon slack "
+                                 f"length >= 0, pennation in [0, pi/2), vmax > 0 and 0 <= a_min <= a_max")
+
+    @property
+    def size(self) -> int:
+        return len(self.muscles)
+
+    def fiber(self, tendon_lengths, tendon_velocities):
+        """``(l, v, cos_alpha, clamped)`` (m,) each: normalised fiber length and velocity, the cosine of
+        the pennation and Millard's clamp (no force) at muscle-tendon lengths and speeds (m,)."""
+        ell = np.asarray(tendon_lengths, dtype=float)
+        ell_dot = np.asarray(tendon_velocities, dtype=float)
+        if ell.shape != (self.size,) or ell_dot.shape != (self.size,):
+            raise StateError(f"muscles: expected lengths and speeds of shape ({self.size},), got {ell.shape} "
+                             f"and {ell_dot.shape}")
+        out = np.zeros((4, self.size))
+        for i, m in enumerate(self.muscles):
+            out[:, i] = _fiber(m, float(ell[i]), float(ell_dot[i]))
+        return out[0], out[1], out[2], out[3] > 0
+
+    def force_range(self, tendon_lengths, tendon_velocities):
+        """The tension range (:class:`~mcdm_pin.model.muscles.MuscleState`) at one instant."""
+        from .muscles import MuscleState
+
+        l, v, cos_a, clamped = self.fiber(tendon_lengths, tendon_velocities)
+        passive, gain = np.zeros(self.size), np.zeros(self.size)
+        for i, m in enumerate(self.muscles):
+            if clamped[i]:
+                continue
+            if m.kind == KINDS[0]:
+                fl, fv, fp = (float(c(x)[0]) for c, x in zip(m.curves, (l[i], v[i], l[i])))
+            else:
+                width, e0, use_passive = m.curves
+                fl, fv = float(degroote_fl(l[i], width)), float(degroote_fv(v[i]))
+                fp = float(degroote_fp(l[i], e0)) if use_passive else 0.0
+            passive[i] = m.f0 * (fp + m.damping * v[i]) * cos_a[i]
+            gain[i] = m.f0 * fl * fv * cos_a[i]
+        a_min = np.array([m.a_min for m in self.muscles])
+        a_max = np.array([m.a_max for m in self.muscles])
+        f_min, f_max = passive + gain * a_min, passive + gain * a_max
+        millard = np.array([m.kind == KINDS[0] for m in self.muscles], dtype=bool)
+        f_min = np.where(millard, np.maximum(f_min, 0.0), f_min)  # OpenSim saturates the rigid fiber at 0
+        f_max = np.where(millard, np.maximum(f_max, 0.0), f_max)
+        return MuscleState(passive, gain, f_min, f_max, a_min, a_max)
+
+
+def _fiber(m: OpenSimMuscle, ell: float, ell_dot: float):
+    """One muscle's ``(l~, v~, cos alpha, clamped)`` (module docstring; Millard's clamps)."""
+    h = m.lo * math.sin(m.alpha0)
+    along = ell - m.ls
+    if m.kind != KINDS[0]:
+        lf = math.sqrt(along * along + h * h)
+        cos_a = along / lf
+        return lf / m.lo, ell_dot * cos_a / (m.lo * m.vmax), cos_a, 0.0
+    sin_max = math.sin(m.max_pennation)
+    pen_min = h / sin_max if m.max_pennation > SIGNIFICANT else 0.01 * m.lo
+    lf = math.sqrt(h * h + along * along) if along >= pen_min * math.cos(m.max_pennation) else pen_min
+    lf = max(lf, m.min_fiber)
+    if m.alpha0 > np.finfo(float).eps:
+        s = h / lf
+        phi = (math.asin(s) if s < sin_max else m.max_pennation) if lf > pen_min else m.max_pennation
+    else:
+        phi = 0.0
+    cos_a = math.cos(phi)
+    tendon = ell - lf * cos_a
+    if tendon < m.ls - SIGNIFICANT:
+        dl = 0.0
+    else:
+        dl = ell_dot * cos_a
+    clamped = (lf <= m.min_fiber and dl <= 0) or lf < m.min_fiber
+    if clamped:
+        dl = 0.0
+    return lf / m.lo, dl / (m.lo * m.vmax), cos_a, float(clamped)

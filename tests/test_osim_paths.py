@@ -1,0 +1,383 @@
+"""OpenSim muscle paths computed by our route pass against OpenSim 4.6 itself: lengths (``getLength``)
+and moment arms (``computeMomentArm`` = -dl/dq) at random states of tiny models built with OpenSim's
+API (two bodies on PinJoints, path points of every kind, wraps over spheres and cylinders with
+quadrants and ranges), read back from their ``.osim`` by :func:`mcdm_pin.osim.paths.read_paths` onto
+a pin model built here; and moving points' own term against finite differences."""
+
+import math
+from pathlib import Path
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from mcdm_pin.model import CableSet, cable_jacobian, cable_lengths
+from mcdm_pin.osim.paths import read_paths, simm_spline
+
+osim = pytest.importorskip("opensim")
+
+RNG = np.random.default_rng(24)
+# (parent, child, location of the joint in the parent, orientation (XYZ body-fixed) in the parent, child
+# offset location); the joints are PinJoints about their frames' z axis
+JOINTS = (("ground", "b1", (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), "q1"),
+          ("b1", "b2", (0.3, 0.0, 0.0), (0.4, -0.3, 0.2), (-0.02, 0.01, 0.0), "q2"))
+RANGES = {"q1": (-1.0, 1.2), "q2": (-0.8, 1.5)}
+
+
+def _xyz(a, b, c):
+    ca, sa, cb, sb, cc, sc = math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(c), math.sin(c)
+    return (np.array([[1, 0, 0], [0, ca, -sa], [0, sa, ca]]) @ np.array([[cb, 0, sb], [0, 1, 0], [-sb, 0, cb]])
+            @ np.array([[cc, -sc, 0], [sc, cc, 0], [0, 0, 1]]))
+
+
+def _pin_model():
+    """The same chain in Pinocchio: one frame per body (and ground) at the OpenSim body frame."""
+    model = pin.Model()
+    model.addFrame(pin.Frame("ground", 0, 0, pin.SE3.Identity(), pin.FrameType.BODY))
+    joint_of = {"ground": 0}
+    for parent, child, loc, ori, child_loc, coord in JOINTS:
+        pj = joint_of[parent]
+        parent_body = model.frames[model.getFrameId(parent)].placement
+        jid = model.addJoint(pj, pin.JointModelRZ(), parent_body * pin.SE3(_xyz(*ori), np.array(loc)), coord)
+        body = pin.SE3(np.eye(3), np.array(child_loc)).inverse()
+        model.appendBodyToJoint(jid, pin.Inertia.FromSphere(1.0, 0.05), body)
+        model.addFrame(pin.Frame(child, jid, 0, body, pin.FrameType.BODY))
+        joint_of[child] = jid
+    return model
+
+
+def _osim_model(muscles, wraps):
+    """An OpenSim model of the chain; ``wraps``: (kind, name, body, radius, length, translation,
+    rotation, quadrant); ``muscles``: (name, points, wrap names with ranges)."""
+    m = osim.Model()
+    bodies = {"ground": m.getGround()}
+    coords = {}
+    for parent, child, loc, ori, child_loc, coord in JOINTS:
+        b = osim.Body(child, 1.0, osim.Vec3(0), osim.Inertia(0.01, 0.01, 0.01))
+        j = osim.PinJoint(f"j_{child}", bodies[parent], osim.Vec3(*loc), osim.Vec3(*ori), b,
+                          osim.Vec3(*child_loc), osim.Vec3(0))
+        j.updCoordinate().setName(coord)
+        m.addBody(b)
+        m.addJoint(j)
+        bodies[child] = b
+        c = j.updCoordinate()
+        c.setRangeMin(RANGES[coord][0])
+        c.setRangeMax(RANGES[coord][1])
+        c.set_clamped(False)
+        coords[coord] = c
+    objects = {}
+    for kind, name, body, radius, length, tr, rot, quadrant in wraps:
+        w = {"sphere": osim.WrapSphere, "cylinder": osim.WrapCylinder, "ellipsoid": osim.WrapEllipsoid}[kind]()
+        w.setName(name)
+        if kind == "ellipsoid":
+            w.set_dimensions(osim.Vec3(*radius))
+        else:
+            w.set_radius(radius)
+        if kind == "cylinder":
+            w.set_length(length)
+        w.set_translation(osim.Vec3(*tr))
+        w.set_xyz_body_rotation(osim.Vec3(*rot))
+        w.set_quadrant(quadrant)
+        bodies[body].addWrapObject(w)
+        objects[name] = w
+    forces = []
+    for name, points, pw in muscles:
+        mus = osim.Thelen2003Muscle(name, 100.0, 0.1, 0.1, 0.0)
+        path = mus.updGeometryPath()
+        for i, p in enumerate(points):
+            if p[0] == "point":
+                path.appendNewPathPoint(f"{name}-P{i}", bodies[p[1]], osim.Vec3(*p[2]))
+            elif p[0] == "conditional":
+                c = osim.ConditionalPathPoint()
+                c.setName(f"{name}-P{i}")
+                c.setParentFrame(bodies[p[1]])
+                c.set_location(osim.Vec3(*p[2]))
+                c.setCoordinate(coords[p[3]])
+                c.setRangeMin(p[4][0])
+                c.setRangeMax(p[4][1])
+                path.updPathPointSet().adoptAndAppend(c)
+            else:  # moving: per axis (x knots, y values)
+                mp = osim.MovingPathPoint()
+                mp.setName(f"{name}-P{i}")
+                mp.setParentFrame(bodies[p[1]])
+                for axis, (xs, ys) in zip("xyz", p[2]):
+                    f = osim.SimmSpline()
+                    for x, y in zip(xs, ys):
+                        f.addPoint(x, y)
+                    getattr(mp, f"set_{axis}_location")(f)
+                    getattr(mp, f"set{axis.upper()}Coordinate")(coords[p[3]])
+                path.updPathPointSet().adoptAndAppend(mp)
+        for wname, rng, *method in pw:
+            path.addPathWrap(objects[wname])
+            n = path.getWrapSet().getSize()
+            path.updWrapSet().get(n - 1).set_range(0, rng[0])
+            path.updWrapSet().get(n - 1).set_range(1, rng[1])
+            if method:
+                path.updWrapSet().get(n - 1).set_method(method[0])
+        m.addForce(mus)
+        forces.append(mus)
+    return m, forces, coords
+
+
+def _compare(tmp_path, muscles, wraps, n_states=30, rtol=1e-9):
+    """Lengths and moment arms, ours against OpenSim's, at random states (q beyond the coordinates'
+    ranges too: moving points clamp there)."""
+    m, forces, coords = _osim_model(muscles, wraps)
+    file = tmp_path / "tiny.osim"
+    m.finalizeConnections()
+    m.printToXML(str(file))
+    m = osim.Model(str(file))
+    state = m.initSystem()
+    model = _pin_model()
+    cables, _, _ = read_paths(ET.parse(file).getroot(), str(file), model)
+    cs = CableSet(model, cables)
+    data = model.createData()
+    names = [c.name for c in cables]
+    worst_l, worst_r = 0.0, 0.0
+    for _ in range(n_states):
+        q = RNG.uniform(-1.6, 1.8, size=2)
+        for k, name in enumerate(("q1", "q2")):
+            m.getCoordinateSet().get(name).setValue(state, q[k], False)
+        m.realizePosition(state)
+        ours_l = cable_lengths(model, data, cs, q)
+        ours_L = cable_jacobian(model, data, cs, q)
+        for i, name in enumerate(names):
+            mus = osim.Muscle.safeDownCast(m.getForceSet().get(name))
+            ref = mus.getLength(state)
+            worst_l = max(worst_l, abs(ours_l[i] - ref) / ref)
+            for k, cname in enumerate(("q1", "q2")):
+                arm = mus.computeMomentArm(state, m.getCoordinateSet().get(cname))
+                worst_r = max(worst_r, abs(-ours_L[i, k] - arm) / max(1e-3, abs(arm)))
+    assert worst_l < rtol and worst_r < rtol, (worst_l, worst_r)
+    return worst_l, worst_r
+
+
+SPLINE = ((-1.0, 0.0, 0.7, 1.2), (0.02, 0.03, 0.05, 0.04))
+
+
+def test_points_of_every_kind(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    moving = ("moving", "b2", (SPLINE, ((-1, 1.5), (0.01, -0.01)), ((-1.0, 0.5, 1.5), (0.0, 0.02, 0.01))), "q2")
+    muscles = [("m1", [("point", "ground", (0.05, 0.1, 0.0)), ("conditional", "b1", (0.2, 0.04, 0.01), "q1",
+                                                                 (-0.5, 0.6)),
+                       moving, ("point", "b2", (0.1, 0.02, -0.01))], []),
+               ("m2", [("point", "b1", (0.1, -0.03, 0.02)), moving, ("conditional", "b2", (0.12, 0.0, 0.03), "q2",
+                                                                      (0.0, 2.0))], [])]
+    _compare(tmp_path, muscles, [])
+
+
+@pytest.mark.parametrize("quadrant", ["all", "+x", "-y"])
+def test_sphere_and_cylinder_wraps(tmp_path, monkeypatch, quadrant):
+    monkeypatch.chdir(tmp_path)
+    wraps = [("sphere", "S", "b1", 0.04, 0.0, (0.3, 0.0, 0.0), (0.2, 0.1, -0.3), quadrant),
+             ("cylinder", "C", "ground", 0.03, 0.2, (0.0, 0.0, 0.0), (0.3, -0.2, 0.1), quadrant)]
+    muscles = [("single", [("point", "ground", (0.1, 0.1, 0.0)), ("point", "b2", (0.15, 0.0, 0.01))], [("S", (-1, -1))]),
+               ("double", [("point", "ground", (-0.05, 0.06, 0.01)), ("point", "b1", (0.15, 0.05, 0.0)),
+                           ("point", "b2", (0.2, -0.02, 0.0))], [("C", (1, 2)), ("S", (2, 3))]),
+               ("cyl", [("point", "ground", (0.05, -0.1, 0.02)), ("point", "b1", (0.2, 0.06, 0.0))], [("C", (-1, -1))])]
+    _compare(tmp_path, muscles, wraps)
+
+
+@pytest.mark.parametrize("quadrant", ["all", "+x", "-z"])
+def test_ellipsoid_wraps(tmp_path, monkeypatch, quadrant):
+    """OpenSim's iterative ellipsoid wrap (hybrid, midpoint and axial methods), alone and with a
+    cylinder on the same path: our code takes OpenSim's own iterations, so the agreement is to
+    rounding, not to OpenSim's tolerances (squared residual 1e-8 for the tangent points, a 1 mm
+    polyline for the surface path)."""
+    monkeypatch.chdir(tmp_path)
+    wraps = [("ellipsoid", "E", "b1", (0.05, 0.03, 0.07), 0.0, (0.3, 0.0, 0.0), (0.2, 0.1, -0.3), quadrant),
+             ("cylinder", "C", "ground", 0.03, 0.2, (0.0, 0.0, 0.0), (0.3, -0.2, 0.1), "all")]
+    muscles = [(f"e_{method}", [("point", "ground", (0.1, 0.1, 0.0)), ("point", "b2", (0.15, 0.0, 0.01))],
+                [("E", (-1, -1), method)]) for method in ("hybrid", "midpoint", "axial")]
+    muscles.append(("two", [("point", "ground", (-0.05, 0.06, 0.01)), ("point", "b1", (0.15, 0.05, 0.0)),
+                            ("point", "b2", (0.2, -0.02, 0.0))], [("C", (1, 2)), ("E", (2, 3))]))
+    _compare(tmp_path, muscles, wraps, rtol=1e-6)
+
+
+def test_moving_point_term_is_the_derivative(tmp_path, monkeypatch):
+    """L of a path with a moving point against central differences of our lengths."""
+    monkeypatch.chdir(tmp_path)
+    moving = ("moving", "b2", (SPLINE, ((-1, 1.5), (0.01, -0.01)), ((-1.0, 0.5, 1.5), (0.0, 0.02, 0.01))), "q2")
+    m, _, _ = _osim_model([("m", [("point", "b1", (0.1, 0.03, 0.0)), moving], [])], [])
+    file = tmp_path / "m.osim"
+    m.finalizeConnections()
+    m.printToXML(str(file))
+    model = _pin_model()
+    cs = CableSet(model, read_paths(ET.parse(file).getroot(), str(file), model)[0])
+    data = model.createData()
+    h = 1e-6
+    for _ in range(10):
+        q = RNG.uniform(-0.7, 1.1, size=2)
+        L = cable_jacobian(model, data, cs, q)[0]
+        fd = [(cable_lengths(model, data, cs, q + h * e)[0] - cable_lengths(model, data, cs, q - h * e)[0]) / (2 * h)
+              for e in np.eye(2)]
+        assert np.allclose(L, fd, rtol=1e-7, atol=1e-9)
+
+
+def test_simm_spline_matches_opensim():
+    x, y = (-1.0, -0.2, 0.3, 0.9, 1.7), (0.1, -0.05, 0.2, 0.0, 0.3)
+    ours = simm_spline(x, y)
+    ref = osim.SimmSpline()
+    for a, b in zip(x, y):
+        ref.addPoint(a, b)
+    from mcdm_pin.osim.paths import _eval
+
+    for t in np.linspace(-1.5, 2.0, 23):
+        assert abs(_eval(ours, t) - ref.calcValue(osim.Vector(1, t))) < 1e-13
+
+
+def _muscle_model(kind, tmp_path, lo, ls, damping):
+    m = osim.Model()
+    bodies = {"ground": m.getGround()}
+    for parent, child, loc, ori, child_loc, coord in JOINTS:
+        b = osim.Body(child, 1.0, osim.Vec3(0), osim.Inertia(0.01, 0.01, 0.01))
+        j = osim.PinJoint(f"j_{child}", bodies[parent], osim.Vec3(*loc), osim.Vec3(*ori), b,
+                          osim.Vec3(*child_loc), osim.Vec3(0))
+        j.updCoordinate().setName(coord)
+        m.addBody(b)
+        m.addJoint(j)
+        bodies[child] = b
+    if kind == "Millard2012EquilibriumMuscle":
+        mus = osim.Millard2012EquilibriumMuscle("mus", 500.0, lo, ls, 0.25)
+        mus.set_ignore_tendon_compliance(True)
+        mus.set_fiber_damping(damping)
+    else:
+        mus = osim.DeGrooteFregly2016Muscle()
+        mus.setName("mus")
+        mus.set_max_isometric_force(500.0)
+        mus.set_optimal_fiber_length(lo)
+        mus.set_tendon_slack_length(ls)
+        mus.set_pennation_angle_at_optimal(0.25)
+        mus.set_ignore_tendon_compliance(True)
+        mus.set_fiber_damping(damping)
+        mus.set_active_force_width_scale(1.2)
+    mus.addNewPathPoint("p1", bodies["ground"], osim.Vec3(-0.1, 0.12, 0.0))
+    mus.addNewPathPoint("p2", bodies["b2"], osim.Vec3(0.1, 0.03, 0.01))
+    m.addForce(mus)
+    m.finalizeConnections()
+    file = tmp_path / "muscle.osim"
+    m.printToXML(str(file))
+    return file
+
+
+@pytest.mark.parametrize("kind,damping", [("Millard2012EquilibriumMuscle", 0.1),
+                                          ("Millard2012EquilibriumMuscle", 0.0),
+                                          ("DeGrooteFregly2016Muscle", 0.05)])
+def test_muscle_force_bounds(tmp_path, monkeypatch, kind, damping):
+    """Tension at activation 0 (OpenSim clamps it to its minimum) and 1, rigid tendon, against
+    OpenSim's ``getTendonForce``, and the curves' multipliers against OpenSim's own."""
+    from mcdm_pin.model.muscles import force_range
+
+    monkeypatch.chdir(tmp_path)
+    model = _pin_model()
+    data = model.createData()
+    probe = CableSet(model, read_paths(ET.parse(_muscle_model(kind, tmp_path, 0.1, 0.1, damping)).getroot(), "p",
+                                       model)[0])
+    qs = RNG.uniform(-0.6, 0.9, size=(40, 2))
+    lengths = np.array([cable_lengths(model, data, probe, q)[0] for q in qs])
+    lo = (lengths.max() - lengths.min()) / 1.1
+    ls = lengths.min() - 0.45 * lo
+    file = _muscle_model(kind, tmp_path, lo, ls, damping)
+    cables, muscles, _ = read_paths(ET.parse(file).getroot(), str(file), model)
+    cs = CableSet(model, cables, muscles=muscles, muscle_cables=muscles.names)
+    m = osim.Model(str(file))
+    s = m.initSystem()
+    mus = osim.Muscle.safeDownCast(m.getForceSet().get("mus"))
+    worst = 0.0
+    for q in qs:
+        qd = RNG.normal(0.0, 3.0, size=2)
+        for k, name in enumerate(("q1", "q2")):
+            m.getCoordinateSet().get(name).setValue(s, q[k], False)
+            m.getCoordinateSet().get(name).setSpeedValue(s, qd[k])
+        ell = cable_lengths(model, data, cs, q)
+        ell_dot = cable_jacobian(model, data, cs, q) @ qd
+        state = force_range(muscles, ell, ell_dot)
+        l, v, cos_a, _ = muscles.fiber(ell, ell_dot)
+        for a, ours in ((0.0, state.f_min[0]), (1.0, state.f_max[0])):
+            mus.setActivation(s, a)
+            m.realizeDynamics(s)
+            ref = mus.getTendonForce(s)
+            worst = max(worst, abs(ours - ref) / max(1.0, abs(ref)))
+        assert abs(l[0] - mus.getNormalizedFiberLength(s)) < 1e-10
+        assert abs(v[0] - mus.getNormalizedFiberVelocity(s)) < 1e-10
+        assert abs(mus.getActiveForceLengthMultiplier(s) * mus.getForceVelocityMultiplier(s) * 500.0 * cos_a[0]
+                   - state.gain[0]) < 1e-9 * 500.0
+    assert worst < 1e-9, worst
+
+
+ARM26 = Path(__file__).resolve().parents[1] / ".." / ".." / "shared" / "reference" / "opensim-models" / "Arm26" / "arm26.osim"
+
+
+def _se3(T):
+    R = T.R()
+    return pin.SE3(np.array([[R.get(i, k) for k in range(3)] for i in range(3)]),
+                   np.array([T.p()[i] for i in range(3)]))
+
+
+def _arm26_pin(m):
+    """A pin model of arm26 (a weld, then two one-axis CustomJoints: revolute joints about their
+    axis in the joint frames), frames named as the bodies, joints named as the coordinates."""
+    model = pin.Model()
+    model.addFrame(pin.Frame("ground", 0, 0, pin.SE3.Identity(), pin.FrameType.BODY))
+    joint_of, body_in_joint = {"ground": 0}, {"ground": pin.SE3.Identity()}
+    for j in m.getJointSet():
+        pf = osim.PhysicalOffsetFrame.safeDownCast(j.getParentFrame())
+        cf = osim.PhysicalOffsetFrame.safeDownCast(j.getChildFrame())
+        parent, child = pf.getParentFrame().getName(), cf.getParentFrame().getName()
+        X_p = body_in_joint[parent] * _se3(pf.getOffsetTransform())
+        X_c = _se3(cf.getOffsetTransform()).inverse()
+        if j.numCoordinates() == 0:
+            joint_of[child], body_in_joint[child] = joint_of[parent], X_p * X_c
+        else:
+            st = osim.CustomJoint.safeDownCast(j).getSpatialTransform()
+            axis = np.array([st.getTransformAxis(0).getAxis()[i] for i in range(3)])
+            jid = model.addJoint(joint_of[parent], pin.JointModelRevoluteUnaligned(axis), X_p,
+                                 j.get_coordinates(0).getName())
+            model.appendBodyToJoint(jid, pin.Inertia.FromSphere(1.0, 0.05), X_c)
+            joint_of[child], body_in_joint[child] = jid, X_c
+        model.addFrame(pin.Frame(child, joint_of[child], 0, body_in_joint[child], pin.FrameType.BODY))
+    return model
+
+
+@pytest.mark.skipif(not ARM26.exists(), reason="arm26 reference model not present")
+def test_arm26_muscle_paths(tmp_path, monkeypatch):
+    """Every muscle of arm26 (cylinders and ellipsoids, several wraps per path): lengths and moment
+    arms at 30 random states against OpenSim's own.
+
+    TRIlong's moment arms are left out: its three wraps need several of OpenSim's rounds, whose moved
+    tangent points OpenSim's lengths see at their first (cached) ground positions, which we follow;
+    OpenSim's ``computeMomentArm`` (on a copy of the state) sees yet other positions and is not the
+    derivative of its own ``getLength`` there (docs/opensim.md)."""
+    monkeypatch.chdir(tmp_path)
+    m = osim.Model(str(ARM26))
+    s = m.initSystem()
+    model = _arm26_pin(m)
+    data = model.createData()
+    cables, muscles, notes = read_paths(ET.parse(ARM26).getroot(), str(ARM26), model)
+    cs = CableSet(model, cables)
+    coords = [m.getCoordinateSet().get(model.names[j]) for j in range(1, model.njoints)]
+    worst_l = worst_r = 0.0
+    for _ in range(30):
+        q = np.array([RNG.uniform(c.getRangeMin(), c.getRangeMax()) for c in coords])
+        for c, v in zip(coords, q):
+            c.setValue(s, v, False)
+        m.realizePosition(s)
+        pin.framesForwardKinematics(model, data, q)
+        for name in ("r_humerus", "r_ulna_radius_hand"):  # the pin model places the bodies as OpenSim does
+            ref = _se3(m.getBodySet().get(name).getTransformInGround(s))
+            assert np.allclose(data.oMf[model.getFrameId(name)].homogeneous, ref.homogeneous, rtol=0, atol=1e-7)
+        ours_l = cable_lengths(model, data, cs, q)
+        ours_L = cable_jacobian(model, data, cs, q)
+        for i, c in enumerate(cables):
+            mus = osim.Muscle.safeDownCast(m.getForceSet().get(c.name))
+            ref = mus.getLength(s)
+            worst_l = max(worst_l, abs(ours_l[i] - ref) / ref)
+            for k, co in enumerate(coords):
+                if c.name == "TRIlong":
+                    continue
+                arm = mus.computeMomentArm(s, co)
+                worst_r = max(worst_r, abs(-ours_L[i, k] - arm) / max(1e-3, abs(arm)))
+    # 1e-6 where ellipsoids are involved (the issue's bar); measured ~5e-9, the stand-in pin model's
+    # kinematics (about 2e-9 rad from OpenSim's CustomJoint) rather than the paths (1e-16 on the tiny models)
+    assert worst_l < 1e-6 and worst_r < 1e-6, (worst_l, worst_r)
