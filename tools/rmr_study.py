@@ -21,7 +21,6 @@ defined with the arm hanging); here their actuators weigh 0 (free), in both obje
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import sys
 import time
@@ -32,58 +31,19 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from mcdm_pin.constraints import InteractionCone  # noqa: E402
 from mcdm_pin.inverse_dynamics import InverseDynamics  # noqa: E402
-from mcdm_pin.model.cables import CableSet  # noqa: E402
-from mcdm_pin.model.muscles_osim import OpenSimMuscles  # noqa: E402
-from mcdm_pin.objectives import MinActivations  # noqa: E402
-from mcdm_pin.osim.document import read_osim  # noqa: E402
-from mcdm_pin.osim.motion import motion_states, read_table  # noqa: E402
-from mcdm_pin.problem import Context, Problem  # noqa: E402
-from mcdm_pin.robot import Robot  # noqa: E402
-from mcdm_pin.solvers.base import cone_violation_deg  # noqa: E402
+from mcdm_pin.osim.motion import read_table  # noqa: E402
+from mcdm_pin.osim.rmr import (GH, N_MUSCLES, RATE, frame_rows, frame_states, rmr_in_our_problem,  # noqa: E402
+                               rmr_objective, rmr_problem, rmr_robot)
+from mcdm_pin.problem import Context  # noqa: E402
 
-SIDECAR = REPO / "robots" / "opensim" / "tsm_rmr.yaml"
-OSIM = REPO / "robots" / "opensim" / "TSM_subject_noWeight.osim"
 REFERENCE = REPO.parents[1] / "shared" / "reference" / "rmr"
 MOTIONS = ("abd01", "flx01", "shrug01")
-RATE = 100.0  # Hz, RMR's frames
-N_MUSCLES, N_ACTUATORS = 33, 17
-SHRUG_FREE = ("plane_elv_actuator", "axial_rot_actuator")
-GH = "GlenoHumeral"
-
-
-def rmr_robot(motion: str = "abd01", sidecar=SIDECAR) -> Robot:
-    """The TSM as RMR poses it: activations in [0, 1] (RMR's bounds: it overrides the muscles' force,
-    so the model's ``minimum_activation`` 0.01 does not apply); for a shrug, plane_elv's and
-    axial_rot's actuators weigh 0."""
-    robot = Robot.load(sidecar)
-    cables = robot.cables
-    muscles = OpenSimMuscles([dataclasses.replace(m, a_min=0.0) for m in cables.muscles.muscles])
-    cables = CableSet(robot.model, cables.cables, muscles=muscles, muscle_cables=muscles.names)
-    acts = robot.actuators
-    if motion.startswith("shrug"):
-        acts = tuple(dataclasses.replace(a, weight=0.0) if a.label in SHRUG_FREE else a for a in acts)
-    return Robot(robot.model, cables, robot.joints, acts, robot.name, sidecar=robot.sidecar,
-                 couplings=robot.couplings, coordinate_names=robot.coordinate_names, source=robot.source,
-                 notes=robot.notes)
 
 
 def motion_files(motion: str, folder=None) -> tuple:
     folder = Path(folder) if folder is not None else REFERENCE / "motions" / motion
     return tuple(folder / f"Kinematics_{k}.sto" for k in ("q", "u", "dudt"))
-
-
-def frame_rows(files, every: int = 1) -> np.ndarray:
-    """RMR's frame indices (``k / RATE`` s) inside the motion's time span, every ``every``-th."""
-    t = read_table(files[0]).time
-    k = np.arange(int(np.ceil(t[0] * RATE - 1e-9)), int(np.floor(t[-1] * RATE + 1e-9)) + 1)
-    return k[::every]
-
-
-def states(robot, files, rows):
-    """(q, v, a) arrays at RMR's frames ``rows``."""
-    return motion_states(robot.source, read_osim(OSIM), *files, np.asarray(rows) / RATE)
 
 
 def rmr_answer(motion: str, cone: bool) -> np.ndarray:
@@ -94,67 +54,14 @@ def rmr_answer(motion: str, cone: bool) -> np.ndarray:
     return loadmat(REFERENCE / "results" / sub / f"muscle_activations_Seth2019_experiment_{motion.upper()}.mat")["xsol"]
 
 
-def problem(robot, cone: bool) -> Problem:
-    """RMR's objective (activations, the actuators' ``w c^2`` added by the problem), and the cone."""
-    return Problem(robot, MinActivations(), [InteractionCone(GH)] if cone else [])
-
-
-def actuator_weights(robot) -> tuple:
-    """``(F_opt, w)`` per actuator: the torque is ``F_opt c``, the objective's term ``w c^2``."""
-    f_opt = np.array([float(a.tau_max[0]) for a in robot.actuators]) / 1e4  # CONTROL_CAP
-    return f_opt, np.array([a.weight for a in robot.actuators]) * f_opt ** 2
-
-
-def rmr_objective(robot, xrow) -> float:
-    """RMR's objective at its answer: ``sum a^2 + sum w c^2`` (our weights, RMR's values)."""
-    _, w = actuator_weights(robot)
-    x = np.asarray(xrow, dtype=float)
-    return float(np.sum(x[:N_MUSCLES] ** 2) + np.sum(w * x[N_MUSCLES:N_MUSCLES + N_ACTUATORS] ** 2))
-
-
-def rmr_in_our_problem(ident, terms, qp, xrow) -> dict:
-    """RMR's answer as our unknowns ``[f; tau]`` at our state and how far it is from our constraints:
-    the equation of motion's residual (largest generalized force, N m or N, and relative), the
-    activation bounds, the cone (degrees beyond it). The actuators that weigh nothing (the thorax's,
-    the forearm's; in a shrug also plane_elv's and axial_rot's) are free in both problems: their
-    torques are refitted to our state (least squares on the residual), which changes no objective."""
-    robot = ident.robot
-    x = np.asarray(xrow, dtype=float)
-    st = terms.muscles
-    k = robot.cables.muscle_index
-    f = np.zeros(robot.m)
-    f[k] = st.passive + st.gain * x[:N_MUSCLES]
-    f_opt, _ = actuator_weights(robot)
-    tau = f_opt * x[N_MUSCLES:N_MUSCLES + N_ACTUATORS]
-    y = np.concatenate([f, tau])
-    n = terms.tau.shape[0]
-    free = robot.m + np.flatnonzero(np.array([a.weight for a in robot.actuators]) == 0.0)
-    r = qp.A[:n] @ y - qp.b[:n]
-    y[free] -= np.linalg.lstsq(qp.A[:n, free], r, rcond=None)[0]
-    r = qp.A[:n] @ y - qp.b[:n]
-    scale = max(np.abs(terms.tau).max(), 1e-300)
-    cone = float(cone_violation_deg(qp, y).max(initial=0.0)) if qp.cones else 0.0
-    a = x[:N_MUSCLES]
-    return dict(eom_abs=float(np.abs(r).max()), eom_rel=float(np.abs(r).max() / scale),
-                bounds=float(max((st.a_min - a).max(), (a - st.a_max).max(), 0.0)), cone_deg=cone,
-                angle_deg=float(np.degrees(np.arccos(np.clip(
-                    _cos(terms.wrenches(y)[robot.joint_names.index(GH), :3], robot, terms), -1, 1)))))
-
-
-def _cos(F_child, robot, terms) -> float:
-    j = robot.joint_names.index(GH)
-    F = terms.R_socket[j] @ F_child
-    return float(F @ terms.socket_axes[j] / max(np.linalg.norm(F), 1e-300))
-
-
 def run(motion: str, cone: bool, every: int = 1, solver: str = "default", files=None, rows=None) -> dict:
     """One motion and case: per-frame records and the summary (module docstring)."""
     robot = rmr_robot(motion)
     files = motion_files(motion) if files is None else files
     rows = frame_rows(files, every) if rows is None else np.asarray(rows)
-    Q, V, A = states(robot, files, rows)
+    Q, V, A = frame_states(robot, files, rows)
     X = rmr_answer(motion, cone)
-    ident = InverseDynamics(robot, problem(robot, cone), solver=solver)
+    ident = InverseDynamics(robot, rmr_problem(robot, cone), solver=solver)
     frames = []
     for row, q, v, a in zip(rows, Q, V, A):
         t0 = time.perf_counter()
@@ -207,8 +114,32 @@ def table(results) -> str:
             f"| {r['motion'].upper()} | {'with GH' if r['cone'] else 'without'} | {s['frames']} | {st} | "
             f"{s['ours_mean']:.4f} | {s['rmr_mean']:.4f} | {s['ours_higher']} | "
             f"{s['rmse_mean']:.4f} / {s['rmse_max']:.4f} | {s['rmr_eom_abs_p50']:.3g} / {s['rmr_eom_abs_max']:.3g} | "
-            f"{s['rmr_cone_broken']} ({s['rmr_cone_max_deg']:.2f}) | {s['ours_angle_max']:.2f} / {s['rmr_angle_max']:.2f} |")
+            f"{s['rmr_cone_broken']} ({s['rmr_cone_max_deg']:.2f}) | "
+            f"{s['ours_angle_max']:.2f} / {s['rmr_angle_max']:.2f} |")
     return "\n".join(lines)
+
+
+def excerpt(motion: str, every: int, out: Path) -> None:
+    """Write the excerpt committed under robots/opensim/motions: the rows of the motion's three tables
+    that bracket RMR's frames ``0, every, 2 every, ...`` (interpolating them at those times gives the
+    full tables' values) and RMR's ``xsol`` at those frames, with and without the cone (CSV)."""
+    files = motion_files(motion)
+    rows = frame_rows(files, 1)
+    rows = rows[rows % every == 0]
+    t = read_table(files[0]).time
+    keep = sorted({int(i) for k in rows for i in (np.searchsorted(t, k / RATE, side="right") - 1,
+                                                  np.searchsorted(t, k / RATE, side="left"))})
+    out.mkdir(parents=True, exist_ok=True)
+    for f in files:
+        lines = f.read_text().splitlines()
+        end = next(i for i, s in enumerate(lines) if s.strip().lower() == "endheader")
+        head = [f"nRows={len(keep)}" if s.startswith("nRows=") else s for s in lines[:end + 2]]
+        (out / f.name).write_text("\n".join(head + [lines[end + 2 + i] for i in keep]) + "\n")
+    for cone in (False, True):
+        X = rmr_answer(motion, cone)[rows]
+        name = f"rmr_xsol_{'with' if cone else 'without'}_GH.csv"
+        np.savetxt(out / name, np.column_stack([rows, X]), delimiter=",", fmt="%.10g",
+                   header="frame (k / 100 s)," + ",".join(f"x{i}" for i in range(X.shape[1])))
 
 
 def main(argv=None) -> int:
