@@ -21,7 +21,7 @@ CONTROL_CAP = 1e4  # |control| bound replacing an infinite control range
 
 
 def read_coordinate_actuators(root, model, joints, weights: dict | None = None):
-    """``(actuators, notes)``: the ``<CoordinateActuator>``\ s of the ``<Model>`` element ``root``, in
+    r"""``(actuators, notes)``: the ``<CoordinateActuator>``\ s of the ``<Model>`` element ``root``, in
     the file's order, labelled with their names.
 
     Args:

@@ -67,7 +67,7 @@ def osim_skeleton(path):
 
 
 def osim_parts(path, name: str | None = None, actuator_weights: dict | None = None) -> RobotParts:
-    """The robot of the ``.osim`` file ``path``, in parts (``Robot(**parts._asdict())``): its muscles
+    r"""The robot of the ``.osim`` file ``path``, in parts (``Robot(**parts._asdict())``): its muscles
     as cables, its ``CoordinateActuator``\ s as actuators (:mod:`.actuators`; ``actuator_weights``
     ``{name: w}`` of their ``w c^2``)."""
     source = str(path)
