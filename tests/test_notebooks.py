@@ -72,3 +72,10 @@ def test_pinocchio_plugin(tmp_path):
     diffs = [float(x) for x in re.findall(r"case \d: optimal, max \|f_code - f_sidecar\| = ([0-9.e+-]+) N", text)]
     assert len(diffs) == 3 and max(diffs) < 1e-9, text
     assert "solved 41/41 instants" in text
+
+
+def test_rmr_shoulder(tmp_path):
+    nb = _run("rmr_shoulder", tmp_path)
+    text = _text(nb)
+    assert "without GH: 21/21 optimal" in text and "with GH   : 21/21 optimal" in text, text
+    assert "largest GH angle ours 19.03 deg" in text
