@@ -144,8 +144,17 @@ def warm_calls():
     wf = np.zeros((1, N_FLOAT))
     wf[0, R_W:R_W + 9] = np.eye(3).ravel()
     wf[0, A_LOCAL], wf[0, B_LOCAL + 1], wf[0, RADIUS], wf[0, SCALE] = 1.0, 1.0, 0.1, 1.0
+    from . import route_osim as ro
+
+    route = np.array([[0, 0, 2, 0, 0, 0, 1, 2]], dtype=i64)  # one OpenSim route of two fixed points
+    osim_args = (oM, np.zeros(1), route, np.zeros(2, dtype=i64), np.zeros(2, dtype=i64), np.zeros(2, dtype=i64),
+                 np.zeros((2, 3), dtype=i64), np.zeros((2, ro.N_PFLOAT)), np.zeros(1, dtype=i64), np.zeros((0, 5)),
+                 np.zeros((0, ro.N_OINT), dtype=i64), np.zeros((0, ro.N_OFLOAT)), np.array([[0.0, 0, 0], [1, 0, 0]]),
+                 np.zeros(2, dtype=i64), np.array([0], dtype=i64), np.array([1], dtype=i64), np.array([False]),
+                 np.ones(1), np.zeros(1), np.zeros((1, 1)), np.zeros(0), np.zeros((2, 3)))
     return [(route_pass, (oM, wi, wf, np.zeros((4, 3)), np.array([1], dtype=i64), np.array([False]),
-                          np.zeros(2), np.zeros(1), np.zeros(1, dtype=np.bool_), 1))]
+                          np.zeros(2), np.zeros(1), np.zeros(1, dtype=np.bool_), 1)),
+            (osim_route_pass, osim_args)]
 
 
 def _register() -> None:

@@ -21,7 +21,11 @@ configuration ``q``:
    ``dl/dq_c += s u^T R_b dP/dq_c`` with ``u`` the segment's unit direction (world), ``s`` +1 when
    ``P`` ends the segment and -1 when it starts it, ``R_b`` the world rotation of ``P``'s body and
    ``dP/dq_c`` the functions' slopes at the unclamped coordinate (OpenSim's ``produceForces``, which
-   ``computeMomentArm`` uses; a segment within one body adds no such term there either).
+   ``computeMomentArm`` uses; a segment within one body adds no such term there either). OpenSim
+   applies this term as a generalized force on the coordinate, not as a force on a body: it is in
+   ``L`` (so in the equation of motion) but in no body wrench, so the interaction wrenches
+   (``Terms.RT``) do not carry it; a joint whose coordinate drives a moving point then sees
+   ``S^T p = (M qdd + h + L^T f)`` less that term.
 
 Tangent points are written into their slots in the frame of the wrap's body: the cable-terms kernel
 then treats them as points fixed on that body at the instant, as OpenSim's ``produceForces`` does.
@@ -41,8 +45,8 @@ import math
 import numpy as np
 from numba import extending
 
-from .wrapping_osim import (INSIDE_RADIUS, MANDATORY_WRAP, NO_WRAP, WRAPPED, osim_cylinder, osim_ellipsoid,
-                            osim_sphere)
+from .wrapping_osim import INSIDE_RADIUS, MANDATORY_WRAP, NO_WRAP, WRAPPED, osim_cylinder, osim_sphere
+from .wrapping_osim_ellipsoid import osim_ellipsoid
 
 register_jitable = extending.register_jitable
 

@@ -149,7 +149,7 @@ def _function(el, where: str) -> PiecewiseCubic:
                      f"LinearFunction, PiecewiseLinearFunction or MultiplierFunction")
 
 
-def _coordinates(model, root) -> dict:
+def _coordinate_ranges(root) -> dict:
     """OpenSim coordinate name -> (q index, v index, (range min, range max))."""
     ranges = {}
     for c in root.iter("Coordinate"):
@@ -319,7 +319,7 @@ def read_paths(root, file, model, coordinates=None):
         inactive wrap objects).
     """
     coordinates = default_coordinates(model) if coordinates is None else dict(coordinates)
-    ranges = _coordinates(model, root)
+    ranges = _coordinate_ranges(root)
     objects = wrap_objects(root, file)
     cables, muscles, notes = [], [], []
     for fs in root.iter("ForceSet"):
