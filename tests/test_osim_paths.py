@@ -21,10 +21,10 @@ osim.Logger.removeFileSink()  # OpenSim would append to an opensim.log beside th
 osim.Logger.setLevelString("warn")
 
 RNG = np.random.default_rng(24)
-# (parent, child, location of the joint in the parent, orientation (XYZ body-fixed) in the parent, child
-# offset location); the joints are PinJoints about their frames' z axis
-JOINTS = (("ground", "b1", (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), "q1"),
-          ("b1", "b2", (0.3, 0.0, 0.0), (0.4, -0.3, 0.2), (-0.02, 0.01, 0.0), "q2"))
+# (parent, child, location and orientation (XYZ body-fixed) of the joint frame in the parent, and in the
+# child); the joints are PinJoints about their frames' z axis
+JOINTS = (("ground", "b1", (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), "q1"),
+          ("b1", "b2", (0.3, 0.0, 0.0), (0.4, -0.3, 0.2), (-0.02, 0.01, 0.0), (0.1, 0.25, -0.3), "q2"))
 RANGES = {"q1": (-1.0, 1.2), "q2": (-0.8, 1.5)}
 
 
@@ -39,11 +39,11 @@ def _pin_model():
     model = pin.Model()
     model.addFrame(pin.Frame("ground", 0, 0, pin.SE3.Identity(), pin.FrameType.BODY))
     joint_of = {"ground": 0}
-    for parent, child, loc, ori, child_loc, coord in JOINTS:
+    for parent, child, loc, ori, child_loc, child_ori, coord in JOINTS:
         pj = joint_of[parent]
         parent_body = model.frames[model.getFrameId(parent)].placement
         jid = model.addJoint(pj, pin.JointModelRZ(), parent_body * pin.SE3(_xyz(*ori), np.array(loc)), coord)
-        body = pin.SE3(np.eye(3), np.array(child_loc)).inverse()
+        body = pin.SE3(_xyz(*child_ori), np.array(child_loc)).inverse()
         model.appendBodyToJoint(jid, pin.Inertia.FromSphere(1.0, 0.05), body)
         model.addFrame(pin.Frame(child, jid, 0, body, pin.FrameType.BODY))
         joint_of[child] = jid
@@ -56,10 +56,10 @@ def _osim_model(muscles, wraps):
     m = osim.Model()
     bodies = {"ground": m.getGround()}
     coords = {}
-    for parent, child, loc, ori, child_loc, coord in JOINTS:
+    for parent, child, loc, ori, child_loc, child_ori, coord in JOINTS:
         b = osim.Body(child, 1.0, osim.Vec3(0), osim.Inertia(0.01, 0.01, 0.01))
         j = osim.PinJoint(f"j_{child}", bodies[parent], osim.Vec3(*loc), osim.Vec3(*ori), b,
-                          osim.Vec3(*child_loc), osim.Vec3(0))
+                          osim.Vec3(*child_loc), osim.Vec3(*child_ori))
         j.updCoordinate().setName(coord)
         m.addBody(b)
         m.addJoint(j)
@@ -233,10 +233,10 @@ def test_simm_spline_matches_opensim():
 def _muscle_model(kind, tmp_path, lo, ls, damping):
     m = osim.Model()
     bodies = {"ground": m.getGround()}
-    for parent, child, loc, ori, child_loc, coord in JOINTS:
+    for parent, child, loc, ori, child_loc, child_ori, coord in JOINTS:
         b = osim.Body(child, 1.0, osim.Vec3(0), osim.Inertia(0.01, 0.01, 0.01))
         j = osim.PinJoint(f"j_{child}", bodies[parent], osim.Vec3(*loc), osim.Vec3(*ori), b,
-                          osim.Vec3(*child_loc), osim.Vec3(0))
+                          osim.Vec3(*child_loc), osim.Vec3(*child_ori))
         j.updCoordinate().setName(coord)
         m.addBody(b)
         m.addJoint(j)
@@ -348,10 +348,10 @@ def test_arm26_muscle_paths(tmp_path, monkeypatch):
     """Every muscle of arm26 (cylinders and ellipsoids, several wraps per path): lengths and moment
     arms at 30 random states against OpenSim's own.
 
-    TRIlong's moment arms are left out: its three wraps need several of OpenSim's rounds, whose moved
-    tangent points OpenSim's lengths see at their first (cached) ground positions, which we follow;
-    OpenSim's ``computeMomentArm`` (on a copy of the state) sees yet other positions and is not the
-    derivative of its own ``getLength`` there (docs/opensim.md)."""
+    TRIlong's three wraps need several of OpenSim's rounds: its lengths see the moved tangent points
+    at their first (cached) ground positions and its forces act where the wraps last put them
+    (docs/opensim.md), both followed here. And the interaction wrenches stay consistent with ``L``:
+    ``S^T p = M qdd + h + L^T f`` for each joint."""
     monkeypatch.chdir(tmp_path)
     shutil.copy(ARM26, tmp_path / ARM26.name)
     m = osim.Model(str(tmp_path / ARM26.name))
@@ -378,13 +378,23 @@ def test_arm26_muscle_paths(tmp_path, monkeypatch):
             ref = mus.getLength(s)
             worst_l = max(worst_l, abs(ours_l[i] - ref) / ref)
             for k, co in enumerate(coords):
-                if c.name == "TRIlong":
-                    continue
                 arm = mus.computeMomentArm(s, co)
                 worst_r = max(worst_r, abs(-ours_L[i, k] - arm) / max(1e-3, abs(arm)))
     # 1e-6 where ellipsoids are involved (the issue's bar); measured ~5e-9, the stand-in pin model's
     # kinematics (about 2e-9 rad from OpenSim's CustomJoint) rather than the paths (1e-16 on the tiny models)
     assert worst_l < 1e-6 and worst_r < 1e-6, (worst_l, worst_r)
+    from mcdm_pin.model import TermsEvaluator
+
+    ev = TermsEvaluator(model, cs)
+    for q in RNG.uniform(0.2, 2.2, size=(5, 2)):
+        t = ev(q, RNG.normal(size=2), RNG.normal(size=2))
+        f = RNG.uniform(0.0, 100.0, size=cs.m)
+        p = t.wrenches(f)
+        pin.forwardKinematics(model, data, q)
+        for a, j in enumerate(ev.joints):
+            S = np.asarray(data.joints[j.child_id].S).reshape(6, -1)
+            iv = model.joints[j.child_id].idx_v
+            assert np.allclose(S.T @ p[a], (t.tau + t.L.T @ f)[iv:iv + 1], rtol=0, atol=1e-12)
 
 
 TSM = Path(__file__).resolve().parents[1] / ".." / ".." / "shared" / "reference" / "rmr" / "model" / "TSM_subject_noWeight.osim"
@@ -396,7 +406,10 @@ def test_thoracoscapular_muscle_lengths(tmp_path, monkeypatch):
     muscles, moving points, 37 PathWraps over ellipsoids, cylinders and spheres): lengths at random
     states against OpenSim's ``getLength``. The pin model here is a stand-in placing each body by a
     free-flyer at OpenSim's own body pose (and one prismatic joint per coordinate a moving point
-    follows), so that only the paths are compared; moment arms wait for the loader's kinematics."""
+    follows), so that only the paths are compared. Moment arms: ``-L V`` with ``V`` the bodies'
+    velocities (and the moving points' coordinate speed) for a unit speed of the coordinate, read from
+    OpenSim; the clavicle and scapula coordinates are left out (OpenSim projects that unit speed onto
+    the model's PointConstraint, which its Python bindings do not expose; the loader's test will)."""
     monkeypatch.chdir(tmp_path)
     shutil.copy(TSM, tmp_path / TSM.name)  # OpenSim loads from the model's folder: load a copy
     m = osim.Model(str(tmp_path / TSM.name))
@@ -418,7 +431,7 @@ def test_thoracoscapular_muscle_lengths(tmp_path, monkeypatch):
     cs = CableSet(model, cables, muscles=muscles, muscle_cables=muscles.names)
     data = model.createData()
     cset = m.getCoordinateSet()
-    worst = 0.0
+    worst = worst_r = 0.0
     for _ in range(8):
         for c in cset:
             lo, hi = max(c.getRangeMin(), -3.0), min(c.getRangeMax(), 3.0)
@@ -435,4 +448,32 @@ def test_thoracoscapular_muscle_lengths(tmp_path, monkeypatch):
         for i, c in enumerate(cables):
             ref = osim.Muscle.safeDownCast(m.getForceSet().get(c.name)).getLength(s)
             worst = max(worst, abs(ours[i] - ref) / ref)
-    assert worst < 1e-6, worst
+        L = cable_jacobian(model, data, cs, q)
+        for co in cset:
+            if co.get_locked() or co.getName().startswith(("clav_", "scapula_")):
+                continue
+            arms = -(L @ _unit_speed_velocities(m, s, co, model, bodies, moving))
+            for i, c in enumerate(cables):
+                arm = osim.Muscle.safeDownCast(m.getForceSet().get(c.name)).computeMomentArm(s, co)
+                worst_r = max(worst_r, abs(arms[i] - arm) / max(1e-3, abs(arm)))
+    assert worst < 1e-6 and worst_r < 1e-6, (worst, worst_r)
+
+
+def _unit_speed_velocities(m, s, coordinate, model, bodies, moving):
+    """The stand-in pin model's velocity (free-flyers: each body's in its own frame) when
+    ``coordinate`` moves at unit speed and every other coordinate is still (OpenSim's state)."""
+    s2 = osim.State(s)
+    s2.updU().setToZero()
+    coordinate.setSpeedValue(s2, 1.0)
+    m.realizeVelocity(s2)
+    V = np.zeros(model.nv)
+    for name in bodies:
+        b = m.getBodySet().get(name)
+        R = _se3(b.getTransformInGround(s2)).rotation
+        sv = b.getVelocityInGround(s2)
+        iv = model.joints[model.getJointId(f"ff_{name}")].idx_v
+        V[iv:iv + 3] = R.T @ np.array([sv.get(1)[i] for i in range(3)])
+        V[iv + 3:iv + 6] = R.T @ np.array([sv.get(0)[i] for i in range(3)])
+    for name in moving:
+        V[model.joints[model.getJointId(name)].idx_v] = m.getCoordinateSet().get(name).getSpeedValue(s2)
+    return V

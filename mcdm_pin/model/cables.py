@@ -10,6 +10,11 @@ branch whose length and tension count ``1/divisor`` (MuJoCo's ``pulley divisor``
 depends on the configuration; its length, ``L`` and wrenches follow from its path at each instant
 (:mod:`mcdm_pin.model.routes`). Cables can only pull: ``0 <= f_min <= f <= f_max``.
 
+Routes read from OpenSim follow OpenSim's rules instead (:mod:`mcdm_pin.model.route_osim`): their
+points may be :class:`ConditionalPoint` and :class:`MovingPoint`, and their wraps (kinds
+``opensim_sphere``, ``opensim_cylinder``, ``opensim_ellipsoid``) follow all the points, each applying
+over the span of points it names, as an OpenSim ``PathWrap`` does.
+
 Build one in code::
 
     cables = CableSet(model, [

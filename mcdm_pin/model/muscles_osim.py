@@ -225,9 +225,52 @@ class OpenSimMuscle:
     min_fiber: float = 0.0
 
 
+def _stack(curves) -> BezierCurve:
+    """Curves of one shape (as many segments each) as one :class:`BezierCurve` whose fields carry a
+    leading muscle axis, evaluated by :func:`_evaluate` on one abscissa per muscle."""
+    return BezierCurve(np.stack([c.px for c in curves]), np.stack([c.py for c in curves]),
+                       *(np.array([getattr(c, f) for c in curves]) for f in ("x0", "x1", "y0", "y1", "dydx0", "dydx1")))
+
+
+def _evaluate(pairs) -> list:
+    """Stacked curves (:func:`_stack`) at one abscissa per muscle: ``[(c, x), ...]`` -> the values
+    ``[y, ...]``; every curve's Bézier parameters are solved in one Newton iteration (x(u) is monotone
+    on each segment)."""
+    outs, rows_x, rows_y, xs, where = [], [], [], [], []
+    for c, x in pairs:
+        x = np.asarray(x, dtype=float)
+        out = np.where(x < c.x0, c.y0 + c.dydx0 * (x - c.x0), c.y1 + c.dydx1 * (x - c.x1))
+        mid = np.flatnonzero((x >= c.x0) & (x <= c.x1))
+        xm = x[mid]
+        seg = np.minimum((xm[:, None] > c.px[mid, :, 5]).sum(axis=1), c.px.shape[1] - 1)
+        rows_x.append(c.px[mid, seg])
+        rows_y.append(c.py[mid, seg])
+        xs.append(xm)
+        where.append(mid)
+        outs.append(out)
+    PX, PY, xm = np.concatenate(rows_x), np.concatenate(rows_y), np.concatenate(xs)
+    if len(xm):
+        u = np.clip((xm - PX[:, 0]) / (PX[:, 5] - PX[:, 0]), 0.0, 1.0)
+        tol = 4 * np.finfo(float).eps * np.maximum(1.0, np.abs(xm))
+        for _ in range(60):
+            f = _bezier(u, PX) - xm
+            if np.all(np.abs(f) <= tol):
+                break
+            d = _bezier_du(u, PX)
+            u = np.clip(u - np.where(d != 0, f / np.where(d != 0, d, 1.0), 0.0), 0.0, 1.0)
+        y = _bezier(u, PY)
+        k = 0
+        for out, mid in zip(outs, where):
+            out[mid] = y[k:k + len(mid)]
+            k += len(mid)
+    return outs
+
+
 class OpenSimMuscles:
     """The OpenSim kind of muscle parameters (:mod:`mcdm_pin.model.muscles` dispatches
-    ``force_range`` to :meth:`force_range`). ``names``, ``size``, ``muscles``."""
+    ``force_range`` to :meth:`force_range`). ``names``, ``size``, ``muscles``; the per-muscle numbers
+    are also kept as arrays, and each kind's curves stacked, so that an instant costs a few numpy calls
+    whatever the number of muscles."""
 
     def __init__(self, muscles):
         self.muscles = tuple(muscles)
@@ -239,6 +282,19 @@ class OpenSimMuscles:
                     and 0 <= m.a_min <= m.a_max):
                 raise ModelError(f"muscle {m.name!r}: expected F0 >= 0, optimal fiber length > 0, tendon slack "
                                  f"length >= 0, pennation in [0, pi/2), vmax > 0 and 0 <= a_min <= a_max")
+        for f in ("f0", "lo", "ls", "alpha0", "vmax", "damping", "a_min", "a_max", "max_pennation", "min_fiber"):
+            setattr(self, f, np.array([getattr(m, f) for m in self.muscles], dtype=float))
+        self.millard = np.array([m.kind == KINDS[0] for m in self.muscles], dtype=bool)
+        self._mi = np.flatnonzero(self.millard)
+        self._di = np.flatnonzero(~self.millard)
+        mill = [self.muscles[i] for i in self._mi]
+        self._curves = tuple(_stack([m.curves[k] for m in mill]) for k in range(3)) if mill else None
+        dg = [self.muscles[i] for i in self._di]
+        self._dg = tuple(np.array([m.curves[k] for m in dg], dtype=float) for k in range(3))
+        self.h = self.lo * np.sin(self.alpha0)
+        sin_max = np.sin(self.max_pennation)
+        self._pen_min = np.where(self.max_pennation > SIGNIFICANT, self.h / sin_max, 0.01 * self.lo)
+        self._sin_max = sin_max
 
     @property
     def size(self) -> int:
@@ -252,61 +308,48 @@ class OpenSimMuscles:
         if ell.shape != (self.size,) or ell_dot.shape != (self.size,):
             raise StateError(f"muscles: expected lengths and speeds of shape ({self.size},), got {ell.shape} "
                              f"and {ell_dot.shape}")
-        out = np.zeros((4, self.size))
-        for i, m in enumerate(self.muscles):
-            out[:, i] = _fiber(m, float(ell[i]), float(ell_dot[i]))
-        return out[0], out[1], out[2], out[3] > 0
+        along = ell - self.ls
+        lf = np.sqrt(along * along + self.h * self.h)
+        # Millard: the pennation model's floor, the fiber clamp, the pennation angle's limits
+        pen_min = self._pen_min
+        lf_m = np.maximum(np.where(along >= pen_min * np.cos(self.max_pennation), lf, pen_min), self.min_fiber)
+        sin_m = self.h / lf_m
+        phi = np.where((self.alpha0 > np.finfo(float).eps) & (lf_m > pen_min),
+                       np.arcsin(np.minimum(sin_m, 1.0)), self.max_pennation)
+        phi = np.where(sin_m >= self._sin_max, self.max_pennation, phi)
+        phi = np.where(self.alpha0 > np.finfo(float).eps, phi, 0.0)
+        cos_m = np.cos(phi)
+        slack = ell - lf_m * cos_m < self.ls - SIGNIFICANT
+        dl_m = np.where(slack, 0.0, ell_dot * cos_m)
+        clamped = ((lf_m <= self.min_fiber) & (dl_m <= 0)) | (lf_m < self.min_fiber)
+        dl_m = np.where(clamped, 0.0, dl_m)
+        cos_d = along / lf
+        lf = np.where(self.millard, lf_m, lf)
+        cos_a = np.where(self.millard, cos_m, cos_d)
+        dl = np.where(self.millard, dl_m, ell_dot * cos_d)
+        return lf / self.lo, dl / (self.lo * self.vmax), cos_a, self.millard & clamped
 
     def force_range(self, tendon_lengths, tendon_velocities):
         """The tension range (:class:`~mcdm_pin.model.muscles.MuscleState`) at one instant."""
         from .muscles import MuscleState
 
         l, v, cos_a, clamped = self.fiber(tendon_lengths, tendon_velocities)
-        passive, gain = np.zeros(self.size), np.zeros(self.size)
-        for i, m in enumerate(self.muscles):
-            if clamped[i]:
-                continue
-            if m.kind == KINDS[0]:
-                fl, fv, fp = (float(c(x)[0]) for c, x in zip(m.curves, (l[i], v[i], l[i])))
-            else:
-                width, e0, use_passive = m.curves
-                fl, fv = float(degroote_fl(l[i], width)), float(degroote_fv(v[i]))
-                fp = float(degroote_fp(l[i], e0)) if use_passive else 0.0
-            passive[i] = m.f0 * (fp + m.damping * v[i]) * cos_a[i]
-            gain[i] = m.f0 * fl * fv * cos_a[i]
-        a_min = np.array([m.a_min for m in self.muscles])
-        a_max = np.array([m.a_max for m in self.muscles])
-        f_min, f_max = passive + gain * a_min, passive + gain * a_max
-        millard = np.array([m.kind == KINDS[0] for m in self.muscles], dtype=bool)
-        f_min = np.where(millard, np.maximum(f_min, 0.0), f_min)  # OpenSim saturates the rigid fiber at 0
-        f_max = np.where(millard, np.maximum(f_max, 0.0), f_max)
-        return MuscleState(passive, gain, f_min, f_max, a_min, a_max)
-
-
-def _fiber(m: OpenSimMuscle, ell: float, ell_dot: float):
-    """One muscle's ``(l~, v~, cos alpha, clamped)`` (module docstring; Millard's clamps)."""
-    h = m.lo * math.sin(m.alpha0)
-    along = ell - m.ls
-    if m.kind != KINDS[0]:
-        lf = math.sqrt(along * along + h * h)
-        cos_a = along / lf
-        return lf / m.lo, ell_dot * cos_a / (m.lo * m.vmax), cos_a, 0.0
-    sin_max = math.sin(m.max_pennation)
-    pen_min = h / sin_max if m.max_pennation > SIGNIFICANT else 0.01 * m.lo
-    lf = math.sqrt(h * h + along * along) if along >= pen_min * math.cos(m.max_pennation) else pen_min
-    lf = max(lf, m.min_fiber)
-    if m.alpha0 > np.finfo(float).eps:
-        s = h / lf
-        phi = (math.asin(s) if s < sin_max else m.max_pennation) if lf > pen_min else m.max_pennation
-    else:
-        phi = 0.0
-    cos_a = math.cos(phi)
-    tendon = ell - lf * cos_a
-    if tendon < m.ls - SIGNIFICANT:
-        dl = 0.0
-    else:
-        dl = ell_dot * cos_a
-    clamped = (lf <= m.min_fiber and dl <= 0) or lf < m.min_fiber
-    if clamped:
-        dl = 0.0
-    return lf / m.lo, dl / (m.lo * m.vmax), cos_a, float(clamped)
+        fl, fv, fp = np.zeros(self.size), np.zeros(self.size), np.zeros(self.size)
+        mi, di = self._mi, self._di
+        if mi.size:
+            fl[mi], fv[mi], fp[mi] = _evaluate(list(zip(self._curves, (l[mi], v[mi], l[mi]))))
+        if di.size:
+            width, e0, use_passive = self._dg
+            x = (l[di] - 1.0) / width + 1.0
+            fl[di] = sum(b1 * np.exp(-0.5 * (x - b2) ** 2 / (b3 + b4 * x) ** 2) for b1, b2, b3, b4 in _B)
+            fv[di] = degroote_fv(v[di])
+            offset = np.exp(_KPE * (_MIN_NORM_FIBER - 1.0) / e0)
+            fp[di] = np.where(use_passive > 0, (np.exp(_KPE * (l[di] - 1.0) / e0) - offset)
+                              / (math.exp(_KPE) - offset), 0.0)
+        live = ~clamped
+        passive = np.where(live, self.f0 * (fp + self.damping * v) * cos_a, 0.0)
+        gain = np.where(live, self.f0 * fl * fv * cos_a, 0.0)
+        f_min, f_max = passive + gain * self.a_min, passive + gain * self.a_max
+        f_min = np.where(self.millard, np.maximum(f_min, 0.0), f_min)  # OpenSim saturates the rigid fiber at 0
+        f_max = np.where(self.millard, np.maximum(f_max, 0.0), f_max)
+        return MuscleState(passive, gain, f_min, f_max, self.a_min, self.a_max)

@@ -126,12 +126,12 @@ def route_pass(oM, wrap_int, wrap_float, point_local, seg_b, seg_active, seg_sca
 @njit(cache=True, nogil=True)
 def osim_route_pass(oM, q, route_int, pt_kind, pt_q, pt_v, pt_fun, pt_float, fun_ptr, knots, wrap_int,
                     wrap_float, point_local, point_key, seg_a, seg_b, seg_active, seg_scale, arc_length,
-                    L_extra, wrap_len, pt_dP):
+                    L_extra, wrap_len, pt_dP, lever):
     """The routes that follow OpenSim's rules, after :func:`route_pass` at the same instant:
     :func:`mcdm_pin.model.route_osim.osim_routes` (its tables: ``route_osim.OsimTables``)."""
     osim_routes(oM, q, route_int, pt_kind, pt_q, pt_v, pt_fun, pt_float, fun_ptr, knots, wrap_int, wrap_float,
                 point_local, point_key, seg_a, seg_b, seg_active, seg_scale, arc_length, L_extra, wrap_len,
-                pt_dP)
+                pt_dP, lever)
 
 
 def warm_calls():
@@ -151,7 +151,7 @@ def warm_calls():
                  np.zeros((2, 3), dtype=i64), np.zeros((2, ro.N_PFLOAT)), np.zeros(1, dtype=i64), np.zeros((0, 5)),
                  np.zeros((0, ro.N_OINT), dtype=i64), np.zeros((0, ro.N_OFLOAT)), np.array([[0.0, 0, 0], [1, 0, 0]]),
                  np.zeros(2, dtype=i64), np.array([0], dtype=i64), np.array([1], dtype=i64), np.array([False]),
-                 np.ones(1), np.zeros(1), np.zeros((1, 1)), np.zeros(0), np.zeros((2, 3)))
+                 np.ones(1), np.zeros(1), np.zeros((1, 1)), np.zeros(0), np.zeros((2, 3)), np.zeros((2, 3)))
     return [(route_pass, (oM, wi, wf, np.zeros((4, 3)), np.array([1], dtype=i64), np.array([False]),
                           np.zeros(2), np.zeros(1), np.zeros(1, dtype=np.bool_), 1)),
             (osim_route_pass, osim_args)]

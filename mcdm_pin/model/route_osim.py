@@ -29,13 +29,24 @@ configuration ``q``:
 
 Tangent points are written into their slots in the frame of the wrap's body: the cable-terms kernel
 then treats them as points fixed on that body at the instant, as OpenSim's ``produceForces`` does.
+
+**OpenSim's cached ground positions.** OpenSim reads a point's ground position through a cache that
+is filled at its first read in an instant (``Point::getLocationInGround``) and that a wrap moving
+its tangent point later in the same instant does not refresh (``PathWrapPoint::setLocation``). Its
+lengths (the rounds' convergence test, the candidates' length change, the final length) and its
+forces' directions use those cached positions, its wrap geometry and the points where its forces
+act use the refreshed ones. We keep the same cache (``_ground``; the tangent points left in the slots
+are the cached ones) and report, in ``lever``, each path tangent point's refreshed position less its
+cached one: :func:`mcdm_pin.model.routes.add_levers` adds the moments of those levers to ``L`` and to
+the interaction wrenches. With one wrap, or wraps that settle in their first round, the lever is 0.
+
 Departures from OpenSim: the previous instant's wrap is never reused (OpenSim reuses it only for a
-sphere segment through the centre), and a wrap whose span has no active point ends the wrapping of
-the path as OpenSim does (its ``return``).
+sphere segment through the centre). A wrap whose span has no active point ends the wrapping of the
+path, as OpenSim's ``return`` does.
 
 The functions here are ``register_jitable`` (compiled inline into
 :func:`mcdm_pin.model.route_kernels.osim_route_pass`, plain Python before ``mcdm-pin compile``);
-:func:`osim_tables` builds their tables once per cable set.
+:class:`OsimTables` builds their tables once per cable set.
 """
 
 from __future__ import annotations
@@ -332,10 +343,11 @@ def _write_segments(oM, point_key, point_local, path, owner, plen, r, wrap_int, 
 @register_jitable
 def osim_routes(oM, q, route_int, pt_kind, pt_q, pt_v, pt_fun, pt_float, fun_ptr, knots, wrap_int,
                 wrap_float, point_local, point_key, seg_a, seg_b, seg_active, seg_scale, arc_length,
-                L_extra, wrap_len, pt_dP):
+                L_extra, wrap_len, pt_dP, lever):
     """Every OpenSim route at configuration ``q`` (steps 1-4 of the module docstring), in place.
     ``L_extra`` (m, nv) is zeroed first; ``arc_length`` is added to (the MuJoCo wraps' pass zeroes
-    it)."""
+    it); ``lever`` (P, 3): for a tangent point whose cached position (``point_local``) differs from
+    where its wrap last put it, that difference (its body's frame), else 0."""
     L_extra[:, :] = 0.0
     for ri in range(route_int.shape[0]):
         r = route_int[ri]
@@ -357,11 +369,15 @@ def osim_routes(oM, q, route_int, pt_kind, pt_q, pt_v, pt_fun, pt_float, fun_ptr
             # computePath's last length: every node's ground position read (and cached); the path's
             # tangent points are then where OpenSim's lengths and forces see them
             _path_length(oM, point_key, point_local, path, owner, plen, wrap_int, r[R_W0], wrap_len, t0, cache)
+            for j in range(2 * nw):
+                for i in range(3):
+                    lever[t0 + j, i] = 0.0
             for j in range(plen):
                 k = path[j] - t0
-                if k >= 0:
-                    point_local[path[j], 0], point_local[path[j], 1] = cache[k, 0], cache[k, 1]
-                    point_local[path[j], 2] = cache[k, 2]
+                if k >= 0:  # lever: the refreshed position less the cached one (forces act there)
+                    for i in range(3):
+                        lever[path[j], i] = point_local[path[j], i] - cache[k, i]
+                        point_local[path[j], i] = cache[k, i]
         _write_segments(oM, point_key, point_local, path, owner, plen, r, wrap_int, wrap_len, seg_a, seg_b,
                         seg_active, seg_scale, arc_length, pt_kind, pt_v, pt_dP, L_extra)
 

@@ -91,6 +91,7 @@ class RoutePaths:
         self.seg_active = np.concatenate([self.seg_active, np.zeros(n_o, dtype=np.bool_)])
         self.seg_scale = np.concatenate([self.seg_scale, np.zeros(n_o)])
         self.L_extra = np.zeros((cables.m, cables.model_signature[1]))
+        self.lever = np.zeros((len(self.point_local) + 2 * n_o, 3))
         self._osim_pass = jit.kernels("model.route_kernels").osim_route_pass
         return OsimTables(cables, okey, len(self.point_local), slot0, seg0)
 
@@ -102,7 +103,7 @@ class RoutePaths:
             self._osim_pass(oM, q, t.route_int, t.pt_kind, t.pt_q, t.pt_v, t.pt_fun, t.pt_float, t.fun_ptr,
                             t.knots, t.wrap_int, t.wrap_float, self.point_local, self.point_key, self.seg_a,
                             self.seg_b, self.seg_active, self.seg_scale, self.arc_length, self.L_extra,
-                            t.wrap_len, t.pt_dP)
+                            t.wrap_len, t.pt_dP, self.lever)
         return (self.point_local, self.point_key, self.seg_a, self.seg_b, self.seg_cable, self.seg_active,
                 self.seg_scale, self.arc_length)
 
@@ -130,3 +131,32 @@ def _tables(rk, cables, key, base_key, wkey, slot_t0):
         wf[w, rk.P_W:rk.P_W + 3] = np.asarray(wr.placement.translation).reshape(3)
         wf[w, rk.RADIUS], wf[w, rk.SCALE] = wr.radius, wr.scale
     return wi, wf
+
+
+def add_levers(routes, L, RT, J, X, oM, sub_v, sub_phys, child_key) -> None:
+    r"""OpenSim's forces act where a wrap last put its tangent points while their directions (and the
+    lengths) use the points' cached positions (:mod:`mcdm_pin.model.route_osim`). For each straight
+    segment end :math:`e` (sign :math:`s_e`, +1 at the segment's end) with a lever :math:`d_e`
+    (world) the end's Plücker vector gains :math:`[0;\ m_e]`, :math:`m_e = s_e\, d_e \times \hat u`
+    (world, about the origin): ``L`` (m, nv) gains :math:`\omega_v \cdot m_e` in the columns ``v``
+    that move the end's body (``sub_v`` (nv, K); :math:`\omega_v` the angular rows ``J[3:]`` of the
+    world Jacobian), and ``RT`` (Jn, 6, m) the moment :math:`R_c^T m_e` for every physical joint whose
+    subtree holds that body (``sub_phys`` (Jn, K); :math:`R_c` the child frame's rotation, key
+    ``child_key``). ``X`` (P, 3): the points the kernel used."""
+    lever = routes.lever
+    moved = np.abs(lever).sum(axis=1) > 0
+    if not moved.any():
+        return
+    for s in np.flatnonzero((routes.seg_scale > 0) & routes.seg_active
+                            & (moved[routes.seg_a] | moved[routes.seg_b])):
+        a, b, c = routes.seg_a[s], routes.seg_b[s], routes.seg_cable[s]
+        u = X[b] - X[a]
+        u *= routes.seg_scale[s] / np.linalg.norm(u)
+        for e, sign in ((b, 1.0), (a, -1.0)):
+            if moved[e]:
+                k = routes.point_key[e]
+                m = sign * np.cross(oM[k, :3, :3] @ lever[e], u)
+                cols = np.flatnonzero(sub_v[:, k])
+                L[c, cols] += m @ J[3:6, cols]
+                for j in np.flatnonzero(sub_phys[:, k]):
+                    RT[j, 3:6, c] += oM[child_key[j], :3, :3].T @ m

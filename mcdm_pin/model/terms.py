@@ -49,7 +49,7 @@ from .cables import CableSet
 from .charts import check_configuration
 from .geometry import CableMaps, cable_geometry
 from .joints import PhysicalJoint, massless_members, resolve_joints
-from .routes import RoutePaths
+from .routes import RoutePaths, add_levers
 
 
 @dataclass
@@ -353,8 +353,9 @@ class TermsEvaluator:
                                  f"length at this configuration, so its direction is undefined")
             if arc is not None:
                 lengths += arc
-                if self._routes._osim is not None:  # OpenSim's moving points' own terms
+                if self._routes._osim is not None:  # OpenSim's moving points' own terms, its levers
                     L += self._routes.L_extra
+                    add_levers(self._routes, L, RT, J, X, oMi, self._sub_v, self._sub_phys, self._child_key)
         else:
             oR, op = oMi[:, :3, :3], oMi[:, :3, 3]
             geo = cable_geometry(cables, oR, op, self._maps)

@@ -311,8 +311,8 @@ def read_paths(root, file, model, coordinates=None):
 
     Returns:
         ``(cables, muscles, notes)``: :class:`~mcdm_pin.model.cables.Cable`\ s named after the muscles
-        (bounds ``[0, 2 F0]``: a muscle's range at an instant follows its length and speed, these only
-        bound it), the modelled muscles (Millard, De Groote) as
+        (static bounds ``[0, 10 F0]``, as for MuJoCo's muscles a ceiling: a modelled muscle's range at
+        an instant follows its length and speed), the modelled muscles (Millard, De Groote) as
         :class:`~mcdm_pin.model.muscles_osim.OpenSimMuscles` in cable order
         (``None`` without muscles; pass them as ``CableSet(model, cables, muscles=muscles,
         muscle_cables=muscles.names)``), and notes on what was left aside (forces without a path,
@@ -337,7 +337,7 @@ def read_paths(root, file, model, coordinates=None):
             f0 = _floats(_text(force, "max_isometric_force", f"{file}: {force.tag} {name!r}"), 1,
                          f"{file}: {force.tag} {name!r}: <max_isometric_force>")[0]
             if force.tag in MODELLED:
-                cables.append(Cable(name, tuple(route), 0.0, max(2.0 * f0, 1.0)))
+                cables.append(Cable(name, tuple(route), 0.0, max(10.0 * f0, 1.0)))
                 muscles.append(read_muscle(force, file))
             else:
                 cables.append(Cable(name, tuple(route), 0.0, f0))
