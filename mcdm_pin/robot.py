@@ -175,7 +175,7 @@ class Robot:
     @classmethod
     def from_sidecar(cls, sidecar: Sidecar) -> "Robot":
         sc = sidecar
-        if sc.mjcf_path is not None:
+        if sc.mjcf_path is not None or sc.osim_path is not None:
             return _from_mjcf_sidecar(sc)
         if sc.urdf_path is None:
             urdf_path = resolve_package_uri(sc.urdf, sc.path)
@@ -302,21 +302,26 @@ class Robot:
 
 # ------------------------------------------------------------------------------------ sidecar helpers
 def _from_mjcf_sidecar(sc: Sidecar) -> Robot:
-    """The MJCF file's robot with the sidecar's joint settings, reserves and trajectories: MuJoCo compiles
-    the file once and the robot is built once, from the parts (:func:`~mcdm_pin.mjcf.load.mjcf_parts`)
-    with the sidecar's changes applied."""
-    if not sc.mjcf_path.is_file():
-        raise sc.error("mjcf", f"MJCF file not found: {sc.mjcf_path}")
-    source = str(sc.mjcf_path)
+    """The MJCF (or OpenSim) file's robot with the sidecar's joint settings, reserves and trajectories:
+    the file is read (MuJoCo compiles an MJCF) once and the robot is built once, from its parts
+    (:func:`~mcdm_pin.mjcf.load.mjcf_parts`, :func:`~mcdm_pin.osim.load.osim_parts`) with the sidecar's
+    changes applied."""
+    key, path = ("osim", sc.osim_path) if sc.osim_path is not None else ("mjcf", sc.mjcf_path)
+    if not path.is_file():
+        raise sc.error(key, f"{'OpenSim' if key == 'osim' else 'MJCF'} file not found: {path}")
+    source = str(path)
     try:
-        parts = mjcf_parts(compile_mjcf(sc.mjcf_path), source, sc.name)
+        if sc.osim_path is not None:
+            parts = osim_parts(path, sc.name, sc.actuator_weights)
+        else:
+            parts = mjcf_parts(compile_mjcf(path), source, sc.name)
     except ModelError as exc:
-        raise sc.error("mjcf", str(exc)) from None
+        raise sc.error(key, str(exc)) from None
     joints = {j.name: j for j in parts.joints}
     for spec in sc.joints:
         if spec.name not in joints:
-            raise sc.error(spec.key, f"unknown joint {spec.name!r}; the MJCF's physical joints are its moving "
-                                     f"bodies: {_names(list(joints))}")
+            raise sc.error(spec.key, f"unknown joint {spec.name!r}; the {key.upper()} file's physical joints are "
+                                     f"{_names(list(joints))}")
         try:
             joints[spec.name] = joints[spec.name].with_settings(alpha=spec.alpha, beta=spec.beta,
                                                                 cone_deg=spec.cone_deg,
@@ -329,7 +334,7 @@ def _from_mjcf_sidecar(sc: Sidecar) -> Robot:
                         "actuators": parts.actuators + reserves}, sidecar=sc)
     except ModelError as exc:
         msg = str(exc)
-        raise sc.error("mjcf", msg if msg.startswith(source) else f"{source}: {msg}") from None
+        raise sc.error(key, msg if msg.startswith(source) else f"{source}: {msg}") from None
 
 
 def _reserves(sc: Sidecar, joints, coordinate_names, couplings) -> tuple[Actuator, ...]:

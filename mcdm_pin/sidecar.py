@@ -147,6 +147,8 @@ class Sidecar:
     mjcf_path: Path | None = None  # a sidecar over an MJCF file (``mjcf:`` instead of ``urdf:``)
     reserves: tuple = ()  # ReserveSpec: coordinate actuators of an MJCF robot
     springs: tuple = ()  # SpringSpec: passive springs (known tensions)
+    osim_path: Path | None = None  # a sidecar over an OpenSim file (``osim:`` instead of ``urdf:``)
+    actuator_weights: dict = field(default_factory=dict)  # an .osim's CoordinateActuators: name -> w of w c^2
 
 
     def error(self, key: str, expected: str) -> SidecarError:
@@ -259,6 +261,8 @@ WRAP_KEYS = ("wrap", "link", "radius", "center", "axis", "side")
 # a sidecar over an MJCF file: the robot (bodies, cables, muscles, couplings) comes from the MJCF; the
 # sidecar adds what MJCF has no words for: joint weights, cones, trajectories
 MJCF_TOP_KEYS = ("version", "name", "description", "mjcf", "joints", "trajectories", "reserves")
+# a sidecar over an OpenSim file: the same, its CoordinateActuators weighed by name instead of reserves
+OSIM_TOP_KEYS = ("version", "name", "description", "osim", "joints", "trajectories", "actuator_weights")
 RESERVE_KEYS = ("coordinates", "max", "weight")
 MJCF_JOINT_KEYS = ("socket_axis", "alpha", "beta", "cone_deg")
 QUINTIC_KEYS = ("type", "q_start", "q_end", "duration", "dt", "spherical")
@@ -313,7 +317,7 @@ def parse_sidecar(data, path: Path | None = None, base_dir: Path | None = None) 
     r = _Reader(path)
     if base_dir is None:
         base_dir = path.parent if path is not None else Path.cwd()
-    if isinstance(data, dict) and "mjcf" in data:
+    if isinstance(data, dict) and ("mjcf" in data or "osim" in data):
         return _parse_mjcf_sidecar(r, data, path, base_dir)
     data = r.mapping(data, "", TOP_KEYS, required=("version", "urdf", "joints", "cables"))
 
@@ -355,13 +359,17 @@ def parse_sidecar(data, path: Path | None = None, base_dir: Path | None = None) 
 
 
 def _parse_mjcf_sidecar(r: _Reader, data: dict, path: Path | None, base_dir: Path) -> Sidecar:
-    """A sidecar over an MJCF file (``MJCF_TOP_KEYS``): joints are MuJoCo bodies' physical joints, named
-    after the body, and take weights, a socket axis and a cone only."""
-    data = r.mapping(data, "", MJCF_TOP_KEYS, required=("version", "mjcf"))
+    """A sidecar over an MJCF file (``MJCF_TOP_KEYS``) or an OpenSim file (``OSIM_TOP_KEYS``): joints are
+    the source's physical joints (MuJoCo bodies, OpenSim joints), by name, and take weights, a socket
+    axis and a cone only."""
+    osim = "osim" in data
+    if osim and "mjcf" in data:
+        raise r.fail("osim", "expected one of 'mjcf' and 'osim', got both")
+    data = r.mapping(data, "", OSIM_TOP_KEYS if osim else MJCF_TOP_KEYS, required=("version", "osim" if osim else "mjcf"))
     version = data["version"]
     if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
         raise r.fail("version", f"expected one of {list(SUPPORTED_VERSIONS)}, got {version!r}")
-    mjcf = r.string(data["mjcf"], "mjcf")
+    mjcf = r.string(data["osim" if osim else "mjcf"], "osim" if osim else "mjcf")
     name = r.string(data.get("name", path.stem if path else "robot"), "name")
     description = data.get("description", "")
     if not isinstance(description, str):
@@ -390,9 +398,20 @@ def _parse_mjcf_sidecar(r: _Reader, data: dict, path: Path | None, base_dir: Pat
     if not isinstance(trajs_raw, dict):
         raise r.fail("trajectories", f"expected a mapping name: trajectory, got {_kind(trajs_raw)}")
     trajectories = {t: _parse_trajectory(r, t, spec, base_dir) for t, spec in trajs_raw.items()}
+    source = (base_dir / mjcf).resolve()
+    if osim:
+        weights_raw = data.get("actuator_weights", {}) or {}
+        if not isinstance(weights_raw, dict):
+            raise r.fail("actuator_weights", f"expected a mapping CoordinateActuator name: weight, got "
+                                             f"{_kind(weights_raw)}")
+        weights = {r.string(k, f"actuator_weights.{k}"): r.number(v, f"actuator_weights.{k}", lo=0.0)
+                   for k, v in weights_raw.items()}
+        return Sidecar(path=path, version=int(version), name=name, urdf="", urdf_path=None,
+                       gravity=(0.0, 0.0, 0.0), joints=tuple(joints), cables=(), trajectories=trajectories,
+                       description=description, osim_path=source, actuator_weights=weights)
     return Sidecar(path=path, version=int(version), name=name, urdf="", urdf_path=None, gravity=(0.0, 0.0, 0.0),
                    joints=tuple(joints), cables=(), trajectories=trajectories, description=description,
-                   mjcf_path=(base_dir / mjcf).resolve(), reserves=_parse_reserves(r, data.get("reserves", [])))
+                   mjcf_path=source, reserves=_parse_reserves(r, data.get("reserves", [])))
 
 
 def _parse_reserves(r: _Reader, raw) -> tuple[ReserveSpec, ...]:
