@@ -333,12 +333,7 @@ class CableSet:
         self.cables = tuple(c for c, _ in resolved)
         if not self.cables:
             raise ModelError("a cable set needs at least one cable")
-        seen: dict[str, int] = {}
-        for k, c in enumerate(self.cables):
-            if c.name in seen:
-                raise ModelError(f"cable {k}: name {c.name!r} is already used by cable {seen[c.name]}")
-            seen[c.name] = k
-        self.names = tuple(c.name for c in self.cables)
+        self.names = _unique_names(self.cables)
         self.f_min = np.array([c.f_min for c in self.cables])
         self.f_max = np.array([c.f_max for c in self.cables])
         jid, local, seg_a, seg_b, seg_c, seg_s, fids_all, wraps = [], [], [], [], [], [], [], []
@@ -400,14 +395,17 @@ class CableSet:
         self.rotating = tuple(rotating)
         self.muscles, self.muscle_index = None, np.zeros(0, dtype=int)
         if muscles is not None:
-            names = list(muscle_cables)
-            unknown = [n for n in names if n not in self.names]
-            if unknown or len(names) != muscles.size or len(set(names)) != len(names):
-                raise ModelError(f"muscles: expected {muscles.size} distinct cable names of this set, one per "
-                                 f"muscle, got {names!r}" + (f" ({unknown} are not cables)" if unknown else ""))
-            self.muscles = muscles
-            self.muscle_index = np.array([self.names.index(n) for n in names], dtype=int)
+            self._bind_muscles(muscles, list(muscle_cables))
         self._evaluators: dict = {}
+
+    def _bind_muscles(self, muscles, names: list) -> None:
+        """The muscles (their force ranges per instant) of the cables ``names``, one per muscle."""
+        unknown = [n for n in names if n not in self.names]
+        if unknown or len(names) != muscles.size or len(set(names)) != len(names):
+            raise ModelError(f"muscles: expected {muscles.size} distinct cable names of this set, one per "
+                             f"muscle, got {names!r}" + (f" ({unknown} are not cables)" if unknown else ""))
+        self.muscles = muscles
+        self.muscle_index = np.array([self.names.index(n) for n in names], dtype=int)
 
     @property
     def configuration_dependent(self) -> bool:
@@ -507,6 +505,16 @@ def _resolve_rotating(model, k: int, p: RotatingPulley, fid: int, point: int, b:
         screw, direction = (p.screw.lead, p.screw.reference, p.screw.outlet), R @ np.array(p.screw.direction)
     return ResolvedRotatingPulley(k, point, b, int(model.frames[fid].parentJoint), placement.act(np.array(p.entry)),
                                   R @ np.array(p.axis), float(p.radius), scale, direction, screw, p.name)
+
+
+def _unique_names(cables) -> tuple[str, ...]:
+    """The cables' names, or :class:`ModelError` naming the first repeated one."""
+    seen: dict[str, int] = {}
+    for k, c in enumerate(cables):
+        if c.name in seen:
+            raise ModelError(f"cable {k}: name {c.name!r} is already used by cable {seen[c.name]}")
+        seen[c.name] = k
+    return tuple(seen)
 
 
 def _signature(model: pin.Model) -> tuple:
