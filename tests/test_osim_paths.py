@@ -241,7 +241,15 @@ def _muscle_model(kind, tmp_path, lo, ls, damping):
         m.addBody(b)
         m.addJoint(j)
         bodies[child] = b
-    if kind == "Millard2012EquilibriumMuscle":
+    if kind == "Thelen2003Muscle":
+        mus = osim.Thelen2003Muscle("mus", 500.0, lo, ls, 0.25)
+        mus.set_Af(0.3)
+        mus.set_Flen(1.8)
+        mus.set_KshapeActive(0.5)
+        mus.set_KshapePassive(4.0)
+        mus.set_minimum_activation(0.02)
+        mus.setMinControl(0.02)
+    elif kind == "Millard2012EquilibriumMuscle":
         mus = osim.Millard2012EquilibriumMuscle("mus", 500.0, lo, ls, 0.25)
         mus.set_ignore_tendon_compliance(True)
         mus.set_fiber_damping(damping)
@@ -307,6 +315,64 @@ def test_muscle_force_bounds(tmp_path, monkeypatch, kind, damping):
         assert abs(mus.getActiveForceLengthMultiplier(s) * mus.getForceVelocityMultiplier(s) * 500.0 * cos_a[0]
                    - state.gain[0]) < 1e-9 * 500.0
     assert worst < 1e-9, worst
+
+
+def test_thelen_force_range(tmp_path, monkeypatch):
+    """Thelen2003Muscle with a rigid tendon against OpenSim's own rigid-tendon force (Static
+    Optimization's ``calcInextensibleTendonActiveFiberForce(s, a)``, plus the passive fiber force
+    along the tendon at the rigid tendon's fiber length; OpenSim's Thelen muscle ignores
+    ``ignore_tendon_compliance``), at 40 states and activations 0 (clamped to the minimum) to 1: the
+    range's ends and the exact tension ``t(a)`` to 1e-9 relative; the chord ``passive + gain a``
+    equals ``t`` at the ends only."""
+    monkeypatch.chdir(tmp_path)
+    model = _pin_model()
+    data = model.createData()
+    probe = CableSet(model, read_paths(ET.parse(_muscle_model("Thelen2003Muscle", tmp_path, 0.1, 0.1, 0.0))
+                                       .getroot(), "p", model)[0])
+    qs = RNG.uniform(-0.6, 0.9, size=(40, 2))
+    lengths = np.array([cable_lengths(model, data, probe, q)[0] for q in qs])
+    lo = (lengths.max() - lengths.min()) / 1.1
+    ls = lengths.min() - 0.45 * lo
+    file = _muscle_model("Thelen2003Muscle", tmp_path, lo, ls, 0.0)
+    cables, muscles, notes = read_paths(ET.parse(file).getroot(), str(file), model)
+    assert muscles.thelen.all() and muscles.a_min[0] == 0.02 and not notes
+    cs = CableSet(model, cables, muscles=muscles, muscle_cables=muscles.names)
+    m = osim.Model(str(file))
+    s = m.initSystem()
+    mus = osim.Thelen2003Muscle.safeDownCast(m.getForceSet().get("mus"))
+    worst, chord, regions = 0.0, 0.0, set()
+    for q in qs:
+        qd = RNG.normal(0.0, 4.0, size=2)
+        for k, name in enumerate(("q1", "q2")):
+            m.getCoordinateSet().get(name).setValue(s, q[k], False)
+            m.getCoordinateSet().get(name).setSpeedValue(s, qd[k])
+        m.realizeVelocity(s)
+        ell = cable_lengths(model, data, cs, q)
+        ell_dot = cable_jacobian(model, data, cs, q) @ qd
+        assert abs(ell[0] - mus.getLength(s)) < 1e-12 and abs(ell_dot[0] - mus.getLengtheningSpeed(s)) < 1e-12
+        l, v, cos_a, clamped = muscles.fiber(ell, ell_dot)
+        regions.add(int(np.sign(v[0])))
+        mus.setFiberLength(s, max(l[0] * lo, mus.getMinimumFiberLength()))
+        m.realizeDynamics(s)
+        passive = mus.getPassiveFiberForceAlongTendon(s)
+        state = force_range_of(muscles, ell, ell_dot)
+        for a in (0.0, 0.02, 0.1, 0.35, 0.6, 0.9, 1.0):
+            ref = mus.calcInextensibleTendonActiveFiberForce(s, a) + passive
+            ours = muscles.tension(ell, ell_dot, np.array([a]))[0]
+            worst = max(worst, abs(ours - ref) / max(1.0, abs(ref)))
+            chord = max(chord, abs(state.passive[0] + state.gain[0] * max(a, 0.02) - ref) / 500.0)
+            if a in (0.0, 1.0):
+                end = state.f_min[0] if a == 0.0 else state.f_max[0]
+                worst = max(worst, abs(end - ref) / max(1.0, abs(ref)))
+    assert regions == {-1, 1}, regions
+    assert worst < 1e-9, worst
+    assert 1e-3 < chord < 0.1, chord  # the chord is not t(a) in between (docs/opensim.md)
+
+
+def force_range_of(muscles, ell, ell_dot):
+    from mcdm_pin.model.muscles import force_range
+
+    return force_range(muscles, ell, ell_dot)
 
 
 ARM26 = Path(__file__).resolve().parents[1] / ".." / ".." / "shared" / "reference" / "opensim-models" / "Arm26" / "arm26.osim"
