@@ -466,7 +466,10 @@ def _check_paths(loaded, loaded_free, states, rng):
                 ref = loaded_free.paths[i].computeMomentArm(loaded_free.state, loaded_free.coords[k])
                 worst["arm", e] = max(worst["arm", e], _rel(tau[i, cv[k]], ref, 1e-3))
                 # with it, MomentArmSolver weighs those forces by the unit speed of the coordinate
-                # projected onto the loop (projectU: least squares, unit weights), scaled to 1 there
+                # projected onto the loop (projectU: least squares, unit weights), scaled to 1 there;
+                # a coordinate the loop does not see (G e_k = 0) keeps its unit speed: the same arm
+                if not G[:, cv[k]].any():
+                    continue
                 unit = np.zeros(loaded.model.nv)
                 unit[cv[k]] = 1.0
                 C = unit - G.T @ np.linalg.solve(G @ G.T, G @ unit)
@@ -514,7 +517,7 @@ def test_thoracoscapular_muscle_paths_on_the_loader(tmp_path, monkeypatch):
     - against OpenSim's ``computeMomentArm`` on its copy with the ``PointConstraint`` not enforced:
       MomentArmSolver's coupling vector is then the coordinate's unit speed, so its moment arm is the
       generalized force of a unit tension, ``-(L P)`` at the coordinate (``P = dv/du``);
-    - against ``computeMomentArm`` with the constraint: MomentArmSolver projects the coordinate's unit
+    - against ``computeMomentArm`` with the constraint (for the coordinates the loop moves): MomentArmSolver projects the coordinate's unit
       speed onto the loop's velocity constraint ``G u = 0`` (``projectU``, least squares with unit
       weights), divides it by the coordinate's projected speed, and returns that ``C`` times the
       generalized forces: ours ``C^T (-(L P))`` with ``C`` from our ``G``.
@@ -527,3 +530,19 @@ def test_thoracoscapular_muscle_paths_on_the_loader(tmp_path, monkeypatch):
     worst = _check_paths(tsm, free, 30, np.random.default_rng(19))
     for kind in ("length", "arm", "constrained"):
         assert worst[kind, False] < 1e-9 and worst[kind, True] < 1e-6, worst
+
+
+@pytest.mark.parametrize("tag,value,match", [("Flen", "0.9", "Flen"), ("Af", "0", "Af"),
+                                             ("minimum_activation", "0.001", "minimum_activation")])
+def test_thelen_refuses_bad_properties(tag, value, match):
+    """A Thelen2003Muscle property OpenSim would refuse is refused, naming the muscle and the field."""
+    from mcdm_pin.exceptions import ModelError
+    from mcdm_pin.osim.muscles import read_muscle
+
+    force = next(ET.parse(ARM26).getroot().iter("Thelen2003Muscle"))
+    node = force.find(tag)
+    if node is None:
+        node = ET.SubElement(force, tag)
+    node.text = value
+    with pytest.raises(ModelError, match=rf"Thelen2003Muscle 'TRIlong'.*{match}"):
+        read_muscle(force, "arm26.osim")
