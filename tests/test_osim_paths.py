@@ -321,8 +321,8 @@ def test_muscle_force_bounds(tmp_path, monkeypatch, kind, damping):
 def test_thelen_force_range(tmp_path, monkeypatch):
     """Thelen2003Muscle with a rigid tendon against OpenSim's own rigid-tendon force (Static
     Optimization's ``calcInextensibleTendonActiveFiberForce(s, a)``, plus the passive fiber force
-    along the tendon at the rigid tendon's fiber length; OpenSim's Thelen muscle ignores
-    ``ignore_tendon_compliance``), at 40 states and activations 0 (clamped to the minimum) to 1: the
+    along the tendon at the rigid tendon's fiber length; OpenSim 4.6 refuses
+    ``ignore_tendon_compliance`` on a Thelen muscle), at 40 states and activations 0 (clamped to the minimum) to 1: the
     range's ends and the exact tension ``t(a)`` to 1e-9 relative; the chord ``passive + gain a``
     equals ``t`` at the ends only."""
     monkeypatch.chdir(tmp_path)

@@ -35,7 +35,7 @@ o)/(e^k - o)`, :math:`o = e^{k(0.2 - 1)/e_0}`, :math:`k = 4` (0 with ``ignore_pa
 no clamps; the activation in ``[min_control, max_control]`` (0 and 1 by default).
 
 **Thelen2003Muscle** (rigid tendon as OpenSim's ``calcInextensibleTendonActiveFiberForce``, the
-force Static Optimization uses; Thelen's muscle ignores ``ignore_tendon_compliance`` in OpenSim 4.6):
+force Static Optimization uses; OpenSim 4.6 refuses ``ignore_tendon_compliance`` on a Thelen muscle):
 the fiber as above with OpenSim's fixed-width pennation model (fiber length at least
 :math:`l_{min} = h/\sin\alpha_{max}`; no force at or below it), :math:`f_L = e^{-(\tilde l - 1)^2/K_a}`,
 :math:`f_P = (e^{K_p(\tilde l - 1)/e_0} - 1)/(e^{K_p} - 1)` for :math:`\tilde l > 1` (else 0), no
