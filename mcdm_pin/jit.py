@@ -53,7 +53,8 @@ try:  # POSIX: the compile lock; elsewhere concurrent compiles each write numba'
 except ImportError:  # pragma: no cover - Windows
     fcntl = None
 
-MODULES = ("mcdm_pin.model.kernels", "mcdm_pin.model.route_kernels", "mcdm_pin.solvers.ipm")  # modules that register kernels
+MODULES = ("mcdm_pin.model.kernels", "mcdm_pin.model.route_kernels", "mcdm_pin.model.muscle_kernels",
+           "mcdm_pin.solvers.ipm")  # modules that register kernels
 POLICIES = ("auto", "compile", "wait", "off")
 STAMP = "mcdm_pin_kernels.stamp"  # the stamp's file name, in the kernels' cache folder
 LOCK = "mcdm_pin_kernels.lock"  # the compile lock's file name, beside the stamp

@@ -49,19 +49,9 @@ SPREAD = 1e3
 
 def equilibrate(A: np.ndarray, sweeps: int = 10) -> tuple[np.ndarray, np.ndarray]:
     """Ruiz equilibration: positive ``r`` (rows) and ``d`` (columns) with ``r_i |A_ij| d_j`` of order
-    1 in every row and column (powers of two, so scaling adds no rounding)."""
-    n_r, n_c = A.shape
-    r, d = np.ones(n_r), np.ones(n_c)
-    B = np.abs(A)
-    for _ in range(sweeps):
-        S = r[:, None] * B * d[None, :]
-        row = S.max(axis=1, initial=0.0)
-        col = S.max(axis=0, initial=0.0)
-        row[row == 0] = 1.0
-        col[col == 0] = 1.0
-        r /= np.sqrt(row)
-        d /= np.sqrt(col)
-    return _pow2(r), _pow2(d)
+    1 in every row and column (powers of two, so scaling adds no rounding). One call of the
+    compiled :func:`mcdm_pin.model.kernels.ruiz` (compiled or not: mcdm_pin/jit.py)."""
+    return jit.kernels("model.kernels").ruiz(np.ascontiguousarray(A, dtype=float), int(sweeps))
 
 
 def _pow2(x):

@@ -176,6 +176,39 @@ def spread(A, b):
 
 
 @njit(cache=True, nogil=True)
+def ruiz(A, sweeps):
+    """:func:`mcdm_pin.scaling.equilibrate`: ``sweeps`` Ruiz sweeps on ``|A|`` (each row and column
+    divided by the square root of its largest entry; an all-zero one left alone), then each factor
+    rounded to the nearest power of two. Returns ``(r, d)``, the rows' and columns' factors."""
+    n_r, n_c = A.shape
+    r = np.ones(n_r)
+    d = np.ones(n_c)
+    row = np.empty(n_r)
+    col = np.empty(n_c)
+    for _ in range(sweeps):
+        col[:] = 0.0
+        for i in range(n_r):
+            m = 0.0
+            ri = r[i]
+            for j in range(n_c):
+                v = ri * abs(A[i, j]) * d[j]
+                if v > m:
+                    m = v
+                if v > col[j]:
+                    col[j] = v
+            row[i] = m
+        for i in range(n_r):
+            r[i] /= np.sqrt(row[i] if row[i] != 0.0 else 1.0)
+        for j in range(n_c):
+            d[j] /= np.sqrt(col[j] if col[j] != 0.0 else 1.0)
+    for i in range(n_r):
+        r[i] = np.exp2(np.round(np.log2(r[i])))
+    for j in range(n_c):
+        d[j] = np.exp2(np.round(np.log2(d[j])))
+    return r, d
+
+
+@njit(cache=True, nogil=True)
 def cone_batch(RT, u, R_socket, axes, index, socket):
     """Every cone's force map at once (:class:`mcdm_pin.constraints.cone.ConeBatch`, whose numpy
     ``arrays`` is the reference): cone ``k`` on physical joint ``j = index[k]`` has ``F = g + G f``
@@ -321,7 +354,7 @@ def warm_calls():
     with :mod:`mcdm_pin.jit`, which loads them from numba's cache or compiles them)."""
     z = np.zeros
     i64 = np.int64
-    return [(spread, (z((1, 2)), z(1))),
+    return [(spread, (z((1, 2)), z(1))), (ruiz, (z((1, 2)), 10)),
             (interaction_quadratic, (z((1, 6, 2)), z((1, 6)), z(1, dtype=i64), z(1))),
             (cone_batch, (z((1, 6, 2)), z((1, 6)), z((1, 3, 3)), z((1, 3)), z(1, dtype=i64), np.ones(1, dtype=np.bool_))),
             (needs_scaling, (z((1, 2)), z(1), z(2), z(2), z(2), z((1, 2)), z(2), z((1, 3, 2)), z((1, 3)), 1e3)),
