@@ -349,12 +349,112 @@ def needs_scaling(A, b, lb, ub, P_diag, P_factor, c, G, g, limit):
     return False
 
 
+@njit(cache=True, nogil=True)
+def _pow2(x):
+    return np.exp2(np.round(np.log2(x)))
+
+
+@njit(cache=True, nogil=True)
+def scale_factors(A, b, lb, ub, c, P, P_diag, P_factor, structured, G, g, f_scale, force, limit):
+    """:func:`mcdm_pin.scaling.scaling_factors` in one pass, the same steps in the same order
+    (``P`` (n, n) the dense Hessian when the problem has it, else (0, 0); ``structured``: ``P =
+    diag(P_diag) + P_factor^T P_factor``; ``f_scale`` (n,) or empty: none). Returns ``(scaled, d,
+    r, obj, cone)``: ``scaled`` false when every factor is one and ``force`` is false (then the
+    rest is meaningless)."""
+    m, n = A.shape
+    K = G.shape[0]
+    ones_m, ones_n = np.ones(m), np.ones(n)
+    has_f = f_scale.shape[0] > 0
+    if not force and not has_f and structured and not needs_scaling(A, b, lb, ub, P_diag, P_factor, c, G, g, limit):
+        return False, ones_n, ones_m, 1.0, np.ones(K)
+    wide = m > 0 and spread(A, np.zeros(0)) > limit
+    if wide:
+        r, d = ruiz(A, 10)
+    else:
+        r, d = ones_m, ones_n.copy()
+    if has_f and m > 0:
+        for j in range(n):
+            d[j] = d[j] * _pow2(f_scale[j])
+    rows = np.zeros(m)
+    for i in range(m):
+        for j in range(n):
+            rows[i] = max(rows[i], abs(A[i, j]) * d[j])
+        rows[i] = rows[i] * r[i]
+    # the variables' unit (scaling.py's comments say why)
+    unit = 0.0
+    ub_min = np.inf
+    for j in range(n):
+        x = abs(lb[j] / d[j])
+        if np.isfinite(x):
+            unit = max(unit, x)
+        x = abs(ub[j] / d[j])
+        if np.isfinite(x) and x > 0.0:
+            ub_min = min(ub_min, x)
+    if unit > 0.0 and np.isfinite(ub_min) and ub_min > unit:
+        unit = np.sqrt(unit * ub_min)
+    for i in range(m):
+        if rows[i] > 0.0:
+            unit = max(unit, abs(b[i] * r[i]) / rows[i])
+    u = _pow2(unit) if unit > 0.0 and _outside(unit, limit) else 1.0
+    r = r.copy()
+    for j in range(n):
+        d[j] = d[j] * u
+    for i in range(m):
+        row = rows[i] * u
+        if row > 0.0 and _outside(row, limit):
+            r[i] = r[i] / _pow2(row)
+    # the objective's size: each variable at its unit, or at its largest bound where that is smaller
+    reach = np.empty(n)
+    for j in range(n):
+        bound = max(abs(lb[j]), abs(ub[j]))
+        reach[j] = min(d[j], bound if np.isfinite(bound) else np.inf)
+    size = 0.0
+    if P.shape[0] > 0:
+        for i in range(n):
+            for j in range(n):
+                size = max(size, abs(reach[i] * P[i, j] * reach[j]))
+    else:
+        for j in range(n):
+            size = max(size, abs(P_diag[j] * reach[j] * reach[j]))
+        for j in range(n):
+            acc = 0.0
+            for q in range(P_factor.shape[0]):
+                x = P_factor[q, j] * reach[j]
+                acc += x * x
+            size = max(size, acc)
+    for j in range(n):
+        size = max(size, abs(c[j] * reach[j]))
+    size = max(size, 1e-300)
+    obj = _pow2(size) if _outside(size, limit) else 1.0
+    cone = np.ones(K)
+    for k in range(K):
+        sz = 0.0
+        for e in range(3):
+            for j in range(n):
+                sz = max(sz, abs(G[k, e, j] * d[j]))
+        for e in range(3):
+            sz = max(sz, abs(g[k, e]))
+        sz = max(sz, 1e-300)
+        if _outside(sz, limit):
+            cone[k] = 1.0 / _pow2(sz)
+    scaled = force or u != 1.0 or obj != 1.0
+    for j in range(n):
+        scaled = scaled or d[j] != 1.0
+    for i in range(m):
+        scaled = scaled or r[i] != 1.0
+    for k in range(K):
+        scaled = scaled or cone[k] != 1.0
+    return scaled, d, r, obj, cone
+
+
 def warm_calls():
     """This module's kernels with example arguments of the types the library passes (registered
     with :mod:`mcdm_pin.jit`, which loads them from numba's cache or compiles them)."""
     z = np.zeros
     i64 = np.int64
     return [(spread, (z((1, 2)), z(1))), (ruiz, (z((1, 2)), 10)),
+            (scale_factors, (z((1, 2)), z(1), z(2), z(2), z(2), z((0, 0)), z(2), z((1, 2)), True, z((1, 3, 2)),
+                             z((1, 3)), z(0), False, 1e3)),
             (interaction_quadratic, (z((1, 6, 2)), z((1, 6)), z(1, dtype=i64), z(1))),
             (cone_batch, (z((1, 6, 2)), z((1, 6)), z((1, 3, 3)), z((1, 3)), z(1, dtype=i64), np.ones(1, dtype=np.bool_))),
             (needs_scaling, (z((1, 2)), z(1), z(2), z(2), z(2), z((1, 2)), z(2), z((1, 3, 2)), z((1, 3)), 1e3)),
