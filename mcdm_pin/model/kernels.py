@@ -350,6 +350,26 @@ def needs_scaling(A, b, lb, ub, P_diag, P_factor, c, G, g, limit):
 
 
 @njit(cache=True, nogil=True)
+def coupling_basis(q, src_v, src_q, dep_rows, dep_cols, coef, independent, nv):
+    """:meth:`mcdm_pin.model.couplings.Couplings.basis`: ``N`` (nv, n) at the configuration ``q``, one
+    pass over the couplings in order (each dependent row's entry ``p'(x)`` times its source row's,
+    ``x = q[src_q]``; ``coef`` (k, 5) the polynomials' coefficients), the independent rows' ones in
+    their own columns."""
+    n = independent.shape[0]
+    value = np.ones(nv)
+    for k in range(dep_rows.shape[0]):
+        x = q[src_q[k]]
+        a1, a2, a3, a4 = coef[k, 1], coef[k, 2], coef[k, 3], coef[k, 4]
+        value[dep_rows[k]] = (a1 + x * (2 * a2 + x * (3 * a3 + x * 4 * a4))) * value[src_v[k]]
+    N = np.zeros((nv, n))
+    for a in range(n):
+        N[independent[a], a] = 1.0
+    for k in range(dep_rows.shape[0]):
+        N[dep_rows[k], dep_cols[k]] = value[dep_rows[k]]
+    return N
+
+
+@njit(cache=True, nogil=True)
 def _pow2(x):
     return np.exp2(np.round(np.log2(x)))
 
@@ -453,6 +473,8 @@ def warm_calls():
     z = np.zeros
     i64 = np.int64
     return [(spread, (z((1, 2)), z(1))), (ruiz, (z((1, 2)), 10)),
+            (coupling_basis, (z(2), z(1, dtype=i64), z(1, dtype=i64), z(1, dtype=i64), z(1, dtype=i64),
+                              z((1, 5)), z(1, dtype=i64), 2)),
             (scale_factors, (z((1, 2)), z(1), z(2), z(2), z(2), z((0, 0)), z(2), z((1, 2)), True, z((1, 3, 2)),
                              z((1, 3)), z(0), False, 1e3)),
             (interaction_quadratic, (z((1, 6, 2)), z((1, 6)), z(1, dtype=i64), z(1))),

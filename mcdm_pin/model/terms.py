@@ -41,6 +41,7 @@ from .cables import CableSet
 from .charts import check_configuration
 from .geometry import CableMaps, cable_geometry
 from .joints import PhysicalJoint, massless_members, resolve_joints
+from .muscles import tension_state
 from .routes import RoutePaths
 
 
@@ -351,8 +352,6 @@ class TermsEvaluator:
         cables = self.cables
         if cables.muscles is None:
             return cables.f_min, cables.f_max, None
-        from .muscles import tension_state
-
         k = cables.muscle_index
         if self._all_muscles:  # every cable a muscle, in order: no gather, no scatter
             state = tension_state(cables.muscles, lengths, L @ qd)

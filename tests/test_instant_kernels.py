@@ -1,8 +1,10 @@
-"""The compiled muscle curves (mcdm_pin/model/muscle_kernels.py) and Ruiz equilibration
-(mcdm_pin.model.kernels.ruiz): compiled and uncompiled give the same bits, and both equal
-independent numpy formulations written here from the formulas (MuJoCo's curves, as
-``mcdm_pin/model/muscles.py``'s docstring gives them; Ruiz's sweeps as ``mcdm_pin/scaling.py``'s).
-The muscle forces themselves are checked against MuJoCo's ``actuator_force`` in tests/test_muscles.py."""
+"""Per-instant kernels of the musculoskeletal path: the muscle curves (mcdm_pin/model/muscle_kernels.py),
+Ruiz equilibration (mcdm_pin.model.kernels.ruiz) and the couplings' basis
+(mcdm_pin.model.kernels.coupling_basis): compiled and uncompiled give the same bits, and both equal
+independent formulations written here (MuJoCo's curves, as ``mcdm_pin/model/muscles.py``'s
+docstring gives them; Ruiz's sweeps as ``mcdm_pin/scaling.py``'s; the basis by finite differences
+of the couplings' fill). The muscle forces themselves are checked against MuJoCo's
+``actuator_force`` in tests/test_muscles.py, the basis in tests/test_couplings.py."""
 
 from __future__ import annotations
 
@@ -152,8 +154,40 @@ def test_ruiz_equals_the_sweeps_compiled_and_not(monkeypatch, seed):
     assert np.all(S.max(axis=1)[live] <= 4.0) and np.all(S.max(axis=1)[live] >= 0.25)
 
 
+def test_coupling_basis_compiled_and_not_and_by_differences(monkeypatch, tmp_path):
+    """MyoSuite's arm: 11 couplings of the shoulder rhythm (dependents on the elevation angle)."""
+    from mcdm_pin import Robot, load_trajectory
+
+    from .conftest import REPO
+
+    monkeypatch.chdir(tmp_path)
+    robot = Robot.load(REPO / "robots" / "myosuite" / "myoarm.yaml")
+    cs = robot.couplings
+    traj = load_trajectory(robot, "abduction")
+    jit.prepare(policy="wait")
+    for k in (0, 37, 100):
+        q = traj.q[k]
+        fast = cs.basis(q)
+        with monkeypatch.context() as mp:
+            _uncompiled(mp)
+            slow = cs.basis(q)
+        np.testing.assert_array_equal(fast, slow)
+        assert fast.shape == (robot.nv, cs.n) and np.count_nonzero(fast) > cs.n
+        # dq/dz by central differences of fill() along each independent coordinate
+        import pinocchio as pin
+
+        h = 1e-6
+        for a, i in enumerate(cs.independent):
+            dv = np.zeros(robot.nv)
+            dv[i] = h
+            up = cs.fill(pin.integrate(robot.model, q, dv))[0]
+            down = cs.fill(pin.integrate(robot.model, q, -dv))[0]
+            np.testing.assert_allclose(pin.difference(robot.model, down, up) / (2 * h), fast[:, a], atol=1e-7)
+
+
 def test_the_kernels_are_registered_and_stamp_the_cache():
     names = jit.entry_points()
     assert {"mcdm_pin.model.muscle_kernels.tension_range", "mcdm_pin.model.muscle_kernels.curves",
-            "mcdm_pin.model.kernels.ruiz"} <= set(names)
+            "mcdm_pin.model.kernels.ruiz", "mcdm_pin.model.kernels.scale_factors",
+            "mcdm_pin.model.kernels.coupling_basis"} <= set(names)
     assert "muscle_kernels.py" in {p.name for p in jit.kernel_sources()}
