@@ -175,27 +175,32 @@ def spread(A, b):
     return out
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, fastmath={"nnan", "ninf"})
 def ruiz(A, sweeps):
     """:func:`mcdm_pin.scaling.equilibrate`: ``sweeps`` Ruiz sweeps on ``|A|`` (each row and column
     divided by the square root of its largest entry; an all-zero one left alone), then each factor
-    rounded to the nearest power of two. Returns ``(r, d)``, the rows' and columns' factors."""
+    rounded to the nearest power of two. Returns ``(r, d)``, the rows' and columns' factors.
+
+    (``A`` is finite: an assembled problem's equations. The fastmath flags only let the maxima
+    compile to vector instructions; no sum is reassociated, so the bits are the uncompiled code's.)"""
     n_r, n_c = A.shape
+    B = np.abs(A)
     r = np.ones(n_r)
     d = np.ones(n_c)
     row = np.empty(n_r)
     col = np.empty(n_c)
+    s = np.empty(n_c)
     for _ in range(sweeps):
         col[:] = 0.0
         for i in range(n_r):
-            m = 0.0
             ri = r[i]
+            for j in range(n_c):  # this row's entries, and the columns' maxima so far
+                v = ri * B[i, j] * d[j]
+                s[j] = v
+                col[j] = v if v > col[j] else col[j]
+            m = 0.0
             for j in range(n_c):
-                v = ri * abs(A[i, j]) * d[j]
-                if v > m:
-                    m = v
-                if v > col[j]:
-                    col[j] = v
+                m = s[j] if s[j] > m else m
             row[i] = m
         for i in range(n_r):
             r[i] /= np.sqrt(row[i] if row[i] != 0.0 else 1.0)
@@ -436,12 +441,13 @@ def scale_factors(A, b, lb, ub, c, P, P_diag, P_factor, structured, G, g, f_scal
     else:
         for j in range(n):
             size = max(size, abs(P_diag[j] * reach[j] * reach[j]))
-        for j in range(n):
-            acc = 0.0
-            for q in range(P_factor.shape[0]):
+        acc = np.zeros(n)  # each column's sum of squares, rows in order (row by row: contiguous)
+        for q in range(P_factor.shape[0]):
+            for j in range(n):
                 x = P_factor[q, j] * reach[j]
-                acc += x * x
-            size = max(size, acc)
+                acc[j] += x * x
+        for j in range(n):
+            size = max(size, acc[j])
     for j in range(n):
         size = max(size, abs(c[j] * reach[j]))
     size = max(size, 1e-300)
