@@ -380,6 +380,51 @@ def _pow2(x):
 
 
 @njit(cache=True, nogil=True)
+def _objective_size(reach, P, P_diag, P_factor, c):
+    """:func:`scale_factors`' size of the objective with each variable at ``reach``: the largest
+    ``|reach_i P_ij reach_j|`` (``P`` dense), else of ``P_diag reach^2`` and the factor's columns'
+    sums of squares, and of ``|c reach|``; at least 1e-300."""
+    n = reach.shape[0]
+    size = 0.0
+    if P.shape[0] > 0:
+        for i in range(n):
+            for j in range(n):
+                size = max(size, abs(reach[i] * P[i, j] * reach[j]))
+    else:
+        for j in range(n):
+            size = max(size, abs(P_diag[j] * reach[j] * reach[j]))
+        acc = np.zeros(n)  # each column's sum of squares, rows in order (row by row: contiguous)
+        for q in range(P_factor.shape[0]):
+            for j in range(n):
+                x = P_factor[q, j] * reach[j]
+                acc[j] += x * x
+        for j in range(n):
+            size = max(size, acc[j])
+    for j in range(n):
+        size = max(size, abs(c[j] * reach[j]))
+    return max(size, 1e-300)
+
+
+@njit(cache=True, nogil=True)
+def _cone_scales(G, g, d, limit):
+    """:func:`scale_factors`' factor of each cone: one over the power of two nearest its size (the
+    largest ``|G_k d|`` and ``|g_k|``) where that lies outside ``limit``, else 1."""
+    K, _, n = G.shape
+    cone = np.ones(K)
+    for k in range(K):
+        sz = 0.0
+        for e in range(3):
+            for j in range(n):
+                sz = max(sz, abs(G[k, e, j] * d[j]))
+        for e in range(3):
+            sz = max(sz, abs(g[k, e]))
+        sz = max(sz, 1e-300)
+        if _outside(sz, limit):
+            cone[k] = 1.0 / _pow2(sz)
+    return cone
+
+
+@njit(cache=True, nogil=True)
 def scale_factors(A, b, lb, ub, c, P, P_diag, P_factor, structured, G, g, f_scale, force, limit):
     """:func:`mcdm_pin.scaling.scaling_factors` in one pass, the same steps in the same order
     (``P`` (n, n) the dense Hessian when the problem has it, else (0, 0); ``structured``: ``P =
@@ -433,36 +478,9 @@ def scale_factors(A, b, lb, ub, c, P, P_diag, P_factor, structured, G, g, f_scal
     for j in range(n):
         bound = max(abs(lb[j]), abs(ub[j]))
         reach[j] = min(d[j], bound if np.isfinite(bound) else np.inf)
-    size = 0.0
-    if P.shape[0] > 0:
-        for i in range(n):
-            for j in range(n):
-                size = max(size, abs(reach[i] * P[i, j] * reach[j]))
-    else:
-        for j in range(n):
-            size = max(size, abs(P_diag[j] * reach[j] * reach[j]))
-        acc = np.zeros(n)  # each column's sum of squares, rows in order (row by row: contiguous)
-        for q in range(P_factor.shape[0]):
-            for j in range(n):
-                x = P_factor[q, j] * reach[j]
-                acc[j] += x * x
-        for j in range(n):
-            size = max(size, acc[j])
-    for j in range(n):
-        size = max(size, abs(c[j] * reach[j]))
-    size = max(size, 1e-300)
+    size = _objective_size(reach, P, P_diag, P_factor, c)
     obj = _pow2(size) if _outside(size, limit) else 1.0
-    cone = np.ones(K)
-    for k in range(K):
-        sz = 0.0
-        for e in range(3):
-            for j in range(n):
-                sz = max(sz, abs(G[k, e, j] * d[j]))
-        for e in range(3):
-            sz = max(sz, abs(g[k, e]))
-        sz = max(sz, 1e-300)
-        if _outside(sz, limit):
-            cone[k] = 1.0 / _pow2(sz)
+    cone = _cone_scales(G, g, d, limit)
     scaled = force or u != 1.0 or obj != 1.0
     for j in range(n):
         scaled = scaled or d[j] != 1.0
