@@ -49,6 +49,7 @@ from .cables import CableSet
 from .charts import check_configuration
 from .geometry import CableMaps, cable_geometry
 from .joints import PhysicalJoint, massless_members, resolve_joints
+from .muscles import tension_state
 from .routes import RoutePaths, add_levers
 
 
@@ -275,6 +276,7 @@ class TermsEvaluator:
         # wrapped routes: their path arrays are rebuilt at every instant and read by the kernel (the
         # numpy reference formulation covers fixed routes only)
         self._routes = RoutePaths(cables, pos) if cables.configuration_dependent else None
+        self._all_muscles = np.array_equal(cables.muscle_index, np.arange(cables.m))
         if compiled or self._routes is not None:
             self._setup_kernel(len(keys))
         else:
@@ -427,10 +429,11 @@ class TermsEvaluator:
         cables = self.cables
         if cables.muscles is None:
             return cables.f_min, cables.f_max, None
-        from .muscles import force_range
-
         k = cables.muscle_index
-        state = force_range(cables.muscles, lengths[k], L[k] @ qd)
+        if self._all_muscles:  # every cable a muscle, in order: no gather, no scatter
+            state = tension_state(cables.muscles, lengths, L @ qd)
+            return state.f_min, state.f_max, state
+        state = tension_state(cables.muscles, lengths[k], L[k] @ qd)
         f_min, f_max = cables.f_min.copy(), cables.f_max.copy()
         f_min[k], f_max[k] = state.f_min, state.f_max
         return f_min, f_max, state
