@@ -35,7 +35,7 @@ def _stationarity(qp, sol) -> float:
 @pytest.mark.parametrize("cone", [False, True])
 def test_ipm_crosses_over_with_fixed_variables(cone):
     from mcdm_pin import jit
-    from mcdm_pin.solvers.cascade import make_solver
+    from mcdm_pin.solvers.chains import make_solver
     from mcdm_pin.solvers.ipm import ipm_solve
 
     jit.prepare(policy="wait")
