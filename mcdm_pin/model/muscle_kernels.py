@@ -22,8 +22,9 @@ passes few arguments (numba's dispatch costs about a microsecond per argument).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
-from numba.extending import register_jitable
+from ..jit import extending, njit
+
+register_jitable = extending.register_jitable
 
 # rows of the constants table (each (m,)): the normalisation (range[0], bias_range[0],
 # lengthrange[0], max(eps, L_opt), max(eps, L_opt^p), max(eps, L_opt vmax), gear), F_L's

@@ -356,7 +356,10 @@ def force_range(params: MuscleParams, tendon_lengths, tendon_velocities) -> Musc
 
 def tension_state(params: MuscleParams, ell: np.ndarray, ell_dot: np.ndarray) -> MuscleState:
     """:func:`force_range` of checked float arrays of one shape (last axis m): one call of the
-    compiled :func:`mcdm_pin.model.muscle_kernels.tension_range`."""
+    compiled :func:`mcdm_pin.model.muscle_kernels.tension_range` (OpenSim's muscles: their own curves,
+    :meth:`~mcdm_pin.model.muscles_osim.OpenSimMuscles.force_range`)."""
+    if not isinstance(params, MuscleParams):  # the OpenSim kind
+        return params.force_range(ell, ell_dot)
     shape, m = ell.shape, params.size
     c_ = np.ascontiguousarray  # (one compiled specialisation: C-ordered 2-D float arrays)
     out = _kernels().tension_range(c_(ell.reshape(-1, m)), c_(ell_dot.reshape(-1, m)), params.kernel_table)

@@ -54,7 +54,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import extending
+from ..jit import extending
 
 from .wrapping_osim import INSIDE_RADIUS, MANDATORY_WRAP, NO_WRAP, WRAPPED, osim_cylinder, osim_sphere
 from .wrapping_osim_ellipsoid import osim_ellipsoid

@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 
-from numba import extending
+from ..jit import extending
 
 register_jitable = extending.register_jitable
 
