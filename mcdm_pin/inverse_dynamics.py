@@ -160,7 +160,7 @@ class InverseDynamics:
         else:
             objective = float("nan")
         if outputs is None or not sol.found:
-            outputs = _outputs(terms, f if sol.found else None, len(self.robot.joints))
+            outputs = _outputs(terms, f if sol.found else None, len(self.robot.joints), tau_act)
         wrench, F_socket, angles = outputs
         return InstantResult(
             f=f, status=sol.status, objective=objective, eom_residual=eom,
@@ -278,15 +278,26 @@ def _terms_of(objective):
     return objective.terms if isinstance(objective, Sum) else [objective]
 
 
-def _outputs(terms, f, n_joints: int):
+def _u_of(terms, tau_act):
+    """``terms.u`` plus the closed loops' share of the actuator torques (``terms.RT_act``)."""
+    RT_act = getattr(terms, "RT_act", None)
+    if RT_act is None or tau_act is None or len(tau_act) == 0:
+        return terms.u
+    return terms.u + RT_act @ np.asarray(tau_act, dtype=float)
+
+
+def _outputs(terms, f, n_joints: int, tau_act=None):
     """Interaction wrenches (child frame), socket-frame forces and their angles at forces ``f``
-    (``None``: no answer, NaN wrenches)."""
+    (``None``: no answer, NaN wrenches) and actuator torques ``tau_act``."""
     if f is not None and jit.ready():  # one compiled pass, the same formulas
         c_ = np.ascontiguousarray
-        return jit.kernels("solvers._fast").instant_outputs(c_(terms.u, dtype=float), c_(terms.RT, dtype=float),
+        return jit.kernels("solvers._fast").instant_outputs(c_(_u_of(terms, tau_act), dtype=float), c_(terms.RT, dtype=float),
                                c_(terms.R_socket, dtype=float), c_(terms.socket_axes, dtype=float),
                                c_(f, dtype=float))
-    wrench = terms.wrenches(f) if f is not None else np.full((n_joints, 6), np.nan)
+    if f is None:
+        wrench = np.full((n_joints, 6), np.nan)
+    else:
+        wrench = terms.wrenches(f if tau_act is None else np.concatenate([f, tau_act]))
     F_socket = np.einsum("jab,jb->ja", terms.R_socket, wrench[:, :3])
     return wrench, F_socket, interaction_angles(F_socket, terms.socket_axes)
 
@@ -309,7 +320,7 @@ def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None, with_output
     :func:`_outputs` at its forces when they came in the same compiled pass (else ``None``)."""
     f = sol.x
     problems = []
-    extra = None if actuation is None else -actuation.S @ f[m:]
+    extra = None if actuation is None else -actuation.rows(terms) @ f[m:]
     outputs = None
     if jit.ready():  # one compiled pass, the same formulas
         fast = jit.kernels("solvers._fast")
@@ -320,7 +331,7 @@ def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None, with_output
                 c_(qp.cone_consts()[1], dtype=float))
         if with_outputs:
             eom, broken, worst, k, *outputs = fast.answer_check_outputs(
-                *args, c_(terms.u, dtype=float), c_(terms.RT, dtype=float), c_(terms.R_socket, dtype=float),
+                *args, c_(_u_of(terms, f[m:]), dtype=float), c_(terms.RT, dtype=float), c_(terms.R_socket, dtype=float),
                 c_(terms.socket_axes, dtype=float))
         else:
             eom, broken, worst, k = fast.answer_check(*args)

@@ -151,7 +151,16 @@ class Problem:
             qp._cone_consts = batch.consts
         elif batch is not None:
             qp.cones = batch(terms)[0] + cones
-        return qp if self.actuation is None else self.actuation.extend(qp, plan["eom"], terms.L.shape[1])
+        if self.actuation is None:
+            return qp
+        return self.actuation.extend(qp, plan["eom"], terms.L.shape[1], terms, self._cone_frames)
+
+    @property
+    def _cone_frames(self) -> dict:
+        """``{joint: (index, frame)}`` of the problem's cones (the actuators' block of a cone on a
+        joint that carries a closed loop's force)."""
+        names = self.robot.joint_names
+        return {c.joint: (names.index(c.joint), c.frame) for c in self.cone_constraints}
 
     def _make_plan(self) -> dict:
         """What :meth:`assemble` does at every instant, decided once: the equation of motion and the
@@ -199,15 +208,25 @@ class _Actuation:
         # w |tau|^2 = 1/2 tau (2 w) tau: the Hessian's diagonal is 2 w (case 1's f^T f has 2 I)
         return cls(robot.actuation, lo, hi, 2.0 * w)
 
-    def extend(self, qp: QPData, eom: bool, nv: int) -> QPData:
-        """``qp`` over ``[f; tau_act]``: the equation of motion's rows gain ``-S``, every other row and
-        cone a zero block; the actuators' bounds and ``w |tau|^2`` are added."""
+    def rows(self, terms) -> np.ndarray:
+        """The actuators' rows of the equation of motion at ``terms``' state: ``S`` (independent
+        coordinates), or ``basis^T S`` with closed loops (``terms.actuation``)."""
+        S = getattr(terms, "actuation", None)
+        return self.S if S is None else S
+
+    def extend(self, qp: QPData, eom: bool, nv: int, terms=None, cone_frames=None) -> QPData:
+        """``qp`` over ``[f; tau_act]``: the equation of motion's rows gain ``-S`` (:meth:`rows`), every
+        other row a zero block, every cone a zero block or, on a joint that carries a closed loop's
+        force, that force's share of the torques (``terms.RT_act``); the actuators' bounds and
+        ``w |tau|^2`` are added."""
         m, k = qp.n, self.n
         A = np.hstack([qp.A, np.zeros((qp.A.shape[0], k))])
         if eom:
-            A[:nv, m:] = -self.S
+            A[:nv, m:] = -self.rows(terms)
+        RT_act = getattr(terms, "RT_act", None)
         pad = lambda G: np.hstack([G, np.zeros((G.shape[0], k))])  # noqa: E731
-        cones = [ConeData(c.joint, pad(c.G), c.g, c.axis, c.angle_deg, c.basis) for c in qp.cones]
+        cones = [ConeData(c.joint, np.hstack([c.G, self._cone_block(c, terms, RT_act, cone_frames)]), c.g,
+                          c.axis, c.angle_deg, c.basis) for c in qp.cones]
         if qp.structured:
             P, P_diag, P_factor = None, np.concatenate([qp.P_diag, self.weight]), pad(qp.P_factor)
         else:
@@ -219,6 +238,19 @@ class _Actuation:
         return QPData(P, np.concatenate([qp.c, np.zeros(k)]), qp.r, A, qp.b,
                       np.concatenate([qp.lb, self.lo]), np.concatenate([qp.ub, self.hi]), cones,
                       P_diag=P_diag, P_factor=P_factor, norm_weight=norm_weight)
+
+
+    def _cone_block(self, cone, terms, RT_act, cone_frames) -> np.ndarray:
+        """(rows of ``cone.G``, n_act): how the actuator torques move the cone's force."""
+        zero = np.zeros((cone.G.shape[0], self.n))
+        if RT_act is None:
+            return zero
+        if cone.joint not in (cone_frames or {}):
+            raise ProblemError(f"cone on joint {cone.joint!r}: not an InteractionCone of this problem, so the "
+                               f"closed loop's share of the actuator torques in its force is unknown")
+        a, frame = cone_frames[cone.joint]
+        block = RT_act[a, :3]
+        return terms.R_socket[a] @ block if frame == "socket" else block
 
 
 def case_problem(robot, case: int, alpha: dict | None = None, beta: dict | None = None,

@@ -175,7 +175,7 @@ class Robot:
     @classmethod
     def from_sidecar(cls, sidecar: Sidecar) -> "Robot":
         sc = sidecar
-        if sc.mjcf_path is not None:
+        if sc.mjcf_path is not None or sc.osim_path is not None:
             return _from_mjcf_sidecar(sc)
         if sc.urdf_path is None:
             urdf_path = resolve_package_uri(sc.urdf, sc.path)
@@ -302,44 +302,57 @@ class Robot:
 
 # ------------------------------------------------------------------------------------ sidecar helpers
 def _from_mjcf_sidecar(sc: Sidecar) -> Robot:
-    """The MJCF file's robot with the sidecar's joint settings and trajectories."""
-    if not sc.mjcf_path.is_file():
-        raise sc.error("mjcf", f"MJCF file not found: {sc.mjcf_path}")
+    """The MJCF (or OpenSim) file's robot with the sidecar's joint settings, reserves and trajectories:
+    the file is read (MuJoCo compiles an MJCF) once and the robot is built once, from its parts
+    (:func:`~mcdm_pin.mjcf.load.mjcf_parts`, :func:`~mcdm_pin.osim.load.osim_parts`) with the sidecar's
+    changes applied."""
+    key, path = ("osim", sc.osim_path) if sc.osim_path is not None else ("mjcf", sc.mjcf_path)
+    if not path.is_file():
+        raise sc.error(key, f"{'OpenSim' if key == 'osim' else 'MJCF'} file not found: {path}")
+    source = str(path)
     try:
-        robot = Robot.from_mujoco(compile_mjcf(sc.mjcf_path), str(sc.mjcf_path), sc.name)
+        if sc.osim_path is not None:
+            parts = osim_parts(path, sc.name, sc.actuator_weights)
+        else:
+            parts = mjcf_parts(compile_mjcf(path), source, sc.name)
     except ModelError as exc:
-        raise sc.error("mjcf", str(exc)) from None
-    joints = {j.name: j for j in robot.joints}
+        raise sc.error(key, str(exc)) from None
+    joints = {j.name: j for j in parts.joints}
     for spec in sc.joints:
         if spec.name not in joints:
-            raise sc.error(spec.key, f"unknown joint {spec.name!r}; the MJCF's physical joints are its moving "
-                                     f"bodies: {_names(list(joints))}")
+            raise sc.error(spec.key, f"unknown joint {spec.name!r}; the {key.upper()} file's physical joints are "
+                                     f"{_names(list(joints))}")
         try:
             joints[spec.name] = joints[spec.name].with_settings(alpha=spec.alpha, beta=spec.beta,
                                                                 cone_deg=spec.cone_deg,
                                                                 socket_axis=spec.socket_axis)
         except ModelError as exc:
             raise sc.error(spec.key, str(exc)) from None
+    reserves = _reserves(sc, tuple(joints.values()), parts.coordinate_names, parts.couplings)
     try:
-        return Robot(robot.model, robot.cables, tuple(joints.values()), _reserves(sc, robot), name=sc.name,
-                     sidecar=sc, couplings=robot.couplings, coordinate_names=robot.coordinate_names,
-                     source=robot.source, notes=robot.notes)
+        return Robot(**{**parts._asdict(), "joints": tuple(joints.values()),
+                        "actuators": parts.actuators + reserves}, sidecar=sc)
     except ModelError as exc:
-        raise sc.error("reserves", str(exc)) from None
+        msg = str(exc)
+        raise sc.error(key, msg if msg.startswith(source) else f"{source}: {msg}") from None
 
 
-def _reserves(sc: Sidecar, robot: Robot) -> tuple[Actuator, ...]:
-    """The sidecar's reserve actuators: one per named coordinate, on the physical joint that holds it."""
+def _reserves(sc: Sidecar, joints, coordinate_names, couplings) -> tuple[Actuator, ...]:
+    """The sidecar's reserve actuators: one per named coordinate, on the physical joint that holds it (an
+    independent coordinate: one that follows couplings is driven through them)."""
+    free = None if couplings is None else set(couplings.independent.tolist())
     out = []
     for spec in sc.reserves:
         for k, name in enumerate(spec.coordinates):
-            if name not in robot.coordinate_names:
-                raise sc.error(f"{spec.key}.coordinates[{k}]", f"unknown coordinate {name!r}; expected one of "
-                                                               f"{_names(robot.coordinate_names)}")
-            out.append(Actuator.on_coordinate(robot.joints, robot.coordinate_names.index(name), -spec.max,
-                                              spec.max, spec.weight, label=name))
+            key = f"{spec.key}.coordinates[{k}]"
+            if name not in coordinate_names:
+                raise sc.error(key, f"unknown coordinate {name!r}; expected one of {_names(coordinate_names)}")
+            i = coordinate_names.index(name)
+            if free is not None and i not in free:
+                raise sc.error(key, f"coordinate {name!r} follows couplings; a reserve drives an independent "
+                                    f"coordinate only")
+            out.append(Actuator.on_coordinate(joints, i, -spec.max, spec.max, spec.weight, label=name))
     return tuple(out)
-
 
 
 def _lock_joints(model: pin.Model, sc: Sidecar) -> pin.Model:

@@ -45,23 +45,15 @@ from .solvers.base import INACCURATE, OPTIMAL, Solution, Solver
 
 SPREAD = 1e3
 """Scale only when some factor would exceed this (either way)."""
+_NO_P = np.zeros((0, 0))
+_NO_F = np.zeros(0)
 
 
 def equilibrate(A: np.ndarray, sweeps: int = 10) -> tuple[np.ndarray, np.ndarray]:
     """Ruiz equilibration: positive ``r`` (rows) and ``d`` (columns) with ``r_i |A_ij| d_j`` of order
-    1 in every row and column (powers of two, so scaling adds no rounding)."""
-    n_r, n_c = A.shape
-    r, d = np.ones(n_r), np.ones(n_c)
-    B = np.abs(A)
-    for _ in range(sweeps):
-        S = r[:, None] * B * d[None, :]
-        row = S.max(axis=1, initial=0.0)
-        col = S.max(axis=0, initial=0.0)
-        row[row == 0] = 1.0
-        col[col == 0] = 1.0
-        r /= np.sqrt(row)
-        d /= np.sqrt(col)
-    return _pow2(r), _pow2(d)
+    1 in every row and column (powers of two, so scaling adds no rounding). One call of the
+    compiled :func:`mcdm_pin.model.kernels.ruiz` (compiled or not: mcdm_pin/jit.py)."""
+    return jit.kernels("model.kernels").ruiz(np.ascontiguousarray(A, dtype=float), int(sweeps))
 
 
 def _pow2(x):
@@ -112,18 +104,22 @@ def _outside(v: float) -> bool:
 
 def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool = False) -> Scaling | None:
     """The factors of the module docstring, or ``None`` when all lie within ``SPREAD`` of one (and
-    ``force`` is false): computed from maxima only, without copying the problem (a uniform variable
-    scale, the usual case, is handled as a scalar)."""
+    ``force`` is false): one compiled pass (:func:`mcdm_pin.model.kernels.scale_factors`, compiled or
+    not: mcdm_pin/jit.py), without copying the problem. The numpy code below it is the reference
+    the kernel is tested against (``tests/test_warm_fast.py``), reached only where a test switches
+    the kernels off."""
     m, n = qp.A.shape
-    if f_scale is None and not force and qp.structured and jit.ready():
-        # the usual well-scaled instant: one compiled pass, no arrays made (it answers "maybe" for a
-        # Hessian diagonal with a negative entry: then the factors below decide)
+    if jit.ready():
         c, A, b, lb, ub, G, g = qp.kernel_arrays()[:7]
         c_ = np.ascontiguousarray  # (no copies: an assembled problem's arrays are C-ordered floats)
-        needs_scaling = jit.kernels("model.kernels").needs_scaling
-        if not needs_scaling(A, b, lb, ub, c_(qp.P_diag, dtype=float), c_(qp.P_factor, dtype=float), c, G, g,
-                             float(SPREAD)):
-            return None
+        structured = qp.structured
+        P = c_(qp._P, dtype=float) if qp._P is not None else _NO_P
+        P_diag = c_(qp.P_diag, dtype=float) if structured else np.zeros(n)
+        P_factor = c_(qp.P_factor, dtype=float).reshape(-1, n) if structured else np.zeros((0, n))
+        fs = _NO_F if f_scale is None else c_(np.broadcast_to(np.asarray(f_scale, dtype=float), (n,)))
+        scaled, d, r, obj, cone = jit.kernels("model.kernels").scale_factors(
+            A, b, lb, ub, c, P, P_diag, P_factor, bool(structured), G, g, fs, bool(force), float(SPREAD))
+        return Scaling(d, r, float(obj), cone) if scaled else None
     absA = np.abs(qp.A) if m else None
     ruiz = m and (spread(qp.A) > SPREAD or f_scale is not None)
     if ruiz:

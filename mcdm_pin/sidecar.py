@@ -10,24 +10,21 @@ The format is documented in ``docs/sidecar.md``.
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from . import yaml12
 from .exceptions import SidecarError
-from .limits import MAX_CABLES, MAX_MAGNITUDE, MAX_ROUTE_POINTS, MAX_SAMPLES, MAX_SIDECAR_BYTES, MIN_FORCE_BOUND
+from .limits import MAX_CABLES, MAX_ROUTE_POINTS, MAX_SAMPLES, MAX_SIDECAR_BYTES, MIN_FORCE_BOUND
+from .sidecar_reader import TrajectorySpec, _join, _kind, _names, _parse_q, _Reader  # noqa: F401 (re-exported)
 from .sidecar_pulleys import RotatingPulleySpec, parse_rotating  # noqa: F401 (RotatingPulleySpec: re-exported)
 from .sidecar_springs import SpringSpec, parse_springs  # noqa: F401 (SpringSpec: a field's type, re-exported)
+from .sidecar_task import parse_task
 from .vocabulary import (SIDECAR_JOINT_TYPES, SPHERICAL_MODES, SPHERICAL_PARAMETRIZATIONS, URDF_JOINT_COUNTS,
                          WRAP_KINDS)
 
 SUPPORTED_VERSIONS = (1,)
 TRAJECTORY_TYPES = ("quintic", "csv", "task")
-
-
-_FLOAT_RE = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 
 
 @dataclass(frozen=True)
@@ -96,29 +93,6 @@ class CableSpec:
 
 
 @dataclass(frozen=True)
-class TrajectorySpec:
-    """A named trajectory. ``type`` is ``quintic`` (q_start, q_end, duration, dt, spherical), ``csv``
-    (file, resolved to an absolute path) or ``task`` (a task-space trajectory solved by inverse
-    kinematics, :mod:`mcdm_pin.ik`: ``frame``, ``point``, ``coordinates``, ``euler``, and ``poses``
-    ``((t, y), ...)`` with ``dt``, or a CSV ``file`` of poses; ``q_start``: the IK's first seed)."""
-
-    name: str
-    type: str
-    q_start: Any = None
-    q_end: Any = None
-    duration: float | None = None
-    dt: float | None = None
-    spherical: str = "axis-angle"
-    file: Path | None = None
-    key: str = ""
-    frame: str | None = None
-    point: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    coordinates: str = "xyz"
-    euler: str = "zyx"
-    poses: tuple = ()
-
-
-@dataclass(frozen=True)
 class ReserveSpec:
     """A group of *reserve* actuators (biomechanics' coordinate actuators): one generalised force per
     named coordinate, within ``[-max, max]`` (N m or N), weighted ``weight`` in the objective."""
@@ -147,6 +121,8 @@ class Sidecar:
     mjcf_path: Path | None = None  # a sidecar over an MJCF file (``mjcf:`` instead of ``urdf:``)
     reserves: tuple = ()  # ReserveSpec: coordinate actuators of an MJCF robot
     springs: tuple = ()  # SpringSpec: passive springs (known tensions)
+    osim_path: Path | None = None  # a sidecar over an OpenSim file (``osim:`` instead of ``urdf:``)
+    actuator_weights: dict = field(default_factory=dict)  # an .osim's CoordinateActuators: name -> w of w c^2
 
 
     def error(self, key: str, expected: str) -> SidecarError:
@@ -155,95 +131,6 @@ class Sidecar:
 
 # --------------------------------------------------------------------------------------------------
 # small typed readers: each one names the key path and what was expected
-
-
-class _Reader:
-    def __init__(self, path: Path | None):
-        self.path = path
-
-    def fail(self, key: str, expected: str) -> SidecarError:
-        return SidecarError(self.path, key, expected)
-
-    def mapping(self, value, key: str, allowed: tuple[str, ...], required: tuple[str, ...] = ()):
-        if not isinstance(value, dict):
-            raise self.fail(key, f"expected a mapping with keys {_names(allowed)}, got {_kind(value)}")
-        for k in value:
-            if not isinstance(k, str):
-                raise self.fail(key, f"keys must be strings, got {k!r}")
-            if k not in allowed:
-                raise self.fail(_join(key, k), f"unknown key {k!r}; expected one of {_names(allowed)}")
-        for k in required:
-            if k not in value:
-                raise self.fail(_join(key, k), f"missing required key {k!r}")
-        return value
-
-    def number(self, value, key: str, *, lo=None, hi=None, lo_open=False, hi_open=False) -> float:
-        if isinstance(value, bool) or value is None:
-            raise self.fail(key, f"expected a number, got {_kind(value)}")
-        if isinstance(value, str):
-            # a quoted number in plain decimal notation is accepted (data built in code, old files)
-            if not _FLOAT_RE.match(value.strip()):
-                raise self.fail(key, f"expected a number, got the string {_short(value)}")
-            value = float(value)
-        if not isinstance(value, (int, float)):
-            raise self.fail(key, f"expected a number, got {_kind(value)}")
-        try:
-            x = float(value)
-        except OverflowError:
-            raise self.fail(key, f"expected a number of magnitude at most {MAX_MAGNITUDE:g}, got an integer "
-                                 f"of {len(str(abs(value)))} digits") from None
-        if not math.isfinite(x):
-            raise self.fail(key, f"expected a finite number, got {value!r}")
-        if abs(x) > MAX_MAGNITUDE:
-            raise self.fail(key, f"expected a number of magnitude at most {MAX_MAGNITUDE:g} (larger values "
-                                 f"overflow in the dynamics), got {x!r}")
-        if lo is not None and (x < lo or (lo_open and x == lo)):
-            raise self.fail(key, f"expected a number {'>' if lo_open else '>='} {lo}, got {x!r}")
-        if hi is not None and (x > hi or (hi_open and x == hi)):
-            raise self.fail(key, f"expected a number {'<' if hi_open else '<='} {hi}, got {x!r}")
-        return x
-
-    def vector(self, value, key: str, n: int | None = 3) -> tuple[float, ...]:
-        if not isinstance(value, (list, tuple)):
-            raise self.fail(key, f"expected a list of {n or 'some'} numbers, got {_kind(value)}")
-        if n is not None and len(value) != n:
-            raise self.fail(key, f"expected a list of {n} numbers, got {len(value)}")
-        return tuple(self.number(v, f"{key}[{i}]") for i, v in enumerate(value))
-
-    def string(self, value, key: str) -> str:
-        if not isinstance(value, str) or not value.strip():
-            raise self.fail(key, f"expected a non-empty string, got {_kind(value)}")
-        return value
-
-    def choice(self, value, key: str, choices: tuple[str, ...]) -> str:
-        if value not in choices:
-            raise self.fail(key, f"expected one of {_names(choices)}, got {value!r}")
-        return value
-
-
-def _short(text: str, n: int = 60) -> str:
-    return repr(text[:n]) + ("..." if len(text) > n else "")
-
-
-def _kind(value) -> str:
-    if value is None:
-        return "nothing (null)"
-    if isinstance(value, bool):
-        return f"the boolean {value}"
-    if isinstance(value, (dict, list, str)):
-        text = repr(value)
-        return f"{type(value).__name__} {text[:60]}{'...' if len(text) > 60 else ''}"
-    return f"{type(value).__name__} {value!r}"
-
-
-def _names(names) -> str:
-    names = list(names)
-    shown = ", ".join(repr(n) for n in names[:25])
-    return shown + (f", ... ({len(names)} in all)" if len(names) > 25 else "")
-
-
-def _join(key: str, sub: str) -> str:
-    return f"{key}.{sub}" if key else sub
 
 
 # --------------------------------------------------------------------------------------------------
@@ -259,6 +146,8 @@ WRAP_KEYS = ("wrap", "link", "radius", "center", "axis", "side")
 # a sidecar over an MJCF file: the robot (bodies, cables, muscles, couplings) comes from the MJCF; the
 # sidecar adds what MJCF has no words for: joint weights, cones, trajectories
 MJCF_TOP_KEYS = ("version", "name", "description", "mjcf", "joints", "trajectories", "reserves")
+# a sidecar over an OpenSim file: the same, its CoordinateActuators weighed by name instead of reserves
+OSIM_TOP_KEYS = ("version", "name", "description", "osim", "joints", "trajectories", "actuator_weights")
 RESERVE_KEYS = ("coordinates", "max", "weight")
 MJCF_JOINT_KEYS = ("socket_axis", "alpha", "beta", "cone_deg")
 QUINTIC_KEYS = ("type", "q_start", "q_end", "duration", "dt", "spherical")
@@ -313,7 +202,7 @@ def parse_sidecar(data, path: Path | None = None, base_dir: Path | None = None) 
     r = _Reader(path)
     if base_dir is None:
         base_dir = path.parent if path is not None else Path.cwd()
-    if isinstance(data, dict) and "mjcf" in data:
+    if isinstance(data, dict) and ("mjcf" in data or "osim" in data):
         return _parse_mjcf_sidecar(r, data, path, base_dir)
     data = r.mapping(data, "", TOP_KEYS, required=("version", "urdf", "joints", "cables"))
 
@@ -355,13 +244,17 @@ def parse_sidecar(data, path: Path | None = None, base_dir: Path | None = None) 
 
 
 def _parse_mjcf_sidecar(r: _Reader, data: dict, path: Path | None, base_dir: Path) -> Sidecar:
-    """A sidecar over an MJCF file (``MJCF_TOP_KEYS``): joints are MuJoCo bodies' physical joints, named
-    after the body, and take weights, a socket axis and a cone only."""
-    data = r.mapping(data, "", MJCF_TOP_KEYS, required=("version", "mjcf"))
+    """A sidecar over an MJCF file (``MJCF_TOP_KEYS``) or an OpenSim file (``OSIM_TOP_KEYS``): joints are
+    the source's physical joints (MuJoCo bodies, OpenSim joints), by name, and take weights, a socket
+    axis and a cone only."""
+    osim = "osim" in data
+    if osim and "mjcf" in data:
+        raise r.fail("osim", "expected one of 'mjcf' and 'osim', got both")
+    data = r.mapping(data, "", OSIM_TOP_KEYS if osim else MJCF_TOP_KEYS, required=("version", "osim" if osim else "mjcf"))
     version = data["version"]
     if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
         raise r.fail("version", f"expected one of {list(SUPPORTED_VERSIONS)}, got {version!r}")
-    mjcf = r.string(data["mjcf"], "mjcf")
+    mjcf = r.string(data["osim" if osim else "mjcf"], "osim" if osim else "mjcf")
     name = r.string(data.get("name", path.stem if path else "robot"), "name")
     description = data.get("description", "")
     if not isinstance(description, str):
@@ -390,9 +283,20 @@ def _parse_mjcf_sidecar(r: _Reader, data: dict, path: Path | None, base_dir: Pat
     if not isinstance(trajs_raw, dict):
         raise r.fail("trajectories", f"expected a mapping name: trajectory, got {_kind(trajs_raw)}")
     trajectories = {t: _parse_trajectory(r, t, spec, base_dir) for t, spec in trajs_raw.items()}
+    source = (base_dir / mjcf).resolve()
+    if osim:
+        weights_raw = data.get("actuator_weights", {}) or {}
+        if not isinstance(weights_raw, dict):
+            raise r.fail("actuator_weights", f"expected a mapping CoordinateActuator name: weight, got "
+                                             f"{_kind(weights_raw)}")
+        weights = {r.string(k, f"actuator_weights.{k}"): r.number(v, f"actuator_weights.{k}", lo=0.0)
+                   for k, v in weights_raw.items()}
+        return Sidecar(path=path, version=int(version), name=name, urdf="", urdf_path=None,
+                       gravity=(0.0, 0.0, 0.0), joints=tuple(joints), cables=(), trajectories=trajectories,
+                       description=description, osim_path=source, actuator_weights=weights)
     return Sidecar(path=path, version=int(version), name=name, urdf="", urdf_path=None, gravity=(0.0, 0.0, 0.0),
                    joints=tuple(joints), cables=(), trajectories=trajectories, description=description,
-                   mjcf_path=(base_dir / mjcf).resolve(), reserves=_parse_reserves(r, data.get("reserves", [])))
+                   mjcf_path=source, reserves=_parse_reserves(r, data.get("reserves", [])))
 
 
 def _parse_reserves(r: _Reader, raw) -> tuple[ReserveSpec, ...]:
@@ -569,8 +473,6 @@ def _parse_trajectory(r: _Reader, name, spec, base_dir: Path) -> TrajectorySpec:
                           f"got {_kind(spec)}")
     ttype = r.choice(spec["type"], f"{key}.type", TRAJECTORY_TYPES)
     if ttype == "task":
-        from .sidecar_task import parse_task
-
         return parse_task(r, name, spec, base_dir, key)
     if ttype == "csv":
         spec = r.mapping(spec, key, CSV_KEYS, required=CSV_KEYS)
@@ -589,21 +491,3 @@ def _parse_trajectory(r: _Reader, name, spec, base_dir: Path) -> TrajectorySpec:
     mode = r.choice(spec.get("spherical", "axis-angle"), f"{key}.spherical", SPHERICAL_MODES)
     return TrajectorySpec(name=name, type="quintic", q_start=q0, q_end=q1, duration=duration, dt=dt,
                           spherical=mode, key=key)
-
-
-def _parse_q(r: _Reader, value, key: str):
-    """A configuration: a list of numbers (one per coordinate, in the model's order) or a mapping
-    physical joint name -> number or list of numbers (joints left out stay at 0)."""
-    if isinstance(value, list):
-        return tuple(r.number(v, f"{key}[{i}]") for i, v in enumerate(value))
-    if isinstance(value, dict):
-        out = {}
-        for j, v in value.items():
-            r.string(j, f"{key}.{j}")
-            if isinstance(v, list):
-                out[j] = tuple(r.number(x, f"{key}.{j}[{i}]") for i, x in enumerate(v))
-            else:
-                out[j] = (r.number(v, f"{key}.{j}"),)
-        return out
-    raise r.fail(key, f"expected a list of numbers or a mapping joint: value(s), got {_kind(value)}")
-

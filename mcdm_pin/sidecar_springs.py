@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .limits import MAX_CABLES, MAX_ROUTE_POINTS
+from .sidecar_reader import _kind
 
 SPRING_KEYS = ("name", "stiffness", "rest_length", "tension_only", "route")
 
@@ -26,7 +27,6 @@ class SpringSpec:
 def parse_springs(r, raw, parse_route_element) -> tuple[SpringSpec, ...]:
     """``springs:`` a list of ``{name, stiffness, rest_length, route[, tension_only]}``, read with the
     sidecar's reader ``r`` (its key paths and messages) and route-element parser."""
-    from .sidecar import _kind
     if raw is None:
         return ()
     if not isinstance(raw, list):

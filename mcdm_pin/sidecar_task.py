@@ -23,7 +23,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .limits import MAX_SAMPLES
-from .sidecar import TrajectorySpec, _kind, _parse_q, _Reader
+from .sidecar_reader import TrajectorySpec, _kind, _parse_q, _Reader
 
 TASK_COORDINATES = "xyzabg"  # mcdm_pin.ik.space
 TASK_EULER = ("zyx", "xyz")

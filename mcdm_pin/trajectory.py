@@ -35,7 +35,6 @@ order above. Any row that does not parse is an error naming its row and column.
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -44,8 +43,12 @@ import numpy as np
 import pinocchio as pin
 
 from .exceptions import SidecarError, StateError, TrajectoryError
-from .limits import MAX_CSV_BYTES, MAX_SAMPLES
+from .limits import MAX_SAMPLES
+from .ik.samples import csv_samples, pose_samples
+from .ik.solve import solve_task
+from .ik.space import TaskSpace
 from .model import charts
+from .profiles import csv_rows, is_number, quintic_profile
 from .sidecar import TrajectorySpec, _names
 from .vocabulary import SPHERICAL_MODES
 
@@ -86,15 +89,6 @@ class Trajectory:
             return self
         idx = np.unique(np.round(np.linspace(0, len(self.t) - 1, samples)).astype(int))
         return Trajectory(self.name, self.t[idx], self.q[idx], self.qd[idx], self.qdd[idx])
-
-
-def quintic_profile(t: np.ndarray, duration: float):
-    """s, ds/dt, d2s/dt2 of the rest-to-rest quintic on [0, duration]."""
-    tau = np.clip(t / duration, 0.0, 1.0)
-    s = tau**3 * (10 - 15 * tau + 6 * tau**2)
-    ds = 30 * tau**2 * (1 - tau) ** 2 / duration
-    dds = 60 * tau * (1 - tau) * (1 - 2 * tau) / duration**2
-    return s, ds, dds
 
 
 class SphericalKinematics:
@@ -275,39 +269,6 @@ def quintic_trajectory(robot, q_start, q_end, duration: float, dt: float,
 
 
 # -------------------------------------------------------------------------------------------- CSV
-def _csv_rows(path: Path) -> list[list[str]]:
-    try:
-        size = path.stat().st_size
-        if size > MAX_CSV_BYTES:
-            raise TrajectoryError(f"{path}: the file has {size} bytes; a trajectory CSV may have at most "
-                                  f"{MAX_CSV_BYTES} (docs/limits.md)")
-        rows = []
-        # utf-8-sig: a byte-order mark written by spreadsheets is not part of the first cell
-        with path.open(newline="", encoding="utf-8-sig") as fh:
-            for row in csv.reader(fh):
-                if row and any(c.strip() for c in row):
-                    rows.append(row)
-                    if len(rows) > MAX_SAMPLES + 1:
-                        raise TrajectoryError(f"{path}: more than {MAX_SAMPLES} rows (docs/limits.md)")
-        return rows
-    except FileNotFoundError:
-        raise TrajectoryError(f"{path}: file not found") from None
-    except IsADirectoryError:
-        raise TrajectoryError(f"{path}: is a folder; expected a CSV file") from None
-    except UnicodeDecodeError:
-        raise TrajectoryError(f"{path}: not UTF-8 text; expected a CSV file") from None
-    except (OSError, csv.Error) as exc:
-        raise TrajectoryError(f"{path}: cannot read the CSV ({exc})") from None
-
-
-def _is_number(cell: str) -> bool:
-    try:
-        float(cell)
-        return True
-    except ValueError:
-        return False
-
-
 def _header_columns(path: Path, header: list[str], robot) -> list[int]:
     """The file column of each canonical column (``t``, the coordinates, then ``qd:``/``qdd:`` when
     the header names them), matched by name; :class:`TrajectoryError` naming the column otherwise."""
@@ -351,10 +312,10 @@ def read_csv(robot, path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np
     header's columns are matched by name (any order); without a header, columns are ``t``, the
     coordinates (and the rates) in order."""
     path = Path(path)
-    rows = _csv_rows(path)
+    rows = csv_rows(path)
     nv = robot.nv
     first, order = 0, None
-    if rows and not any(_is_number(c) for c in rows[0]):
+    if rows and not any(is_number(c) for c in rows[0]):
         order = _header_columns(path, [c.strip() for c in rows[0]], robot)
         first = 1
     width = len(order) if order is not None else len(rows[first]) if len(rows) > first else 0
@@ -371,7 +332,7 @@ def read_csv(robot, path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np
         try:
             values.append([float(c) for c in row])
         except ValueError:
-            col = next(j for j, c in enumerate(row) if not _is_number(c))
+            col = next(j for j, c in enumerate(row) if not is_number(c))
             raise TrajectoryError(f"{path}: row {i + 1}, column {col + 1}: expected a number, got "
                                   f"{row[col]!r}") from None
     data = np.array(values, dtype=float).reshape(-1, width)
@@ -417,14 +378,35 @@ def _spline_trajectory(robot, name, t, x) -> Trajectory:
 
 
 # ---------------------------------------------------------------------------------------- sidecar
+def task_trajectory(robot, spec):
+    """The joint :class:`~mcdm_pin.trajectory.Trajectory` of a sidecar ``task`` trajectory ``spec``
+    (:func:`mcdm_pin.ik.solve_task` on the robot's model; first seed ``spec.q_start`` or the robot's
+    reference pose); errors name the sidecar and the trajectory's key."""
+    where = robot.sidecar.path if robot.sidecar is not None else robot.name
+    if getattr(robot, "couplings", None) is not None:
+        raise TrajectoryError(f"{where}: {spec.key}: task trajectories on a robot with joint couplings are not "
+                              f"supported (the inverse kinematics would move coupled coordinates freely)")
+    try:
+        space = TaskSpace(frame=spec.frame, point=tuple(spec.point), coordinates=spec.coordinates, euler=spec.euler)
+        if spec.file is not None:
+            t, y, yd, ydd = csv_samples(spec.file, spec.coordinates)
+        else:
+            t, y, yd, ydd = pose_samples(spec.poses, spec.dt)
+        path = robot.sidecar.path if robot.sidecar is not None else None
+        x0 = (resolve_configuration(robot, spec.q_start, f"{spec.key}.q_seed", path)
+              if spec.q_start is not None else robot.reference_coordinates())
+        sol = solve_task(robot.model, space, t, y, yd, ydd, robot.configuration(x0), name=f"trajectory {spec.name!r}")
+    except TrajectoryError as exc:
+        raise TrajectoryError(f"{where}: {spec.key}: {exc}") from None
+    return Trajectory(spec.name, sol.t, sol.q, sol.qd, sol.qdd)
+
+
 def trajectory_from_spec(robot, spec: TrajectorySpec) -> Trajectory:
     """The sidecar's trajectory ``spec``, sampled; an error in a quintic names the sidecar file and
     the trajectory's key (a CSV's names its file)."""
     if spec.type == "csv":
         return follow_couplings(robot, csv_trajectory(robot, spec.file, name=spec.name))
     if spec.type == "task":  # inverse kinematics (mcdm_pin.ik)
-        from .ik.samples import task_trajectory
-
         return follow_couplings(robot, task_trajectory(robot, spec))
     x0, x1 = _ends(robot, spec)
     try:

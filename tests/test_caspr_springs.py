@@ -190,7 +190,7 @@ def test_actuated_sidecar_bounds(tmp_path):
 
 
 # ------------------------------------------------------------------------------------ CASPR import
-CASPR = REPO.parent.parent / "shared" / "reference" / "caspr" / "library"
+CASPR = REPO.parent / "shared" / "reference" / "caspr" / "library"
 needs_caspr = pytest.mark.skipif(not (CASPR / "models.json").is_file(), reason="CASPR's files are not here")
 
 

@@ -86,3 +86,10 @@ def test_control_loop(tmp_path):
     rms = float(re.search(r"position RMS ([0-9.]+) mm", text).group(1))
     assert rms < 1.0, text
     assert (tmp_path / "out" / "control_loop.png").stat().st_size > 20_000
+
+
+def test_rmr_shoulder(tmp_path):
+    nb = _run("rmr_shoulder", tmp_path)
+    text = _text(nb)
+    assert "without GH: 21/21 optimal" in text and "with GH   : 21/21 optimal" in text, text
+    assert "largest GH angle ours 19.03 deg" in text

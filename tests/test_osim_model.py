@@ -504,16 +504,11 @@ def test_refusals_name_the_element(tmp_path, replacements, match):
         osim_skeleton(_edited(tmp_path, replacements))
 
 
-def test_robot_load_speaks_opensim_names(monkeypatch):
+def test_robot_load_speaks_opensim_names():
+    """Robot.load reads the muscles (cables named after them) and the CoordinateActuators (actuators
+    labelled with their names, on their coordinates)."""
     from mcdm_pin import Robot
-    from mcdm_pin.model.cables import Cable, CableSet, RoutePoint
-    from mcdm_pin.osim import load
 
-    def one_cable(root, file, om):  # stands in for the muscles' reader
-        return CableSet(om.model, [Cable("c", (RoutePoint("thorax", (0.0, 0.0, 0.1)), RoutePoint("humerus", (0.0, 0.0, 0.0))),
-                                         0.0, 100.0)])
-
-    monkeypatch.setattr(load, "_cables", one_cable)
     robot = Robot.load(TSM)
     assert robot.joint_names == ("ground_thorax", "sternoclavicular", "scapulothoracic", "GlenoHumeral", "elbow",
                                  "radioulnar")
@@ -523,6 +518,11 @@ def test_robot_load_speaks_opensim_names(monkeypatch):
     assert robot.source.coordinate_values(q)["shoulder_elv"] == 0.7
     assert q[robot.coordinate_names.index("scapula_winging")] == 0.1
     assert any("PointConstraint 'AC'" in note for note in robot.notes)
+    assert robot.m == 33 and robot.cable_names[0] == "TrapeziusScapula_M" and robot.cables.muscles is not None
+    assert robot.n_act == 17 and robot.actuators[4].label == "ground_thorax_ty_actuator"
+    assert robot.actuators[4].tau_max[0] == 500.0 * 1e4  # optimal_force 500, control range capped at 1e4
+    assert robot.coordinate_names[int(robot.actuators[4].idx_v[0])] == "ground_thorax_ty"
+    assert not any("not a path force" in note for note in robot.notes)
 
 
 def test_a_locked_coordinate_is_fixed_at_its_default(tmp_path):

@@ -14,6 +14,7 @@ import pinocchio as pin
 import pytest
 
 from mcdm_pin.model import CableSet, cable_jacobian, cable_lengths
+from mcdm_pin.osim import speeds
 from mcdm_pin.osim.paths import read_paths, simm_spline
 
 osim = pytest.importorskip("opensim")
@@ -241,7 +242,15 @@ def _muscle_model(kind, tmp_path, lo, ls, damping):
         m.addBody(b)
         m.addJoint(j)
         bodies[child] = b
-    if kind == "Millard2012EquilibriumMuscle":
+    if kind == "Thelen2003Muscle":
+        mus = osim.Thelen2003Muscle("mus", 500.0, lo, ls, 0.25)
+        mus.set_Af(0.3)
+        mus.set_Flen(1.8)
+        mus.set_KshapeActive(0.5)
+        mus.set_KshapePassive(4.0)
+        mus.set_minimum_activation(0.02)
+        mus.setMinControl(0.02)
+    elif kind == "Millard2012EquilibriumMuscle":
         mus = osim.Millard2012EquilibriumMuscle("mus", 500.0, lo, ls, 0.25)
         mus.set_ignore_tendon_compliance(True)
         mus.set_fiber_damping(damping)
@@ -309,82 +318,184 @@ def test_muscle_force_bounds(tmp_path, monkeypatch, kind, damping):
     assert worst < 1e-9, worst
 
 
-ARM26 = Path(__file__).resolve().parents[1] / ".." / ".." / "shared" / "reference" / "opensim-models" / "Arm26" / "arm26.osim"
+def test_thelen_force_range(tmp_path, monkeypatch):
+    """Thelen2003Muscle with a rigid tendon against OpenSim's own rigid-tendon force (Static
+    Optimization's ``calcInextensibleTendonActiveFiberForce(s, a)``, plus the passive fiber force
+    along the tendon at the rigid tendon's fiber length; OpenSim 4.6 refuses
+    ``ignore_tendon_compliance`` on a Thelen muscle), at 40 states and activations 0 (clamped to the minimum) to 1: the
+    range's ends and the exact tension ``t(a)`` to 1e-9 relative; the chord ``passive + gain a``
+    equals ``t`` at the ends only."""
+    monkeypatch.chdir(tmp_path)
+    model = _pin_model()
+    data = model.createData()
+    probe = CableSet(model, read_paths(ET.parse(_muscle_model("Thelen2003Muscle", tmp_path, 0.1, 0.1, 0.0))
+                                       .getroot(), "p", model)[0])
+    qs = RNG.uniform(-0.6, 0.9, size=(40, 2))
+    lengths = np.array([cable_lengths(model, data, probe, q)[0] for q in qs])
+    lo = (lengths.max() - lengths.min()) / 1.1
+    ls = lengths.min() - 0.45 * lo
+    file = _muscle_model("Thelen2003Muscle", tmp_path, lo, ls, 0.0)
+    cables, muscles, notes = read_paths(ET.parse(file).getroot(), str(file), model)
+    assert muscles.thelen.all() and muscles.a_min[0] == 0.02 and not notes
+    cs = CableSet(model, cables, muscles=muscles, muscle_cables=muscles.names)
+    m = osim.Model(str(file))
+    s = m.initSystem()
+    mus = osim.Thelen2003Muscle.safeDownCast(m.getForceSet().get("mus"))
+    worst, chord, regions = 0.0, 0.0, set()
+    for q in qs:
+        qd = RNG.normal(0.0, 4.0, size=2)
+        for k, name in enumerate(("q1", "q2")):
+            m.getCoordinateSet().get(name).setValue(s, q[k], False)
+            m.getCoordinateSet().get(name).setSpeedValue(s, qd[k])
+        m.realizeVelocity(s)
+        ell = cable_lengths(model, data, cs, q)
+        ell_dot = cable_jacobian(model, data, cs, q) @ qd
+        assert abs(ell[0] - mus.getLength(s)) < 1e-12 and abs(ell_dot[0] - mus.getLengtheningSpeed(s)) < 1e-12
+        l, v, cos_a, clamped = muscles.fiber(ell, ell_dot)
+        regions.add(int(np.sign(v[0])))
+        mus.setFiberLength(s, max(l[0] * lo, mus.getMinimumFiberLength()))
+        m.realizeDynamics(s)
+        passive = mus.getPassiveFiberForceAlongTendon(s)
+        state = force_range_of(muscles, ell, ell_dot)
+        for a in (0.0, 0.02, 0.1, 0.35, 0.6, 0.9, 1.0):
+            ref = mus.calcInextensibleTendonActiveFiberForce(s, a) + passive
+            ours = muscles.tension(ell, ell_dot, np.array([a]))[0]
+            worst = max(worst, abs(ours - ref) / max(1.0, abs(ref)))
+            chord = max(chord, abs(state.passive[0] + state.gain[0] * max(a, 0.02) - ref) / 500.0)
+            if a in (0.0, 1.0):
+                end = state.f_min[0] if a == 0.0 else state.f_max[0]
+                worst = max(worst, abs(end - ref) / max(1.0, abs(ref)))
+    assert regions == {-1, 1}, regions
+    assert worst < 1e-9, worst
+    assert 1e-3 < chord < 0.1, chord  # the chord is not t(a) in between (docs/opensim.md)
 
 
-def _se3(T):
-    R = T.R()
-    return pin.SE3(np.array([[R.get(i, k) for k in range(3)] for i in range(3)]),
-                   np.array([T.p()[i] for i in range(3)]))
+def force_range_of(muscles, ell, ell_dot):
+    from mcdm_pin.model.muscles import force_range
+
+    return force_range(muscles, ell, ell_dot)
 
 
-def _arm26_pin(m):
-    """A pin model of arm26 (a weld, then two one-axis CustomJoints: revolute joints about their
-    axis in the joint frames), frames named as the bodies, joints named as the coordinates."""
-    model = pin.Model()
-    model.addFrame(pin.Frame("ground", 0, 0, pin.SE3.Identity(), pin.FrameType.BODY))
-    joint_of, body_in_joint = {"ground": 0}, {"ground": pin.SE3.Identity()}
-    for j in m.getJointSet():
-        pf = osim.PhysicalOffsetFrame.safeDownCast(j.getParentFrame())
-        cf = osim.PhysicalOffsetFrame.safeDownCast(j.getChildFrame())
-        parent, child = pf.getParentFrame().getName(), cf.getParentFrame().getName()
-        X_p = body_in_joint[parent] * _se3(pf.getOffsetTransform())
-        X_c = _se3(cf.getOffsetTransform()).inverse()
-        if j.numCoordinates() == 0:
-            joint_of[child], body_in_joint[child] = joint_of[parent], X_p * X_c
-        else:
-            st = osim.CustomJoint.safeDownCast(j).getSpatialTransform()
-            axis = np.array([st.getTransformAxis(0).getAxis()[i] for i in range(3)])
-            jid = model.addJoint(joint_of[parent], pin.JointModelRevoluteUnaligned(axis), X_p,
-                                 j.get_coordinates(0).getName())
-            model.appendBodyToJoint(jid, pin.Inertia.FromSphere(1.0, 0.05), X_c)
-            joint_of[child], body_in_joint[child] = jid, X_c
-        model.addFrame(pin.Frame(child, joint_of[child], 0, body_in_joint[child], pin.FrameType.BODY))
-    return model
+REPO = Path(__file__).resolve().parents[1]
+ARM26 = REPO / "robots" / "opensim" / "arm26.osim"
+TSM = REPO / "robots" / "opensim" / "TSM_subject_noWeight.osim"
 
 
-@pytest.mark.skipif(not ARM26.exists(), reason="arm26 reference model not present")
-def test_arm26_muscle_paths(tmp_path, monkeypatch):
-    """Every muscle of arm26 (cylinders and ellipsoids, several wraps per path): lengths and moment
-    arms at 30 random states against OpenSim's own.
+class Loaded:
+    """A committed ``.osim`` on the real loader (:func:`mcdm_pin.osim.load.osim_skeleton`) with its
+    muscles read by :func:`read_paths` (coordinates: OpenSim's names -> the loader's ``q``, ``v``
+    entries), and OpenSim's own copy (loaded from ``workdir``), its ``PointConstraint``s enforced or not."""
+
+    def __init__(self, path, workdir, enforce=True):
+        from mcdm_pin.osim.load import osim_skeleton
+
+        self.om, _, self.src, doc = osim_skeleton(path)
+        om = self.om
+        self.model, self.data, cv = om.model, om.model.createData(), om.coordinate_v
+        coords = {n: (int(om.q_index[v]), int(v)) for n, v in zip(om.coordinates, cv)}
+        self.cables, self.muscles, _ = read_paths(doc.root, str(path), self.model, coords)
+        self.cs = CableSet(self.model, self.cables)
+        self.ellipsoid = np.array([any(getattr(p, "kind", "") == "opensim_ellipsoid" for p in c.route)
+                                   for c in self.cables])
+        copy = Path(workdir) / f"{'c' if enforce else 'f'}_{Path(path).name}"
+        shutil.copyfile(path, copy)
+        self.osim = osim.Model(str(copy))
+        if not enforce:
+            for c in self.osim.getConstraintSet():
+                c.set_isEnforced(False)
+        self.state = self.osim.initSystem()
+        self.coords = [self.osim.getCoordinateSet().get(n) for n in om.coordinates]
+        self.paths = [osim.Muscle.safeDownCast(self.osim.getForceSet().get(c.name)) for c in self.cables]
+
+    def random_q(self, rng):
+        """A random configuration: unlocked coordinates uniform in their ranges (cut at +-3), on the
+        loops (the clavicle and scapula coordinates moved onto them) when the model has some."""
+        vals = {}
+        for c in self.coords:
+            if not c.get_locked():
+                vals[c.getName()] = rng.uniform(max(c.getRangeMin(), -3.0), min(c.getRangeMax(), 3.0))
+        q = self.src.configuration(vals)
+        if self.src.loops is not None:
+            names = self.om.coordinates
+            q = self.src.loops.project(q, [int(self.om.coordinate_v[k]) for k, n in enumerate(names)
+                                           if n.startswith(("clav_", "scapula_"))])
+        return q
+
+    def set(self, q):
+        om = self.om
+        for c, v in zip(self.coords, om.coordinate_v):
+            c.setValue(self.state, float(q[om.q_index[v]]), False)
+        self.osim.realizePosition(self.state)
+
+    def unit_tension_forces(self, q):
+        """OpenSim-speed generalized forces of a unit tension in each cable, ``-(L P)`` (m, nv) with
+        ``P = dv/du`` (:mod:`mcdm_pin.osim.speeds`), columns at the coordinates' ``v`` entries."""
+        L = cable_jacobian(self.model, self.data, self.cs, q)
+        P = np.column_stack([speeds.from_speeds(self.om.angular, q, e) for e in np.eye(self.model.nv)])
+        return -(L @ P), P
+
+
+def _rel(ours, ref, floor):
+    return abs(ours - ref) / max(floor, abs(ref))
+
+
+def _check_paths(loaded, loaded_free, states, rng):
+    """Largest relative differences (lengths, moment arms about every unlocked coordinate, and, with
+    loops, OpenSim's constrained moment arms), separately for cables over an ellipsoid."""
+    worst = {(k, e): 0.0 for k in ("length", "arm", "constrained") for e in (False, True)}
+    cv = loaded.om.coordinate_v
+    for _ in range(states):
+        q = loaded.random_q(rng)
+        loaded.set(q)
+        lengths = cable_lengths(loaded.model, loaded.data, loaded.cs, q)
+        tau, P = loaded.unit_tension_forces(q)
+        if loaded_free is not None:
+            loaded_free.set(q)
+            G = loaded.src.loops.jacobian(q) @ P
+        for i, mus in enumerate(loaded.paths):
+            e = bool(loaded.ellipsoid[i])
+            worst["length", e] = max(worst["length", e], _rel(lengths[i], mus.getLength(loaded.state), 1e-3))
+            for k, c in enumerate(loaded.coords):
+                if c.get_locked():
+                    continue
+                if loaded_free is None:
+                    worst["arm", e] = max(worst["arm", e], _rel(tau[i, cv[k]], mus.computeMomentArm(loaded.state, c),
+                                                                1e-3))
+                    continue
+                # without the constraint OpenSim's moment arm is the generalized force of a unit tension
+                ref = loaded_free.paths[i].computeMomentArm(loaded_free.state, loaded_free.coords[k])
+                worst["arm", e] = max(worst["arm", e], _rel(tau[i, cv[k]], ref, 1e-3))
+                # with it, MomentArmSolver weighs those forces by the unit speed of the coordinate
+                # projected onto the loop (projectU: least squares, unit weights), scaled to 1 there;
+                # a coordinate the loop does not see (G e_k = 0) keeps its unit speed: the same arm
+                if not G[:, cv[k]].any():
+                    continue
+                unit = np.zeros(loaded.model.nv)
+                unit[cv[k]] = 1.0
+                C = unit - G.T @ np.linalg.solve(G @ G.T, G @ unit)
+                ref = mus.computeMomentArm(loaded.state, c)
+                worst["constrained", e] = max(worst["constrained", e], _rel(C @ tau[i] / C[cv[k]], ref, 1e-3))
+    return worst
+
+
+def test_arm26_muscle_paths_on_the_loader(tmp_path, monkeypatch):
+    """Every muscle of arm26 (Thelen muscles; cylinders and ellipsoids, several wraps per path) on the
+    real loader: lengths and moment arms at 30 random states against OpenSim's ``getLength`` and
+    ``computeMomentArm``: 1e-9 relative (floor 1 mm), 1e-6 for the paths over an ellipsoid (TRIlong, BIClong).
 
     TRIlong's three wraps need several of OpenSim's rounds: its lengths see the moved tangent points
     at their first (cached) ground positions and its forces act where the wraps last put them
     (docs/opensim.md), both followed here. And the interaction wrenches stay consistent with ``L``:
     ``S^T p = M qdd + h + L^T f`` for each joint."""
     monkeypatch.chdir(tmp_path)
-    shutil.copy(ARM26, tmp_path / ARM26.name)
-    m = osim.Model(str(tmp_path / ARM26.name))
-    s = m.initSystem()
-    model = _arm26_pin(m)
-    data = model.createData()
-    cables, muscles, notes = read_paths(ET.parse(ARM26).getroot(), str(ARM26), model)
-    cs = CableSet(model, cables)
-    coords = [m.getCoordinateSet().get(model.names[j]) for j in range(1, model.njoints)]
-    worst_l = worst_r = 0.0
-    for _ in range(30):
-        q = np.array([RNG.uniform(c.getRangeMin(), c.getRangeMax()) for c in coords])
-        for c, v in zip(coords, q):
-            c.setValue(s, v, False)
-        m.realizePosition(s)
-        pin.framesForwardKinematics(model, data, q)
-        for name in ("r_humerus", "r_ulna_radius_hand"):  # the pin model places the bodies as OpenSim does
-            ref = _se3(m.getBodySet().get(name).getTransformInGround(s))
-            assert np.allclose(data.oMf[model.getFrameId(name)].homogeneous, ref.homogeneous, rtol=0, atol=1e-7)
-        ours_l = cable_lengths(model, data, cs, q)
-        ours_L = cable_jacobian(model, data, cs, q)
-        for i, c in enumerate(cables):
-            mus = osim.Muscle.safeDownCast(m.getForceSet().get(c.name))
-            ref = mus.getLength(s)
-            worst_l = max(worst_l, abs(ours_l[i] - ref) / ref)
-            for k, co in enumerate(coords):
-                arm = mus.computeMomentArm(s, co)
-                worst_r = max(worst_r, abs(-ours_L[i, k] - arm) / max(1e-3, abs(arm)))
-    # 1e-6 where ellipsoids are involved (the issue's bar); measured ~5e-9, the stand-in pin model's
-    # kinematics (about 2e-9 rad from OpenSim's CustomJoint) rather than the paths (1e-16 on the tiny models)
-    assert worst_l < 1e-6 and worst_r < 1e-6, (worst_l, worst_r)
+    arm = Loaded(ARM26, tmp_path)
+    assert arm.muscles.thelen.all() and arm.ellipsoid.sum() == 2  # TRIlong, BIClong
+    worst = _check_paths(arm, None, 30, np.random.default_rng(26))
+    assert worst["length", False] < 1e-9 and worst["arm", False] < 1e-9, worst
+    assert worst["length", True] < 1e-6 and worst["arm", True] < 1e-6, worst
     from mcdm_pin.model import TermsEvaluator
 
+    model, data, cs = arm.model, arm.data, arm.cs
     ev = TermsEvaluator(model, cs)
     for q in RNG.uniform(0.2, 2.2, size=(5, 2)):
         t = ev(q, RNG.normal(size=2), RNG.normal(size=2))
@@ -397,83 +508,41 @@ def test_arm26_muscle_paths(tmp_path, monkeypatch):
             assert np.allclose(S.T @ p[a], (t.tau + t.L.T @ f)[iv:iv + 1], rtol=0, atol=1e-12)
 
 
-TSM = Path(__file__).resolve().parents[1] / ".." / ".." / "shared" / "reference" / "rmr" / "model" / "TSM_subject_noWeight.osim"
-
-
-@pytest.mark.skipif(not TSM.exists(), reason="thoracoscapular reference model not present")
-def test_thoracoscapular_muscle_lengths(tmp_path, monkeypatch):
+def test_thoracoscapular_muscle_paths_on_the_loader(tmp_path, monkeypatch):
     """Every muscle of the thoracoscapular shoulder (Seth et al. 2019 via RMR, CC BY 4.0: 33 Millard
-    muscles, moving points, 37 PathWraps over ellipsoids, cylinders and spheres): lengths at random
-    states against OpenSim's ``getLength``. The pin model here is a stand-in placing each body by a
-    free-flyer at OpenSim's own body pose (and one prismatic joint per coordinate a moving point
-    follows), so that only the paths are compared. Moment arms: ``-L V`` with ``V`` the bodies'
-    velocities (and the moving points' coordinate speed) for a unit speed of the coordinate, read from
-    OpenSim; the clavicle and scapula coordinates are left out (OpenSim projects that unit speed onto
-    the model's PointConstraint, which its Python bindings do not expose; the loader's test will)."""
+    muscles, moving points, PathWraps over ellipsoids, cylinders and spheres) on the real loader, at
+    30 random states on the acromioclavicular loop: lengths against ``getLength``; moment arms about
+    every unlocked coordinate, the clavicle and scapula ones included, two ways, both exact:
+
+    - against OpenSim's ``computeMomentArm`` on its copy with the ``PointConstraint`` not enforced:
+      MomentArmSolver's coupling vector is then the coordinate's unit speed, so its moment arm is the
+      generalized force of a unit tension, ``-(L P)`` at the coordinate (``P = dv/du``);
+    - against ``computeMomentArm`` with the constraint (for the coordinates the loop moves): MomentArmSolver projects the coordinate's unit
+      speed onto the loop's velocity constraint ``G u = 0`` (``projectU``, least squares with unit
+      weights), divides it by the coordinate's projected speed, and returns that ``C`` times the
+      generalized forces: ours ``C^T (-(L P))`` with ``C`` from our ``G``.
+
+    1e-9 relative (floor 1 mm) without an ellipsoid, 1e-6 with one."""
     monkeypatch.chdir(tmp_path)
-    shutil.copy(TSM, tmp_path / TSM.name)  # OpenSim loads from the model's folder: load a copy
-    m = osim.Model(str(tmp_path / TSM.name))
-    s = m.initSystem()
-    root = ET.parse(TSM).getroot()
-    moving = sorted({(e.text or "").split("/")[-1] for e in root.iter() if e.tag.startswith("socket_")
-                     and e.tag.endswith("coordinate")})
-    model = pin.Model()
-    model.addFrame(pin.Frame("ground", 0, 0, pin.SE3.Identity(), pin.FrameType.BODY))
-    bodies = [b.getName() for b in m.getBodySet()]
-    for name in bodies:
-        jid = model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), f"ff_{name}")
-        model.appendBodyToJoint(jid, pin.Inertia.FromSphere(1.0, 0.05), pin.SE3.Identity())
-        model.addFrame(pin.Frame(name, jid, 0, pin.SE3.Identity(), pin.FrameType.BODY))
-    for name in moving:
-        jid = model.addJoint(0, pin.JointModelPX(), pin.SE3.Identity(), name)
-        model.appendBodyToJoint(jid, pin.Inertia.FromSphere(1.0, 0.05), pin.SE3.Identity())
-    cables, muscles, notes = read_paths(root, str(TSM), model)
-    cs = CableSet(model, cables, muscles=muscles, muscle_cables=muscles.names)
-    data = model.createData()
-    cset = m.getCoordinateSet()
-    worst = worst_r = 0.0
-    for _ in range(8):
-        for c in cset:
-            lo, hi = max(c.getRangeMin(), -3.0), min(c.getRangeMax(), 3.0)
-            c.setValue(s, RNG.uniform(lo, hi) if not c.get_locked() else c.getDefaultValue(), False)
-        m.realizePosition(s)
-        q = np.zeros(model.nq)
-        for name in bodies:
-            X = _se3(m.getBodySet().get(name).getTransformInGround(s))
-            i = model.joints[model.getJointId(f"ff_{name}")].idx_q
-            q[i:i + 7] = pin.SE3ToXYZQUAT(X)
-        for name in moving:
-            q[model.joints[model.getJointId(name)].idx_q] = cset.get(name).getValue(s)
-        ours = cable_lengths(model, data, cs, q)
-        for i, c in enumerate(cables):
-            ref = osim.Muscle.safeDownCast(m.getForceSet().get(c.name)).getLength(s)
-            worst = max(worst, abs(ours[i] - ref) / ref)
-        L = cable_jacobian(model, data, cs, q)
-        for co in cset:
-            if co.get_locked() or co.getName().startswith(("clav_", "scapula_")):
-                continue
-            arms = -(L @ _unit_speed_velocities(m, s, co, model, bodies, moving))
-            for i, c in enumerate(cables):
-                arm = osim.Muscle.safeDownCast(m.getForceSet().get(c.name)).computeMomentArm(s, co)
-                worst_r = max(worst_r, abs(arms[i] - arm) / max(1e-3, abs(arm)))
-    assert worst < 1e-6 and worst_r < 1e-6, (worst, worst_r)
+    tsm = Loaded(TSM, tmp_path)
+    free = Loaded(TSM, tmp_path, enforce=False)
+    assert tsm.ellipsoid.any() and not tsm.ellipsoid.all()
+    worst = _check_paths(tsm, free, 30, np.random.default_rng(19))
+    for kind in ("length", "arm", "constrained"):
+        assert worst[kind, False] < 1e-9 and worst[kind, True] < 1e-6, worst
 
 
-def _unit_speed_velocities(m, s, coordinate, model, bodies, moving):
-    """The stand-in pin model's velocity (free-flyers: each body's in its own frame) when
-    ``coordinate`` moves at unit speed and every other coordinate is still (OpenSim's state)."""
-    s2 = osim.State(s)
-    s2.updU().setToZero()
-    coordinate.setSpeedValue(s2, 1.0)
-    m.realizeVelocity(s2)
-    V = np.zeros(model.nv)
-    for name in bodies:
-        b = m.getBodySet().get(name)
-        R = _se3(b.getTransformInGround(s2)).rotation
-        sv = b.getVelocityInGround(s2)
-        iv = model.joints[model.getJointId(f"ff_{name}")].idx_v
-        V[iv:iv + 3] = R.T @ np.array([sv.get(1)[i] for i in range(3)])
-        V[iv + 3:iv + 6] = R.T @ np.array([sv.get(0)[i] for i in range(3)])
-    for name in moving:
-        V[model.joints[model.getJointId(name)].idx_v] = m.getCoordinateSet().get(name).getSpeedValue(s2)
-    return V
+@pytest.mark.parametrize("tag,value,match", [("Flen", "0.9", "Flen"), ("Af", "0", "Af"),
+                                             ("minimum_activation", "0.001", "minimum_activation")])
+def test_thelen_refuses_bad_properties(tag, value, match):
+    """A Thelen2003Muscle property OpenSim would refuse is refused, naming the muscle and the field."""
+    from mcdm_pin.exceptions import ModelError
+    from mcdm_pin.osim.muscles import read_muscle
+
+    force = next(ET.parse(ARM26).getroot().iter("Thelen2003Muscle"))
+    node = force.find(tag)
+    if node is None:
+        node = ET.SubElement(force, tag)
+    node.text = value
+    with pytest.raises(ModelError, match=rf"Thelen2003Muscle 'TRIlong'.*{match}"):
+        read_muscle(force, "arm26.osim")

@@ -218,3 +218,71 @@ def test_problem_of_a_run_is_rebuilt_from_its_problem_json(two_link):
     run.problem_json = ""
     with pytest.raises(ResultsError, match="smoothing"):
         problem_from_run(two_link, run)
+
+
+ARM = REPO / "robots" / "myosuite" / "myoarm.yaml"  # 63 muscles over wraps, 11 couplings, 22 reserves
+
+
+@pytest.fixture(scope="module")
+def arm_run(tmp_path_factory):
+    """Minimum activations on 7 instants (0.8 .. 0.92 s) of the arm's abduction, saved."""
+    pytest.importorskip("mujoco")
+    from mcdm_pin.objectives import MinActivations
+    from mcdm_pin.problem import Problem
+    from mcdm_pin.trajectory import Trajectory
+
+    robot = Robot.load(ARM)
+    full = load_trajectory(robot, "abduction")
+    part = slice(40, 47)
+    traj = Trajectory("abduction", full.t[part], full.q[part], full.qd[part], full.qdd[part])
+    res = InverseDynamics(robot, Problem(robot, MinActivations(), [])).solve_trajectory(traj, progress=False)
+    assert res.found.all()
+    return robot, res, res.save(tmp_path_factory.mktemp("arm") / "arm.npz")
+
+
+def test_coupled_arm_dynamics_with_constraint_forces_reproduce_the_plan(arm_run):
+    """The replay's dynamics are computed independently of the solve: the full equation of motion with
+    the couplings' constraint forces (KKT), and L in numpy from the route's path. At every planned
+    state the run's forces and reserve torques give the planned acceleration (measured 2e-12 rad/s^2;
+    without the constraint forces ~3e3 rad/s^2 off), and the numpy L equals the kernel's (4e-16)."""
+    from mcdm_pin.model.terms import TermsEvaluator
+    from mcdm_pin.verify.replay import _Dynamics, _inputs
+    from mcdm_pin.verify.routed import RoutedL
+
+    robot, res, _ = arm_run
+    dyn, U = _Dynamics(robot), _inputs(robot, res)
+    assert len(robot.couplings) == 11 and U.shape == (len(res.t), robot.m + 22)
+    ev, zero = TermsEvaluator(robot, compiled=False), np.zeros(robot.nv)
+    routed = RoutedL(robot)
+    for k in range(len(res.t)):
+        q, v = res.configuration[k], res.qd[k]
+        a, lam = dyn.solve(q, v, U[k])
+        assert np.abs(a - res.qdd[k]).max() < 1e-9
+        assert lam.shape == (11,) and 1.0 < np.abs(lam).max() < 1e3  # N m, measured 16 .. 35
+        G, gamma = dyn.constraint_rows(q, v)
+        assert np.abs(G @ res.qdd[k] - gamma).max() < 1e-9  # the plan keeps the couplings
+        L = ev(q, zero, zero, checked=True).L_full
+        assert np.abs(routed(q) - L).max() < 1e-12 * np.abs(L).max()
+    free = np.asarray(__import__("pinocchio").aba(robot.model, dyn.data, q, v, dyn.joint_force(q, v, U[-1])))
+    assert np.abs(free - res.qdd[-1]).max() > 10.0
+
+
+def test_cli_verify_passes_the_coupled_arm_and_fails_it_tampered(arm_run, tmp_path, capsys):
+    """RK4 from 4 substeps (the finger dampers make modes of -500 1/s: 5 ms is inside RK4's stability
+    region): self error at order 4.7, 4.3 to 1e-10, plan error 2.5e-5 rad, the floor of interpolating
+    f linearly (measured). One muscle's force 20 % too high puts the replay 3e-2 rad off the plan."""
+    from mcdm_pin.results import TrajectoryResult
+
+    robot, res, path = arm_run
+    assert main(["verify", str(ARM), str(path), "--substeps", "4", "--levels", "4"]) == 0
+    out = capsys.readouterr().out
+    assert "verdict: converged" in out and "11 couplings' constraint forces" in out
+    bad = TrajectoryResult.load(path)
+    j = int(np.argmax(bad.f[0]))
+    bad.f[:, j] *= 1.2
+    assert main(["verify", str(ARM), str(bad.save(tmp_path / "tampered.npz")), "--substeps", "4",
+                 "--levels", "2"]) == 1
+    out = capsys.readouterr().out
+    assert "verdict: diverged" in out
+    err = float(out.split("strays up to ")[1].split()[0])
+    assert err > 2e-2  # rad; the untampered run's replay stays within 2.5e-5 of the plan

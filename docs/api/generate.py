@@ -53,6 +53,7 @@ MODULES = [
     ("mcdm_pin.mjcf.model", "the pin.Model of a compiled MuJoCo model, and the coordinate maps"),
     ("mcdm_pin.mjcf.tendons", "MuJoCo's tendons, muscles, motors and equalities -> cables, couplings"),
     ("mcdm_pin.osim", "OpenSim .osim files -> Robot, read as XML (the skeleton: bodies, joints, couplings, loops)"),
+    ("mcdm_pin.osim.rmr", "RMR's per-frame problem on the thoracoscapular shoulder, and its answers in ours"),
     ("mcdm_pin.verify", "forward-dynamics replay and its verdict"),
     ("mcdm_pin.trajectory_checks", "the trajectory checks of mcdm-pin info"),
     ("mcdm_pin.workspace", "workspaces: poses -> chunks -> Dask -> Zarr"),

@@ -151,23 +151,11 @@ def import_caspr(bodies_xml, cables_xml, out_dir, trajectories_xml=None, cable_s
     urdf_name = _check_name(urdf_name or name, "urdf_name")
     out_dir = Path(out_dir)
     urdf_dir = out_dir if urdf_dir is None else Path(urdf_dir)
-    for key, folder in (("out_dir", out_dir), ("urdf_dir", urdf_dir)):
-        if folder.exists() and not folder.is_dir():
-            raise CasprError(None, key, f"{folder} is a file; expected a folder (existing or to be made)")
     source = (f"{Path(bodies_xml).name} + {Path(cables_xml).name} (cable set {cset.id!r})"
               + (f" + {Path(trajectories_xml).name}" if trajectories_xml is not None else ""))
     chs = chains(bodies)
-    data = {"version": 1, "name": name, "description": "", "urdf": f"{urdf_name}.urdf", "gravity": list(GRAVITY),
-            "joints": sidecar_joints(chs, cone_deg, actuator_limit), "cables": sidecar_cables(bodies, cset)}
-    if cset.springs:
-        data["springs"] = sidecar_springs(bodies, cset)
-    parent = _existing_parent(out_dir)
-    for key, folder in (("--out", out_dir), ("--urdf-dir", urdf_dir)):
-        _check_writable(folder, key)
-    try:
-        tmp = Path(tempfile.mkdtemp(prefix=".import-caspr-", dir=parent))
-    except OSError as exc:
-        raise CasprError(None, "--out", f"{out_dir}: cannot be written ({exc.strerror or exc})") from None
+    data = _sidecar_data(name, urdf_name, bodies, chs, cset, cone_deg, actuator_limit)
+    tmp = _staging(out_dir, urdf_dir)
     try:
         (tmp / f"{urdf_name}.urdf").write_text(urdf_text(bodies, chs, urdf_name, Path(bodies_xml).name),
                                                encoding="utf-8")
@@ -199,6 +187,30 @@ def import_caspr(bodies_xml, cables_xml, out_dir, trajectories_xml=None, cable_s
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return result
+
+
+def _sidecar_data(name, urdf_name, bodies, chs, cset, cone_deg, actuator_limit) -> dict:
+    """The sidecar's content before the trajectories (written with :func:`.writer.sidecar_text`)."""
+    data = {"version": 1, "name": name, "description": "", "urdf": f"{urdf_name}.urdf", "gravity": list(GRAVITY),
+            "joints": sidecar_joints(chs, cone_deg, actuator_limit), "cables": sidecar_cables(bodies, cset)}
+    if cset.springs:
+        data["springs"] = sidecar_springs(bodies, cset)
+    return data
+
+
+def _staging(out_dir: Path, urdf_dir: Path) -> Path:
+    """A new temporary folder beside ``out_dir`` (the import writes there and moves the files into place
+    at the end), once both output folders are known to be writable."""
+    for key, folder in (("out_dir", out_dir), ("urdf_dir", urdf_dir)):
+        if folder.exists() and not folder.is_dir():
+            raise CasprError(None, key, f"{folder} is a file; expected a folder (existing or to be made)")
+    parent = _existing_parent(out_dir)
+    for key, folder in (("--out", out_dir), ("--urdf-dir", urdf_dir)):
+        _check_writable(folder, key)
+    try:
+        return Path(tempfile.mkdtemp(prefix=".import-caspr-", dir=parent))
+    except OSError as exc:
+        raise CasprError(None, "--out", f"{out_dir}: cannot be written ({exc.strerror or exc})") from None
 
 
 def _check_writable(folder: Path, key: str) -> None:

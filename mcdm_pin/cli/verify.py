@@ -74,7 +74,11 @@ def run(args) -> int:
     how = ("re-solved on the plan at every stage time" if forces is not None
            else f"{args.hold} between instants")
     print(f"{robot.name}: replay of {run_path} ({result.problem or 'unknown problem'})")
-    print(f"forward dynamics: Pinocchio ABA, tau = -L(q)^T f, {args.integrator} (order "
+    coupled = getattr(robot, "couplings", None)
+    dynamics = ("Pinocchio ABA" if coupled is None else
+                f"M, h from Pinocchio with the {len(coupled)} couplings' constraint forces (KKT)")
+    act = " + S tau_act" if robot.actuators else ""
+    print(f"forward dynamics: {dynamics}, tau = -L(q)^T f{act}, {args.integrator} (order "
           f"{ORDER[args.integrator]}), forces {how}; from the first solved "
           f"instant t = {r0.t[0]:g} s to t = {r0.t[-1]:g} s ({len(r0.t)} instants)"
           + (f", restarting from the plan every {args.window} instant(s)" if args.window else ""))

@@ -32,7 +32,7 @@ def _positive(text: str) -> float:
 
 def _scene_options(args) -> dict:
     return dict(fmax=args.fmax, arrow_scale=args.arrow_scale, start_time=args.time,
-                legend=not args.no_legend, links=args.links)
+                legend=not args.no_legend, links=args.links, arc_tol=args.arc_tol)
 
 
 def _add_scene_options(p) -> None:
@@ -44,6 +44,9 @@ def _add_scene_options(p) -> None:
     p.add_argument("--time", type=float, metavar="T",
                    help="show the scene paused at trajectory time T, s (default: play)")
     p.add_argument("--no-legend", action="store_true", help="no colour bar / time overlay")
+    p.add_argument("--arc-tol", type=_positive, metavar="REL",
+                   help="wrapped cables: how much shorter than its route a drawn cable may be, relative "
+                        "(default 1e-6; larger draws each wrap's arc with fewer pieces: a smaller file)")
     p.add_argument("--links", choices=("auto", "solid", "ghost"), default="auto",
                    help="how links are drawn: auto (default: meshes translucent, so that the cables "
                         "attached inside a body's skin show; primitive shapes opaque), solid or ghost")

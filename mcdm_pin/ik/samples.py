@@ -1,5 +1,5 @@
-r"""A sidecar's ``task`` trajectory: task-space samples from poses or a CSV, solved into a joint
-trajectory (:func:`task_trajectory`).
+r"""A sidecar's ``task`` trajectory's task-space samples, from poses or a CSV (solved into a joint
+trajectory by :func:`mcdm_pin.trajectory.task_trajectory`).
 
 **Poses** ``[{t, y}, ...]`` with ``dt``: between consecutive poses every coordinate follows the
 rest-to-rest quintic :math:`y(t) = y_i + (y_{i+1} - y_i)\,s(\tau)`, :math:`s = 10\tau^3 - 15\tau^4 +
@@ -20,13 +20,11 @@ import math
 import numpy as np
 
 from ..exceptions import TrajectoryError
-from .space import TaskSpace
+from ..profiles import csv_rows, is_number, quintic_profile
 
 
 def pose_samples(poses, dt: float):
     """``(t, y, yd, ydd)`` of rest-to-rest quintics through ``poses`` ``((t_i, y_i), ...)``."""
-    from ..trajectory import quintic_profile
-
     ts, ys, yds, ydds = [], [], [], []
     for i in range(len(poses) - 1):
         (t0, y0), (t1, y1) = poses[i], poses[i + 1]
@@ -46,13 +44,11 @@ def csv_samples(path, coordinates: str):
     """``(t, y, yd, ydd)`` of a CSV of poses (module docstring)."""
     from scipy.interpolate import make_interp_spline
 
-    from ..trajectory import _csv_rows, _is_number
-
-    rows = _csv_rows(path)
+    rows = csv_rows(path)
     cols = ["t", *coordinates]
     order = list(range(len(cols)))
     first = 0
-    if rows and not any(_is_number(c) for c in rows[0]):
+    if rows and not any(is_number(c) for c in rows[0]):
         head = [c.strip() for c in rows[0]]
         if sorted(head) != sorted(cols):
             raise TrajectoryError(f"{path}: row 1: header {head}; expected the columns {', '.join(cols)} (any order)")
@@ -69,29 +65,3 @@ def csv_samples(path, coordinates: str):
     t, y = data[:, 0], data[:, 1:]
     spline = make_interp_spline(t, y, k=5)
     return t, y, spline(t, 1), spline(t, 2)
-
-
-def task_trajectory(robot, spec):
-    """The joint :class:`~mcdm_pin.trajectory.Trajectory` of a sidecar ``task`` trajectory ``spec``
-    (:func:`mcdm_pin.ik.solve_task` on the robot's model; first seed ``spec.q_start`` or the robot's
-    reference pose); errors name the sidecar and the trajectory's key."""
-    from ..trajectory import Trajectory, resolve_configuration
-    from .solve import solve_task
-
-    where = robot.sidecar.path if robot.sidecar is not None else robot.name
-    if getattr(robot, "couplings", None) is not None:
-        raise TrajectoryError(f"{where}: {spec.key}: task trajectories on a robot with joint couplings are not "
-                              f"supported (the inverse kinematics would move coupled coordinates freely)")
-    try:
-        space = TaskSpace(frame=spec.frame, point=tuple(spec.point), coordinates=spec.coordinates, euler=spec.euler)
-        if spec.file is not None:
-            t, y, yd, ydd = csv_samples(spec.file, spec.coordinates)
-        else:
-            t, y, yd, ydd = pose_samples(spec.poses, spec.dt)
-        path = robot.sidecar.path if robot.sidecar is not None else None
-        x0 = (resolve_configuration(robot, spec.q_start, f"{spec.key}.q_seed", path)
-              if spec.q_start is not None else robot.reference_coordinates())
-        sol = solve_task(robot.model, space, t, y, yd, ydd, robot.configuration(x0), name=f"trajectory {spec.name!r}")
-    except TrajectoryError as exc:
-        raise TrajectoryError(f"{where}: {spec.key}: {exc}") from None
-    return Trajectory(spec.name, sol.t, sol.q, sol.qd, sol.qdd)

@@ -108,6 +108,7 @@ def read_tendons(mj, mjm, source: str) -> TendonSet:
         raise _refuse(source, "actuators", "two muscles drive one tendon; expected one muscle per tendon")
     cables, names, notes = [], [], []
     params = found.params
+    ceiling = _tension_ceilings(params) if params.size else np.zeros(0)
     for t in range(mj.ntendon):
         tname = mujoco.mj_id2name(mj, mujoco.mjtObj.mjOBJ_TENDON, t) or f"tendon:#{t}"
         _check_tendon(mj, t, source, tname, notes)
@@ -124,7 +125,7 @@ def read_tendons(mj, mjm, source: str) -> TendonSet:
             continue
         if kind == "muscle":
             # the static bounds only enclose the tension; each instant's range follows the muscle's state
-            cables.append(Cable(cname, tuple(route), 0.0, _tension_ceiling(params, k)))
+            cables.append(Cable(cname, tuple(route), 0.0, float(ceiling[k])))
             names.append(cname)
         else:
             cables.append(Cable(cname, tuple(route), *motors[k][1:]))
@@ -201,15 +202,16 @@ def _motors(mj, source: str, skipped) -> dict:
     return out
 
 
-def _tension_ceiling(params, k: int) -> float:
-    """A tension no state of muscle ``k`` can exceed within its length range (its static upper bound)."""
+def _tension_ceilings(params) -> np.ndarray:
+    """(m,) a tension no state of each muscle can exceed within its length range (its static upper
+    bound): 10 x the largest force at full activation and a lengthening speed of 1e3 m/s over 5
+    lengths spanning the range, at least 1 N (all muscles in one evaluation)."""
     from ..model.muscles import force_range
 
-    lr = params.lengthrange[k] / params.gear[k]
-    lengths = np.linspace(lr[0], lr[1], 5)
-    one = _subset(params, [k])
-    top = max(float(force_range(one, np.array([x]), np.array([1e3]))[3][0]) for x in lengths)
-    return max(1.0, 10.0 * top)
+    lr = params.lengthrange / params.gear[:, None]
+    lengths = np.linspace(lr[:, 0], lr[:, 1], 5)  # (5, m)
+    top = force_range(params, lengths, np.full_like(lengths, 1e3)).f_max.max(axis=0)
+    return np.maximum(1.0, 10.0 * top)
 
 
 def _subset(params, idx):

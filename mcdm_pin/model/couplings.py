@@ -98,7 +98,8 @@ class Couplings:
         dep = set(self.dependent.tolist())
         self.independent = np.array([i for i in range(nv) if i not in dep], dtype=int)
         self.independent_names = tuple(self.names[i] for i in self.independent)
-        self._chain = None  # basis()'s index lists, made on first use
+        self._chain = None  # basis()'s index arrays, made on first use
+        self._independent64 = self.independent.astype(np.int64)
 
     @property
     def n(self) -> int:
@@ -155,33 +156,31 @@ class Couplings:
         Every row has one entry at most: an independent coordinate's 1 in its own column; a
         dependent's ``p'(x)`` times its independent coordinate's entry, in that one's column (none for
         a fixed coordinate). So the rows are products of scalars along each chain of couplings,
-        taken in order, and written in one assignment."""
+        taken in order: one compiled pass (:func:`mcdm_pin.model.kernels.coupling_basis`, compiled
+        or not: mcdm_pin/jit.py)."""
         if self._chain is None:
             self._chain = _chain(self)
-        dep_rows, dep_cols, src, coef = self._chain
-        qv = np.asarray(q, dtype=float)[self.q_index[src]].tolist() if len(dep_rows) else []
-        value = [1.0] * self.nv  # each row's entry (1 for the independent rows)
-        for k, (d, i, x) in enumerate(zip(dep_rows, src, qv)):
-            if callable(coef[k]):  # a function's f'
-                value[d] = coef[k](x)[1] * value[i]
-                continue
-            a0, a1, a2, a3, a4 = coef[k]
-            value[d] = (a1 + x * (2 * a2 + x * (3 * a3 + x * 4 * a4))) * value[i]  # Coupling.value's p'
-        N = np.zeros((self.nv, self.n))
-        N[self.independent, np.arange(self.n)] = 1.0
-        if len(dep_rows):
-            N[dep_rows, dep_cols] = [value[d] for d in dep_rows]
-        return N
+        from .. import jit
+
+        src, src_q, rows, cols, coef, functions = self._chain
+        x = np.asarray(q, dtype=float)[src_q]
+        # each coupling's slope p'(x): the polynomials' at once, the functions' (OpenSim's) one by one
+        slope = coef[:, 1] + x * (2 * coef[:, 2] + x * (3 * coef[:, 3] + x * 4 * coef[:, 4]))
+        for k, f in functions:
+            slope[k] = f(x[k])[1]
+        return jit.kernels("model.kernels").coupling_basis(slope, src, rows, cols, self._independent64,
+                                                           int(self.nv))
 
 
 def _chain(cs: Couplings):
-    """:meth:`Couplings.basis`'s lists, in the couplings' order, for those with an independent
-    coordinate at the root of its chain (not a fixed one): ``(rows, columns, sources, coefficients)``:
-    each dependent's row, the column of that independent coordinate, the row it multiplies (whose
-    ``q`` entry is also the polynomial's ``x``) and its polynomial (or, for a function, its
-    ``value`` method)."""
+    """:meth:`Couplings.basis`'s index arrays, in the couplings' order, for those with an independent
+    coordinate at the root of its chain (not a fixed one): ``(sources, their q entries, rows,
+    columns, coefficients, functions)``: the row each dependent multiplies (whose ``q`` entry is also
+    the coupling's ``x``), that ``q`` entry's index, each dependent's row, the column of the
+    independent coordinate at its chain's root, its polynomial (k, 5; zeros for a function) and the
+    ``(k, value)`` of the couplings given by a function (``value(x) = (p, p', p'')``)."""
     col = {int(i): k for k, i in enumerate(cs.independent)}
-    rows, cols, src, coef = [], [], [], []
+    rows, cols, src, coef, functions = [], [], [], [], []
     for c in cs.items:
         root = col.get(c.independent) if c.independent >= 0 else None
         if root is None:  # a fixed coordinate, or one coupled to a fixed one: a zero row
@@ -191,8 +190,13 @@ def _chain(cs: Couplings):
         rows.append(c.dependent)
         cols.append(root)
         src.append(c.independent)
-        coef.append(c.value if c.function is not None else tuple(float(a) for a in c.coef))
-    return rows, cols, np.array(src, dtype=int), coef
+        coef.append([0.0] * 5 if c.function is not None else [float(a) for a in c.coef])
+        if c.function is not None:
+            functions.append((len(rows) - 1, c.value))
+    i64 = np.int64
+    src = np.array(src, dtype=i64)
+    return (src, cs.q_index[src].astype(i64), np.array(rows, dtype=i64), np.array(cols, dtype=i64),
+            np.array(coef, dtype=float).reshape(len(rows), 5), tuple(functions))
 
 
 def _ordered(items, names):

@@ -175,6 +175,44 @@ def spread(A, b):
     return out
 
 
+@njit(cache=True, nogil=True, fastmath={"nnan", "ninf"})
+def ruiz(A, sweeps):
+    """:func:`mcdm_pin.scaling.equilibrate`: ``sweeps`` Ruiz sweeps on ``|A|`` (each row and column
+    divided by the square root of its largest entry; an all-zero one left alone), then each factor
+    rounded to the nearest power of two. Returns ``(r, d)``, the rows' and columns' factors.
+
+    (``A`` is finite: an assembled problem's equations. The fastmath flags only let the maxima
+    compile to vector instructions; no sum is reassociated, so the bits are the uncompiled code's.)"""
+    n_r, n_c = A.shape
+    B = np.abs(A)
+    r = np.ones(n_r)
+    d = np.ones(n_c)
+    row = np.empty(n_r)
+    col = np.empty(n_c)
+    s = np.empty(n_c)
+    for _ in range(sweeps):
+        col[:] = 0.0
+        for i in range(n_r):
+            ri = r[i]
+            for j in range(n_c):  # this row's entries, and the columns' maxima so far
+                v = ri * B[i, j] * d[j]
+                s[j] = v
+                col[j] = v if v > col[j] else col[j]
+            m = 0.0
+            for j in range(n_c):
+                m = s[j] if s[j] > m else m
+            row[i] = m
+        for i in range(n_r):
+            r[i] /= np.sqrt(row[i] if row[i] != 0.0 else 1.0)
+        for j in range(n_c):
+            d[j] /= np.sqrt(col[j] if col[j] != 0.0 else 1.0)
+    for i in range(n_r):
+        r[i] = np.exp2(np.round(np.log2(r[i])))
+    for j in range(n_c):
+        d[j] = np.exp2(np.round(np.log2(d[j])))
+    return r, d
+
+
 @njit(cache=True, nogil=True)
 def cone_batch(RT, u, R_socket, axes, index, socket):
     """Every cone's force map at once (:class:`mcdm_pin.constraints.cone.ConeBatch`, whose numpy
@@ -316,12 +354,149 @@ def needs_scaling(A, b, lb, ub, P_diag, P_factor, c, G, g, limit):
     return False
 
 
+@njit(cache=True, nogil=True)
+def coupling_basis(slope, src_v, dep_rows, dep_cols, independent, nv):
+    """:meth:`mcdm_pin.model.couplings.Couplings.basis`: ``N`` (nv, n), one pass over the couplings in
+    order: each dependent row's entry is its coupling's slope ``p'(x)`` at the configuration
+    (``slope`` (k,)) times its source row's; the independent rows' ones in their own columns."""
+    n = independent.shape[0]
+    value = np.ones(nv)
+    for k in range(dep_rows.shape[0]):
+        value[dep_rows[k]] = slope[k] * value[src_v[k]]
+    N = np.zeros((nv, n))
+    for a in range(n):
+        N[independent[a], a] = 1.0
+    for k in range(dep_rows.shape[0]):
+        N[dep_rows[k], dep_cols[k]] = value[dep_rows[k]]
+    return N
+
+
+@njit(cache=True, nogil=True)
+def _pow2(x):
+    return np.exp2(np.round(np.log2(x)))
+
+
+@njit(cache=True, nogil=True)
+def _objective_size(reach, P, P_diag, P_factor, c):
+    """:func:`scale_factors`' size of the objective with each variable at ``reach``: the largest
+    ``|reach_i P_ij reach_j|`` (``P`` dense), else of ``P_diag reach^2`` and the factor's columns'
+    sums of squares, and of ``|c reach|``; at least 1e-300."""
+    n = reach.shape[0]
+    size = 0.0
+    if P.shape[0] > 0:
+        for i in range(n):
+            for j in range(n):
+                size = max(size, abs(reach[i] * P[i, j] * reach[j]))
+    else:
+        for j in range(n):
+            size = max(size, abs(P_diag[j] * reach[j] * reach[j]))
+        acc = np.zeros(n)  # each column's sum of squares, rows in order (row by row: contiguous)
+        for q in range(P_factor.shape[0]):
+            for j in range(n):
+                x = P_factor[q, j] * reach[j]
+                acc[j] += x * x
+        for j in range(n):
+            size = max(size, acc[j])
+    for j in range(n):
+        size = max(size, abs(c[j] * reach[j]))
+    return max(size, 1e-300)
+
+
+@njit(cache=True, nogil=True)
+def _cone_scales(G, g, d, limit):
+    """:func:`scale_factors`' factor of each cone: one over the power of two nearest its size (the
+    largest ``|G_k d|`` and ``|g_k|``) where that lies outside ``limit``, else 1."""
+    K, _, n = G.shape
+    cone = np.ones(K)
+    for k in range(K):
+        sz = 0.0
+        for e in range(3):
+            for j in range(n):
+                sz = max(sz, abs(G[k, e, j] * d[j]))
+        for e in range(3):
+            sz = max(sz, abs(g[k, e]))
+        sz = max(sz, 1e-300)
+        if _outside(sz, limit):
+            cone[k] = 1.0 / _pow2(sz)
+    return cone
+
+
+@njit(cache=True, nogil=True)
+def scale_factors(A, b, lb, ub, c, P, P_diag, P_factor, structured, G, g, f_scale, force, limit):
+    """:func:`mcdm_pin.scaling.scaling_factors` in one pass, the same steps in the same order
+    (``P`` (n, n) the dense Hessian when the problem has it, else (0, 0); ``structured``: ``P =
+    diag(P_diag) + P_factor^T P_factor``; ``f_scale`` (n,) or empty: none). Returns ``(scaled, d,
+    r, obj, cone)``: ``scaled`` false when every factor is one and ``force`` is false (then the
+    rest is meaningless)."""
+    m, n = A.shape
+    K = G.shape[0]
+    ones_m, ones_n = np.ones(m), np.ones(n)
+    has_f = f_scale.shape[0] > 0
+    if not force and not has_f and structured and not needs_scaling(A, b, lb, ub, P_diag, P_factor, c, G, g, limit):
+        return False, ones_n, ones_m, 1.0, np.ones(K)
+    wide = m > 0 and spread(A, np.zeros(0)) > limit
+    if wide:
+        r, d = ruiz(A, 10)
+    else:
+        r, d = ones_m, ones_n.copy()
+    if has_f and m > 0:
+        for j in range(n):
+            d[j] = d[j] * _pow2(f_scale[j])
+    rows = np.zeros(m)
+    for i in range(m):
+        for j in range(n):
+            rows[i] = max(rows[i], abs(A[i, j]) * d[j])
+        rows[i] = rows[i] * r[i]
+    # the variables' unit (scaling.py's comments say why)
+    unit = 0.0
+    ub_min = np.inf
+    for j in range(n):
+        x = abs(lb[j] / d[j])
+        if np.isfinite(x):
+            unit = max(unit, x)
+        x = abs(ub[j] / d[j])
+        if np.isfinite(x) and x > 0.0:
+            ub_min = min(ub_min, x)
+    if unit > 0.0 and np.isfinite(ub_min) and ub_min > unit:
+        unit = np.sqrt(unit * ub_min)
+    for i in range(m):
+        if rows[i] > 0.0:
+            unit = max(unit, abs(b[i] * r[i]) / rows[i])
+    u = _pow2(unit) if unit > 0.0 and _outside(unit, limit) else 1.0
+    r = r.copy()
+    for j in range(n):
+        d[j] = d[j] * u
+    for i in range(m):
+        row = rows[i] * u
+        if row > 0.0 and _outside(row, limit):
+            r[i] = r[i] / _pow2(row)
+    # the objective's size: each variable at its unit, or at its largest bound where that is smaller
+    reach = np.empty(n)
+    for j in range(n):
+        bound = max(abs(lb[j]), abs(ub[j]))
+        reach[j] = min(d[j], bound if np.isfinite(bound) else np.inf)
+    size = _objective_size(reach, P, P_diag, P_factor, c)
+    obj = _pow2(size) if _outside(size, limit) else 1.0
+    cone = _cone_scales(G, g, d, limit)
+    scaled = force or u != 1.0 or obj != 1.0
+    for j in range(n):
+        scaled = scaled or d[j] != 1.0
+    for i in range(m):
+        scaled = scaled or r[i] != 1.0
+    for k in range(K):
+        scaled = scaled or cone[k] != 1.0
+    return scaled, d, r, obj, cone
+
+
 def warm_calls():
     """This module's kernels with example arguments of the types the library passes (registered
     with :mod:`mcdm_pin.jit`, which loads them from numba's cache or compiles them)."""
     z = np.zeros
     i64 = np.int64
-    return [(spread, (z((1, 2)), z(1))),
+    return [(spread, (z((1, 2)), z(1))), (ruiz, (z((1, 2)), 10)),
+            (coupling_basis, (z(1), z(1, dtype=i64), z(1, dtype=i64), z(1, dtype=i64), z(1, dtype=i64), 2)),
+            (scale_factors, (z((1, 2)), z(1), z(2), z(2), z(2), z((0, 0)), z(2), z((1, 2)), True, z((1, 3, 2)),
+                             z((1, 3)), z(0), False, 1e3)),
             (interaction_quadratic, (z((1, 6, 2)), z((1, 6)), z(1, dtype=i64), z(1))),
             (cone_batch, (z((1, 6, 2)), z((1, 6)), z((1, 3, 3)), z((1, 3)), z(1, dtype=i64), np.ones(1, dtype=np.bool_))),
             (needs_scaling, (z((1, 2)), z(1), z(2), z(2), z(2), z((1, 2)), z(2), z((1, 3, 2)), z((1, 3)), 1e3)),

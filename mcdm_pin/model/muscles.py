@@ -48,8 +48,12 @@ With ``actearly`` MuJoCo evaluates the force at the next step's activation; the 
 
 API: :func:`from_mujoco` (a compiled ``MjModel`` -> :class:`MuscleParams` and tendon ids),
 :func:`normalised`, :func:`normalised_passive`, :func:`fl`, :func:`fv`, :func:`fp` (the curves),
-:func:`force_range` (-> :class:`MuscleState`), :func:`activation` (its inverse), :func:`length_slopes`
+:func:`force_range` (-> :class:`MuscleState`; :func:`tension_state` without the checks),
+:func:`activation` (its inverse), :func:`length_slopes`
 (with :func:`dfl`, :func:`dfp`).
+
+The curves and the tension range are computed by the compiled kernels of
+:mod:`mcdm_pin.model.muscle_kernels` (plain Python before ``mcdm-pin compile``: one implementation).
 
 This follows ``mju_muscleGainLength``, ``mju_muscleGain``, ``mju_muscleBias`` and
 ``mju_muscleDynamics`` (``src/engine/engine_util_misc.c``) and ``mj_fwdActuation``
@@ -151,9 +155,15 @@ class MuscleParams:
 
     @cached_property
     def _curves(self) -> "_Curves":
-        """The curves' constants (:class:`_Curves`), computed once: the per-instant functions below
-        are numpy calls on (m,) arrays whose cost is per call, not per element."""
+        """The curves' constants (:class:`_Curves`), computed once (the normalisation below and the
+        kernels' table, :attr:`kernel_table`)."""
         return _curves(self)
+
+    @cached_property
+    def kernel_table(self) -> np.ndarray:
+        """The constants of :mod:`mcdm_pin.model.muscle_kernels` (its ``N_ROWS`` rows, m columns;
+        read-only), from :attr:`_curves`' expressions."""
+        return _kernel_table(self)
 
     def length_at(self, l) -> np.ndarray:
         """Tendon lengths (m) at normalised lengths ``l`` (broadcast over muscles; inverse of the map)."""
@@ -276,41 +286,53 @@ def normalised_passive(params: MuscleParams, tendon_lengths) -> np.ndarray:
     return k.bias_r0 + (params.gear * ell - k.lr0) / k.bias_lopt
 
 
+def _kernel_table(p: MuscleParams) -> np.ndarray:
+    from . import muscle_kernels as mk
+
+    k = p._curves
+    t = np.empty((mk.N_ROWS, p.size))
+    for row, value in ((mk.R0, k.r0), (mk.BIAS_R0, k.bias_r0), (mk.LR0, k.lr0), (mk.LOPT, k.lopt),
+                       (mk.BIAS_LOPT, k.bias_lopt), (mk.VDEN, k.vden), (mk.GEAR, p.gear), (mk.LMIN, p.lmin),
+                       (mk.LMAX, p.lmax), (mk.FL_A, k.fl_a), (mk.FL_B, k.fl_b), (mk.FL_D1, k.fl_d[0]),
+                       (mk.FL_D2, k.fl_d[1]), (mk.FL_D3, k.fl_d[2]), (mk.FL_D4, k.fl_d[3]), (mk.FV_Y, k.fv_y),
+                       (mk.FV_D, k.fv_d), (mk.FVMAX, p.fvmax), (mk.FP_B, k.fp_b), (mk.FP_W, k.fp_w),
+                       (mk.FP_HALF, k.fp_half), (mk.FPMAX, p.fpmax), (mk.PASSIVE_SCALE, k.passive_scale),
+                       (mk.GAIN_SCALE, k.gain_scale), (mk.ACT_MIN, p.act_min), (mk.ACT_MAX, p.act_max)):
+        t[row] = value
+    t.setflags(write=False)
+    return t
+
+
+def _kernels():
+    from .. import jit
+
+    return jit.kernels("model.muscle_kernels")  # compiled or not: mcdm_pin/jit.py
+
+
+def _curve(params: MuscleParams, x, which: int) -> np.ndarray:
+    """Curve ``which`` (0 F_L, 1 F_V, 2 F_P) at ``x`` (last axis m, or broadcast to it): the
+    compiled curves of :mod:`mcdm_pin.model.muscle_kernels`."""
+    x = np.asarray(x, dtype=float)
+    shape = np.broadcast_shapes(x.shape, (params.size,))
+    rows = np.ascontiguousarray(np.broadcast_to(x, shape).reshape(-1, params.size))
+    return _kernels().curves(rows, which, params.kernel_table).reshape(shape)
+
+
 def fl(params: MuscleParams, l) -> np.ndarray:
     """Active force-length curve ``F_L(l)`` in [0, 1] (``mju_muscleGainLength``)."""
-    l = np.asarray(l, dtype=float)
-    k = params._curves
-    lmin, lmax, a, b = params.lmin, params.lmax, k.fl_a, k.fl_b
-    d1, d2, d3, d4 = k.fl_d
-    x1 = (l - lmin) / d1
-    x2 = (1 - l) / d2
-    x3 = (l - 1) / d3
-    x4 = (lmax - l) / d4
-    inside = (lmin <= l) & (l <= lmax)
-    # the first piece whose condition holds (np.select's rule, as nested np.where: cheaper)
-    return np.where(~inside, 0.0, np.where(l <= a, 0.5 * x1 * x1, np.where(
-        l <= 1, 1 - 0.5 * x2 * x2, np.where(l <= b, 1 - 0.5 * x3 * x3, 0.5 * x4 * x4))))
+    return _curve(params, l, 0)
 
 
 def fv(params: MuscleParams, v) -> np.ndarray:
     """Force-velocity curve ``F_V(v)`` in [0, fvmax] (the velocity curve of ``mju_muscleGain``)."""
-    v = np.asarray(v, dtype=float)
-    k = params._curves
-    y = k.fv_y
-    return np.where(v <= -1, 0.0, np.where(v <= 0, (v + 1) * (v + 1), np.where(
-        v <= y, params.fvmax - (y - v) * (y - v) / k.fv_d, params.fvmax)))
+    return _curve(params, v, 1)
 
 
 def fp(params: MuscleParams, l) -> np.ndarray:
     """Passive force-length curve ``F_P(l)`` >= 0 per F0 (``mju_muscleBias``; ``bias_lmax``, ``fpmax``).
 
     ``l`` is the passive normalised length (:func:`normalised_passive`)."""
-    l = np.asarray(l, dtype=float)
-    k = params._curves
-    x_quad = (l - 1) / k.fp_w
-    x_lin = (l - k.fp_b) / k.fp_w
-    return np.where(l <= 1, 0.0, np.where(l <= k.fp_b, k.fp_half * x_quad * x_quad,
-                                          params.fpmax * (0.5 + x_lin)))
+    return _curve(params, l, 2)
 
 
 def force_range(params: MuscleParams, tendon_lengths, tendon_velocities) -> MuscleState:
@@ -327,16 +349,22 @@ def force_range(params: MuscleParams, tendon_lengths, tendon_velocities) -> Musc
         return params.force_range(tendon_lengths, tendon_velocities)
     ell = _lengths(params, tendon_lengths, "tendon_lengths")
     ell_dot = _lengths(params, tendon_velocities, "tendon_velocities")
-    k = params._curves
-    g_ell = params.gear * ell  # (normalised and normalised_passive, the inputs checked once)
-    l = k.r0 + (g_ell - k.lr0) / k.lopt
-    v = params.gear * ell_dot / k.vden
-    lp = k.bias_r0 + (g_ell - k.lr0) / k.bias_lopt
-    passive = k.passive_scale * fp(params, lp)
-    gain = k.gain_scale * fl(params, l) * fv(params, v)
-    a_min = np.broadcast_to(params.act_min, gain.shape)
-    a_max = np.broadcast_to(params.act_max, gain.shape)
-    return MuscleState(passive, gain, passive + gain * a_min, passive + gain * a_max, a_min, a_max)
+    if ell.shape != ell_dot.shape:
+        ell, ell_dot = np.broadcast_arrays(ell, ell_dot)
+    return tension_state(params, ell, ell_dot)
+
+
+def tension_state(params: MuscleParams, ell: np.ndarray, ell_dot: np.ndarray) -> MuscleState:
+    """:func:`force_range` of checked float arrays of one shape (last axis m): one call of the
+    compiled :func:`mcdm_pin.model.muscle_kernels.tension_range`."""
+    shape, m = ell.shape, params.size
+    c_ = np.ascontiguousarray  # (one compiled specialisation: C-ordered 2-D float arrays)
+    out = _kernels().tension_range(c_(ell.reshape(-1, m)), c_(ell_dot.reshape(-1, m)), params.kernel_table)
+    passive, gain, f_min, f_max = out.reshape((4,) + shape)
+    if len(shape) == 1:
+        return MuscleState(passive, gain, f_min, f_max, params.act_min, params.act_max)
+    return MuscleState(passive, gain, f_min, f_max, np.broadcast_to(params.act_min, shape),
+                       np.broadcast_to(params.act_max, shape))
 
 
 def dfl(params: MuscleParams, l) -> np.ndarray:

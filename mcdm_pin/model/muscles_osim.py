@@ -34,8 +34,27 @@ The activation lies in ``[minimum_activation, 1]``.
 o)/(e^k - o)`, :math:`o = e^{k(0.2 - 1)/e_0}`, :math:`k = 4` (0 with ``ignore_passive_fiber_force``),
 no clamps; the activation in ``[min_control, max_control]`` (0 and 1 by default).
 
-Thelen2003Muscle is not modelled: OpenSim 4.6 has no rigid tendon for it, and its force-velocity
-relation depends on the activation (the tension is not affine in it).
+**Thelen2003Muscle** (rigid tendon as OpenSim's ``calcInextensibleTendonActiveFiberForce``, the
+force Static Optimization uses; OpenSim 4.6 refuses ``ignore_tendon_compliance`` on a Thelen muscle):
+the fiber as above with OpenSim's fixed-width pennation model (fiber length at least
+:math:`l_{min} = h/\sin\alpha_{max}`; no force at or below it), :math:`f_L = e^{-(\tilde l - 1)^2/K_a}`,
+:math:`f_P = (e^{K_p(\tilde l - 1)/e_0} - 1)/(e^{K_p} - 1)` for :math:`\tilde l > 1` (else 0), no
+damping. The force-velocity multiplier is the inverse of Thelen's (2003) eqs. 6-7 as OpenSim writes
+them (``calcdlceN``), with :math:`c = 0.25 + 0.75 a`, ``Af`` :math:`A_f`, ``Flen`` :math:`F_{len}`,
+:math:`k = (2 + 2/A_f)/(F_{len} - 1)`, threshold :math:`\theta` (``fv_linear_extrap_threshold``):
+:math:`f_V = (c + \tilde v)/(c - \tilde v/A_f)` for :math:`-c < \tilde v \le 0`, 0 for
+:math:`\tilde v \le -c`; :math:`f_V = (c + k F_{len}\tilde v)/(c + k\tilde v)` for
+:math:`0 < f_V < \theta F_{len}`, and beyond OpenSim's linear extrapolation of :math:`\tilde v(f_V)`
+at :math:`\theta F_{len}`. OpenSim finds this :math:`f_V` by Newton's method (``calcfvInv``,
+tolerance 1e-6 in :math:`\tilde v`, then one more step); we solve it in closed form.
+
+:math:`f_V` depends on the activation, so the tension
+:math:`t(a) = F_0 (a f_L f_V(\tilde v, a) + f_P)\cos\alpha` is *not* affine in :math:`a` (it is where
+:math:`\tilde v = 0`). The range is exact: ``f_min`` :math:`= t(a_{min})`, ``f_max`` :math:`= t(1)`
+(:math:`t` increases with :math:`a`). ``passive`` and ``gain`` are the chord through these two
+ends, ``passive + gain a``, which the solver takes as the tension at activation :math:`a` (in
+between it differs from :math:`t(a)`: :meth:`OpenSimMuscles.thelen_chord_error`, and
+docs/opensim.md); :meth:`OpenSimMuscles.tension` is the exact :math:`t(a)`.
 """
 
 from __future__ import annotations
@@ -198,17 +217,45 @@ def degroote_fp(l, e0=0.6):
     return (np.exp(_KPE * (np.asarray(l, dtype=float) - 1.0) / e0) - offset) / (math.exp(_KPE) - offset)
 
 
+# ------------------------------------------------------------------ Thelen (2003)
+
+def thelen_fv(v, a, af, flen, threshold):
+    """Thelen's force-velocity multiplier at normalised fiber velocity ``v`` and activation ``a``: the
+    inverse of OpenSim's ``calcdlceN`` (module docstring), in closed form; arrays broadcast."""
+    v, a = np.asarray(v, dtype=float), np.asarray(a, dtype=float)
+    c = 0.25 + 0.75 * a
+    k = (2.0 + 2.0 / af) / (flen - 1.0)
+    f_star = threshold * flen
+    v_e = c * (f_star - 1.0) / (k * (flen - f_star))           # v at f_V = theta F_len
+    slope_e = c * (flen - 1.0) / (k * (flen - f_star) ** 2)  # dv/df_V there
+    with np.errstate(divide="ignore", invalid="ignore"):
+        conc = np.maximum((c + v) / (c - v / af), 0.0)
+        ecc = (c + k * flen * v) / (c + k * v)
+    return np.where(v <= 0, np.where(v <= -c, 0.0, conc),
+                    np.where(v < v_e, ecc, f_star + (v - v_e) / slope_e))
+
+
+def thelen_fl(l, k_active):
+    return np.exp(-(np.asarray(l, dtype=float) - 1.0) ** 2 / k_active)
+
+
+def thelen_fp(l, k_passive, e0):
+    l = np.asarray(l, dtype=float)
+    return np.where(l > 1.0, (np.exp(k_passive * (l - 1.0) / e0) - 1.0) / (np.exp(k_passive) - 1.0), 0.0)
+
+
 # ------------------------------------------------------------------ the muscles
 
-KINDS = ("Millard2012EquilibriumMuscle", "DeGrooteFregly2016Muscle")
+KINDS = ("Millard2012EquilibriumMuscle", "DeGrooteFregly2016Muscle", "Thelen2003Muscle")
 
 
 @dataclass(frozen=True)
 class OpenSimMuscle:
     """One OpenSim muscle with a rigid tendon (module docstring). Lengths in metres, ``vmax`` in optimal
     fiber lengths per second, ``alpha0`` radians, ``f0`` newtons; ``curves``: Millard's
-    ``(f_L, f_V, f_P)`` :class:`BezierCurve`\\ s, or De Groote's ``(width, e0, passive)``;
-    ``min_fiber``: Millard's minimum fiber length (m)."""
+    ``(f_L, f_V, f_P)`` :class:`BezierCurve`\\ s, De Groote's ``(width, e0, passive)``, or Thelen's
+    ``(KshapeActive, KshapePassive, FmaxMuscleStrain, Af, Flen, fv_linear_extrap_threshold)``;
+    ``min_fiber``: Millard's and Thelen's minimum fiber length (m)."""
 
     name: str
     kind: str
@@ -285,8 +332,11 @@ class OpenSimMuscles:
         for f in ("f0", "lo", "ls", "alpha0", "vmax", "damping", "a_min", "a_max", "max_pennation", "min_fiber"):
             setattr(self, f, np.array([getattr(m, f) for m in self.muscles], dtype=float))
         self.millard = np.array([m.kind == KINDS[0] for m in self.muscles], dtype=bool)
+        self.thelen = np.array([m.kind == KINDS[2] for m in self.muscles], dtype=bool)
         self._mi = np.flatnonzero(self.millard)
-        self._di = np.flatnonzero(~self.millard)
+        self._di = np.flatnonzero(~self.millard & ~self.thelen)
+        self._ti = np.flatnonzero(self.thelen)
+        self._th = np.array([self.muscles[i].curves for i in self._ti], dtype=float).reshape(-1, 6).T
         mill = [self.muscles[i] for i in self._mi]
         self._curves = tuple(_stack([m.curves[k] for m in mill]) for k in range(3)) if mill else None
         dg = [self.muscles[i] for i in self._di]
@@ -302,7 +352,8 @@ class OpenSimMuscles:
 
     def fiber(self, tendon_lengths, tendon_velocities):
         """``(l, v, cos_alpha, clamped)`` (m,) each: normalised fiber length and velocity, the cosine of
-        the pennation and Millard's clamp (no force) at muscle-tendon lengths and speeds (m,)."""
+        the pennation and Millard's or Thelen's clamp (no force) at muscle-tendon lengths and speeds
+        (m,)."""
         ell = np.asarray(tendon_lengths, dtype=float)
         ell_dot = np.asarray(tendon_velocities, dtype=float)
         if ell.shape != (self.size,) or ell_dot.shape != (self.size,):
@@ -324,10 +375,13 @@ class OpenSimMuscles:
         clamped = ((lf_m <= self.min_fiber) & (dl_m <= 0)) | (lf_m < self.min_fiber)
         dl_m = np.where(clamped, 0.0, dl_m)
         cos_d = along / lf
-        lf = np.where(self.millard, lf_m, lf)
-        cos_a = np.where(self.millard, cos_m, cos_d)
-        dl = np.where(self.millard, dl_m, ell_dot * cos_d)
-        return lf / self.lo, dl / (self.lo * self.vmax), cos_a, self.millard & clamped
+        # Thelen: the same pennation model, no slack rule; no force at or below the minimum length
+        pennated = self.millard | self.thelen
+        lf = np.where(pennated, lf_m, lf)
+        cos_a = np.where(pennated, cos_m, cos_d)
+        dl = np.where(self.millard, dl_m, ell_dot * cos_a)
+        clamped = np.where(self.thelen, lf_m <= pen_min, self.millard & clamped)
+        return lf / self.lo, dl / (self.lo * self.vmax), cos_a, clamped
 
     def force_range(self, tendon_lengths, tendon_velocities):
         """The tension range (:class:`~mcdm_pin.model.muscles.MuscleState`) at one instant."""
@@ -352,4 +406,45 @@ class OpenSimMuscles:
         f_min, f_max = passive + gain * self.a_min, passive + gain * self.a_max
         f_min = np.where(self.millard, np.maximum(f_min, 0.0), f_min)  # OpenSim saturates the rigid fiber at 0
         f_max = np.where(self.millard, np.maximum(f_max, 0.0), f_max)
+        ti = self._ti
+        if ti.size:  # Thelen: exact ends, the chord between them (module docstring)
+            fl_t, fp_t, t_lo, t_hi = self._thelen(l[ti], v[ti], cos_a[ti], live[ti], self.a_min[ti], self.a_max[ti])
+            a_lo, a_hi = self.a_min[ti], self.a_max[ti]
+            gain[ti] = np.where(a_hi > a_lo, (t_hi - t_lo) / np.where(a_hi > a_lo, a_hi - a_lo, 1.0), 0.0)
+            passive[ti] = t_lo - gain[ti] * a_lo
+            f_min[ti], f_max[ti] = t_lo, t_hi
         return MuscleState(passive, gain, f_min, f_max, self.a_min, self.a_max)
+
+    def _thelen(self, l, v, cos_a, live, *activations):
+        """Thelen's ``f_L``, ``f_P`` and exact tensions ``t(a)`` (N) at each of ``activations``, for the
+        Thelen muscles (arguments restricted to them)."""
+        k_a, k_p, e0, af, flen, thr = self._th
+        f0 = self.f0[self._ti]
+        fl, fp = thelen_fl(l, k_a), thelen_fp(l, k_p, e0)
+        out = []
+        for a in activations:
+            a = np.clip(a, self.a_min[self._ti], 1.0)  # OpenSim's clampActivation
+            out.append(np.where(live, f0 * (a * fl * thelen_fv(v, a, af, flen, thr) + fp) * cos_a, 0.0))
+        return (fl, fp, *out)
+
+    def tension(self, tendon_lengths, tendon_velocities, activations):
+        """Every muscle's exact tension (N) at activations ``a`` (m,) (clamped to ``[a_min, a_max]``):
+        ``passive + gain a`` for Millard and De Groote (and 0 where Millard's fiber force would be
+        negative), Thelen's non-affine ``t(a)`` for Thelen's."""
+        a = np.clip(np.asarray(activations, dtype=float), self.a_min, self.a_max)
+        st = self.force_range(tendon_lengths, tendon_velocities)
+        out = st.passive + st.gain * a
+        out = np.where(self.millard, np.maximum(out, 0.0), out)
+        ti = self._ti
+        if ti.size:
+            l, v, cos_a, clamped = self.fiber(tendon_lengths, tendon_velocities)
+            out[ti] = self._thelen(l[ti], v[ti], cos_a[ti], ~clamped[ti], a[ti])[2]
+        return out
+
+    def thelen_chord_error(self, tendon_lengths, tendon_velocities, activations):
+        """``(passive + gain a) - t(a)`` (N) for every muscle (0 but for Thelen's): what the solver's
+        affine tension makes of Thelen's at activations ``a`` (m,)."""
+        st = self.force_range(tendon_lengths, tendon_velocities)
+        a = np.clip(np.asarray(activations, dtype=float), self.a_min, self.a_max)
+        return np.where(self.thelen, st.passive + st.gain * a - self.tension(tendon_lengths, tendon_velocities, a),
+                        0.0)

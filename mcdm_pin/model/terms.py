@@ -27,6 +27,14 @@ convention) is affine in the cable forces:
 where :math:`W_b` are the cables' signed Plücker vectors on body :math:`b` (:mod:`mcdm_pin.model.geometry`).
 Because the joints are passive, the joint-space part :math:`S_a^T p_a` equals
 :math:`(M\ddot q + h + L^T f)_a`, zero whenever the equation of motion holds.
+
+**Closed loops** (an OpenSim ``PointConstraint``, :mod:`mcdm_pin.osim.constraints`): with the basis
+:math:`B = N K` of the velocities the couplings and loops allow, the equation the unknowns satisfy is
+:math:`B^T L^T f - B^T S \tau_{act} = -B^T(M\ddot q + h)`, so ``L`` is ``L_full B``, ``tau`` is
+``B^T (M qdd + h)`` and the actuators' rows are ``B^T S`` (``Terms.actuation``, state-dependent). The
+loop force :math:`\lambda = \lambda_0 + \Lambda f + \Lambda_{act}\tau_{act}` is recovered from the
+equation projected on :math:`N`, and acts on the joints between the loop's bodies:
+``u += W lambda_0``, ``RT += W Lambda``, ``RT_act = W Lambda_act`` (``W`` the loop's wrench map).
 """
 
 from __future__ import annotations
@@ -41,6 +49,7 @@ from .cables import CableSet
 from .charts import check_configuration
 from .geometry import CableMaps, cable_geometry
 from .joints import PhysicalJoint, massless_members, resolve_joints
+from .muscles import tension_state
 from .routes import RoutePaths, add_levers
 
 
@@ -71,7 +80,14 @@ class Terms:
             (``+ R_s^T f_s``); ``None`` without springs.
         basis: with coupled coordinates, ``N`` (nv, n) (:mod:`mcdm_pin.model.couplings`): then ``L``
             is ``d lengths / dz`` (m, n) and ``tau`` is ``N^T (M qdd + h)`` (n,), over the independent
-            coordinates ``z``; ``L_full`` is ``d lengths / dq`` (m, nv) either way.
+            coordinates ``z``; ``L_full`` is ``d lengths / dq`` (m, nv) either way. With closed loops,
+            ``N K`` (nv, n - 3k) in the same roles (module docstring).
+        actuation: with closed loops and actuators, the actuators' rows ``basis^T S`` (n, n_act) of the
+            equation of motion at this state (``None``: the robot's fixed ``Robot.actuation``).
+        RT_act: (J, 6, n_act) the interaction wrenches' derivative with respect to the actuator
+            torques (the loop force they induce); ``None`` when zero.
+        loop_force: ``(lambda_0, Lambda, Lambda_act)``: the loop forces (N, world) ``lambda_0 +
+            Lambda f + Lambda_act tau_act`` (``None`` without loops).
     """
 
     q: np.ndarray
@@ -95,6 +111,9 @@ class Terms:
     L_full: np.ndarray | None = None
     spring_lengths: np.ndarray | None = None
     spring_forces: np.ndarray | None = None
+    actuation: np.ndarray | None = None
+    RT_act: np.ndarray | None = None
+    loop_force: tuple | None = None
 
     # --- M and h on demand: the problem needs only tau = M qdd + h, which RNEA gives directly ----
     @property
@@ -121,8 +140,15 @@ class Terms:
 
     # --- derived quantities for a force vector f (m,) ---------------------------------------------
     def wrenches(self, f) -> np.ndarray:
-        """(J, 6) interaction wrenches ``[F; M]`` of parent on child, child frame, joint point."""
-        return self.u + self.RT @ np.asarray(f, dtype=float)
+        """(J, 6) interaction wrenches ``[F; M]`` of parent on child, child frame, joint point; ``f``
+        the cable forces (m,), or the cable forces then the actuator torques (closed loops carry a
+        share of the actuators' torques into the wrenches, ``RT_act``)."""
+        x = np.asarray(f, dtype=float)
+        m = self.RT.shape[2]
+        w = self.u + self.RT @ x[:m]
+        if self.RT_act is not None and x.shape[0] > m:
+            w = w + self.RT_act @ x[m:]
+        return w
 
     def wrenches_socket(self, f) -> np.ndarray:
         """(J, 6) interaction wrenches ``[F; M]`` in each joint's socket frame (same point)."""
@@ -183,11 +209,15 @@ class TermsEvaluator:
     """
 
     def __init__(self, model, cables: CableSet | None = None, joints=None, compiled: bool = True,
-                 couplings=None, passive=None, springs=None):
+                 couplings=None, passive=None, springs=None, loops=None, actuation=None):
         if cables is None and hasattr(model, "cables") and hasattr(model, "model"):  # a Robot
             couplings = getattr(model, "couplings", None)
             passive = getattr(model, "passive", None)
             springs = getattr(model, "springs", None)
+            loops = getattr(getattr(model, "source", None), "loops", None)
+            if loops is not None and getattr(model, "actuators", ()):
+                from .actuators import actuation_matrix
+                actuation = actuation_matrix(model.model.nv, model.actuators)
             model, cables, joints = model.model, model.cables, model.joints
         if not isinstance(cables, CableSet):
             raise ModelError(f"expected a CableSet, got {type(cables).__name__}")
@@ -204,6 +234,8 @@ class TermsEvaluator:
         self.cables = cables
         self.couplings = couplings if couplings is not None and len(couplings) else None
         self.passive = passive
+        self.loops = loops  # closed loops (PointLoops) or None
+        self._S = None if actuation is None or loops is None else np.asarray(actuation, dtype=float)
         self.joints = js
         # passive springs (mcdm_pin.model.springs): their routes' terms, computed as a cable set's
         self.springs = springs if springs is not None and len(springs) else None
@@ -244,6 +276,7 @@ class TermsEvaluator:
         # wrapped routes: their path arrays are rebuilt at every instant and read by the kernel (the
         # numpy reference formulation covers fixed routes only)
         self._routes = RoutePaths(cables, pos) if cables.configuration_dependent else None
+        self._all_muscles = np.array_equal(cables.muscle_index, np.arange(cables.m))
         if compiled or self._routes is not None:
             self._setup_kernel(len(keys))
         else:
@@ -360,25 +393,47 @@ class TermsEvaluator:
             tau += st.L.T @ spring_forces
             u = u + st.RT @ spring_forces
         f_min, f_max, state = self._tension_bounds(lengths, L, qd)
-        basis, L_full = None, L
-        if self.couplings is not None:
+        basis, L_full, loop = None, L, {}
+        if self.loops is not None:
+            basis, u, RT, loop = self._loop_terms(q, tau, L, u, RT)
+        elif self.couplings is not None:
             basis = self.couplings.basis(q)
+        if basis is not None:
             L, tau = L @ basis, basis.T @ tau
         return Terms(q=q.copy(), qd=qd.copy(), qdd=qdd.copy(), tau=tau, lengths=lengths, L=L, u=u,
                      RT=RT, R_socket=R_socket, socket_axes=self._axes, points=X, _evaluator=self,
                      finite=bad != -2 and bool(np.isfinite(tau.sum())), f_min=f_min, f_max=f_max,
                      muscles=state, basis=basis, L_full=L_full, spring_lengths=spring_lengths,
-                     spring_forces=spring_forces)
+                     spring_forces=spring_forces, **loop)
+
+    def _loop_terms(self, q, tau, L, u, RT):
+        """``(basis, u, RT, extra)`` with the closed loops (module docstring): the basis ``N K``,
+        the wrenches with the loop force's share, and the Terms fields ``actuation``, ``RT_act``,
+        ``loop_force``."""
+        loops = self.loops
+        basis = loops.basis(q)
+        lam0, Lam = loops.force_map(q, tau, L)
+        W = loops.wrench_map(q)[self._child]  # (J, 6, 3k)
+        u = u + W @ lam0
+        RT = RT + W @ Lam
+        extra = dict(loop_force=(lam0, Lam, None))
+        if self._S is not None:
+            # G^T lambda = tau0 + L^T f - S tau_act: the actuators' share of lambda
+            _, Lam_act = loops.force_map(q, np.zeros_like(tau), -self._S.T)
+            extra = dict(actuation=basis.T @ self._S, RT_act=W @ Lam_act,
+                         loop_force=(lam0, Lam, Lam_act))
+        return basis, u, RT, extra
 
     def _tension_bounds(self, lengths, L, qd):
         """The cables' bounds at this instant and the muscles' state (``None`` without muscles)."""
         cables = self.cables
         if cables.muscles is None:
             return cables.f_min, cables.f_max, None
-        from .muscles import force_range
-
         k = cables.muscle_index
-        state = force_range(cables.muscles, lengths[k], L[k] @ qd)
+        if self._all_muscles:  # every cable a muscle, in order: no gather, no scatter
+            state = tension_state(cables.muscles, lengths, L @ qd)
+            return state.f_min, state.f_max, state
+        state = tension_state(cables.muscles, lengths[k], L[k] @ qd)
         f_min, f_max = cables.f_min.copy(), cables.f_max.copy()
         f_min[k], f_max[k] = state.f_min, state.f_max
         return f_min, f_max, state

@@ -23,6 +23,7 @@ from ..model.cables import CableSet
 from ..model.couplings import Couplings
 from ..model.joints import physical_joints
 from . import speeds
+from .actuators import read_coordinate_actuators
 from .constraints import PointLoops
 from .document import read_osim
 from .model import OsimModel, build
@@ -33,13 +34,21 @@ def is_osim(path) -> bool:
     return Path(path).suffix.lower() == ".osim"
 
 
-def _cables(root, file, model) -> CableSet | None:
-    """The muscles of the ``.osim`` as a :class:`CableSet`, or ``None`` when it has none.
-
-    WIRING POINT: returns ``None`` until ``mcdm_pin.osim.paths.read_paths`` (muscles, paths, wraps)
-    is merged; ``root`` is the parsed ``<Model>`` element (``xml.etree``), ``file`` the path,
+def _cables(root, file, model):
+    """``(CableSet or None, notes)``: the muscles of the ``.osim`` as cables (:mod:`.paths`), ``None``
+    when it has none. ``root`` is the parsed ``<Model>`` element (``xml.etree``), ``file`` the path,
     ``model`` the :class:`~mcdm_pin.osim.model.OsimModel` (its frames are named after the bodies)."""
-    return None
+    from .paths import read_paths
+
+    coordinates = {n: (int(model.q_index[v]), int(v)) for n, v in zip(model.coordinates, model.coordinate_v)}
+    cables, muscles, notes = read_paths(root, file, model.model, coordinates)
+    # the CoordinateActuators are read here (mcdm_pin.osim.actuators), not left aside
+    notes = [n for n in notes if not (n.startswith("CoordinateActuator ") and "not a path force" in n)]
+    if not cables:
+        return None, notes
+    if muscles is None:
+        return CableSet(model.model, cables), notes
+    return CableSet(model.model, cables, muscles=muscles, muscle_cables=muscles.names), notes
 
 
 def osim_skeleton(path):
@@ -57,22 +66,25 @@ def osim_skeleton(path):
     return om, couplings, OsimSource(om, couplings), doc
 
 
-def osim_parts(path, name: str | None = None) -> RobotParts:
-    """The robot of the ``.osim`` file ``path``, in parts (``Robot(**parts._asdict())``)."""
+def osim_parts(path, name: str | None = None, actuator_weights: dict | None = None) -> RobotParts:
+    r"""The robot of the ``.osim`` file ``path``, in parts (``Robot(**parts._asdict())``): its muscles
+    as cables, its ``CoordinateActuator``\ s as actuators (:mod:`.actuators`; ``actuator_weights``
+    ``{name: w}`` of their ``w c^2``)."""
     source = str(path)
     om, couplings, src, doc = osim_skeleton(path)
+    joints = physical_joints(om.model)
     try:
-        cables = _cables(doc.root, source, om)
+        cables, path_notes = _cables(doc.root, source, om)
+        actuators, act_notes = read_coordinate_actuators(doc.root, om, joints, actuator_weights)
     except ModelError as exc:
         msg = str(exc)
         msg = msg if msg.startswith(source) else f"{source}: {msg}"
         raise ModelError(msg + _line_of(source, msg)) from None
     if cables is None:
-        raise ModelError(f"{source}: no muscle read, so the model has no cable (the muscle and path reader, "
-                         f"mcdm_pin.osim.paths, is not wired into mcdm_pin.osim.load._cables yet)")
+        raise ModelError(f"{source}: no muscle (no force with a GeometryPath), so the model has no cable")
     notes = tuple(doc.notes) + om.notes + tuple(f"PointConstraint {n!r}: a closed loop (mcdm_pin.osim.constraints)"
-                                     for n, _, _ in om.loops)
-    return RobotParts(om.model, cables, physical_joints(om.model), (), name or Path(path).stem, couplings,
+                                     for n, _, _ in om.loops) + tuple(path_notes) + tuple(act_notes)
+    return RobotParts(om.model, cables, joints, actuators, name or Path(path).stem, couplings,
                       om.velocity_names, src, notes)
 
 

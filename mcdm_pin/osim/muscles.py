@@ -76,9 +76,7 @@ def read_muscle(force, file) -> OpenSimMuscle:
     name = force.get("name")
     where = f"{file}: {force.tag} {name!r}"
     if force.tag not in KINDS:
-        raise ModelError(f"{where}: {force.tag} is not modelled with a rigid tendon; expected one of {KINDS}"
-                         + (" (OpenSim 4.6 has no rigid tendon for Thelen2003Muscle, and its force-velocity "
-                            "relation depends on the activation)" if force.tag == "Thelen2003Muscle" else ""))
+        raise ModelError(f"{where}: {force.tag} is not modelled with a rigid tendon; expected one of {KINDS}")
     f0 = _number(force, "max_isometric_force", where)
     lo = _number(force, "optimal_fiber_length", where)
     ls = _number(force, "tendon_slack_length", where)
@@ -95,6 +93,8 @@ def read_muscle(force, file) -> OpenSimMuscle:
         pen_min = h / math.sin(max_pen) if max_pen > SIGNIFICANT else 0.01 * lo
         return OpenSimMuscle(name, force.tag, f0, lo, ls, alpha0, vmax, damping, a_min, 1.0, curves, max_pen,
                              max(SIGNIFICANT, x0 * lo, pen_min))
+    if force.tag == "Thelen2003Muscle":
+        return _thelen(force, where, name, f0, lo, ls, alpha0, vmax)
     damping = _number(force, "fiber_damping", where, 0.0)
     width = _number(force, "active_force_width_scale", where, 1.0)
     e0 = _number(force, "passive_fiber_strain_at_one_norm_force", where, 0.6)
@@ -104,3 +104,32 @@ def read_muscle(force, file) -> OpenSimMuscle:
     a_max = _number(force, "max_control", where, 1.0)
     return OpenSimMuscle(name, force.tag, f0, lo, ls, alpha0, vmax, damping, max(a_min, 0.0), min(a_max, 1.0),
                          (width, e0, passive))
+
+
+_THELEN = {"KshapeActive": 0.45, "KshapePassive": 5.0, "FmaxMuscleStrain": 0.6, "Af": 0.25, "Flen": 1.4,
+           "fv_linear_extrap_threshold": 0.95}
+
+
+def _thelen(force, where, name, f0, lo, ls, alpha0, vmax) -> OpenSimMuscle:
+    """Thelen2003Muscle: its curve constants (OpenSim 4.6's defaults where left out, and its checks),
+    the activation in ``[minimum_activation, 1]`` and the pennation model's minimum fiber length."""
+    c = {k: _number(force, k, where, d) for k, d in _THELEN.items()}
+    for k in ("KshapeActive", "KshapePassive", "FmaxMuscleStrain", "Af"):
+        if not c[k] > 0:
+            raise ModelError(f"{where}: <{k}>: expected a number > 0, got {c[k]!r}")
+    if not c["Flen"] > 1.0:
+        raise ModelError(f"{where}: <Flen>: expected a number > 1, got {c['Flen']!r}")
+    if not 1.0 / c["Flen"] < c["fv_linear_extrap_threshold"] < 1.0:
+        raise ModelError(f"{where}: <fv_linear_extrap_threshold>: expected a number in (1/Flen, 1), got "
+                         f"{c['fv_linear_extrap_threshold']!r}")
+    a_min = _number(force, "minimum_activation", where, 0.01)
+    if not 0.01 <= a_min <= 1.0:
+        raise ModelError(f"{where}: <minimum_activation>: expected a number in [0.01, 1] (OpenSim's rule), "
+                         f"got {a_min!r}")
+    max_pen = _number(force, "maximum_pennation_angle", where, math.acos(0.1))
+    if not 0.0 <= max_pen <= math.pi / 2:
+        raise ModelError(f"{where}: <maximum_pennation_angle>: expected a number in [0, pi/2], got {max_pen!r}")
+    h = lo * math.sin(alpha0)
+    min_fiber = h / math.sin(max_pen) if max_pen > SIGNIFICANT else 0.01 * lo
+    return OpenSimMuscle(name, force.tag, f0, lo, ls, alpha0, vmax, 0.0, a_min, 1.0,
+                         tuple(c[k] for k in _THELEN), max_pen, min_fiber)

@@ -36,7 +36,7 @@ from ..model.muscles_osim import KINDS as MODELLED
 from ..model.muscles_osim import OpenSimMuscles
 from .muscles import read_muscle
 
-MUSCLE_KINDS = ("Thelen2003Muscle", "Millard2012EquilibriumMuscle", "DeGrooteFregly2016Muscle")
+MUSCLE_KINDS = MODELLED  # Millard2012EquilibriumMuscle, DeGrooteFregly2016Muscle, Thelen2003Muscle
 WRAP_KINDS = {"WrapSphere": "opensim_sphere", "WrapCylinder": "opensim_cylinder",
               "WrapEllipsoid": "opensim_ellipsoid"}
 TINY = 1e-7  # SIMM's TINY_NUMBER: the floor of a spline's knot spacing
@@ -312,7 +312,7 @@ def read_paths(root, file, model, coordinates=None):
     Returns:
         ``(cables, muscles, notes)``: :class:`~mcdm_pin.model.cables.Cable`\ s named after the muscles
         (static bounds ``[0, 10 F0]``, as for MuJoCo's muscles a ceiling: a modelled muscle's range at
-        an instant follows its length and speed), the modelled muscles (Millard, De Groote) as
+        an instant follows its length and speed), the muscles (Millard, De Groote, Thelen) as
         :class:`~mcdm_pin.model.muscles_osim.OpenSimMuscles` in cable order
         (``None`` without muscles; pass them as ``CableSet(model, cables, muscles=muscles,
         muscle_cables=muscles.names)``), and notes on what was left aside (forces without a path,
@@ -336,12 +336,6 @@ def read_paths(root, file, model, coordinates=None):
             notes += more
             f0 = _floats(_text(force, "max_isometric_force", f"{file}: {force.tag} {name!r}"), 1,
                          f"{file}: {force.tag} {name!r}: <max_isometric_force>")[0]
-            if force.tag in MODELLED:
-                cables.append(Cable(name, tuple(route), 0.0, max(10.0 * f0, 1.0)))
-                muscles.append(read_muscle(force, file))
-            else:
-                cables.append(Cable(name, tuple(route), 0.0, f0))
-                notes.append(f"{force.tag} {name!r}: no rigid-tendon force model (OpenSim 4.6 has none for it, "
-                             f"and its force-velocity relation depends on the activation): a cable with fixed "
-                             f"bounds [0, max_isometric_force = {f0:g} N]")
+            cables.append(Cable(name, tuple(route), 0.0, max(10.0 * f0, 1.0)))
+            muscles.append(read_muscle(force, file))
     return cables, (OpenSimMuscles(muscles) if muscles else None), notes

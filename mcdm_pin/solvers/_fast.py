@@ -24,7 +24,7 @@ from ..jit import njit
 from ..model.kernels import gram_lower
 from ..tolerances import UNIQUE_PENALTY
 from ._ipm_linalg import dot
-from ._ipm import CROSSOVER, ipm_solve
+from ._ipm import CROSSOVER, INFEASIBLE_CERT, ipm_solve
 from ._kkt import FOUND, active_set_run, chol_lower, cone_force, next_guess
 
 
@@ -347,10 +347,32 @@ def ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, G, g, ax, tn, basis0, cosr, basis,
     and the next instant's guess of the bounds (multipliers below 1e-12 of the largest free their
     variable), in one call.
 
+    Variables with ``lb == ub`` (a muscle whose force range has collapsed to its passive force) are
+    substituted out first (:func:`without_fixed`): a box without interior leaves an interior-point
+    method no room (its two slacks must vanish together; on MyoSuite's arm, case 3, such a muscle
+    made 54 of 101 cold instants end in a numerical breakdown or at a crossover that failed). The
+    reduced problem is solved and its answer extended (:func:`with_fixed`).
+
     Returns ``(code, x, y, z, z_cone, objective, iterations, held, mus, dirs, next_state, unique)``:
     after a crossover as :func:`active_set_answer`'s; otherwise ``z, z_cone`` the method's own (or
     the certificate), the rest empty and ``unique`` 0."""
     T, t = cone_rows(G, g, ax, cosr, basis)
+    fixed, free = fixed_split(lb, ub)
+    if fixed.shape[0] == 0 or free.shape[0] == 0:
+        return _ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, T, t, G, g, ax, tn, basis0, cosr, basis, max_iter, eps,
+                           crossover_gap, max_pivots, as_tols, ncorr, rank_tol, strict, near, unique_rel)
+    Hr, d0r, Fr, cr, rr, Ar, br, Tr, tr, Gr, gr = without_fixed(H, d0, Fm, c, r, A, b, lb, T, t, G, g, fixed, free)
+    code, x, y, z, zc, obj, it, held, mus, dirs, nxt, unique = _ipm_answer(
+        Hr, d0r, Fr, cr, rr, Ar, br, lb[free], ub[free], Tr, tr, Gr, gr, ax, tn, basis0, cosr, basis, max_iter,
+        eps, crossover_gap, max_pivots, as_tols, ncorr, rank_tol, strict, near, unique_rel)
+    xf, zf, objf, nxtf = with_fixed(code, x, y, z, zc, nxt, H, c, r, A, lb, T, fixed, free)
+    return code, xf, y, zf, zc, objf if code == CROSSOVER else obj, it, held, mus, dirs, nxtf, unique
+
+
+@njit(cache=True, nogil=True)
+def _ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, T, t, G, g, ax, tn, basis0, cosr, basis, max_iter, eps, crossover_gap,
+                max_pivots, as_tols, ncorr, rank_tol, strict, near, unique_rel):
+    """:func:`ipm_answer` once the cone rows ``T, t`` are made and no variable is fixed."""
     code, x, y, z, zc, it, state, cact, mus, dirs = ipm_solve(
         H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, g, ax, tn, basis0, max_pivots,
         as_tols, ncorr, rank_tol)
@@ -361,6 +383,134 @@ def ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, G, g, ax, tn, basis0, cosr, basis,
     zb, zcone, obj, held = answer_duals(H, c, r, x, grad, state, cact, mus, dirs, cosr, basis)
     unique = answer_unique(x, zb, c, lb, ub, A, H, G, g, ax, tn, cosr, zcone, strict, near, unique_rel)
     return code, x, y, zb, zcone, obj, it, held, mus, dirs, nxt, unique
+
+
+@njit(cache=True, nogil=True)
+def fixed_split(lb, ub):
+    """``(fixed, free)``: the indices of the variables with ``lb == ub`` (finite) and of the others."""
+    n = lb.shape[0]
+    nfix = 0
+    for i in range(n):
+        if lb[i] == ub[i] and np.isfinite(lb[i]):
+            nfix += 1
+    fixed = np.empty(nfix, dtype=np.int64)
+    free = np.empty(n - nfix, dtype=np.int64)
+    a_, b_ = 0, 0
+    for i in range(n):
+        if lb[i] == ub[i] and np.isfinite(lb[i]):
+            fixed[a_] = i
+            a_ += 1
+        else:
+            free[b_] = i
+            b_ += 1
+    return fixed, free
+
+
+@njit(cache=True, nogil=True)
+def without_fixed(H, d0, Fm, c, r, A, b, lb, T, t, G, g, fixed, free):
+    r"""The problem over the ``free`` variables with the ``fixed`` ones at their value ``x_F = lb_F``:
+    with ``x = (x_R, x_F)``,
+
+    .. math:: \tfrac12 x_R^T H_{RR} x_R + (c_R + H_{RF} x_F)^T x_R
+              + (r + c_F^T x_F + \tfrac12 x_F^T H_{FF} x_F),
+
+    ``A_R x_R = b - A_F x_F``, the cone rows ``T_R x_R + (t + T_F x_F)`` and forces
+    ``G_R x_R + (g + G_F x_F)``; ``P = diag(d0) + Fm^T Fm`` keeps its form (``d0_R``, ``Fm_R``).
+    Returns ``(H_RR, d0_R, Fm_R, c', r', A_R, b', T_R, t', G_R, g')``."""
+    nr, nf = free.shape[0], fixed.shape[0]
+    xF = np.empty(nf)
+    for a in range(nf):
+        xF[a] = lb[fixed[a]]
+    Hr = np.empty((nr, nr))
+    cr = np.empty(nr)
+    for a in range(nr):
+        i = free[a]
+        acc = c[i]
+        for q in range(nf):
+            acc += H[i, fixed[q]] * xF[q]
+        cr[a] = acc
+        for e in range(nr):
+            Hr[a, e] = H[i, free[e]]
+    rr = r
+    for q in range(nf):
+        j = fixed[q]
+        rr += c[j] * xF[q]
+        for p in range(nf):
+            rr += 0.5 * xF[q] * H[j, fixed[p]] * xF[p]
+    d0r = np.empty(nr)
+    Fr = np.empty((Fm.shape[0], nr))
+    Ar = np.empty((A.shape[0], nr))
+    for a in range(nr):
+        d0r[a] = d0[free[a]]
+        for k in range(Fm.shape[0]):
+            Fr[k, a] = Fm[k, free[a]]
+        for k in range(A.shape[0]):
+            Ar[k, a] = A[k, free[a]]
+    br = b.copy()
+    for k in range(A.shape[0]):
+        for q in range(nf):
+            br[k] -= A[k, fixed[q]] * xF[q]
+    K = T.shape[0]
+    Tr = np.empty((K, 3, nr))
+    Gr = np.empty((K, 3, nr))
+    tr = t.copy()
+    gr = g.copy()
+    for k in range(K):
+        for e in range(3):
+            for a in range(nr):
+                Tr[k, e, a] = T[k, e, free[a]]
+                Gr[k, e, a] = G[k, e, free[a]]
+            for q in range(nf):
+                tr[k, e] += T[k, e, fixed[q]] * xF[q]
+                gr[k, e] += G[k, e, fixed[q]] * xF[q]
+    return Hr, d0r, Fr, cr, rr, Ar, br, Tr, tr, Gr, gr
+
+
+@njit(cache=True, nogil=True)
+def with_fixed(code, x, y, z, zc, nxt, H, c, r, A, lb, T, fixed, free):
+    """The reduced problem's answer (:func:`without_fixed`; ``code`` its :func:`._ipm.ipm_solve` code)
+    on every variable: ``x_F = lb_F``; the fixed variables' bound multipliers from stationarity
+    (:mod:`.base`'s convention, ``z_F = -(H x + c + A^T y - sum_k T_k^T z^cone_k)_F``, without
+    ``H x + c`` for an infeasibility certificate: a fixed variable is at both bounds, so its
+    multiplier may have either sign); after a crossover the objective on the whole
+    problem and the next guess, a fixed variable held at the bound its multiplier points to
+    (unless that multiplier is below 1e-12 of the largest, :func:`._kkt.next_guess`'s rule).
+    Returns ``(x, z, objective, next_state)``."""
+    n = lb.shape[0]
+    nr, nf = free.shape[0], fixed.shape[0]
+    xf = np.empty(n)
+    zf = np.zeros(n)
+    for a in range(nr):
+        xf[free[a]] = x[a]
+        zf[free[a]] = z[a]
+    for q in range(nf):
+        xf[fixed[q]] = lb[fixed[q]]
+    K = T.shape[0]
+    for q in range(nf):
+        j = fixed[q]
+        s = 0.0 if code == INFEASIBLE_CERT else c[j] + dot(H[j], xf)
+        for k in range(A.shape[0]):
+            s += A[k, j] * y[k]
+        for k in range(K):
+            for e in range(3):
+                s -= T[k, e, j] * zc[k, e]
+        zf[j] = -s
+    if code != CROSSOVER:
+        return xf, zf, np.nan, nxt
+    obj = r
+    for i in range(n):
+        obj += (0.5 * dot(H[i], xf) + c[i]) * xf[i]
+    zmax = 0.0
+    for i in range(n):
+        zmax = max(zmax, abs(zf[i]))
+    nxtf = np.zeros(n, dtype=np.int8)
+    for a in range(nr):
+        nxtf[free[a]] = nxt[a]
+    for q in range(nf):
+        j = fixed[q]
+        if abs(zf[j]) > 1e-12 * zmax:
+            nxtf[j] = 2 if zf[j] > 0.0 else 1
+    return xf, zf, obj, nxtf
 
 
 @njit(cache=True, nogil=True)

@@ -163,24 +163,41 @@ def optimal_face_rows(qp, sol: Solution | None = None) -> np.ndarray:
     """An orthonormal basis of the rows that are constant on the optimal face: the equations, the rows
     of ``P``, ``c^T``, and, from the duals of ``sol`` (the same for every optimal point), the bounds
     and cone surfaces whose multiplier is not zero (complementarity holds them for every optimum).
-    Rank-revealed by an SVD (module docstring)."""
+
+    Many of these rows are unit rows ``e_i`` (a diagonal entry of ``P``, a strongly active bound):
+    they span the coordinates ``S``, and every other row's part on ``S`` lies in their span, so the
+    basis is the ``e_i`` (``i`` in ``S``) and an orthonormal basis of the other rows' parts on the
+    remaining coordinates, rank-revealed by an SVD (module docstring) of that smaller matrix (each
+    row normalised first, the threshold relative to the largest singular value of the whole, at
+    least 1). On MyoSuite's arm (85 variables, ~60 of them in ``S``) that SVD is 4x25 instead of 8x85
+    in flops' terms: most of the stage's cost."""
     n = qp.n
+    unit = np.zeros(n, dtype=bool)  # variables whose unit row is among the rows
     if qp.P_factor is not None and qp.P_diag is not None:
-        rows = [qp.P_factor, np.eye(n)[np.flatnonzero(qp.P_diag != 0.0)]]
+        rows = [qp.P_factor]
+        unit |= qp.P_diag != 0.0
     else:
         w, V = np.linalg.eigh(qp.P)
         rows = [V[:, w > 1e-12 * max(np.abs(w).max(initial=0.0), 1e-300)].T]
     rows += [qp.A, qp.c[None, :]]
     if sol is not None and sol.z is not None:
         free, cone_rows, _ = _strongly_active(qp, sol, curvature=False)
-        rows.append(np.eye(n)[~free])
-        for k, r in cone_rows:
-            rows.append(r)
+        unit |= ~free
+        rows += [r[None, :] for _, r in cone_rows]
     N = np.vstack(rows)
     norms = np.linalg.norm(N, axis=1)
-    N = N[norms > 0] / norms[norms > 0, None]
-    _, sv, Vt = np.linalg.svd(N, full_matrices=False)
-    return Vt[sv > 1e-10 * max(sv.max(initial=0.0), 1e-300)]
+    rest = np.flatnonzero(~unit)
+    R = N[norms > 0][:, rest] / norms[norms > 0, None]
+    S = np.flatnonzero(unit)
+    if R.size:
+        _, sv, Vt = np.linalg.svd(R, full_matrices=False)
+        Vt = Vt[sv > 1e-10 * max(sv.max(initial=0.0), 1.0)]
+    else:
+        Vt = np.zeros((0, len(rest)))
+    E = np.zeros((len(S) + len(Vt), n))
+    E[np.arange(len(S)), S] = 1.0
+    E[len(S):, rest] = Vt
+    return E
 
 
 def stage2_problem(qp, sol: Solution):

@@ -5,7 +5,9 @@ Starting from the first solved state of a :class:`~mcdm_pin.results.TrajectoryRe
 .. math:: \dot v = \text{ABA}\big(q, v,\; \tau = -L(q)^T f(t)\big)
 
 (Pinocchio's articulated-body algorithm, the cables' generalised force evaluated at the *integrated*
-configuration, not the planned one) and compare :math:`q` with the plan at the sample instants
+configuration, not the planned one; actuators' torques ``tau_act`` join :math:`\tau` on hybrid robots
+and reserves; on robots with coupled coordinates the full equation of motion is solved with the
+couplings' constraint forces as unknowns) and compare :math:`q` with the plan at the sample instants
 (:mod:`mcdm_pin.verify.replay`). Robots with quaternion joints (native ball or free joints) are
 integrated on their configuration manifold (Runge-Kutta-Munthe-Kaas through ``pin.integrate``), and
 the error is ``pin.difference`` between the replayed and the planned configuration (rad or m).

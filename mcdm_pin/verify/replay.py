@@ -10,6 +10,7 @@ import pinocchio as pin
 
 from ..exceptions import ResultsError
 from ..model.geometry import cable_geometry
+from .routed import RoutedL
 
 INTEGRATORS = ("rk4", "euler", "semi-implicit")
 ORDER = {"rk4": 4, "euler": 1, "semi-implicit": 1}
@@ -111,39 +112,57 @@ def _num(x, fmt: str) -> str:
 
 
 class _Dynamics:
-    """``a = ABA(q, v, -L(q)^T f + tau_passive(q, v) - L_s^T f_s(q))`` for one robot (``f_s``: the
-    passive springs' known tensions) (reuses Pinocchio data). ``L``
-    comes from the numpy reference of the cable geometry (:mod:`mcdm_pin.model.geometry`), not from the
-    compiled kernels that computed the forces: the replay checks them independently. Routes over wraps
-    take their path from :mod:`mcdm_pin.model.routes` (checked against MuJoCo on its own). A robot
-    with coupled coordinates is refused: its replay needs the couplings' constraint forces."""
+    r"""The forward dynamics of one robot under cable forces and actuator torques (reuses Pinocchio
+    data): ``u`` is ``f`` (m, N) followed by the actuators' ``tau_act`` (n_act, N m or N), and
+
+    .. math:: \tau = -L(q)^T f + S\,\tau_{act} + \tau_{passive}(q, v) - L_s(q)^T f_s(q)
+
+    (``f_s``: the passive springs' known tensions ``k (l - l0)``).
+
+    ``L`` comes from numpy, not from the cable-terms kernel that computed the forces: the replay checks
+    them independently. Fixed routes: the reference cable geometry (:mod:`mcdm_pin.model.geometry`);
+    routes over wraps: their path from :mod:`mcdm_pin.model.routes` (checked against MuJoCo on its
+    own) and the segments' Jacobians (:mod:`mcdm_pin.verify.routed`).
+
+    Without couplings ``a = ABA(q, v, tau)``. With couplings (:mod:`mcdm_pin.model.couplings`) the
+    replay integrates all ``nv`` coordinates under the couplings' constraint forces, solved from the full
+    equation of motion, not from the projected one the solver uses: each coupling
+    :math:`g_c(q) = y_c - p_c(x_c) = 0` (dependent :math:`y_c`, independent :math:`x_c`; :math:`x_c`
+    absent for a fixed coordinate) contributes a row of :math:`G = \partial g/\partial q`
+    (:math:`+1` at :math:`y_c`, :math:`-p_c'(x_c)` at :math:`x_c`) and
+
+    .. math:: \begin{bmatrix} M & G^T \\ G & 0 \end{bmatrix}
+              \begin{bmatrix} \ddot q \\ -\lambda \end{bmatrix} =
+              \begin{bmatrix} \tau - h(q, v) \\ \gamma \end{bmatrix}, \qquad
+              \gamma_c = p_c''(x_c)\,\dot x_c^2,
+
+    (``M`` from CRBA, ``h`` from RNEA at zero acceleration; the second row is :math:`\ddot g = 0`).
+    :math:`\lambda_c` is the generalised force coupling ``c`` applies to its dependent coordinate
+    (N m or N); it applies :math:`-p_c'\lambda_c` to the independent one, so it does no work along the
+    couplings. Drift off the couplings is left to the integrator (it is of its order, and part of the
+    error against the plan)."""
 
     def __init__(self, robot):
-        from ..exceptions import ModelError
+        from ..model.actuators import actuation_matrix
 
-        if getattr(robot, "couplings", None) is not None:
-            raise ModelError(f"robot {robot.name!r} couples coordinates ({len(robot.couplings)} couplings): "
-                             f"verify does not replay coupled coordinates (their constraint forces are "
-                             f"not integrated)")
         self.robot = robot
         self.model = robot.model
         self.data = robot.model.createData()
         self.passive = getattr(robot, "passive", None)
-        self._routed = self._springs = None
+        self.m = robot.m
+        self.S = actuation_matrix(robot.nv, robot.actuators) if robot.actuators else None
+        self.couplings = getattr(robot, "couplings", None)
+        self._routed = RoutedL(robot) if robot.cables.configuration_dependent else None
+        self._springs = None
         springs = getattr(robot, "springs", None)
         if springs is not None:  # passive springs: known tensions k (l - l0) at every state
             from ..model.terms import TermsEvaluator
 
             self._springs = (springs, TermsEvaluator(robot.model, springs.geometry, robot.joints, compiled=False))
-        if robot.cables.configuration_dependent:
-            from ..model.terms import TermsEvaluator
-
-            self._routed = TermsEvaluator(robot, compiled=False)
 
     def generalised_cable_force(self, q, f) -> np.ndarray:
         if self._routed is not None:
-            zero = np.zeros(self.model.nv)
-            return -self._routed(q, zero, zero, checked=True).L_full.T @ f
+            return -self._routed(q).T @ f
         model, data = self.model, self.data
         pin.computeJointJacobians(model, data, q)
         nj = model.njoints
@@ -155,8 +174,12 @@ class _Dynamics:
         L = np.einsum("jkm,jkn->mn", geo.W, J)
         return -L.T @ f
 
-    def __call__(self, q, v, f) -> np.ndarray:
-        tau = self.generalised_cable_force(q, f)
+    def joint_force(self, q, v, u) -> np.ndarray:
+        """``tau`` (nv) of the cables, actuators and known joint forces (class docstring)."""
+        u = np.asarray(u, dtype=float)
+        tau = self.generalised_cable_force(q, u[:self.m])
+        if self.S is not None:
+            tau = tau + self.S @ u[self.m:]
         if self.passive is not None:
             tau = tau + self.passive(q, v)
         if self._springs is not None:
@@ -164,7 +187,41 @@ class _Dynamics:
             zero = np.zeros(self.model.nv)
             st = ev(q, zero, zero, checked=True)
             tau = tau - st.L.T @ springs.forces(st.lengths)
-        return np.array(pin.aba(self.model, self.data, q, v, tau))
+        return tau
+
+    def constraint_rows(self, q, v) -> tuple[np.ndarray, np.ndarray]:
+        """``(G, gamma)`` of the couplings at ``(q, v)`` (class docstring), one row per coupling."""
+        cs = self.couplings
+        G, gamma = np.zeros((len(cs.items), self.model.nv)), np.zeros(len(cs.items))
+        for r, c in enumerate(cs.items):
+            G[r, c.dependent] = 1.0
+            if c.independent >= 0:
+                _, dp, ddp = c.value(float(q[cs.q_index[c.independent]]))
+                G[r, c.independent] -= dp
+                xd = v[c.independent]
+                gamma[r] = ddp * xd * xd
+        return G, gamma
+
+    def solve(self, q, v, u) -> tuple[np.ndarray, np.ndarray]:
+        """``(a, lambda)``: the acceleration (nv) and the couplings' constraint forces (empty without
+        couplings) under ``u`` at ``(q, v)``; NaN once the state is not finite (a diverging replay)."""
+        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+            k = 0 if self.couplings is None else len(self.couplings.items)
+            return np.full(self.model.nv, np.nan), np.full(k, np.nan)
+        tau = self.joint_force(q, v, u)
+        if self.couplings is None:
+            return np.array(pin.aba(self.model, self.data, q, v, tau)), np.zeros(0)
+        M = pin.crba(self.model, self.data, q)
+        M = np.triu(M) + np.triu(M, 1).T  # crba fills the upper triangle
+        h = pin.rnea(self.model, self.data, q, v, np.zeros(self.model.nv))
+        G, gamma = self.constraint_rows(q, v)
+        n, k = len(v), len(gamma)
+        K = np.block([[M, G.T], [G, np.zeros((k, k))]])
+        x = np.linalg.solve(K, np.concatenate([tau - h, gamma]))
+        return x[:n], -x[n:]
+
+    def __call__(self, q, v, u) -> np.ndarray:
+        return self.solve(q, v, u)[0]
 
     def growth_rate(self, q, v, f, eps: float = 1e-6) -> float:
         """Largest real part of the eigenvalues of d(q, v)/dt linearised at (q, v) under forces f
@@ -198,6 +255,28 @@ def _configurations(robot, result) -> np.ndarray:
     if conf.ndim == 2 and conf.shape[1] == robot.nq:
         return conf
     return np.array([robot.configuration(x) for x in np.asarray(result.q, float)]).reshape(-1, robot.nq)
+
+
+def _inputs(robot, result) -> np.ndarray:
+    """(N, m + n_act) the run's cable forces followed by its actuator torques (hybrid robots, reserves)."""
+    F = np.asarray(result.f, float)
+    n_act = sum(len(a.idx_v) for a in robot.actuators)
+    if n_act == 0:
+        return F
+    tau = np.asarray(result.tau_act, float).reshape(len(F), -1)
+    if tau.shape[1] != n_act:
+        raise ResultsError(f"the results file has {tau.shape[1]} actuator torque column(s); robot {robot.name} "
+                           f"has {n_act} actuator components")
+    return np.hstack([F, tau])
+
+
+def _checked_inputs(robot, u, tt) -> np.ndarray:
+    u = np.asarray(u, float).reshape(-1)
+    n = robot.m + sum(len(a.idx_v) for a in robot.actuators)
+    if len(u) != n:
+        raise ResultsError(f"forces(t = {tt:g}) returned {len(u)} values; expected the {robot.m} cable "
+                           f"forces followed by the {n - robot.m} actuator torques")
+    return u
 
 
 def solved_stretch(result) -> tuple[int, int, str]:
@@ -269,7 +348,7 @@ def _stepper(model, integrator: str, acc):
 
 def replay(robot, result, integrator: str = "rk4", substeps: int = 1, hold: str = "linear",
            forces: Callable[[float], np.ndarray] | None = None,
-           window: int | None = None) -> ReplayReport:
+           window: int | None = None, growth_rate: float | None = None) -> ReplayReport:
     """Integrate the forward dynamics under the result's cable forces (package docstring).
 
     Args:
@@ -280,11 +359,14 @@ def replay(robot, result, integrator: str = "rk4", substeps: int = 1, hold: str 
             order 1).
         substeps: integration steps per sample interval (the step is ``(t[k+1] - t[k]) / substeps``).
         hold: ``linear`` (forces interpolated linearly between instants) or ``zoh`` (held).
-        forces: optional callable ``t -> f`` used instead of the samples (e.g. :func:`resolved_forces`).
+        forces: optional callable ``t -> f`` used instead of the samples (e.g. :func:`resolved_forces`);
+            on robots with actuators it returns ``f`` followed by ``tau_act``.
         window: restart from the plan's state every ``window`` sample intervals. Under force control
             a cable robot can be open-loop unstable (the 8-vertebra neck: errors grow like
             ``exp(350 t)``), so a replay over the whole run measures rounding amplified by
             ``exp(growth_rate * T)``; windows keep the amplification bounded.
+        growth_rate: the open-loop growth rate at the first solved instant, when already known (a
+            replay of the same run at another step): not computed again.
 
     Returns:
         a :class:`ReplayReport`; it starts at the first solved instant and ends before the next
@@ -297,22 +379,22 @@ def replay(robot, result, integrator: str = "rk4", substeps: int = 1, hold: str 
     if last <= first:
         raise ResultsError(f"only one solved instant (t = {result.t[first]:g} s) before an unsolved one: "
                            f"nothing to integrate. {stopped}")
-    t, F = np.asarray(result.t, float), np.asarray(result.f, float)
+    t, F = np.asarray(result.t, float), _inputs(robot, result)
     Q, V = _configurations(robot, result), np.asarray(result.qd, float)
     dyn = _Dynamics(robot)
     model = robot.model
 
     def force_at(tt, k):
-        """Forces at time tt inside sample interval [t_k, t_{k+1}]."""
+        """Forces (and actuator torques) at time tt inside sample interval [t_k, t_{k+1}]."""
         if forces is not None:
-            return np.asarray(forces(tt), float)
+            return _checked_inputs(robot, forces(tt), tt)
         if hold == "zoh":
             return F[k]
         s = (tt - t[k]) / (t[k + 1] - t[k])
         return (1.0 - s) * F[k] + s * F[k + 1]
 
     q, v = Q[first].copy(), V[first].copy()
-    growth = dyn.growth_rate(q, v, force_at(t[first], first))
+    growth = dyn.growth_rate(q, v, force_at(t[first], first)) if growth_rate is None else float(growth_rate)
     qs, vs = [q.copy()], [v.copy()]
     steps = []
     diverged_at = None
@@ -351,7 +433,7 @@ def open_loop_growth(robot, result, instants: int = 5, hold: str = "linear") -> 
     linearised at ``instants`` solved instants spread over the replayed stretch (the first among
     them), and where it was found."""
     first, last, _ = solved_stretch(result)
-    Q, V, F = _configurations(robot, result), np.asarray(result.qd, float), np.asarray(result.f, float)
+    Q, V, F = _configurations(robot, result), np.asarray(result.qd, float), _inputs(robot, result)
     dyn = _Dynamics(robot)
     best = (-np.inf, float(result.t[first]))
     for k in np.unique(np.linspace(first, last, max(1, instants)).round().astype(int)):
@@ -367,8 +449,9 @@ def convergence(robot, result, integrator: str = "rk4", substeps: int = 1, level
     Richardson self-error ``max |q_h - q_h/2|`` and the observed order ``log2`` of its ratio."""
     if levels < 2:
         raise ResultsError(f"levels: expected at least 2, got {levels!r}")
-    reports = [replay(robot, result, integrator, substeps * 2**k, hold, forces, window)
-               for k in range(levels)]
+    reports = [replay(robot, result, integrator, substeps, hold, forces, window)]
+    reports += [replay(robot, result, integrator, substeps * 2**k, hold, forces, window,
+                       growth_rate=reports[0].growth_rate) for k in range(1, levels)]
     model = robot.model
 
     def self_error(a, b):

@@ -21,7 +21,8 @@ def planned_state(robot, spec) -> Callable[[float], tuple[np.ndarray, np.ndarray
 
 def resolved_forces(ident, plan) -> Callable[[float], np.ndarray]:
     """``t -> f``: the inverse-dynamics problem re-solved on the planned state at time ``t``
-    (``ident``: an :class:`~mcdm_pin.inverse_dynamics.InverseDynamics`; ``plan``: :func:`planned_state`).
+    (``ident``: an :class:`~mcdm_pin.inverse_dynamics.InverseDynamics`; ``plan``: :func:`planned_state`),
+    the actuators' ``tau_act`` appended on robots with actuators (what the replay takes).
     Raises :class:`TrajectoryError` at a time where it has no valid answer."""
     cache: dict[float, np.ndarray] = {}
 
@@ -32,7 +33,7 @@ def resolved_forces(ident, plan) -> Callable[[float], np.ndarray]:
             if not res.found:
                 raise TrajectoryError(f"re-solving the forces at t = {key:g} s: {res.status} "
                                       f"({res.message})")
-            cache[key] = res.f
+            cache[key] = np.concatenate([res.f, np.asarray(res.tau_act, float).reshape(-1)])
         return cache[key]
 
     return forces

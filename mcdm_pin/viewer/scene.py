@@ -157,7 +157,9 @@ class Kinematics:
     seg_cable: np.ndarray | None = None
 
 
-def kinematics(robot, result) -> Kinematics:
+def kinematics(robot, result, arc_tol: float | None = None) -> Kinematics:
+    """The placements of ``result``'s instants; ``arc_tol``: the relative tolerance of wrapped cables'
+    drawn length (:func:`mcdm_pin.viewer.arcs.route_polylines`; default its ``ARC_TOL``)."""
     model, data = robot.model, robot.model.createData()
     conf = np.asarray(result.configuration, float)
     if conf.ndim != 2 or conf.shape[1] != robot.nq:
@@ -178,37 +180,18 @@ def kinematics(robot, result) -> Kinematics:
     if not cables.configuration_dependent:
         ends = np.stack([points[:, cables.seg_a], points[:, cables.seg_b]], axis=2)
         return Kinematics(links, joint_T, points, ends, cables.seg_cable)
-    segments, seg_cable = _routed_segments(robot, conf)
+    from .arcs import route_polylines  # imported here: the route maths import numba
+
+    # wrapped routes: each engaged wrap's path on its surface, sampled (mcdm_pin/viewer/arcs.py)
+    segments, seg_cable, _ = route_polylines(robot, conf, arc_tol)
     return Kinematics(links, joint_T, points, segments, seg_cable)
-
-
-def _routed_segments(robot, conf) -> tuple[np.ndarray, np.ndarray]:
-    """The drawn segments of wrapped routes at every instant: the path's straight pieces, and each
-    engaged wrap's arc as the chord between its tangent points (:mod:`mcdm_pin.model.routes`)."""
-    from ..model.terms import TermsEvaluator
-
-    ev = TermsEvaluator(robot, compiled=False)
-    routes = ev._routes
-    wraps = robot.cables.wraps
-    zero = np.zeros(robot.nv)
-    n_seg = len(routes.seg_a) + len(wraps)
-    out = np.empty((len(conf), n_seg, 2, 3))
-    for k, q in enumerate(conf):
-        X = ev(robot.check_configuration(q), zero, zero, checked=True).points
-        a = X[routes.seg_a]
-        b = np.where((routes.seg_scale > 0)[:, None], X[routes.seg_b], a)
-        slot = routes.n_points + 2 * np.arange(len(wraps))  # each wrap's T_0, then T_1 (model/routes.py)
-        t0, t1 = X[slot], X[slot + 1]
-        on = routes.engaged[:, None]
-        out[k, :len(a), 0], out[k, :len(a), 1] = a, b
-        out[k, len(a):, 0], out[k, len(a):, 1] = t0, np.where(on, t1, t0)
-    return out, np.concatenate([routes.seg_cable, [w.cable for w in wraps]]).astype(int)
 
 
 # ----------------------------------------------------------------------------------------- build
 def build_scene(robot, result, fmax: float | None = None, arrow_scale: float | None = None,
                 legend: bool = True, start_time: float | None = None, loop: bool = True,
-                source: str = "results", links: str = "auto", aspect: float = ASPECT) -> Scene:
+                source: str = "results", links: str = "auto", aspect: float = ASPECT,
+                arc_tol: float | None = None) -> Scene:
     """Build the animated scene of ``result`` (a :class:`~mcdm_pin.results.TrajectoryResult`).
 
     Args:
@@ -225,6 +208,9 @@ def build_scene(robot, result, fmax: float | None = None, arrow_scale: float | N
         links: ``solid`` (opaque), ``ghost`` (translucent) or ``auto`` (meshes, i.e. body skins that
             hide the cables inside them, translucent; primitive shapes opaque).
         aspect: width / height of the picture the camera frames the robot for.
+        arc_tol: wrapped cables: the largest relative shortfall of a drawn cable against its route,
+            which sets how finely each wrap's arc is sampled (default 1e-6,
+            :data:`mcdm_pin.viewer.arcs.ARC_TOL`).
     """
     check_results(robot, result, source)
     if fmax is not None and not (np.isfinite(fmax) and fmax > 0):
@@ -236,7 +222,9 @@ def build_scene(robot, result, fmax: float | None = None, arrow_scale: float | N
     t = np.asarray(result.t, float)
     if start_time is not None and not (t[0] - 1e-12 <= start_time <= t[-1] + 1e-12):
         raise ViewerError(f"start time {start_time} s is outside the trajectory ({t[0]:g}..{t[-1]:g} s)")
-    kin = kinematics(robot, result)
+    if arc_tol is not None and not (np.isfinite(arc_tol) and arc_tol > 0):
+        raise ViewerError(f"arc_tol: expected a positive relative tolerance, got {arc_tol}")
+    kin = kinematics(robot, result, arc_tol)
     visuals = robot_visuals(robot)
     f = np.asarray(result.f, float)
     wrench = np.asarray(result.interaction_wrench, float)

@@ -1,0 +1,134 @@
+r"""RMR's problem on the thoracoscapular shoulder model (Belli et al., PLOS ONE 2023), per frame.
+
+RMR (the Rapid Muscle Redundancy solver) minimises, at each frame,
+
+.. math:: \sum_i a_i^2 + \sum_j w_j c_j^2
+
+over the 33 muscles' activations :math:`a_i \in [0, 1]` (muscle force ``passive + gain a``, the
+muscles' rigid-tendon state at the frame) and the 17 ``CoordinateActuator`` controls :math:`c_j`
+(torque ``F_opt c``; ``w`` = 0 on the thorax's six coordinates, the elbow and the forearm, 10 on the
+shoulder girdle's and glenohumeral coordinates), subject to the equation of motion and, "with GH",
+the glenohumeral reaction force within the glenoid cone (:mod:`mcdm_pin.osim.glenoid`). The robot of
+``robots/opensim/tsm_rmr.yaml`` declares the weights and the cone; :func:`rmr_robot` sets RMR's
+activation bounds ``[0, 1]`` (RMR overrides the muscles' force, so the model's
+``minimum_activation`` 0.01 does not bound it). RMR's answers (``xsol``: 33 activations, then the
+17 controls in the model's order, and a 51st column that matches no actuator of the model) are
+compared with ours by :func:`rmr_objective` and :func:`rmr_in_our_problem`.
+
+In a shrug RMR frees the accelerations of ``plane_elv`` and ``axial_rot`` (poorly defined with the arm
+hanging); here their actuators then weigh 0 (free torques at the measured accelerations).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from ..constraints import InteractionCone
+from ..model.cables import CableSet
+from ..model.muscles_osim import OpenSimMuscles
+from ..objectives import MinActivations
+from ..problem import Problem
+from ..solvers.base import cone_violation_deg
+from .actuators import CONTROL_CAP
+from .document import read_osim
+from .motion import motion_states, read_table
+
+REPO = Path(__file__).resolve().parents[2]
+SIDECAR = REPO / "robots" / "opensim" / "tsm_rmr.yaml"
+RATE = 100.0  # Hz: RMR's frames, frame k at k / RATE s
+N_MUSCLES, N_ACTUATORS = 33, 17
+SHRUG_FREE = ("plane_elv_actuator", "axial_rot_actuator")
+GH = "GlenoHumeral"
+
+
+def rmr_robot(motion: str = "abd01", sidecar=SIDECAR) -> Robot:
+    """The TSM as RMR poses it: activations in [0, 1] (RMR's bounds: it overrides the muscles' force,
+    so the model's ``minimum_activation`` 0.01 does not apply); for a shrug, plane_elv's and
+    axial_rot's actuators weigh 0."""
+    from ..robot import Robot
+
+    robot = Robot.load(sidecar)
+    cables = robot.cables
+    muscles = OpenSimMuscles([dataclasses.replace(m, a_min=0.0) for m in cables.muscles.muscles])
+    cables = CableSet(robot.model, cables.cables, muscles=muscles, muscle_cables=muscles.names)
+    acts = robot.actuators
+    if motion.startswith("shrug"):
+        acts = tuple(dataclasses.replace(a, weight=0.0) if a.label in SHRUG_FREE else a for a in acts)
+    return Robot(robot.model, cables, robot.joints, acts, robot.name, sidecar=robot.sidecar,
+                 couplings=robot.couplings, coordinate_names=robot.coordinate_names, source=robot.source,
+                 notes=robot.notes)
+
+
+def frame_rows(files, every: int = 1) -> np.ndarray:
+    """RMR's frame indices (``k / RATE`` s) inside the motion's time span, every ``every``-th."""
+    t = read_table(files[0]).time
+    k = np.arange(int(np.ceil(t[0] * RATE - 1e-9)), int(np.floor(t[-1] * RATE + 1e-9)) + 1)
+    return k[::every]
+
+
+def frame_states(robot, files, rows):
+    """``(q, v, a)`` at RMR's frames ``rows`` (frame k at ``k / RATE`` s) from the motion's coordinate,
+    speed and acceleration tables ``files`` (:func:`~mcdm_pin.osim.motion.motion_states`)."""
+    return motion_states(robot.source, read_osim(robot.source.maps.source), *files, np.asarray(rows) / RATE)
+
+
+def excerpt_answers(folder, cone: bool):
+    """``(rows, xsol)`` of RMR's answers kept beside a committed motion excerpt (``rmr_xsol_*.csv``)."""
+    data = np.loadtxt(Path(folder) / f"rmr_xsol_{'with' if cone else 'without'}_GH.csv", delimiter=",", ndmin=2)
+    return data[:, 0].astype(int), data[:, 1:]
+
+
+def rmr_problem(robot, cone: bool) -> Problem:
+    """RMR's objective (activations, the actuators' ``w c^2`` added by the problem), and the cone."""
+    return Problem(robot, MinActivations(), [InteractionCone(GH)] if cone else [])
+
+
+def actuator_weights(robot) -> tuple:
+    """``(F_opt, w)`` per actuator: the torque is ``F_opt c``, the objective's term ``w c^2``."""
+    f_opt = np.array([float(a.tau_max[0]) for a in robot.actuators]) / CONTROL_CAP
+    return f_opt, np.array([a.weight for a in robot.actuators]) * f_opt ** 2
+
+
+def rmr_objective(robot, xrow) -> float:
+    """RMR's objective at its answer: ``sum a^2 + sum w c^2`` (our weights, RMR's values)."""
+    _, w = actuator_weights(robot)
+    x = np.asarray(xrow, dtype=float)
+    return float(np.sum(x[:N_MUSCLES] ** 2) + np.sum(w * x[N_MUSCLES:N_MUSCLES + N_ACTUATORS] ** 2))
+
+
+def rmr_in_our_problem(ident, terms, qp, xrow) -> dict:
+    """RMR's answer as our unknowns ``[f; tau]`` at our state and how far it is from our constraints:
+    the equation of motion's residual (largest generalized force, N m or N, and relative), the
+    activation bounds, the cone (degrees beyond it). The actuators that weigh nothing (the thorax's,
+    the forearm's; in a shrug also plane_elv's and axial_rot's) are free in both problems: their
+    torques are refitted to our state (least squares on the residual), which changes no objective."""
+    robot = ident.robot
+    x = np.asarray(xrow, dtype=float)
+    st = terms.muscles
+    k = robot.cables.muscle_index
+    f = np.zeros(robot.m)
+    f[k] = st.passive + st.gain * x[:N_MUSCLES]
+    f_opt, _ = actuator_weights(robot)
+    tau = f_opt * x[N_MUSCLES:N_MUSCLES + N_ACTUATORS]
+    y = np.concatenate([f, tau])
+    n = terms.tau.shape[0]
+    free = robot.m + np.flatnonzero(np.array([a.weight for a in robot.actuators]) == 0.0)
+    r = qp.A[:n] @ y - qp.b[:n]
+    y[free] -= np.linalg.lstsq(qp.A[:n, free], r, rcond=None)[0]
+    r = qp.A[:n] @ y - qp.b[:n]
+    scale = max(np.abs(terms.tau).max(), 1e-300)
+    cone = float(cone_violation_deg(qp, y).max(initial=0.0)) if qp.cones else 0.0
+    a = x[:N_MUSCLES]
+    return dict(eom_abs=float(np.abs(r).max()), eom_rel=float(np.abs(r).max() / scale),
+                bounds=float(max((st.a_min - a).max(), (a - st.a_max).max(), 0.0)), cone_deg=cone,
+                angle_deg=float(np.degrees(np.arccos(np.clip(
+                    _cos(terms.wrenches(y)[robot.joint_names.index(GH), :3], robot, terms), -1, 1)))))
+
+
+def _cos(F_child, robot, terms) -> float:
+    j = robot.joint_names.index(GH)
+    F = terms.R_socket[j] @ F_child
+    return float(F @ terms.socket_axes[j] / max(np.linalg.norm(F), 1e-300))

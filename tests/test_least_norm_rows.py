@@ -1,0 +1,52 @@
+"""The least-norm stage's optimal-face rows (mcdm_pin.solvers.least_norm.optimal_face_rows) split off
+the unit rows (diagonal entries of ``P``, strongly active bounds) before the SVD: the basis must be
+orthonormal and span exactly the rows' space, checked against an SVD of all the rows stacked."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mcdm_pin.solvers.base import OPTIMAL, Solution
+from mcdm_pin.solvers.least_norm import optimal_face_rows
+
+from .test_solvers import _weak_factor_problem
+
+
+def _span_of_all(qp, sol):
+    """An orthonormal basis of every row's span by one SVD (the stage's former computation)."""
+    n = qp.n
+    rows = [qp.P_factor, np.eye(n)[qp.P_diag != 0], qp.A, qp.c[None, :]]
+    near = 1e-8
+    at = ((sol.x - qp.lb <= near * (1 + np.abs(qp.lb))) & (sol.z < 0)) | \
+         ((qp.ub - sol.x <= near * (1 + np.abs(qp.ub))) & (sol.z > 0))
+    rows.append(np.eye(n)[at])
+    N = np.vstack(rows)
+    N = N[np.linalg.norm(N, axis=1) > 0]
+    N = N / np.linalg.norm(N, axis=1)[:, None]
+    _, s, Vt = np.linalg.svd(N, full_matrices=False)
+    return Vt[s > 1e-10 * s.max()]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_face_rows_span_what_one_svd_of_all_rows_spans(seed):
+    rng = np.random.default_rng(seed)
+    qp = _weak_factor_problem(seed, cone=False)
+    n = qp.n
+    P_diag = np.where(rng.uniform(size=n) < 0.3, rng.uniform(0.5, 2.0, n), 0.0)
+    qp = qp.replace(P_diag=P_diag, P=None)
+    # a point with some variables at their bounds, multipliers pushing them there
+    x = rng.uniform(1.0, 20.0, n)
+    low, up = rng.choice(n, 6, replace=False)[:3], rng.choice(n, 6, replace=False)[3:]
+    up = np.setdiff1d(up, low)
+    x[low], x[up] = qp.lb[low], qp.ub[up]
+    z = np.zeros(n)
+    z[low], z[up] = -1.0, 1.0
+    sol = Solution(x, OPTIMAL, 0.0, y=np.zeros(len(qp.b)), z=z, z_cone=np.zeros((0, 3)))
+    E = optimal_face_rows(qp, sol)
+    ref = _span_of_all(qp, sol)
+    assert E.shape == ref.shape
+    np.testing.assert_allclose(E @ E.T, np.eye(len(E)), atol=1e-12)
+    # the same space: each basis is reproduced by projecting it onto the other
+    np.testing.assert_allclose(ref @ E.T @ E, ref, atol=1e-10)
+    np.testing.assert_allclose(E @ ref.T @ ref, E, atol=1e-10)
