@@ -1,6 +1,12 @@
 """The force distribution in a 1 kHz control loop against MuJoCo: the acceptance table of issue 26, item 3.
 
     python benchmarks/control_loop.py [--robots neck cogiro] [--duration 10] [--no-realtime] [--json FILE]
+        [--fifo PRIORITY] [--cpu CORE] [--spin-us US] [--gc freeze|off|on] [--no-warm] [--lock-memory]
+        [--repeat N]
+
+The loop's conditions (``mcdm_pin.control.realtime``, docs/control.md): the real-time scheduling
+class, a pinned core, polling the clock before each tick, the garbage collector's mode, the warm-up
+before the loop, locked memory; ``--repeat`` runs each robot's loop several times.
 
 Per robot: the plant is the robot exported to MuJoCo (``mcdm_pin.export.mjcf``, RK4 at 1 ms); the
 controller's model has every mass and inertia 5 % too large (``--mass-factor``); the sensors add
@@ -16,8 +22,9 @@ budget) and falls back to the previous tick's forces (docs/control.md).
   ``general_1`` trajectory (4 s) slowed to 5 s, there and back; task-space law on the platform frame,
   case 1; noise 1e-5 m and rad, 1e-4 m/s and rad/s.
 
-The table: ticks, deadline misses (wall time of law + distribution over 1 ms) and those whose CPU
-time alone was over (the rest were preempted by other processes), fallbacks by reason, p50/p99/max of
+The table: ticks, deadline misses (wall time of law + distribution over 1 ms) split by cause
+(``mcdm_pin.control.realtime``: the tick's CPU time alone over 1 ms; CPU time plus the wait on the
+run queue over it, i.e. other processes ran; neither), fallbacks by reason, p50/p99/max of
 the tick's latency, of the distribution alone and of the tick's CPU time, RMS and peak tracking error,
 and the load average
 and the busiest other processes before and after (the machine is shared).
@@ -85,11 +92,23 @@ def busiest(n: int = 6) -> list[str]:
     return [" ".join(line.split()[1:])[:90] for line in out if line.split() and line.split()[0] != me][:n]
 
 
+def cpu_times() -> tuple[float, float]:
+    """The machine's steal time (its virtual CPUs held by the host) and interrupt time (hard and
+    soft), s, summed over cores since boot (``/proc/stat``; zeros where there is none)."""
+    try:
+        fields = open("/proc/stat").readline().split()
+        hz = os.sysconf("SC_CLK_TCK")
+        return int(fields[8]) / hz, (int(fields[6]) + int(fields[7])) / hz
+    except (OSError, IndexError, ValueError):
+        return 0.0, 0.0
+
+
 def row(name: str, s: dict, load: tuple) -> str:
     reasons = ", ".join(f"{k} {v}" for k, v in sorted(s["fallback_reasons"].items())) or "-"
     err = (f"{s['rms_rot_deg']:.4f} / {s['peak_rot_deg']:.4f} deg" if name == "neck" else
            f"{s['rms_lin_mm']:.3f} / {s['peak_lin_mm']:.3f} mm, {s['rms_rot_deg']:.4f} / {s['peak_rot_deg']:.4f} deg")
-    return (f"| {name} | {s['ticks']} | {s['misses']} ({s['misses_cpu']} on CPU time) | {s['fallbacks']} ({reasons}) | "
+    return (f"| {name} | {s['ticks']} | {s['misses']} ({s['misses_cpu']} / {s['misses_queue']} / "
+            f"{s['misses_other']}) | {s['fallbacks']} ({reasons}) | "
             f"{s['latency_p50_ms']:.3f} / {s['latency_p99_ms']:.3f} / {s['latency_max_ms']:.2f} | "
             f"{s['distribution_p50_ms']:.3f} / {s['distribution_p99_ms']:.3f} / {s['distribution_max_ms']:.2f} | "
             f"{s['cpu_p50_ms']:.3f} / {s['cpu_p99_ms']:.3f} / {s['cpu_max_ms']:.2f} | "
@@ -108,6 +127,14 @@ def main(argv=None) -> int:
     ap.add_argument("--no-realtime", action="store_true", help="run the ticks back to back, not paced at 1 kHz")
     ap.add_argument("--fifo", type=int, default=None, metavar="PRIORITY",
                     help="run the paced ticks in SCHED_FIFO at this priority (Linux; needs the permission)")
+    ap.add_argument("--gc", default="freeze", choices=["freeze", "off", "on"],
+                    help="the garbage collector during the loop (default freeze)")
+    ap.add_argument("--cpu", type=int, default=None, help="pin the loop to this core")
+    ap.add_argument("--spin-us", type=float, default=0.0,
+                    help="poll the clock for the last SPIN_US microseconds before each paced tick")
+    ap.add_argument("--no-warm", action="store_true", help="no warm-up of the solver's stages before the loop")
+    ap.add_argument("--lock-memory", action="store_true", help="mlockall the process's pages during the loop")
+    ap.add_argument("--repeat", type=int, default=1, help="run each robot's loop this many times")
     ap.add_argument("--json", type=Path, default=None, help="write the summaries here")
     args = ap.parse_args(argv)
 
@@ -115,12 +142,16 @@ def main(argv=None) -> int:
     from mcdm_pin.control import run_loop
 
     jit.prepare(policy="wait")
+    if args.json is not None:
+        args.json = args.json.resolve()  # (before the chdir below)
     os.chdir(tempfile.mkdtemp(prefix="control_loop_"))  # MuJoCo's log, if any, goes there
     print(f"# control loop, {machine_line()}; compiled kernels: {jit.ready()}")
-    print(f"# paced at 1 kHz on the wall clock: {not args.no_realtime}; ticks in SCHED_FIFO: "
-          f"{'priority ' + str(args.fifo) if args.fifo is not None else 'no'}")
+    print(f"# paced at 1 kHz on the wall clock: {not args.no_realtime} (spin {args.spin_us:g} us); ticks in "
+          f"SCHED_FIFO: {'priority ' + str(args.fifo) if args.fifo is not None else 'no'}; gc {args.gc}; "
+          f"core {args.cpu if args.cpu is not None else 'any'}; warm-up {not args.no_warm}; "
+          f"memory locked {args.lock_memory}")
     rows, out = [], {}
-    for name in args.robots:
+    for name in [r for r in args.robots for _ in range(args.repeat)]:
         noise = None
         if args.noise_q is not None or args.noise_v is not None:
             base = NOISE[name]
@@ -128,21 +159,34 @@ def main(argv=None) -> int:
                      base[1] if args.noise_v is None else args.noise_v)
         controller, plant, reference, what = setup(name, args.mass_factor, args.omega, noise, args.seed)
         before, load0 = busiest(), os.getloadavg()[0]
+        cpu0 = cpu_times()
         t0 = time.perf_counter()
         res = run_loop(controller, plant, reference, args.duration, realtime=not args.no_realtime,
-                       fifo_priority=args.fifo)
+                       fifo_priority=args.fifo, gc=args.gc, cpu=args.cpu, spin_s=args.spin_us * 1e-6,
+                       warm=not args.no_warm, lock_memory=args.lock_memory)
         wall = time.perf_counter() - t0
+        steal, irq = (b - a for a, b in zip(cpu0, cpu_times()))
         after, load1 = busiest(), os.getloadavg()[0]
         s = res.summary()
         print(f"\n## {name}: {what}")
         print(f"wall {wall:.1f} s (reference sampling included); answering stages {s['stages']}; "
               f"longest run of consecutive fallbacks {s['longest_fallback_run']} ticks")
+        print(f"late ticks: {s['misses_cpu']} on CPU time, {s['misses_queue']} waiting on the run queue, "
+              f"{s['misses_other']} neither; with a page fault {s['late_with_fault']}, "
+              f"a garbage collection {s['late_with_gc']}, an involuntary switch {s['late_with_switch']}; "
+              f"in all ticks {s['faults']} page faults, {s['collections_in_ticks']} collections "
+              f"({s['collections_between']} between ticks); start delay p50/p99/max "
+              f"{s['start_late_p50_ms']:.3f} / {s['start_late_p99_ms']:.3f} / {s['start_late_max_ms']:.2f} ms; "
+              f"periods skipped {s['periods_skipped']} (before {s['ticks_after_skip']} ticks); late from the "
+              f"tick's instant (start delay + latency > deadline) {s['late_from_instant']}; "
+              f"steal {steal:.2f} s, interrupts {irq:.2f} s (both cores, during the loop)")
         print(f"busiest processes before: {'; '.join(before)}")
         print(f"busiest processes after:  {'; '.join(after)}")
         rows.append(row(name, s, (load0, load1)))
-        out[name] = dict(s, description=what, load_before=load0, load_after=load1, busiest_before=before,
-                         busiest_after=after, wall_s=wall)
-    print("\n| robot | ticks | misses (1 ms) | fallbacks | tick latency p50 / p99 / max, ms | "
+        out.setdefault(name, []).append(dict(s, description=what, steal_s=steal, irq_s=irq, load_before=load0,
+                                             load_after=load1, busiest_before=before, busiest_after=after,
+                                             wall_s=wall))
+    print("\n| robot | ticks | misses (1 ms): CPU / run queue / other | fallbacks | tick latency p50 / p99 / max, ms | "
           "distribution p50 / p99 / max, ms | tick CPU time p50 / p99 / max, ms | tracking error RMS / peak | "
           "load (1 min) |")
     print("|---|---|---|---|---|---|---|---|---|")

@@ -165,3 +165,61 @@ def test_fifo_needs_pacing(cogiro, tmp_path, monkeypatch):
     plant = MujocoPlant(cogiro)
     with pytest.raises(ProblemError, match="realtime"):
         run_loop(controller, plant, plan(cogiro, cogiro.sidecar.trajectories["general_1"]), 0.01, fifo_priority=10)
+
+
+def test_conditions_are_undone():
+    """The loop's conditions (gc frozen and disabled, pinned core) hold inside and are undone after,
+    also when the body raises; an unknown gc mode is refused."""
+    import gc
+    import os
+
+    from mcdm_pin.control.realtime import Conditions
+    from mcdm_pin.exceptions import ProblemError
+
+    was, cores = gc.isenabled(), os.sched_getaffinity(0)
+    with pytest.raises(RuntimeError):
+        with Conditions(gc="freeze", cpu=min(cores)):
+            assert not gc.isenabled() and gc.get_freeze_count() > 0
+            assert os.sched_getaffinity(0) == {min(cores)}
+            raise RuntimeError("inside")
+    assert gc.isenabled() == was and gc.get_freeze_count() == 0 and os.sched_getaffinity(0) == cores
+    with pytest.raises(ProblemError, match="gc"):
+        Conditions(gc="sometimes")
+
+
+def test_probe_and_pacing():
+    """wait_until never returns early (sleep, then polling); the probe's counters only grow."""
+    import time
+
+    from mcdm_pin.control.realtime import Probe, wait_until
+
+    probe = Probe()
+    try:
+        before = probe.read()
+        for spin in (0.0, 2e-4):
+            target = time.perf_counter() + 1e-3
+            wait_until(target, spin)
+            assert time.perf_counter() >= target
+        after = probe.read()
+    finally:
+        probe.close()
+    assert all(b >= a for a, b in zip(before, after))
+
+
+def test_warm_keeps_the_answers(neck):
+    """Controller.warm (every solver stage alone, then ticks) changes nothing of the loop's answers:
+    after start, a warmed controller's ticks equal an unwarmed one's, bit for bit."""
+    law = lambda: JointSpaceLaw(neck, kp=100.0, kd=20.0)  # noqa: E731
+    q0, v0 = pin.neutral(neck.model), np.zeros(neck.nv)
+    rng = np.random.default_rng(3)
+    states = [(pin.integrate(neck.model, q0, 1e-3 * rng.normal(size=neck.nv)), 1e-2 * rng.normal(size=neck.nv))
+              for _ in range(3)]
+    forces = []
+    for warm in (False, True):
+        controller = Controller(neck, 1, law(), deadline_s=1.0)
+        if warm:
+            controller.warm(q0, v0, q0, v0, np.zeros(neck.nv), ticks=3)
+        controller.start(q0, v0, q0, v0, np.zeros(neck.nv))
+        forces.append([controller.tick(q, v, q0, v0, np.zeros(neck.nv)).f.copy() for q, v in states])
+        assert controller.misses == 0 and not controller.fallbacks
+    assert all(np.array_equal(a, b) for a, b in zip(*forces))

@@ -115,6 +115,29 @@ class Controller:
         self.f_applied = res.f.copy()
         return self.f_applied
 
+    def warm(self, q, v, q_r, v_r, a_r, ticks: int = 20) -> None:
+        """Run every code path of a tick before the loop, so that no first call (a module's import, a
+        solver's set-up, a compiled kernel's cache load or new specialisation) falls inside a tick:
+        each answering stage of the solver chain alone on the problem of this state (without a
+        budget), then :meth:`start` and ``ticks`` ticks at this state. Call :meth:`start` afterwards:
+        it forgets the warm start, the law's integral and the counters."""
+        chain = self.ident.solver.inner  # the solver chain (a Cascade) inside the scaling wrapper
+        stages, budget = chain.stages, chain.budget_s
+        chain.budget_s = None
+        try:
+            for alone in [s for s in stages if not s.refines]:
+                chain.stages = [alone] + [s for s in stages if s.refines]
+                self.ident.reset()
+                try:
+                    self.ident.solve(q, v, self.law(q, v, q_r, v_r, a_r))
+                except McdmError:  # (a stage that refuses this problem alone: nothing of it to warm)
+                    pass
+        finally:
+            chain.stages, chain.budget_s = stages, budget
+        self.start(q, v, q_r, v_r, a_r)
+        for _ in range(ticks):
+            self.tick(q, v, q_r, v_r, a_r)
+
     def tick(self, q, v, q_r, v_r, a_r) -> Tick:
         """Forces for the measured state ``(q, v)`` and the reference ``(q_r, v_r, a_r)``."""
         if self.f_applied is None:
