@@ -105,6 +105,19 @@ def _bezier_du(u, P):
     return 5.0 * (basis * np.diff(P, axis=1)).sum(axis=1)
 
 
+_POW = np.arange(6)
+
+
+def _bezier_and_du(u, P, dP):
+    """:func:`_bezier` and :func:`_bezier_du` from one set of powers (the same numbers as the two):
+    ``dP = np.diff(P, axis=1)``."""
+    up = u[:, None] ** _POW  # u^i
+    sp = (1 - u[:, None]) ** _POW  # (1 - u)^i
+    value = (_BINOM5 * sp[:, ::-1] * up * P).sum(axis=1)
+    du = 5.0 * (_BINOM4 * sp[:, 4::-1] * up[:, :5] * dP).sum(axis=1)
+    return value, du
+
+
 @dataclass(frozen=True)
 class BezierCurve:
     """OpenSim's ``SmoothSegmentedFunction``: quintic Bézier segments (control points ``px``, ``py``
@@ -299,11 +312,12 @@ def _evaluate(pairs) -> list:
     if len(xm):
         u = np.clip((xm - PX[:, 0]) / (PX[:, 5] - PX[:, 0]), 0.0, 1.0)
         tol = 4 * np.finfo(float).eps * np.maximum(1.0, np.abs(xm))
+        dPX = np.diff(PX, axis=1)
         for _ in range(60):
-            f = _bezier(u, PX) - xm
+            f, d = _bezier_and_du(u, PX, dPX)
+            f = f - xm
             if np.all(np.abs(f) <= tol):
                 break
-            d = _bezier_du(u, PX)
             u = np.clip(u - np.where(d != 0, f / np.where(d != 0, d, 1.0), 0.0), 0.0, 1.0)
         y = _bezier(u, PY)
         k = 0
