@@ -292,6 +292,17 @@ def _stack(curves) -> BezierCurve:
                        *(np.array([getattr(c, f) for c in curves]) for f in ("x0", "x1", "y0", "y1", "dydx0", "dydx1")))
 
 
+def _concat(curves) -> BezierCurve:
+    """Stacked curves (:func:`_stack`) one after the other along the muscle axis, as one, so that
+    :func:`_evaluate` solves them in one pass. Curves with fewer segments repeat their last one (same
+    end point, so :func:`_evaluate` picks the same control points)."""
+    k = max(c.px.shape[1] for c in curves)
+    pad = lambda P: np.concatenate([P, np.repeat(P[:, -1:], k - P.shape[1], axis=1)], axis=1)  # noqa: E731
+    return BezierCurve(np.concatenate([pad(c.px) for c in curves]), np.concatenate([pad(c.py) for c in curves]),
+                       *(np.concatenate([getattr(c, f) for c in curves])
+                         for f in ("x0", "x1", "y0", "y1", "dydx0", "dydx1")))
+
+
 _GRID = np.linspace(0.0, 1.0, 33)  # Bézier parameters of the tables that start Newton's iteration
 
 
@@ -376,7 +387,9 @@ class OpenSimMuscles:
         self._th = np.array([self.muscles[i].curves for i in self._ti], dtype=float).reshape(-1, 6).T
         mill = [self.muscles[i] for i in self._mi]
         self._curves = tuple(_stack([m.curves[k] for m in mill]) for k in range(3)) if mill else None
-        self._grids = tuple(_grid(c) for c in self._curves) if mill else None
+        # the three curves (active force-length, force-velocity, passive) solved as one
+        self._all = _concat(self._curves) if mill else None
+        self._grid = _grid(self._all) if mill else None
         dg = [self.muscles[i] for i in self._di]
         self._dg = tuple(np.array([m.curves[k] for m in dg], dtype=float) for k in range(3))
         self.h = self.lo * np.sin(self.alpha0)
@@ -429,7 +442,8 @@ class OpenSimMuscles:
         fl, fv, fp = np.zeros(self.size), np.zeros(self.size), np.zeros(self.size)
         mi, di = self._mi, self._di
         if mi.size:
-            fl[mi], fv[mi], fp[mi] = _evaluate(list(zip(self._curves, (l[mi], v[mi], l[mi]), self._grids)))
+            y = _evaluate([(self._all, np.concatenate([l[mi], v[mi], l[mi]]), self._grid)])[0]
+            fl[mi], fv[mi], fp[mi] = np.split(y, 3)
         if di.size:
             width, e0, use_passive = self._dg
             x = (l[di] - 1.0) / width + 1.0
