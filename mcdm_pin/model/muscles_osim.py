@@ -303,7 +303,7 @@ def _concat(curves) -> BezierCurve:
                          for f in ("x0", "x1", "y0", "y1", "dydx0", "dydx1")))
 
 
-_GRID = np.linspace(0.0, 1.0, 33)  # Bézier parameters of the tables that start Newton's iteration
+_GRID = np.linspace(0.0, 1.0, 129)  # Bézier parameters of the tables that start Newton's iteration
 
 
 def _grid(c) -> np.ndarray:
