@@ -412,6 +412,24 @@ def test_loop_force_and_wrench_maps_are_affine_in_the_cable_forces():
             assert np.allclose(data.f[j].vector - before[j], W[j] @ lam, rtol=0, atol=1e-9)
 
 
+def test_loop_instant_equals_its_separate_maps():
+    """PointLoops.instant (one Jacobian pass, one SVD) gives basis, force_map (cables and actuators)
+    and wrench_map's numbers; its basis spans the null space of G."""
+    om, _, src, _ = osim_skeleton(TSM)
+    model, loops = om.model, src.loops
+    rng = np.random.default_rng(4)
+    q = loops.project(src.configuration({}) + rng.uniform(-0.2, 0.2, model.nq))
+    tau0, L, S = rng.normal(size=model.nv), rng.normal(size=(4, model.nv)), rng.normal(size=(model.nv, 2))
+    basis, lam0, Lam, Lam_act, W = loops.instant(q, tau0, L, S)
+    ref_basis = loops.basis(q)
+    assert np.abs(loops.jacobian(q) @ basis).max() < 1e-12
+    assert np.allclose(basis @ basis.T, ref_basis @ ref_basis.T, rtol=0, atol=1e-12)  # same subspace
+    ref0, ref = loops.force_map(q, tau0, L)
+    assert np.allclose(lam0, ref0, rtol=1e-12, atol=1e-12) and np.allclose(Lam, ref, rtol=1e-12, atol=1e-12)
+    assert np.allclose(Lam_act, loops.force_map(q, np.zeros(model.nv), -S.T)[1], rtol=1e-12, atol=1e-12)
+    assert np.array_equal(W, loops.wrench_map(q))
+
+
 @pytest.mark.parametrize("path", [ARM26, TSM], ids=["arm26", "tsm"])
 def test_interaction_wrenches_equal_opensims_joint_reactions(workdir, path):
     """With OpenSim's forward dynamics (gravity, forces off) giving the accelerations, RNEA's

@@ -105,6 +105,19 @@ def _bezier_du(u, P):
     return 5.0 * (basis * np.diff(P, axis=1)).sum(axis=1)
 
 
+_POW = np.arange(6)
+
+
+def _bezier_and_du(u, P, dP):
+    """:func:`_bezier` and :func:`_bezier_du` from one set of powers (the same numbers as the two):
+    ``dP = np.diff(P, axis=1)``."""
+    up = u[:, None] ** _POW  # u^i
+    sp = (1 - u[:, None]) ** _POW  # (1 - u)^i
+    value = (_BINOM5 * sp[:, ::-1] * up * P).sum(axis=1)
+    du = 5.0 * (_BINOM4 * sp[:, 4::-1] * up[:, :5] * dP).sum(axis=1)
+    return value, du
+
+
 @dataclass(frozen=True)
 class BezierCurve:
     """OpenSim's ``SmoothSegmentedFunction``: quintic Bézier segments (control points ``px``, ``py``
@@ -279,12 +292,45 @@ def _stack(curves) -> BezierCurve:
                        *(np.array([getattr(c, f) for c in curves]) for f in ("x0", "x1", "y0", "y1", "dydx0", "dydx1")))
 
 
-def _evaluate(pairs) -> list:
-    """Stacked curves (:func:`_stack`) at one abscissa per muscle: ``[(c, x), ...]`` -> the values
-    ``[y, ...]``; every curve's Bézier parameters are solved in one Newton iteration (x(u) is monotone
-    on each segment)."""
-    outs, rows_x, rows_y, xs, where = [], [], [], [], []
-    for c, x in pairs:
+def _concat(curves) -> BezierCurve:
+    """Stacked curves (:func:`_stack`) one after the other along the muscle axis, as one, so that
+    :func:`_evaluate` solves them in one pass. Curves with fewer segments repeat their last one (same
+    end point, so :func:`_evaluate` picks the same control points)."""
+    k = max(c.px.shape[1] for c in curves)
+    pad = lambda P: np.concatenate([P, np.repeat(P[:, -1:], k - P.shape[1], axis=1)], axis=1)  # noqa: E731
+    return BezierCurve(np.concatenate([pad(c.px) for c in curves]), np.concatenate([pad(c.py) for c in curves]),
+                       *(np.concatenate([getattr(c, f) for c in curves])
+                         for f in ("x0", "x1", "y0", "y1", "dydx0", "dydx1")))
+
+
+_GRID = np.linspace(0.0, 1.0, 129)  # Bézier parameters of the tables that start Newton's iteration
+
+
+def _grid(c) -> np.ndarray:
+    """(muscles, segments, len(_GRID)) the stacked curve's abscissae ``x(u)`` at ``u = _GRID``."""
+    i = np.arange(6)
+    basis = _BINOM5 * (1 - _GRID[:, None]) ** (5 - i) * _GRID[:, None] ** i  # (G, 6)
+    return c.px @ basis.T
+
+
+def _start(xm, XG) -> np.ndarray:
+    """Newton's first Bézier parameters: ``x(u)`` interpolated linearly between the table's
+    abscissae ``XG`` (n, G) (increasing along a segment) around each ``xm`` (n,)."""
+    G = XG.shape[1]
+    i = np.clip((XG < xm[:, None]).sum(axis=1), 1, G - 1)
+    rows = np.arange(len(xm))
+    lo, hi = XG[rows, i - 1], XG[rows, i]
+    width = hi - lo
+    t = np.where(width > 0, (xm - lo) / np.where(width > 0, width, 1.0), 0.0)
+    return np.clip((i - 1 + t) / (G - 1), 0.0, 1.0)
+
+
+def _evaluate(triples) -> list:
+    """Stacked curves (:func:`_stack`) at one abscissa per muscle: ``[(c, x, grid), ...]`` (``grid``
+    :func:`_grid` of ``c``) -> the values ``[y, ...]``; every curve's Bézier parameters are solved in
+    one Newton iteration (x(u) is monotone on each segment) from the tables' interpolation."""
+    outs, rows_x, rows_y, rows_g, xs, where = [], [], [], [], [], []
+    for c, x, grid in triples:
         x = np.asarray(x, dtype=float)
         out = np.where(x < c.x0, c.y0 + c.dydx0 * (x - c.x0), c.y1 + c.dydx1 * (x - c.x1))
         mid = np.flatnonzero((x >= c.x0) & (x <= c.x1))
@@ -292,18 +338,20 @@ def _evaluate(pairs) -> list:
         seg = np.minimum((xm[:, None] > c.px[mid, :, 5]).sum(axis=1), c.px.shape[1] - 1)
         rows_x.append(c.px[mid, seg])
         rows_y.append(c.py[mid, seg])
+        rows_g.append(grid[mid, seg])
         xs.append(xm)
         where.append(mid)
         outs.append(out)
     PX, PY, xm = np.concatenate(rows_x), np.concatenate(rows_y), np.concatenate(xs)
     if len(xm):
-        u = np.clip((xm - PX[:, 0]) / (PX[:, 5] - PX[:, 0]), 0.0, 1.0)
+        u = _start(xm, np.concatenate(rows_g))
         tol = 4 * np.finfo(float).eps * np.maximum(1.0, np.abs(xm))
+        dPX = np.diff(PX, axis=1)
         for _ in range(60):
-            f = _bezier(u, PX) - xm
+            f, d = _bezier_and_du(u, PX, dPX)
+            f = f - xm
             if np.all(np.abs(f) <= tol):
                 break
-            d = _bezier_du(u, PX)
             u = np.clip(u - np.where(d != 0, f / np.where(d != 0, d, 1.0), 0.0), 0.0, 1.0)
         y = _bezier(u, PY)
         k = 0
@@ -339,6 +387,9 @@ class OpenSimMuscles:
         self._th = np.array([self.muscles[i].curves for i in self._ti], dtype=float).reshape(-1, 6).T
         mill = [self.muscles[i] for i in self._mi]
         self._curves = tuple(_stack([m.curves[k] for m in mill]) for k in range(3)) if mill else None
+        # the three curves (active force-length, force-velocity, passive) solved as one
+        self._all = _concat(self._curves) if mill else None
+        self._grid = _grid(self._all) if mill else None
         dg = [self.muscles[i] for i in self._di]
         self._dg = tuple(np.array([m.curves[k] for m in dg], dtype=float) for k in range(3))
         self.h = self.lo * np.sin(self.alpha0)
@@ -391,7 +442,8 @@ class OpenSimMuscles:
         fl, fv, fp = np.zeros(self.size), np.zeros(self.size), np.zeros(self.size)
         mi, di = self._mi, self._di
         if mi.size:
-            fl[mi], fv[mi], fp[mi] = _evaluate(list(zip(self._curves, (l[mi], v[mi], l[mi]))))
+            y = _evaluate([(self._all, np.concatenate([l[mi], v[mi], l[mi]]), self._grid)])[0]
+            fl[mi], fv[mi], fp[mi] = np.split(y, 3)
         if di.size:
             width, e0, use_passive = self._dg
             x = (l[di] - 1.0) / width + 1.0

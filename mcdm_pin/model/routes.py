@@ -179,16 +179,20 @@ def add_levers(routes, L, RT, J, X, oM, sub_v, sub_phys, child_key) -> None:
     moved = np.abs(lever).sum(axis=1) > 0
     if not moved.any():
         return
-    for s in np.flatnonzero((routes.seg_scale > 0) & routes.seg_active
-                            & (moved[routes.seg_a] | moved[routes.seg_b])):
-        a, b, c = routes.seg_a[s], routes.seg_b[s], routes.seg_cable[s]
-        u = X[b] - X[a]
-        u *= routes.seg_scale[s] / np.linalg.norm(u)
-        for e, sign in ((b, 1.0), (a, -1.0)):
-            if moved[e]:
-                k = routes.point_key[e]
-                m = sign * np.cross(oM[k, :3, :3] @ lever[e], u)
-                cols = np.flatnonzero(sub_v[:, k])
-                L[c, cols] += m @ J[3:6, cols]
-                for j in np.flatnonzero(sub_phys[:, k]):
-                    RT[j, 3:6, c] += oM[child_key[j], :3, :3].T @ m
+    s = np.flatnonzero((routes.seg_scale > 0) & routes.seg_active & (moved[routes.seg_a] | moved[routes.seg_b]))
+    if not s.size:
+        return
+    a, b = routes.seg_a[s], routes.seg_b[s]
+    u = X[b] - X[a]
+    u *= (routes.seg_scale[s] / np.linalg.norm(u, axis=1))[:, None]
+    # every moved end of those segments: its point, sign, cable and segment direction
+    ends, sign = np.concatenate([b, a]), np.repeat([1.0, -1.0], len(s))
+    cable, u = np.tile(routes.seg_cable[s], 2), np.vstack([u, u])
+    keep = moved[ends]
+    ends, sign, cable, u = ends[keep], sign[keep], cable[keep], u[keep]
+    k = routes.point_key[ends]
+    m = sign[:, None] * np.cross(np.einsum("nij,nj->ni", oM[k, :3, :3], lever[ends]), u)  # (n, 3) world
+    np.add.at(L, cable, (m @ J[3:6]) * (sub_v[:, k].T != 0))
+    # R_c^T m for every physical joint, kept where the joint's subtree holds the end's body
+    moments = np.einsum("jab,na->jbn", oM[child_key, :3, :3], m) * (sub_phys[:, k] != 0)[:, None, :]
+    np.add.at(RT, (slice(None), slice(3, 6), cable), moments)

@@ -410,16 +410,13 @@ class TermsEvaluator:
         """``(basis, u, RT, extra)`` with the closed loops (module docstring): the basis ``N K``,
         the wrenches with the loop force's share, and the Terms fields ``actuation``, ``RT_act``,
         ``loop_force``."""
-        loops = self.loops
-        basis = loops.basis(q)
-        lam0, Lam = loops.force_map(q, tau, L)
-        W = loops.wrench_map(q)[self._child]  # (J, 6, 3k)
+        basis, lam0, Lam, Lam_act, W = self.loops.instant(q, tau, L, self._S)
+        W = W[self._child]  # (J, 6, 3k)
         u = u + W @ lam0
         RT = RT + W @ Lam
         extra = dict(loop_force=(lam0, Lam, None))
         if self._S is not None:
             # G^T lambda = tau0 + L^T f - S tau_act: the actuators' share of lambda
-            _, Lam_act = loops.force_map(q, np.zeros_like(tau), -self._S.T)
             extra = dict(actuation=basis.T @ self._S, RT_act=W @ Lam_act,
                          loop_force=(lam0, Lam, Lam_act))
         return basis, u, RT, extra

@@ -62,6 +62,15 @@ class PointLoops:
         self.names = tuple(n for n, _, _ in self.loops)
         self.k = 3 * len(self.loops)
         self.data = model.createData()
+        # per loop point: (columns of its loop, sign, frame, its joint and the joint's ancestors)
+        self._points = []
+        for i, (_, a, b) in enumerate(self.loops):
+            for fid, sign in ((b, 1.0), (a, -1.0)):
+                chain, j = [], int(model.frames[fid].parentJoint)
+                while j > 0:
+                    chain.append(j)
+                    j = int(model.parents[j])
+                self._points.append((slice(3 * i, 3 * i + 3), sign, fid, chain, np.array(chain, dtype=int)))
 
     def residual(self, q) -> np.ndarray:
         """(3k,) ``x_2 - x_1`` per loop, world axes (m)."""
@@ -98,13 +107,30 @@ class PointLoops:
         """(nv, n - 3k) ``N K``: the velocities the couplings and the loops allow (orthonormal ``K``).
 
         Raises ModelError if ``G N`` loses rank (the loop's constraints are then not independent)."""
+        return self._factor(q, self.jacobian(q))[1]
+
+    def _factor(self, q, G):
+        """``(N, N K, (N^T G^T)^+)`` from one SVD ``G N = U diag(s) V^T``: ``K`` the last ``n - 3k``
+        columns of ``V`` and ``(N^T G^T)^+ = U diag(1/s) V_{:3k}^T`` (full rank, checked)."""
         N = self._coupling_basis(q)
-        GN = self.jacobian(q) @ N
-        _, s, Vt = np.linalg.svd(GN)
+        GN = G @ N
+        U, s, Vt = np.linalg.svd(GN)
         if s.size and s[-1] <= RANK_TOL * max(1.0, s[0]):
             raise ModelError(f"point constraint(s) {list(self.names)}: G N has rank < {self.k} at this "
                              f"configuration (singular values {s.tolist()})")
-        return N @ Vt[self.k:].T
+        return N, N @ Vt[self.k:].T, (U / s) @ Vt[:self.k]
+
+    def instant(self, q, tau0, L, S=None):
+        """Everything the loops add at one instant, from one Jacobian pass and one SVD:
+        ``(N K, lambda_0, Lambda, Lambda_act, W)`` (:meth:`basis`, :meth:`force_map` with ``L``, the
+        actuators' ``Lambda_act`` of :meth:`force_map` with ``tau0 = 0`` and ``L = -S^T`` (``None``
+        without ``S`` (nv, n_act)), :meth:`wrench_map`)."""
+        G = self.jacobian(q)  # (also the joints' and the frames' placements, for the wrench map)
+        N, basis, pinv = self._factor(q, G)
+        lam0 = pinv @ (N.T @ np.asarray(tau0, dtype=float))
+        Lam = pinv @ (N.T @ np.asarray(L, dtype=float).T)
+        Lam_act = None if S is None else pinv @ (N.T @ -np.asarray(S, dtype=float))
+        return basis, lam0, Lam, Lam_act, self._wrench_map()
 
     def force(self, q, generalized) -> np.ndarray:
         """(3k,) ``lambda`` (N, world) from ``generalized = M qdd + h + L^T f`` (nv): the least-squares
@@ -132,8 +158,7 @@ class PointLoops:
     def force_map(self, q, tau0, L=None):
         """``(lambda_0, Lambda)`` with ``lambda = lambda_0 + Lambda f`` (:meth:`force`): ``tau0 = M qdd + h``
         (nv), ``L`` (m, nv) the cables' ``d lengths / dq`` (``None``: no cables, ``Lambda`` empty)."""
-        N = self._coupling_basis(q)
-        pinv = np.linalg.pinv(N.T @ self.jacobian(q).T)
+        N, _, pinv = self._factor(q, self.jacobian(q))
         lam0 = pinv @ (N.T @ np.asarray(tau0, dtype=float))
         Lam = np.zeros((self.k, 0)) if L is None else pinv @ (N.T @ np.asarray(L, dtype=float).T)
         return lam0, Lam
@@ -144,18 +169,24 @@ class PointLoops:
         ``W[j] lambda`` is ``data.f[j]`` with the loop forces minus ``data.f[j]`` without. A force on the subtree is one the parent
         need not exert, hence ``W[j] = -`` the sum, over the loop points in the subtree, of the point
         force moved to joint ``j``."""
-        m, d = self.model, self.data
-        pin.framesForwardKinematics(m, d, np.asarray(q, dtype=float))
-        W = np.zeros((m.njoints, 6, self.k))
-        for i, (_, a, b) in enumerate(self.loops):
-            for fid, sign in ((b, 1.0), (a, -1.0)):
-                point = d.oMf[fid].translation
-                j = int(m.frames[fid].parentJoint)
-                while j > 0:
-                    R, o = d.oMi[j].rotation, d.oMi[j].translation
-                    W[j, :3, 3 * i:3 * i + 3] -= sign * R.T
-                    W[j, 3:, 3 * i:3 * i + 3] -= sign * R.T @ pin.skew(point - o)
-                    j = int(m.parents[j])
+        pin.framesForwardKinematics(self.model, self.data, np.asarray(q, dtype=float))
+        return self._wrench_map()
+
+    def _wrench_map(self) -> np.ndarray:
+        """:meth:`wrench_map` at the placements in ``self.data`` (joints' and frames')."""
+        d = self.data
+        W = np.zeros((self.model.njoints, 6, self.k))
+        for cols, sign, fid, chain, rows in self._points:
+            if not chain:
+                continue
+            RT = np.array([d.oMi[j].rotation.T for j in chain])  # (c, 3, 3) world -> joint
+            r = d.oMf[fid].translation - np.array([d.oMi[j].translation for j in chain])  # (c, 3)
+            # the moment about the joint of a unit force along e_i at the point, joint axes: R^T skew(r)
+            sk = np.zeros((len(chain), 3, 3))
+            sk[:, 0, 1], sk[:, 0, 2], sk[:, 1, 2] = -r[:, 2], r[:, 1], -r[:, 0]
+            sk[:, 1, 0], sk[:, 2, 0], sk[:, 2, 1] = r[:, 2], -r[:, 1], r[:, 0]
+            W[rows, :3, cols] -= sign * RT
+            W[rows, 3:, cols] -= sign * (RT @ sk)
         return W
 
     def project(self, q, free=None, iterations: int = 50, tol: float = 1e-13) -> np.ndarray:
