@@ -136,10 +136,12 @@ def main(argv=None) -> int:
     ap.add_argument("--lock-memory", action="store_true", help="mlockall the process's pages during the loop")
     ap.add_argument("--repeat", type=int, default=1, help="run each robot's loop this many times")
     ap.add_argument("--json", type=Path, default=None, help="write the summaries here")
+    ap.add_argument("--plot", type=Path, default=None, metavar="FILE",
+                    help="the first run's figure (tracking error, cable tensions: mcdm_pin.control.plot_run)")
     args = ap.parse_args(argv)
 
     from mcdm_pin import jit
-    from mcdm_pin.control import run_loop
+    from mcdm_pin.control import plot_run, run_loop
 
     jit.prepare(policy="wait")
     if args.json is not None:
@@ -183,6 +185,8 @@ def main(argv=None) -> int:
         print(f"busiest processes before: {'; '.join(before)}")
         print(f"busiest processes after:  {'; '.join(after)}")
         rows.append(row(name, s, (load0, load1)))
+        if args.plot is not None and len(rows) == 1:
+            print("figure:", plot_run(res, args.plot))
         out.setdefault(name, []).append(dict(s, description=what, steal_s=steal, irq_s=irq, load_before=load0,
                                              load_after=load1, busiest_before=before, busiest_after=after,
                                              wall_s=wall))

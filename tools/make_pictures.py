@@ -94,6 +94,9 @@ PICTURES = (
     Picture("glenohumeral_abduction", "docs/glenohumeral.md", (
         "python tools/glenohumeral_study.py",
     )),
+    Picture("control_loop_cogiro", "docs/control.md", (
+        "python benchmarks/control_loop.py --robots cogiro --duration 1 --plot docs/img/control_loop_cogiro.png",
+    )),
 )
 
 
