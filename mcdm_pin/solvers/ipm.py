@@ -15,7 +15,7 @@ import numpy as np
 from .. import jit
 from .. import tolerances as tol
 from ..qp import ConeData, QPData, perpendicular_basis
-from . import _fast, _ipm
+from . import _fast, _ipm, _kkt
 from .active_set import _AS_TOLS, compiled_answer, unique_args
 from .base import INACCURATE, INFEASIBLE, OPTIMAL, Solution, Stage, failure
 
@@ -97,7 +97,22 @@ def warm_calls():
     axis = np.array([0.0, 0.0, 1.0])
     cone = ConeData("j", np.ones((3, n)), np.zeros(3), axis, 30.0, perpendicular_basis(axis))
     qp = QPData(np.eye(n), np.zeros(n), 0.0, np.ones((1, n)), np.ones(1), np.zeros(n), np.ones(n), [cone])
-    return [(_fast.ipm_answer, ipm_arguments(qp))]
+    return [(_fast.ipm_answer, ipm_arguments(qp)), *_crossover_call()]
+
+
+def _crossover_call() -> list:
+    """:func:`._kkt.active_set_solve` with the types the crossover of :func:`._ipm.ipm_solve` passes
+    (those of :func:`._fast.active_set_answer`'s example, by parameter name): an entry point of its
+    own, so that a parallel compile (:func:`mcdm_pin.jit.compile_plan`) compiles it beside the
+    interior-point method, which then loads it from numba's cache. None if a name does not match."""
+    import inspect
+
+    answer, args = _fast.warm_calls()[0]
+    given = dict(zip(inspect.signature(answer.py_func).parameters, args), cdir0=args[14])
+    names = list(inspect.signature(_kkt.active_set_solve.py_func).parameters)
+    if not set(names) <= set(given):
+        return []
+    return [(_kkt.active_set_solve, tuple(given[k] for k in names))]
 
 
 jit.register("mcdm_pin.solvers", warm_calls)
