@@ -101,9 +101,9 @@ POLICIES = ("auto", "compile", "wait", "off")
 STAMP = "mcdm_pin_kernels.stamp"  # the stamp's file name, in the kernels' cache folder
 LOCK = "mcdm_pin_kernels.lock"  # the compile lock's file name, beside the stamp
 WORKERS_ENV = "MCDM_PIN_COMPILE_WORKERS"  # how many processes compile (default: the usable cores)
-COMPILE_COST = {"mcdm_pin.solvers._fast.ipm_answer": 121.0, "mcdm_pin.solvers._kkt.active_set_solve": 40.0,
-                "mcdm_pin.solvers._fast.active_set_answer": 18.0,
-                "mcdm_pin.model.route_kernels.osim_route_pass": 16.0, "mcdm_pin.model.route_kernels.route_pass": 4.4,
+COMPILE_COST = {"mcdm_pin.solvers._fast.ipm_answer": 92.5, "mcdm_pin.solvers.ipm.crossover_active_set": 47.8,
+                "mcdm_pin.solvers._fast.active_set_answer": 25.1,
+                "mcdm_pin.model.route_kernels.osim_route_pass": 16.8, "mcdm_pin.model.route_kernels.route_pass": 4.6,
                 "mcdm_pin.model.kernels.cable_terms": 1.6}
 """CPU seconds of each entry point's compile into an empty cache, measured (docs/speed.md, "First
 run"): :func:`compile_plan` splits the entry points between the processes by them."""
@@ -162,7 +162,9 @@ def kernel_sources() -> tuple[Path, ...]:
     (``UNIQUE_PENALTY``, ``IPM_START_BOX_WEIGHT``), so a changed constant must recompile them too."""
     root = Path(__file__).resolve().parent
     # njit kernels, and register_jitable functions compiled inline into them (numba.extending)
-    pattern = re.compile(r"^from (numba(\.\w+)?|\.+jit) import .*\b(njit|extending|register_jitable)\b", re.M)
+    # (or that decorate with them, imported from another kernel module: wrapping_osim_ellipsoid.py)
+    pattern = re.compile(r"^(from (numba(\.\w+)?|\.+jit) import .*\b(njit|extending|register_jitable)\b"
+                         r"|@(njit|register_jitable|extending\.register_jitable)\b)", re.M)
     found = {p for p in root.rglob("*.py") if pattern.search(p.read_text(encoding="utf-8"))}
     return tuple(sorted(found | {root / "tolerances.py"}))
 

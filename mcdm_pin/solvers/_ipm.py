@@ -520,9 +520,8 @@ def _crossover(x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax,
     state, cact, cdir = _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, G, gc, ax, basis0)
     if not _new_guess(state, cact, last_state, last_cact):
         return (0, -1, x, np.zeros(0), np.zeros(0), state, cact, np.zeros((0, 3)), np.zeros(0))
-    # max_newton as an int64, not a literal 10: the warm path's compiled active-set solver serves here too
     code, f, mus, grad, st, ca, dirs, nxt, yy = _kkt.active_set_solve(
-        H, c, A, b, lb, ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, np.int64(10),
+        H, c, A, b, lb, ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, 10,
         as_tols[0], as_tols[1], as_tols[2], as_tols[3], as_tols[4])
     return (1, code, f, mus, grad, st, ca, dirs, yy)
 
