@@ -358,17 +358,27 @@ def compile_workers() -> int:
 
 
 def compile_plan(names: list[str], workers: int) -> list[list[int]]:
-    """The entry points' indices split into at most ``workers`` groups, one per process: longest
-    first (:data:`COMPILE_COST`, 1 s for a name it lacks), each to the least loaded group, and each
-    group in that order (the heavy layers first, so that a kernel two groups share is more often
-    cached by one before the other reaches it)."""
-    order = sorted(range(len(names)), key=lambda i: -COMPILE_COST.get(names[i], 1.0))
-    groups: list[list[int]] = [[] for _ in range(max(1, min(workers, len(names))))]
-    load = [0.0] * len(groups)
-    for i in order:
+    """The entry points' indices (``names`` in the registry's order) split into at most ``workers``
+    groups, one per process. The first group, the calling process's, starts as a one-process compile
+    does: the first registered module's entry points (the model's kernels, cheap) in the registry's
+    order, then the heaviest entry point (:data:`COMPILE_COST`, 1 s for a name it lacks). numba's code
+    for a kernel depends on what its process compiled before it (a callee compiled earlier is linked
+    as it was made then), and this order gives the interior-point method the machine code, and so the
+    answers, bit for bit, of a compile in one process. The others go longest first, each to the least
+    loaded group (the heavy layers first, so that a kernel two groups share is more often cached by
+    one before the other reaches it)."""
+    cost = [COMPILE_COST.get(n, 1.0) for n in names]
+    if not names:
+        return []
+    heaviest = max(range(len(names)), key=cost.__getitem__)
+    module = names[0].rsplit(".", 1)[0]
+    first = [i for i, n in enumerate(names) if n.rsplit(".", 1)[0] == module and i != heaviest] + [heaviest]
+    groups: list[list[int]] = [first] + [[] for _ in range(max(1, min(workers, len(names))) - 1)]
+    load = [sum(cost[i] for i in first)] + [0.0] * (len(groups) - 1)
+    for i in sorted(set(range(len(names))) - set(first), key=lambda i: (-cost[i], i)):
         k = min(range(len(groups)), key=load.__getitem__)
         groups[k].append(i)
-        load[k] += COMPILE_COST.get(names[i], 1.0)
+        load[k] += cost[i]
     return [g for g in groups if g]
 
 

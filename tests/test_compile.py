@@ -13,16 +13,18 @@ from .conftest import REPO
 
 
 def test_compile_plan_splits_by_cost():
-    """Longest first, each to the least loaded group; every entry point in exactly one group."""
-    names = ["a", "b", "c", "d", "e"]
-    costs = {"a": 10.0, "b": 100.0, "c": 40.0, "d": 30.0, "e": 20.0}
+    """The calling process starts as a one-process compile does (the first module's entry points,
+    then the heaviest); the others longest first, each to the least loaded group; every entry point
+    in exactly one group."""
+    names = ["m.a", "m.f", "s.b", "s.c", "s.d", "s.e"]
+    costs = {"m.a": 1.0, "m.f": 2.0, "s.b": 100.0, "s.c": 40.0, "s.d": 30.0, "s.e": 35.0}
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(jit, "COMPILE_COST", costs)
-        groups = jit.compile_plan(names, 2)
-        assert groups == [[1], [2, 3, 4, 0]]
-        assert jit.compile_plan(names, 1) == [[1, 2, 3, 4, 0]]
-        assert sorted(i for g in jit.compile_plan(names, 9) for i in g) == [0, 1, 2, 3, 4]
-        assert len(jit.compile_plan(names, 9)) == 5
+        assert jit.compile_plan(names, 2) == [[0, 1, 2], [3, 5, 4]]
+        assert jit.compile_plan(names, 1) == [[0, 1, 2, 3, 5, 4]]
+        assert jit.compile_plan(names, 3) == [[0, 1, 2], [3], [5, 4]]
+        assert sorted(i for g in jit.compile_plan(names, 9) for i in g) == list(range(6))
+        assert len(jit.compile_plan(names, 9)) == 4 and jit.compile_plan([], 2) == []
 
 
 def test_stamp_covers_modules_that_decorate_with_imported_decorators():
@@ -44,7 +46,12 @@ def test_workers_setting(monkeypatch):
 
 def _stand_in(monkeypatch, tmp_path, child_code):
     """Two stand-in entry points; the worker process runs ``child_code`` (a real process)."""
-    calls = [(lambda: None, ()), (lambda: None, ())]
+    def model(): pass
+
+    def solver(): pass
+
+    model.__module__, solver.__module__ = "stand_in.model", "stand_in.solver"  # two modules: two groups
+    calls = [(model, ()), (solver, ())]
     monkeypatch.setattr(jit, "cache_dir", lambda: tmp_path)
     monkeypatch.setattr(jit, "_all_calls", lambda: calls)
     monkeypatch.setattr(jit, "_dispatchers", lambda: [])
