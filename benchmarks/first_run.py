@@ -8,7 +8,8 @@ folder), as on a machine where mcdm-pin was just installed:
 
 1. the first run: the kernels are not compiled; the run says so in one line on stderr and runs them
    as their Python code (the same kernels, the same chain of stages);
-2. ``mcdm-pin compile`` (the explicit compile, as a user or a CI runs it);
+2. ``mcdm-pin compile --timings`` (the explicit compile, as a user or a CI runs it; its wall and CPU
+   time, the CPU of its worker processes included, and each entry point's);
 3. the second run, on the compiled kernels.
 
 Prints a table of wall times and the stderr lines of each run. The answers of both runs are the same
@@ -18,6 +19,7 @@ Prints a table of wall times and the stderr lines of each run. The answers of bo
 from __future__ import annotations
 
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -38,6 +40,12 @@ def _run(env) -> tuple[float, str, str]:
     return wall, out.stdout, out.stderr
 
 
+def _children_cpu() -> float:
+    """CPU seconds (user + system) of the finished child processes and their own children."""
+    use = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return use.ru_utime + use.ru_stime
+
+
 def _peaks(text: str) -> list[str]:
     """The answer's lines with the peak values only (ties at a bound or a cone may be reported at
     another instant of the tie)."""
@@ -55,10 +63,10 @@ def main() -> int:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache, MCDM_PIN_JIT="auto")
         load0 = os.getloadavg()[0]
         wall1, out1, err1 = _run(env)
-        t0 = time.perf_counter()
-        done = subprocess.run([sys.executable, "-m", "mcdm_pin", "compile"], cwd=REPO, env=env, capture_output=True,
-                              text=True, timeout=1800)
-        compile_wall = time.perf_counter() - t0
+        t0, cpu0, load_c = time.perf_counter(), _children_cpu(), os.getloadavg()[0]
+        done = subprocess.run([sys.executable, "-m", "mcdm_pin", "compile", "--timings"], cwd=REPO, env=env,
+                              capture_output=True, text=True, timeout=1800)
+        compile_wall, compile_cpu = time.perf_counter() - t0, _children_cpu() - cpu0
         if done.returncode != 0:
             raise SystemExit(f"first_run: mcdm-pin compile failed: {done.stderr}")
         wall2, out2, err2 = _run(env)
@@ -69,8 +77,12 @@ def main() -> int:
     print("| run | wall, s | stderr |")
     print("|---|---|---|")
     print(f"| first (kernels not compiled: they run as Python) | {wall1:.2f} | {err1.strip() or '-'} |")
-    print(f"| `mcdm-pin compile` | {compile_wall:.1f} | {done.stdout.strip()} |")
+    lines = done.stdout.strip().splitlines()
+    print(f"| `mcdm-pin compile` | {compile_wall:.1f} | {lines[0] if lines else '-'} |")
     print(f"| second (compiled kernels) | {wall2:.2f} | {err2.strip() or '-'} |")
+    print(f"\n`mcdm-pin compile`: wall {compile_wall:.1f} s, CPU {compile_cpu:.1f} s (the command and its "
+          f"workers), 1-min load average {load_c:.2f} when it started\n")
+    print("\n".join(lines[1:]))
     print(f"\nthe two runs' answers are {'the same' if same else 'DIFFERENT'}")
     print("\nfirst run's last line:  " + out1.strip().splitlines()[-1])
     print("second run's last line: " + out2.strip().splitlines()[-1])

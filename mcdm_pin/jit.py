@@ -2,13 +2,17 @@ r"""One execution path: the library's numba kernels run compiled when an explici
 them, and as the very same Python functions (their ``py_func``) until then.
 
 numba compiles a kernel on its first call with given argument types (about 160 s of CPU for all
-of this library's kernels) and caches it on disk (``__pycache__`` beside the module, or under
+of this library's kernels, docs/speed.md "First run") and caches it on disk (``__pycache__`` beside the module, or under
 ``NUMBA_CACHE_DIR``). Nothing here compiles behind the user's back:
 
 - every module with kernels registers the calls that use them (:func:`register`: a function
   returning ``(kernel, example_args)`` pairs with the argument types the library passes);
 - :func:`compile_now` (the ``mcdm-pin compile`` command, or ``MCDM_PIN_JIT=compile``) compiles every
-  registered kernel in the calling process, with a note on stderr, and then writes a *stamp*;
+  registered kernel, with a note on stderr, and then writes a *stamp*. The entry points are split
+  between :func:`compile_workers` processes (:func:`compile_plan`: the calling one and workers started
+  for the compile alone), which share numba's on-disk cache (one file per kernel and specialisation,
+  each written whole by a rename); the calling process then calls every entry point once more, which
+  loads what the workers cached (and compiles anything they did not);
 - :func:`prepare` (called when an :class:`~mcdm_pin.inverse_dynamics.InverseDynamics` is created)
   loads the compiled kernels from numba's cache when the stamp is current (1.5 s here), and
   otherwise leaves them uncompiled, with one note on stderr saying how to compile them.
@@ -22,8 +26,9 @@ The stamp (:data:`STAMP`, in the cache folder of the kernels) holds the digest o
 module's source and of ``tolerances.py`` (some kernels read its constants when compiled), the
 ``(mtime, size)`` of each kernel source (numba's own cache key: a touched file would make numba
 recompile on load), and the numba and Python versions. It is removed before a compile starts and
-written, by an atomic rename, only after every kernel is compiled and cached: a compile that is
-interrupted, or still running, leaves no stamp, and runs meanwhile stay uncompiled. numba
+written, by an atomic rename, only after every kernel is compiled and cached (every worker ended
+well and the final pass loaded every entry point): a compile that is interrupted, or still running,
+or whose worker failed, leaves no stamp, and runs meanwhile stay uncompiled. numba
 invalidates a cached kernel only when *its own* file changes, not a kernel it calls in another module,
 so a compile whose stamp is stale first flushes every kernel's cache (``Dispatcher.recompile`` on
 dispatchers without overloads: numba's public flush). Concurrent compiles of one install take a lock
@@ -53,7 +58,7 @@ import time
 import types
 from pathlib import Path
 
-from .exceptions import MissingPackageError
+from .exceptions import MissingPackageError, SolverError
 from .extras import install_hint
 
 try:  # POSIX: the compile lock; elsewhere concurrent compiles each write numba's files atomically
@@ -96,6 +101,18 @@ MODULES = ("mcdm_pin.model.kernels", "mcdm_pin.model.route_kernels", "mcdm_pin.m
 POLICIES = ("auto", "compile", "wait", "off")
 STAMP = "mcdm_pin_kernels.stamp"  # the stamp's file name, in the kernels' cache folder
 LOCK = "mcdm_pin_kernels.lock"  # the compile lock's file name, beside the stamp
+WORKERS_ENV = "MCDM_PIN_COMPILE_WORKERS"  # how many processes compile (default: the usable cores)
+COMPILE_COST = {"mcdm_pin.solvers._fast.ipm_answer": 92.5, "mcdm_pin.solvers.ipm.crossover_active_set": 47.8,
+                "mcdm_pin.solvers._fast.active_set_answer": 25.1,
+                "mcdm_pin.model.route_kernels.osim_route_pass": 16.8, "mcdm_pin.model.route_kernels.route_pass": 4.6,
+                "mcdm_pin.model.kernels.cable_terms": 1.6}
+"""CPU seconds of each entry point's compile into an empty cache, measured (docs/speed.md, "First
+run"): :func:`compile_plan` splits the entry points between the processes by them."""
+_CHILD_CODE = "import sys; from mcdm_pin import jit; jit._child_main(sys.argv[1:])"  # a worker's program
+LAST_COMPILE: dict = {}
+"""The last compile of this process (:func:`compile_now`): ``entries`` (name, wall s, CPU s, worker;
+worker 0 is this process), ``workers``, ``wall``, ``cpu`` (this process and the workers) and
+``load_wall``, ``load_cpu`` (the final pass that loads every entry point here)."""
 UNCOMPILED_SLOWDOWN = 1000.0
 """How many times longer the uncompiled kernels may take than the compiled ones: the factor by which
 :class:`~mcdm_pin.inverse_dynamics.InverseDynamics` stretches a solver's time budget while they run
@@ -146,7 +163,9 @@ def kernel_sources() -> tuple[Path, ...]:
     (``UNIQUE_PENALTY``, ``IPM_START_BOX_WEIGHT``), so a changed constant must recompile them too."""
     root = Path(__file__).resolve().parent
     # njit kernels, and register_jitable functions compiled inline into them (numba.extending)
-    pattern = re.compile(r"^from (numba(\.\w+)?|\.+jit) import .*\b(njit|extending|register_jitable)\b", re.M)
+    # (or that decorate with them, imported from another kernel module: wrapping_osim_ellipsoid.py)
+    pattern = re.compile(r"^(from (numba(\.\w+)?|\.+jit) import .*\b(njit|extending|register_jitable)\b"
+                         r"|@(njit|register_jitable|extending\.register_jitable)\b)", re.M)
     found = {p for p in root.rglob("*.py") if pattern.search(p.read_text(encoding="utf-8"))}
     return tuple(sorted(found | {root / "tolerances.py"}))
 
@@ -324,9 +343,132 @@ class _Lock:
             self.fh.close()
 
 
-def compile_now(quiet: bool = False) -> float:
-    """Compile every registered kernel in this process (blocking) and stamp the cache; loads them
-    instead when a complete compile is stamped already. Returns the seconds it took."""
+def compile_workers() -> int:
+    """How many processes :func:`compile_now` compiles in: ``MCDM_PIN_COMPILE_WORKERS`` when set (a
+    positive integer), else the cores this process may run on."""
+    text = os.environ.get(WORKERS_ENV, "").strip()
+    if text:
+        if not text.isdigit() or int(text) < 1:
+            raise SolverError(f"{WORKERS_ENV}={text!r}: expected a positive integer (processes that "
+                              f"compile the kernels)")
+        return int(text)
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - no sched_getaffinity (macOS, Windows)
+        return max(1, os.cpu_count() or 1)
+
+
+def compile_plan(names: list[str], workers: int) -> list[list[int]]:
+    """The entry points' indices (``names`` in the registry's order) split into at most ``workers``
+    groups, one per process. The first group, the calling process's, starts as a one-process compile
+    does: the first registered module's entry points (the model's kernels, cheap) in the registry's
+    order, then the heaviest entry point (:data:`COMPILE_COST`, 1 s for a name it lacks). numba's code
+    for a kernel depends on what its process compiled before it (a callee compiled earlier is linked
+    as it was made then), and this order gives the interior-point method the machine code, and so the
+    answers, bit for bit, of a compile in one process. The others go longest first, each to the least
+    loaded group (the heavy layers first, so that a kernel two groups share is more often cached by
+    one before the other reaches it)."""
+    cost = [COMPILE_COST.get(n, 1.0) for n in names]
+    if not names:
+        return []
+    heaviest = max(range(len(names)), key=cost.__getitem__)
+    module = names[0].rsplit(".", 1)[0]
+    first = [i for i, n in enumerate(names) if n.rsplit(".", 1)[0] == module and i != heaviest] + [heaviest]
+    groups: list[list[int]] = [first] + [[] for _ in range(max(1, min(workers, len(names))) - 1)]
+    load = [sum(cost[i] for i in first)] + [0.0] * (len(groups) - 1)
+    for i in sorted(set(range(len(names))) - set(first), key=lambda i: (-cost[i], i)):
+        k = min(range(len(groups)), key=load.__getitem__)
+        groups[k].append(i)
+        load[k] += cost[i]
+    return [g for g in groups if g]
+
+
+def _compile_group(calls, group) -> list[tuple[str, float, float]]:
+    """Call (compile, and cache) the entry points ``group`` of ``calls``: ``(name, wall s, CPU s)``."""
+    out = []
+    for i in group:
+        disp, args = calls[i]
+        w, c = time.perf_counter(), time.process_time()
+        disp(*args)
+        out.append((_name(disp), time.perf_counter() - w, time.process_time() - c))
+    return out
+
+
+def _name(disp) -> str:
+    f = getattr(disp, "py_func", disp)
+    return f"{getattr(f, '__module__', '?')}.{getattr(f, '__name__', repr(f))}"
+
+
+def _child_main(argv: list[str]) -> None:
+    """A compile worker (:func:`_start_children`): compiles the entry points whose indices ``argv``
+    names into numba's cache and prints one line per entry point, ``name wall cpu``, then
+    ``total cpu``."""
+    calls = _all_calls()
+    for name, wall, cpu in _compile_group(calls, [int(a) for a in argv]):
+        print(f"{name} {wall:.3f} {cpu:.3f}", flush=True)
+    print(f"total {time.process_time():.3f}", flush=True)
+
+
+def _start_children(groups, names):
+    """One Python process per group (``_child_main``), importing this very package (its folder first on
+    ``PYTHONPATH``), with numba's settings of this process (the same ``NUMBA_CACHE_DIR``)."""
+    import subprocess  # the explicit compile step only: no library constructor starts a process
+
+    root = str(Path(__file__).resolve().parents[1])
+    env = dict(os.environ, MCDM_PIN_JIT="off",
+               PYTHONPATH=os.pathsep.join([root, *filter(None, [os.environ.get("PYTHONPATH")])]))
+    return [(subprocess.Popen([sys.executable, "-c", _CHILD_CODE, *map(str, g)], env=env, stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True), [names[i] for i in g]) for g in groups]
+
+
+def _join_children(children) -> tuple[list, float]:
+    """Wait for the workers: their per-entry ``(name, wall, cpu, worker)`` (workers from 1) and their
+    total CPU seconds."""
+    rows, cpu = [], 0.0
+    for k, (proc, want) in enumerate(children, start=1):
+        out, err = proc.communicate()
+        if proc.returncode != 0:
+            raise SolverError(f"compiling the kernels {', '.join(want)} failed in a worker process (exit "
+                              f"status {proc.returncode}): {err.strip()[-2000:]}")
+        for line in out.splitlines():
+            parts = line.split()
+            if parts[:1] == ["total"]:
+                cpu += float(parts[1])
+            elif len(parts) == 3:
+                rows.append((parts[0], float(parts[1]), float(parts[2]), k))
+    return rows, cpu
+
+
+def _compile_all(calls, workers: int) -> None:
+    """Compile every entry point into numba's cache: the first group of :func:`compile_plan` here, the
+    others in worker processes at the same time; then each entry point is called here once more (the
+    others' kernels load from the cache; anything a worker did not cache compiles here)."""
+    names = [_name(d) for d, _ in calls]
+    groups = compile_plan(names, workers)
+    t0, c0 = time.perf_counter(), time.process_time()
+    children = _start_children(groups[1:], names) if len(groups) > 1 else []
+    try:
+        rows = [(*r, 0) for r in _compile_group(calls, groups[0])]
+        done, child_cpu = _join_children(children)
+    finally:
+        for proc, _ in children:  # interrupted: stop the workers (their files are whole or absent)
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+    rows += done
+    w, c = time.perf_counter(), time.process_time()
+    for disp, args in calls:
+        disp(*args)
+    LAST_COMPILE.clear()
+    LAST_COMPILE.update(entries=rows, workers=len(groups), load_wall=time.perf_counter() - w,
+                        load_cpu=time.process_time() - c, wall=time.perf_counter() - t0,
+                        cpu=time.process_time() - c0 + child_cpu)
+
+
+def compile_now(quiet: bool = False, workers: int | None = None) -> float:
+    """Compile every registered kernel (blocking; in :func:`compile_workers` processes at once: this
+    one and workers) and stamp the cache; loads them instead when a complete compile is stamped
+    already. Returns the seconds it took; :data:`LAST_COMPILE` holds the details of a compile."""
     global _COMPILED
     if numba is None:
         raise MissingPackageError(f"compiling the kernels needs the optional package 'numba', which is "
@@ -336,18 +478,19 @@ def compile_now(quiet: bool = False) -> float:
     with _Lock(folder, quiet):
         if load():
             return time.perf_counter() - t0
-        if not quiet:
-            print("mcdm-pin: compiling the numba kernels (once per install, about 3 minutes on a quiet "
-                  "machine)...", file=sys.stderr, flush=True)
         if folder is not None:
             try:
                 (folder / STAMP).unlink(missing_ok=True)
             except OSError:
                 folder = None  # an unwritable cache: numba compiles in memory, nothing to stamp
+        workers = (workers or compile_workers()) if folder is not None else 1  # workers share the cache
+        if not quiet:
+            print(f"mcdm-pin: compiling the numba kernels (once per install, in {workers} process"
+                  f"{'es' if workers > 1 else ''}; about 100 s on two quiet cores)...", file=sys.stderr,
+                  flush=True)
         for d in _dispatchers():
             d.recompile()  # flushes the kernel's cache (and recompiles what this process loaded from it)
-        for disp, args in _all_calls():
-            disp(*args)
+        _compile_all(_all_calls(), workers)
         if folder is not None:
             _write_stamp(folder)
         _COMPILED = True
@@ -373,7 +516,8 @@ def prepare(policy: str | None = None, quiet: bool = False) -> bool:
         return True
     if not (quiet or _NOTED):
         _NOTED = True
-        how = ("`mcdm-pin compile` compiles them once (about 3 minutes)" if numba is not None else
+        how = ("`mcdm-pin compile` compiles them once (a few minutes of CPU, split between the cores)"
+               if numba is not None else
                "installing numba (pip install 'mcdm-pin[numba]') and `mcdm-pin compile` compile them")
         print(f"mcdm-pin: the numba kernels are not compiled on this install: they run as plain Python "
               f"(the same answers, slower); {how}", file=sys.stderr, flush=True)

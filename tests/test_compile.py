@@ -1,0 +1,111 @@
+"""The compile step (mcdm_pin/jit.py): the entry points compile in several processes at once, the
+stamp comes only after every worker and the final pass succeeded, and what the library calls at
+runtime is exactly what the compile covered (no kernel compiles after ``mcdm-pin compile``)."""
+
+from __future__ import annotations
+
+import pytest
+
+from mcdm_pin import InverseDynamics, Robot, jit, load_trajectory
+from mcdm_pin.exceptions import SolverError
+
+from .conftest import REPO
+
+
+def test_compile_plan_splits_by_cost():
+    """The calling process starts as a one-process compile does (the first module's entry points,
+    then the heaviest); the others longest first, each to the least loaded group; every entry point
+    in exactly one group."""
+    names = ["m.a", "m.f", "s.b", "s.c", "s.d", "s.e"]
+    costs = {"m.a": 1.0, "m.f": 2.0, "s.b": 100.0, "s.c": 40.0, "s.d": 30.0, "s.e": 35.0}
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(jit, "COMPILE_COST", costs)
+        assert jit.compile_plan(names, 2) == [[0, 1, 2], [3, 5, 4]]
+        assert jit.compile_plan(names, 1) == [[0, 1, 2, 3, 5, 4]]
+        assert jit.compile_plan(names, 3) == [[0, 1, 2], [3], [5, 4]]
+        assert sorted(i for g in jit.compile_plan(names, 9) for i in g) == list(range(6))
+        assert len(jit.compile_plan(names, 9)) == 4 and jit.compile_plan([], 2) == []
+
+
+def test_stamp_covers_modules_that_decorate_with_imported_decorators():
+    """A module whose functions are compiled inline into kernels through a decorator it imports from
+    another kernel module (``@register_jitable`` from wrapping_osim.py) is a kernel source too."""
+    names = {p.name for p in jit.kernel_sources()}
+    assert {"wrapping_osim_ellipsoid.py", "wrapping_osim.py", "ipm.py"} <= names
+
+
+def test_workers_setting(monkeypatch):
+    monkeypatch.setenv(jit.WORKERS_ENV, "3")
+    assert jit.compile_workers() == 3
+    monkeypatch.setenv(jit.WORKERS_ENV, "zero")
+    with pytest.raises(SolverError, match=jit.WORKERS_ENV):
+        jit.compile_workers()
+    monkeypatch.delenv(jit.WORKERS_ENV)
+    assert jit.compile_workers() >= 1
+
+
+def _stand_in(monkeypatch, tmp_path, child_code):
+    """Two stand-in entry points; the worker process runs ``child_code`` (a real process)."""
+    def model(): pass
+
+    def solver(): pass
+
+    model.__module__, solver.__module__ = "stand_in.model", "stand_in.solver"  # two modules: two groups
+    calls = [(model, ()), (solver, ())]
+    monkeypatch.setattr(jit, "cache_dir", lambda: tmp_path)
+    monkeypatch.setattr(jit, "_all_calls", lambda: calls)
+    monkeypatch.setattr(jit, "_dispatchers", lambda: [])
+    monkeypatch.setattr(jit, "_COMPILED", False)
+    monkeypatch.setattr(jit, "_CHILD_CODE", child_code)
+    (tmp_path / jit.STAMP).write_text("an old compile's stamp\n")
+
+
+def test_failed_worker_leaves_no_stamp(tmp_path, monkeypatch):
+    """A worker that fails (or is interrupted) fails the compile: no stamp, nothing loaded."""
+    _stand_in(monkeypatch, tmp_path, "import sys; print('numba says no', file=sys.stderr); sys.exit(3)")
+    with pytest.raises(SolverError, match="numba says no"):
+        jit.compile_now(quiet=True, workers=2)
+    assert not (tmp_path / jit.STAMP).exists() and not jit.compiled()
+
+
+def test_workers_then_stamp(tmp_path, monkeypatch):
+    """Workers that succeed: the final pass runs here, then the stamp is written, whole."""
+    code = "import sys; print('x.k 1.0 0.5'); print('total 0.7')"
+    _stand_in(monkeypatch, tmp_path, code)
+    jit.compile_now(quiet=True, workers=2)
+    assert jit.stamp_current() and jit.compiled() and not list(tmp_path.glob("*.tmp"))
+    assert jit.LAST_COMPILE["workers"] == 2 and jit.LAST_COMPILE["cpu"] >= 0.7
+    assert [e[3] for e in jit.LAST_COMPILE["entries"]].count(1) == 1
+
+
+def _signatures():
+    return {f"{d.py_func.__module__}.{d.py_func.__name__}": set(map(str, d.signatures))
+            for d in jit._dispatchers()}
+
+
+def test_no_kernel_compiles_at_runtime():
+    """After the compile, solving the bundled robots (cases 1-3, warm and cold instants, the
+    interior-point method, cones, the human arm's muscles, the neck) adds no specialisation to any
+    kernel: the compile covered every type the library passes."""
+    jit.prepare(policy="wait")
+    before = _signatures()
+    arm = Robot.load(REPO / "robots" / "two_link_sr.yaml")
+    for traj_name in ("traj1", "traj2"):
+        traj = load_trajectory(arm, traj_name).subsample(6)
+        for case in (1, 2, 3):
+            InverseDynamics.for_case(arm, case).solve_trajectory(traj, progress=False)
+    for robot_file, traj_name, cases in (("human_arm.yaml", "abduct", (2, 3)),
+                                         ("caspr/8S_neck/8S_neck.yaml", "roll", (1, 3))):
+        robot = Robot.load(REPO / "robots" / robot_file)
+        traj = load_trajectory(robot, traj_name).subsample(4)
+        for case in cases:
+            cones = {j.name: 15.0 for j in robot.joints} if case == 3 and "neck" in robot_file else None
+            ident = InverseDynamics.for_case(robot, case, cones=cones)
+            ident.solve_trajectory(traj, progress=False)
+            ident.reset()
+            ident.solve(traj.q[1], traj.qd[1], traj.qdd[1])
+    after = _signatures()
+    grown = {k: sorted(v - before.get(k, set())) for k, v in after.items() if v - before.get(k, set())}
+    assert not grown, grown
+    entries = set(jit.entry_points())  # one specialisation each: nothing compiles twice
+    assert all(len(after[k]) == 1 for k in entries), {k: after[k] for k in entries if len(after[k]) != 1}
