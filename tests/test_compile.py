@@ -83,10 +83,12 @@ def _signatures():
             for d in jit._dispatchers()}
 
 
-def test_no_kernel_compiles_at_runtime():
+def test_no_kernel_compiles_at_runtime(monkeypatch, tmp_path):
     """After the compile, solving the bundled robots (cases 1-3, warm and cold instants, the
-    interior-point method, cones, the human arm's muscles, the neck) adds no specialisation to any
+    interior-point method, cones, the human arm's muscles, the neck, MyoSuite's elbow: wraps and
+    MuJoCo muscles) adds no specialisation to any
     kernel: the compile covered every type the library passes."""
+    monkeypatch.chdir(tmp_path)  # MuJoCo writes its log where it runs
     jit.prepare(policy="wait")
     before = _signatures()
     arm = Robot.load(REPO / "robots" / "two_link_sr.yaml")
@@ -95,7 +97,8 @@ def test_no_kernel_compiles_at_runtime():
         for case in (1, 2, 3):
             InverseDynamics.for_case(arm, case).solve_trajectory(traj, progress=False)
     for robot_file, traj_name, cases in (("human_arm.yaml", "abduct", (2, 3)),
-                                         ("caspr/8S_neck/8S_neck.yaml", "roll", (1, 3))):
+                                         ("caspr/8S_neck/8S_neck.yaml", "roll", (1, 3)),
+                                         ("myosuite/myoelbow.yaml", "flexion", (1, 2))):
         robot = Robot.load(REPO / "robots" / robot_file)
         traj = load_trajectory(robot, traj_name).subsample(4)
         for case in cases:

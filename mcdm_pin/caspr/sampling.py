@@ -181,13 +181,29 @@ def sample(bodies, traj: CasprTrajectory) -> Samples:
     if traj.samples is not None:
         return _from_file(bodies, traj)
     kind = _KIND[traj.type]
-    dt = traj.time_step
     parts_t, parts = [], []
     notes = []
+    for p, a, b, grid, keep in _grids(traj, notes):
+        blend = traj.blend[p] if traj.blend else None
+        seg = _segment(bodies, kind, grid, a, b, blend)
+        parts_t.append(grid[keep])
+        parts.append(tuple(x[keep] for x in seg[:3]) + ({k: tuple(r[keep] for r in v) for k, v in seg[3].items()},))
+    t = np.concatenate(parts_t)
+    q, qd, qdd = (np.vstack([s[i] for s in parts]) for i in range(3))
+    rotations = {k: tuple(np.concatenate([s[3][k][i] for s in parts]) for i in range(3)) for k in parts[0][3]}
+    return Samples(t, q, qd, qdd, rotations, notes)
+
+
+def _grids(traj, notes: list):
+    """CASPR's sample times, segment by segment: ``(p, a, b, grid, keep)`` for the segment from point
+    ``a`` to point ``b`` (``grid``: MATLAB's ``a.time:dt:b.time``; ``keep``: the samples it adds, its
+    first one being the previous segment's last). The sample count is checked before any array is
+    made; a segment that is not a whole number of time steps adds a note to ``notes``."""
     from ..limits import MAX_SAMPLES
 
+    dt = traj.time_step
     span = traj.points[-1].time - traj.points[0].time
-    if not (dt > 0 and span / dt <= MAX_SAMPLES):  # counted before any array is made
+    if not (dt > 0 and span / dt <= MAX_SAMPLES):
         raise SamplingError(f"time_step = {dt:g} s over {span:g} s gives {span / dt:.3g} samples; at most "
                             f"{MAX_SAMPLES:,} per trajectory (docs/limits.md)")
     for p in range(len(traj.points) - 1):
@@ -200,15 +216,7 @@ def sample(bodies, traj: CasprTrajectory) -> Samples:
             notes.append(f"segment {p + 1} lasts {b.time - a.time:g} s, not a whole number of time steps "
                          f"({dt:g} s): as in CASPR, its spline ends at its last sample, "
                          f"t = {grid[-1]:.9g} s, and the next segment starts at {b.time:g} s")
-        blend = traj.blend[p] if traj.blend else None
-        seg = _segment(bodies, kind, grid, a, b, blend)
-        keep = slice(0, None) if p == 0 else slice(1, None)
-        parts_t.append(grid[keep])
-        parts.append(tuple(x[keep] for x in seg[:3]) + ({k: tuple(r[keep] for r in v) for k, v in seg[3].items()},))
-    t = np.concatenate(parts_t)
-    q, qd, qdd = (np.vstack([s[i] for s in parts]) for i in range(3))
-    rotations = {k: tuple(np.concatenate([s[3][k][i] for s in parts]) for i in range(3)) for k in parts[0][3]}
-    return Samples(t, q, qd, qdd, rotations, notes)
+        yield p, a, b, grid, (slice(0, None) if p == 0 else slice(1, None))
 
 
 def _segment(bodies, kind, grid, a, b, blend):
@@ -322,26 +330,10 @@ def sample_operational(traj) -> Samples:
     :func:`sample` and splines every coordinate of ``y`` alone (``Spline.QuinticInterpolation`` or
     ``LinearInterpolation``, through the segment's grid); ``q``, ``qd``, ``qdd`` of the result hold
     ``y``, ``y_dot``, ``y_ddot``."""
-    from ..limits import MAX_SAMPLES
-
     kind = _KIND[traj.type]
-    dt = traj.time_step
-    span = traj.points[-1].time - traj.points[0].time
-    if not (dt > 0 and span / dt <= MAX_SAMPLES):
-        raise SamplingError(f"time_step = {dt:g} s over {span:g} s gives {span / dt:.3g} samples; at most "
-                            f"{MAX_SAMPLES:,} per trajectory (docs/limits.md)")
     ts, ys, notes = [], [], []
-    for p in range(len(traj.points) - 1):
-        a, b = traj.points[p], traj.points[p + 1]
-        grid = matlab_colon(a.time, dt, b.time)
-        if len(grid) < 2:
-            raise SamplingError(f"segment {p + 1} ({a.time:g} s to {b.time:g} s) is shorter than time_step = "
-                                f"{dt:g} s: CASPR's spline through a single sample is undefined")
-        if abs(grid[-1] - b.time) > 1e-9 * max(1.0, abs(b.time)):
-            notes.append(f"segment {p + 1} lasts {b.time - a.time:g} s, not a whole number of time steps "
-                         f"({dt:g} s): as in CASPR, its spline ends at its last sample, t = {grid[-1]:.9g} s")
+    for _, a, b, grid, keep in _grids(traj, notes):
         seg = spline(kind, grid, grid[0], grid[-1], a.q, a.q_dot, a.q_ddot, b.q, b.q_dot, b.q_ddot)
-        keep = slice(0, None) if p == 0 else slice(1, None)
         ts.append(grid[keep])
         ys.append([x[keep] for x in seg])
     y, yd, ydd = (np.vstack([s[i] for s in ys]) for i in range(3))

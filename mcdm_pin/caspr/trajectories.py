@@ -228,17 +228,8 @@ def _read_one(path, el, tid, where, bodies) -> CasprTrajectory:
         if np.any(rates[0][rot] != 0) or np.any(rates[1][rot] != 0):
             _fail(pw, "non-zero q_dot/q_ddot on a spherical joint's angles: CASPR splines spherical joints "
                       "from rest to rest only (it refuses this trajectory)")
-        if i == 1:
-            t = 0.0  # CASPR ignores the first point's time
-        else:
-            raw = pt.get("time")
-            if raw is None:
-                _fail(f"{pw}@time", "missing; every point after the first needs a time")
-            tv = _num(path, raw, f"{pw}@time")
-            t = tv if tdef == "absolute" else points[-1].time + tv
-            if not t > points[-1].time:
-                _fail(f"{pw}@time", f"expected a time after {points[-1].time:g} s (time_definition={tdef!r}), "
-                                    f"got {raw}")
+        t = _point_time(path, pt, pw, i, points, tdef)
+        if i > 1:
             if blend_default is not None:
                 b = pt.get("blend_time")
                 b = blend_default if b is None else _num(path, b, f"{pw}@blend_time")
@@ -253,6 +244,21 @@ def _read_one(path, el, tid, where, bodies) -> CasprTrajectory:
         points = _average_velocities(points, rot, where)
     return CasprTrajectory(id=tid, type=el.tag, time_step=dt, points=tuple(points), element=where,
                            blend=tuple(blend))
+
+
+def _point_time(path, pt, pw: str, i: int, points, tdef: str) -> float:
+    """The time of the ``i``-th point (1-based) ``pt``: 0 for the first (CASPR ignores its time), else
+    its ``time`` (absolute, or relative to the previous point's), after the previous point's."""
+    if i == 1:
+        return 0.0
+    raw = pt.get("time")
+    if raw is None:
+        _fail(f"{pw}@time", "missing; every point after the first needs a time")
+    tv = _num(path, raw, f"{pw}@time")
+    t = tv if tdef == "absolute" else points[-1].time + tv
+    if not t > points[-1].time:
+        _fail(f"{pw}@time", f"expected a time after {points[-1].time:g} s (time_definition={tdef!r}), got {raw}")
+    return t
 
 
 def _average_velocities(points, rot, where):
@@ -343,16 +349,7 @@ def _read_operational(path, el, tid, where, operational) -> CasprOperationalTraj
             rates = [_vec(path, pt, tag, pw, n) for tag in OPERATIONAL_TYPES[el.tag]] or [np.zeros(n)] * 2
         except _Refused as exc:
             raise _Refused(f"{exc} (operational set {opset.id!r}: {n} coordinates, {opset.coordinates})") from None
-        if i == 1:
-            t = 0.0
-        else:
-            raw = pt.get("time")
-            if raw is None:
-                _fail(f"{pw}@time", "missing; every point after the first needs a time")
-            tv = _num(path, raw, f"{pw}@time")
-            t = tv if tdef == "absolute" else points[-1].time + tv
-            if not t > points[-1].time:
-                _fail(f"{pw}@time", f"expected a time after {points[-1].time:g} s, got {raw}")
+        t = _point_time(path, pt, pw, i, points, tdef)
         points.append(CasprPoint(time=t, q=y, q_dot=rates[0], q_ddot=rates[1]))
     if len(points) < 2:
         _fail(f"{where}/points", f"expected at least two <point>, got {len(points)}")

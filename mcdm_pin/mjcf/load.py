@@ -21,6 +21,7 @@ from ..model.actuators import Actuator
 from ..model.cables import CableSet
 from ..model.couplings import Couplings
 from ..model.joints import physical_joints
+from ..source_lines import line_of
 from .model import build_model
 from .tendons import read_couplings, read_tendons
 
@@ -103,15 +104,9 @@ def _line_of(source: str, message: str) -> str:
     the file holds it (an element from an included file or a model built in code has no line here)."""
     m = re.search(r"\b(body|joint|site|geom|tendon|actuator|equality|spatial|muscle|connect|weld) '([^']+)'",
                   message[len(source):])
-    path = Path(source)
-    if m is None or not path.is_file():
+    if m is None:
         return ""
-    pattern = re.compile(r'name\s*=\s*"' + re.escape(m.group(2)) + '"')
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        for n, line in enumerate(fh, 1):
-            if pattern.search(line):
-                return f" (line {n})"
-    return ""
+    return line_of(source, re.compile(r'name\s*=\s*"' + re.escape(m.group(2)) + '"'))
 
 
 class MjcfSource:

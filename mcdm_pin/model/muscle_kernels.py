@@ -127,6 +127,7 @@ def warm_calls():
     """This module's kernels with example arguments of the types the library passes (registered with
     :mod:`mcdm_pin.jit`)."""
     k = np.ones((N_ROWS, 1))
+    k.setflags(write=False)  # the library's table is read-only (MuscleParams.kernel_table): one type
     x = np.ones((1, 1))
     return [(tension_range, (x, x, k)), (curves, (x, 0, k))]
 

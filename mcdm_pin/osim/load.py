@@ -22,6 +22,7 @@ from ..mjcf.load import RobotParts
 from ..model.cables import CableSet
 from ..model.couplings import Couplings
 from ..model.joints import physical_joints
+from ..source_lines import line_of
 from . import speeds
 from .actuators import read_coordinate_actuators
 from .constraints import PointLoops
@@ -91,14 +92,9 @@ def osim_parts(path, name: str | None = None, actuator_weights: dict | None = No
 def _line_of(source: str, message: str) -> str:
     """`` (line N)`` of the element a message names (``Tag 'name'``) in ``source``."""
     m = re.search(r"\b([A-Z]\w*) '([^']+)'", message[len(source):])
-    if m is None or not Path(source).is_file():
+    if m is None:
         return ""
-    pattern = re.compile(r"<" + re.escape(m.group(1)) + r'\s+name\s*=\s*"' + re.escape(m.group(2)) + '"')
-    with open(source, encoding="utf-8", errors="replace") as fh:
-        for n, line in enumerate(fh, 1):
-            if pattern.search(line):
-                return f" (line {n})"
-    return ""
+    return line_of(source, re.compile(r"<" + re.escape(m.group(1)) + r'\s+name\s*=\s*"' + re.escape(m.group(2)) + '"'))
 
 
 class OsimSource:
