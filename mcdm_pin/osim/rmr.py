@@ -44,13 +44,13 @@ SHRUG_FREE = ("plane_elv_actuator", "axial_rot_actuator")
 GH = "GlenoHumeral"
 
 
-def rmr_robot(motion: str = "abd01", sidecar=SIDECAR) -> Robot:
-    """The TSM as RMR poses it: activations in [0, 1] (RMR's bounds: it overrides the muscles' force,
+def rmr_robot(motion: str = "abd01", sidecar=None) -> Robot:
+    """The TSM as RMR poses it (``sidecar``: default the repository's ``robots/opensim/tsm_rmr.yaml``): activations in [0, 1] (RMR's bounds: it overrides the muscles' force,
     so the model's ``minimum_activation`` 0.01 does not apply); for a shrug, plane_elv's and
     axial_rot's actuators weigh 0."""
     from ..robot import Robot
 
-    robot = Robot.load(sidecar)
+    robot = Robot.load(SIDECAR if sidecar is None else sidecar)
     cables = robot.cables
     muscles = OpenSimMuscles([dataclasses.replace(m, a_min=0.0) for m in cables.muscles.muscles])
     cables = CableSet(robot.model, cables.cables, muscles=muscles, muscle_cables=muscles.names)
