@@ -51,12 +51,10 @@ def _pin_model():
     return model
 
 
-def _osim_model(muscles, wraps):
-    """An OpenSim model of the chain; ``wraps``: (kind, name, body, radius, length, translation,
-    rotation, quadrant); ``muscles``: (name, points, wrap names with ranges)."""
-    m = osim.Model()
-    bodies = {"ground": m.getGround()}
-    coords = {}
+def _chain(m):
+    """The chain of :data:`JOINTS` in the OpenSim model ``m``: its bodies (``ground`` included) and
+    coordinates by name."""
+    bodies, coords = {"ground": m.getGround()}, {}
     for parent, child, loc, ori, child_loc, child_ori, coord in JOINTS:
         b = osim.Body(child, 1.0, osim.Vec3(0), osim.Inertia(0.01, 0.01, 0.01))
         j = osim.PinJoint(f"j_{child}", bodies[parent], osim.Vec3(*loc), osim.Vec3(*ori), b,
@@ -65,11 +63,19 @@ def _osim_model(muscles, wraps):
         m.addBody(b)
         m.addJoint(j)
         bodies[child] = b
-        c = j.updCoordinate()
+        coords[coord] = j.updCoordinate()
+    return bodies, coords
+
+
+def _osim_model(muscles, wraps):
+    """An OpenSim model of the chain; ``wraps``: (kind, name, body, radius, length, translation,
+    rotation, quadrant); ``muscles``: (name, points, wrap names with ranges)."""
+    m = osim.Model()
+    bodies, coords = _chain(m)
+    for coord, c in coords.items():
         c.setRangeMin(RANGES[coord][0])
         c.setRangeMax(RANGES[coord][1])
         c.set_clamped(False)
-        coords[coord] = c
     objects = {}
     for kind, name, body, radius, length, tr, rot, quadrant in wraps:
         w = {"sphere": osim.WrapSphere, "cylinder": osim.WrapCylinder, "ellipsoid": osim.WrapEllipsoid}[kind]()
@@ -233,15 +239,7 @@ def test_simm_spline_matches_opensim():
 
 def _muscle_model(kind, tmp_path, lo, ls, damping):
     m = osim.Model()
-    bodies = {"ground": m.getGround()}
-    for parent, child, loc, ori, child_loc, child_ori, coord in JOINTS:
-        b = osim.Body(child, 1.0, osim.Vec3(0), osim.Inertia(0.01, 0.01, 0.01))
-        j = osim.PinJoint(f"j_{child}", bodies[parent], osim.Vec3(*loc), osim.Vec3(*ori), b,
-                          osim.Vec3(*child_loc), osim.Vec3(*child_ori))
-        j.updCoordinate().setName(coord)
-        m.addBody(b)
-        m.addJoint(j)
-        bodies[child] = b
+    bodies, _ = _chain(m)
     if kind == "Thelen2003Muscle":
         mus = osim.Thelen2003Muscle("mus", 500.0, lo, ls, 0.25)
         mus.set_Af(0.3)

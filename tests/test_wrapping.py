@@ -308,14 +308,7 @@ ARM = """
 
 def test_small_model_matches_mujoco():
     m = mujoco.MjModel.from_xml_string(ARM)
-    d = mujoco.MjData(m)
-    rng = np.random.default_rng(7)
-    errors, engaged = {"length": 0.0, "points": 0.0, "J": 0.0}, {}
-    for _ in range(N_STATES):
-        d.qpos[:] = random_qpos(m, rng)
-        mujoco.mj_forward(m, d)
-        compare(m, d, errors, engaged)
-    assert errors["length"] < 1e-12 and errors["points"] < 1e-12 and errors["J"] < 1e-10, errors
+    engaged = _check_random_states(m, 7, N_STATES)
     names = [m.tendon(t).name for t in range(m.ntendon)]
     counts = {names[t]: c for t, c in engaged.items()}
     assert counts["end_inside"] == 0  # an end point inside the sphere never wraps
@@ -427,11 +420,13 @@ def myoarm(tmp_path_factory):
         return mujoco.MjModel.from_xml_string(xml)
 
 
-def _check_random_states(m, seed):
+def _check_random_states(m, seed, n=N_STATES_MYO):
+    """Our paths against MuJoCo's at ``n`` random states: lengths, tangent points and ``ten_J``; how
+    often each tendon's wraps engaged."""
     d = mujoco.MjData(m)
     rng = np.random.default_rng(seed)
     errors, engaged = {"length": 0.0, "points": 0.0, "J": 0.0}, {}
-    for _ in range(N_STATES_MYO):
+    for _ in range(n):
         d.qpos[:] = random_qpos(m, rng)
         mujoco.mj_forward(m, d)
         compare(m, d, errors, engaged)

@@ -199,12 +199,7 @@ def _read_one(path, el, tid, where, bodies) -> CasprTrajectory:
         return _read_file(path, el, tid, where, bodies)
     if el.tag not in TYPES:
         _fail(where, f"unknown trajectory type <{el.tag}>; expected one of {', '.join(TYPES)}")
-    tdef = el.get("time_definition")
-    if tdef not in ("absolute", "relative"):
-        _fail(f"{where}@time_definition", f"expected 'absolute' or 'relative', got {tdef!r}")
-    dt = _num(path, el.get("time_step"), f"{where}@time_step")
-    if not dt > 0:
-        _fail(f"{where}@time_step", f"expected a positive time step, got {dt}")
+    tdef, dt = _timing(path, el, where)
     blend_default = None
     if el.tag == "parabolic_blend_trajectory":
         blend_default = _num(path, el.get("blend_time_default"), f"{where}@blend_time_default")
@@ -244,6 +239,18 @@ def _read_one(path, el, tid, where, bodies) -> CasprTrajectory:
         points = _average_velocities(points, rot, where)
     return CasprTrajectory(id=tid, type=el.tag, time_step=dt, points=tuple(points), element=where,
                            blend=tuple(blend))
+
+
+def _timing(path, el, where: str) -> tuple[str, float]:
+    """A trajectory element's ``(time_definition, time_step)``: ``absolute`` or ``relative``, and a
+    positive step (s)."""
+    tdef = el.get("time_definition")
+    if tdef not in ("absolute", "relative"):
+        _fail(f"{where}@time_definition", f"expected 'absolute' or 'relative', got {tdef!r}")
+    dt = _num(path, el.get("time_step"), f"{where}@time_step")
+    if not dt > 0:
+        _fail(f"{where}@time_step", f"expected a positive time step, got {dt}")
+    return tdef, dt
 
 
 def _point_time(path, pt, pw: str, i: int, points, tdef: str) -> float:
@@ -329,12 +336,7 @@ def _read_operational(path, el, tid, where, operational) -> CasprOperationalTraj
     if opset is None:
         _fail(where, "an operational-space trajectory is solved by inverse kinematics on the model's operational "
                      f"space, and there is none: {getattr(operational, 'reason', 'no operational-spaces file given')}")
-    tdef = el.get("time_definition")
-    if tdef not in ("absolute", "relative"):
-        _fail(f"{where}@time_definition", f"expected 'absolute' or 'relative', got {tdef!r}")
-    dt = _num(path, el.get("time_step"), f"{where}@time_step")
-    if not dt > 0:
-        _fail(f"{where}@time_step", f"expected a positive time step, got {dt}")
+    tdef, dt = _timing(path, el, where)
     pts_el = el.find("points")
     if pts_el is None:
         _fail(where, "missing <points> element")

@@ -141,8 +141,5 @@ class MjcfSource:
             given_v.add(int(maps.jnt_idx_v[j]))
         q = maps.to_pin_q(qpos)
         if self.couplings is not None:
-            dep = [int(d) for d in self.couplings.dependent if int(d) not in given_v]
-            filled, _, _ = self.couplings.fill(q)
-            q[self.couplings.q_index[dep]] = filled[self.couplings.q_index[dep]]
-            self.couplings.check(q)
+            q = self.couplings.complete(q, given_v)
         return q

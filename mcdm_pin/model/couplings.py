@@ -109,6 +109,17 @@ class Couplings:
     def __len__(self) -> int:
         return len(self.items)
 
+    def complete(self, q, given) -> np.ndarray:
+        """``q`` with the dependent entries whose velocity columns are not in ``given`` (a set of ``v``
+        indices a user gave values for) computed from the independent ones, then checked: values given
+        for dependents must follow their couplings (:class:`~mcdm_pin.exceptions.StateError`)."""
+        dep = [int(d) for d in self.dependent if int(d) not in given]
+        filled, _, _ = self.fill(q)
+        q = np.array(q, dtype=float)
+        q[self.q_index[dep]] = filled[self.q_index[dep]]
+        self.check(q)
+        return q
+
     def fill(self, q, v=None, a=None):
         """``(q, v, a)`` with every dependent entry computed from the independent ones (copies; ``v``,
         ``a`` ``None`` stay ``None``)."""

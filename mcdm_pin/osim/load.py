@@ -130,10 +130,7 @@ class OsimSource:
         q = np.zeros(maps.model.nq)
         q[maps.q_index[maps.coordinate_v]] = x
         if self.couplings is not None:
-            dep = [int(d) for d in self.couplings.dependent if int(d) not in given]
-            filled, _, _ = self.couplings.fill(q)
-            q[self.couplings.q_index[dep]] = filled[self.couplings.q_index[dep]]
-            self.couplings.check(q)
+            q = self.couplings.complete(q, given)
         return q
 
     def coordinate_values(self, q) -> dict:
