@@ -190,15 +190,13 @@ def test_actuated_sidecar_bounds(tmp_path):
 
 
 # ------------------------------------------------------------------------------------ CASPR import
-CASPR = REPO.parent / "shared" / "reference" / "caspr" / "library"
-needs_caspr = pytest.mark.skipif(not (CASPR / "models.json").is_file(), reason="CASPR's files are not here")
+CASPR = REPO / "tests" / "data" / "caspr"  # CASPR's XML of the models these tests import (committed)
 
 
 def _files(model):
     return [CASPR / model / f"{model}_{k}.xml" for k in ("bodies", "cables")]
 
 
-@needs_caspr
 def test_caspr_cable_models(tmp_path):
     """Passive springs become ``springs:``; VSD and linear-spring cables are cables with their bounds;
     an empty default set gives way to the first set with cables, said in the notes."""

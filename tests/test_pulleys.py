@@ -21,10 +21,7 @@ from . import caspr_newton as cn
 from .caspr_library_check import (OBJ_TOL, REPO, X_TOL, clarabel_alone, compare, objective_agreement,
                                   ours_from_caspr, reference_state, solve_case1, worst)
 
-# CASPR's XML beside the repository (../shared, as tools/caspr_library.py reads it; a worktree is one
-# level deeper); the committed reference values stand in for it on a plain clone
-CASPR = next((p / "shared" / "reference" / "caspr" / "library" for p in (REPO.parent, REPO.parent.parent)
-              if (p / "shared" / "reference" / "caspr" / "library").is_dir()), None)
+CASPR = REPO / "tests" / "data" / "caspr"  # CASPR's XML of the pulley models (committed)
 RADIUS = 0.045
 # (entry point, entry direction) of four base pulleys round a box, one of them not axis-aligned
 BASE = [((0.08, 2.2, 1.9), (0.0, 0.0, 1.0)), ((2.2, 2.2, 0.1), (0.0, 0.0, -1.0)),
@@ -279,7 +276,6 @@ def test_committed_models_match_their_reference(name):
     assert len(states) >= 2 and all(val <= 1e-9 for val in w.values()), w
 
 
-@pytest.mark.skipif(CASPR is None, reason="CASPR's XML files (../shared/reference/caspr) are not here")
 def test_terms_equal_caspr_newton_euler(tmp_path):
     """Lengths, ``L``, ``M``, ``tau`` and the interaction wrench maps of both SpiderBot_UR3 models as
     committed, and of CAROCA's ``with_rotating_pulleys`` set imported here, against CASPR's Newton-Euler

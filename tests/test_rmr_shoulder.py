@@ -18,7 +18,6 @@ from mcdm_pin.osim.rmr import (GH, N_MUSCLES, excerpt_answers, frame_states, rmr
 REPO = Path(__file__).resolve().parents[1]
 EXCERPT = REPO / "robots" / "opensim" / "motions" / "abd01"
 FILES = tuple(EXCERPT / f"Kinematics_{k}.sto" for k in ("q", "u", "dudt"))
-FULL = REPO.parents[1] / "shared" / "reference" / "rmr" / "motions" / "abd01"
 ROWS = (100, 450, 700)  # frames k (k / 100 s): arm low, rising, high
 
 
@@ -39,13 +38,6 @@ def test_rmr_weights_and_bounds(robot):
     weights = {a.label: a.weight * float(a.tau_max[0] / 1e4) ** 2 for a in robot.actuators}
     assert sum(w == 0 for w in weights.values()) == 8 and sum(w == 10 for w in weights.values()) == 9
     assert np.all([m.a_min == 0.0 for m in robot.cables.muscles.muscles])
-
-
-@pytest.mark.skipif(not FULL.is_dir(), reason="the full motion is in ../shared/reference/rmr (not committed)")
-def test_the_excerpt_gives_the_full_motions_states(robot):
-    full = tuple(FULL / f.name for f in FILES)
-    for a, b in zip(frame_states(robot, FILES, ROWS), frame_states(robot, full, ROWS)):
-        assert np.array_equal(a, b)
 
 
 @pytest.mark.parametrize("cone", [False, True], ids=["without_GH", "with_GH"])

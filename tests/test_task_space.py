@@ -23,9 +23,7 @@ from mcdm_pin.exceptions import MissingPackageError, TrajectoryError  # noqa: E4
 from mcdm_pin.ik import TaskSpace, solve_task  # noqa: E402
 from mcdm_pin.ik.samples import pose_samples  # noqa: E402
 
-CASPR = Path(__file__).resolve().parents[2] / "shared" / "reference" / "caspr" / "library"
-if not CASPR.is_dir():
-    CASPR = Path("/work/shared/reference/caspr/library")
+CASPR = Path(__file__).resolve().parent / "data" / "caspr"  # CASPR's BMArm XML (committed)
 FRAME = "wrist2_body"
 POINT = (0.1, -0.05, 0.2)
 
@@ -137,8 +135,6 @@ def _bmarm(tmp_path, *ids):
     from mcdm_pin.cli import main
 
     L = CASPR / "BMArm"
-    if not L.is_dir():
-        pytest.skip("CASPR's library is not at ../shared/reference/caspr")
     args = ["import-caspr", str(L / "BMArm_bodies.xml"), str(L / "BMArm_cables.xml"), "--trajectories",
             str(L / "BMArm_trajectories.xml"), "--out", str(tmp_path / "out")]
     for i in ids:
@@ -176,8 +172,6 @@ def test_caspr_unreachable_trajectory_is_refused_alone(tmp_path, capsys):
     from mcdm_pin.caspr import import_caspr
 
     L = CASPR / "BMArm"
-    if not L.is_dir():
-        pytest.skip("CASPR's library is not at ../shared/reference/caspr")
     res = import_caspr(L / "BMArm_bodies.xml", L / "BMArm_cables.xml", tmp_path / "out",
                        trajectories_xml=L / "BMArm_trajectories.xml",
                        trajectory_ids=["operational:op_space_control_traj_1", "traj_test"])

@@ -37,7 +37,7 @@ from mcdm_pin.osim.rmr import (GH, N_MUSCLES, RATE, frame_rows, frame_states, rm
                                rmr_objective, rmr_problem, rmr_robot)
 from mcdm_pin.problem import Context  # noqa: E402
 
-REFERENCE = REPO.parents[1] / "shared" / "reference" / "rmr"
+REFERENCE = REPO.parent / "shared" / "reference" / "rmr"  # RMR's files beside the clone (../shared)
 MOTIONS = ("abd01", "flx01", "shrug01")
 
 
@@ -142,12 +142,39 @@ def excerpt(motion: str, every: int, out: Path) -> None:
                    header="frame (k / 100 s)," + ",".join(f"x{i}" for i in range(X.shape[1])))
 
 
+EXCERPT = REPO / "robots" / "opensim" / "motions" / "abd01"  # the committed excerpt: every 5th frame
+
+
+def check_excerpt() -> int:
+    """The committed ABD01 excerpt is what :func:`excerpt` writes from RMR's files (byte for byte), and
+    the states it gives at three frames (arm low, rising, high) equal the full tables'."""
+    import filecmp
+    import tempfile
+
+    from mcdm_pin.osim.rmr import rmr_robot
+
+    with tempfile.TemporaryDirectory() as tmp:
+        excerpt("abd01", 5, Path(tmp))
+        differ = [f.name for f in sorted(Path(tmp).iterdir()) if not filecmp.cmp(f, EXCERPT / f.name, shallow=False)]
+    robot, rows = rmr_robot("abd01"), (100, 450, 700)
+    ours = frame_states(robot, motion_files("abd01", EXCERPT), rows)
+    full = frame_states(robot, motion_files("abd01"), rows)
+    same = all(np.array_equal(a, b) for a, b in zip(ours, full))
+    print(f"excerpt: {len(differ)} file(s) differ from a regeneration{': ' + ', '.join(differ) if differ else ''}; "
+          f"states at frames {rows} {'equal' if same else 'DIFFER from'} the full motion's")
+    return 0 if not differ and same else 1
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--check-excerpt", action="store_true",
+                    help="only check the committed ABD01 excerpt against RMR's files (needs ../shared)")
     ap.add_argument("--every", type=int, default=1, help="every K-th frame (default: all, 100 Hz)")
     ap.add_argument("--motions", default=",".join(MOTIONS))
     ap.add_argument("--json", default=None, help="write the per-frame records here")
     args = ap.parse_args(argv)
+    if args.check_excerpt:
+        return check_excerpt()
     results = []
     for motion in args.motions.split(","):
         for cone in (False, True):
