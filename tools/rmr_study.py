@@ -34,7 +34,7 @@ sys.path.insert(0, str(REPO))
 from mcdm_pin.inverse_dynamics import InverseDynamics  # noqa: E402
 from mcdm_pin.osim.motion import read_table  # noqa: E402
 from mcdm_pin.osim.rmr import (GH, N_MUSCLES, RATE, frame_rows, frame_states, rmr_in_our_problem,  # noqa: E402
-                               rmr_objective, rmr_problem, rmr_robot)
+                               rmr_objective, rmr_problem, rmr_robot, rmr_states)
 from mcdm_pin.problem import Context  # noqa: E402
 
 REFERENCE = REPO.parent / "shared" / "reference" / "rmr"  # RMR's files beside the clone (../shared)
@@ -54,13 +54,19 @@ def rmr_answer(motion: str, cone: bool) -> np.ndarray:
     return loadmat(REFERENCE / "results" / sub / f"muscle_activations_Seth2019_experiment_{motion.upper()}.mat")["xsol"]
 
 
-def run(motion: str, cone: bool, every: int = 1, solver: str = "default", files=None, rows=None) -> dict:
-    """One motion and case: per-frame records and the summary (module docstring)."""
+def run(motion: str, cone: bool, every: int = 1, solver: str = "default", files=None, rows=None,
+        states: str = "rmr") -> dict:
+    """One motion and case: per-frame records and the summary (module docstring). ``states``: ``rmr``
+    (RMR's filtered IK, every frame of ``xsol``) or ``cmc`` (CMC's tables, ``files``)."""
     robot = rmr_robot(motion)
-    files = motion_files(motion) if files is None else files
-    rows = frame_rows(files, every) if rows is None else np.asarray(rows)
-    Q, V, A = frame_states(robot, files, rows)
     X = rmr_answer(motion, cone)
+    if states == "rmr":
+        rows = np.arange(0, len(X), every) if rows is None else np.asarray(rows)
+        Q, V, A = rmr_states(robot, motion, rows)
+    else:
+        files = motion_files(motion) if files is None else files
+        rows = frame_rows(files, every) if rows is None else np.asarray(rows)
+        Q, V, A = frame_states(robot, files, rows)
     ident = InverseDynamics(robot, rmr_problem(robot, cone), solver=solver)
     frames = []
     for row, q, v, a in zip(rows, Q, V, A):
@@ -76,7 +82,7 @@ def run(motion: str, cone: bool, every: int = 1, solver: str = "default", files=
                            rmr_objective=rmr_objective(robot, X[row]) if row < len(X) else float("nan"),
                            rmse=float(np.sqrt(np.mean((ours_a - X[row, :N_MUSCLES]) ** 2))) if row < len(X)
                            else float("nan"), rmr=theirs))
-    return dict(motion=motion, cone=cone, frames=frames, summary=summarise(frames))
+    return dict(motion=motion, cone=cone, states=states, frames=frames, summary=summarise(frames))
 
 
 def summarise(frames) -> dict:
@@ -96,7 +102,40 @@ def summarise(frames) -> dict:
                 rmr_eom_rel_p50=float(np.median(rmr("eom_rel"))),
                 rmr_cone_broken=int(np.sum(rmr("cone_deg") > 1e-6)), rmr_cone_max_deg=float(rmr("cone_deg").max()),
                 rmr_angle_max=float(rmr("angle_deg").max()), ours_angle_max=float(arr("angle_deg").max()),
-                time_p50_ms=float(np.median(arr("time_s")) * 1e3))
+                time_p50_ms=float(np.median(arr("time_s")) * 1e3), **closed_summary(ours, rmr))
+
+
+FEASIBLE = 1e-6  # activation-bound excess (1) and cone excess (deg) below which a closed answer counts as feasible
+
+
+def closed_summary(ours, rmr) -> dict:
+    """RMR's answers completed by the least change that closes our equation (rmr.close_answer): at how
+    many frames they are feasible (bounds, cone), the change's size, and ours against their objective
+    there (ours is the global optimum, so it must never be higher)."""
+    ok = (rmr("closed_bounds") <= FEASIBLE) & (rmr("closed_cone_deg") <= FEASIBLE)
+    J = rmr("closed_objective")
+    return dict(closed_feasible=int(ok.sum()), closed_change_p50=float(np.median(rmr("closed_change"))),
+                closed_change_max=float(rmr("closed_change").max()),
+                closed_ours_higher=int(np.sum(ok & (ours > J * (1 + 1e-6) + 1e-9))),
+                closed_gap_p50=float(np.median((J[ok] - ours[ok]) / J[ok])) if ok.any() else float("nan"),
+                rmr_eom_raw_p50=float(np.median(rmr("eom_raw"))), rmr_eom_raw_max=float(rmr("eom_raw").max()))
+
+
+def closed_table(results) -> str:
+    """The common-footing table (markdown): RMR's answers closed onto our equation of motion."""
+    head = ("| motion | cone | frames | RMR residual, own controls p50/max (N m) | least change p50/max | "
+            "closed RMR feasible | ours > closed RMR | (closed RMR J - ours J) / closed RMR J, p50 |")
+    lines = [head, "|" + "---|" * 8]
+    for r in results:
+        s = r["summary"]
+        if "ours_mean" not in s:
+            continue
+        lines.append(
+            f"| {r['motion'].upper()} | {'with GH' if r['cone'] else 'without'} | {s['frames']} | "
+            f"{s['rmr_eom_raw_p50']:.3g} / {s['rmr_eom_raw_max']:.3g} | "
+            f"{s['closed_change_p50']:.3g} / {s['closed_change_max']:.3g} | {s['closed_feasible']} | "
+            f"{s['closed_ours_higher']} | {s['closed_gap_p50']:.2%} |")
+    return "\n".join(lines)
 
 
 def table(results) -> str:
@@ -117,6 +156,35 @@ def table(results) -> str:
             f"{s['rmr_cone_broken']} ({s['rmr_cone_max_deg']:.2f}) | "
             f"{s['ours_angle_max']:.2f} / {s['rmr_angle_max']:.2f} |")
     return "\n".join(lines)
+
+
+def plot(results, path) -> None:
+    """Per frame of one motion, without and with the cone: our objective, RMR's at its answer and at its
+    answer closed onto our equation (feasible frames), and RMR's residual in our equation."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, len(results), figsize=(6 * len(results), 6), sharex=True, squeeze=False)
+    for col, r in enumerate(results):
+        fr = [f for f in r["frames"] if f["rmr"] is not None]
+        t = np.array([f["row"] for f in fr]) / RATE
+        ok = np.array([f["rmr"]["closed_bounds"] <= FEASIBLE and f["rmr"]["closed_cone_deg"] <= FEASIBLE for f in fr])
+        ax = axes[0, col]
+        ax.plot(t, [f["objective"] for f in fr], "k-", lw=1, label="ours (global optimum)")
+        ax.plot(t, [f["rmr_objective"] for f in fr], "C0-", lw=0.8, label="RMR at its answer")
+        closed = np.array([f["rmr"]["closed_objective"] for f in fr])
+        ax.plot(t[ok], closed[ok], "C1.", ms=2, label="RMR closed onto our equation (feasible)")
+        ax.set_title(f"{r['motion'].upper()} {'with GH' if r['cone'] else 'without GH'}")
+        ax.set_ylabel("objective")
+        ax.legend(fontsize=7)
+        ax = axes[1, col]
+        ax.semilogy(t, [f["rmr"]["eom_raw"] for f in fr], "C3-", lw=0.8)
+        ax.set_ylabel("RMR's residual in our equation (N m)")
+        ax.set_xlabel("time (s)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
 
 
 def excerpt(motion: str, every: int, out: Path) -> None:
@@ -172,17 +240,35 @@ def main(argv=None) -> int:
     ap.add_argument("--every", type=int, default=1, help="every K-th frame (default: all, 100 Hz)")
     ap.add_argument("--motions", default=",".join(MOTIONS))
     ap.add_argument("--json", default=None, help="write the per-frame records here")
+    ap.add_argument("--states", choices=("rmr", "cmc"), default="rmr",
+                    help="RMR's filtered IK (default, RMR's own states) or CMC's Kinematics tables")
+    ap.add_argument("--audit", action="store_true",
+                    help="only RMR's answers in OpenSim (its own constraint, our residual's origin; needs opensim)")
+    ap.add_argument("--plot", default=None, help="write the per-frame figure of the first motion here (PNG)")
+    ap.add_argument("--reference", default=None, help="RMR's folder (default ../shared/reference/rmr)")
     args = ap.parse_args(argv)
+    global REFERENCE
+    REFERENCE = Path(args.reference) if args.reference else REFERENCE
     if args.check_excerpt:
         return check_excerpt()
+    if args.audit:
+        from rmr_opensim import audit, audit_table
+
+        print(audit_table([audit(m, c, rmr_answer(m, c), args.every) for m in args.motions.split(",")
+                           for c in (False, True)]))
+        return 0
     results = []
     for motion in args.motions.split(","):
         for cone in (False, True):
             t0 = time.perf_counter()
-            results.append(run(motion, cone, args.every))
+            results.append(run(motion, cone, args.every, states=args.states))
             print(f"{motion} cone={cone}: {len(results[-1]['frames'])} frames in {time.perf_counter() - t0:.1f} s",
                   file=sys.stderr)
     print(table(results))
+    print()
+    print(closed_table(results))
+    if args.plot:
+        plot(results[:2], args.plot)
     if args.json:
         Path(args.json).write_text(json.dumps(results, default=float))
     return 0

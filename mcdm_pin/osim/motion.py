@@ -87,13 +87,15 @@ def translational_coordinates(doc) -> set:
 
 def motion_states(source, doc, q_file, u_file, udot_file, times):
     """``(q, v, a)`` (T, nq), (T, nv), (T, nv) at ``times`` (s) from OpenSim's coordinate, speed and
-    acceleration tables (module docstring). ``source``: the robot's
-    :class:`~mcdm_pin.osim.load.OsimSource`; ``doc``: its read document (which coordinates rotate)."""
-    tables = [read_table(f) for f in (q_file, u_file, udot_file)]
+    acceleration tables (module docstring; a :class:`Table` already read is taken as it is). ``source``:
+    the robot's :class:`~mcdm_pin.osim.load.OsimSource`; ``doc``: its read document (which coordinates
+    rotate)."""
+    tables = [f if isinstance(f, Table) else read_table(f) for f in (q_file, u_file, udot_file)]
     times = np.asarray(times, dtype=float)
     names = source.maps.coordinates
     slide = translational_coordinates(doc)
     for t, f in zip(tables, (q_file, u_file, udot_file)):
+        f = "a table" if isinstance(f, Table) else f
         missing = [n for n in names if n not in t.labels]
         if missing:
             raise ModelError(f"{f}: no column for coordinate(s) {missing}")

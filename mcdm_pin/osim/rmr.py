@@ -4,16 +4,21 @@ RMR (the Rapid Muscle Redundancy solver) minimises, at each frame,
 
 .. math:: \sum_i a_i^2 + \sum_j w_j c_j^2
 
-over the 33 muscles' activations :math:`a_i \in [0, 1]` (muscle force ``passive + gain a``, the
-muscles' rigid-tendon state at the frame) and the 17 ``CoordinateActuator`` controls :math:`c_j`
-(torque ``F_opt c``; ``w`` = 0 on the thorax's six coordinates, the elbow and the forearm, 10 on the
-shoulder girdle's and glenohumeral coordinates), subject to the equation of motion and, "with GH",
-the glenohumeral reaction force within the glenoid cone (:mod:`mcdm_pin.osim.glenoid`). The robot of
-``robots/opensim/tsm_rmr.yaml`` declares the weights and the cone; :func:`rmr_robot` sets RMR's
-activation bounds ``[0, 1]`` (RMR overrides the muscles' force, so the model's
-``minimum_activation`` 0.01 does not bound it). RMR's answers (``xsol``: 33 activations, then the
-17 controls in the model's order, and a 51st column that matches no actuator of the model) are
-compared with ours by :func:`rmr_objective` and :func:`rmr_in_our_problem`.
+over the 33 muscles' activations :math:`a_i \in [0, 1]` (muscle force ``passive + gain a`` with
+RMR's force model: OpenSim's ``a F_0 f_L f_V cos(alpha) + F_0 f_P cos(alpha)`` with a rigid tendon,
+*without* the fibre damping's ``F_0 beta v cos(alpha)`` that OpenSim's Millard muscle adds; the curves
+stay those of OpenSim's damped model, as RMR reads them from it) and the 17 ``CoordinateActuator``
+controls :math:`c_j` (torque ``F_opt c``; ``w`` = 0 on the thorax's six coordinates, the elbow and the
+forearm, 10 on the shoulder girdle's and glenohumeral coordinates), subject to the equation of motion
+and, "with GH", the glenohumeral reaction force within the glenoid cone
+(:mod:`mcdm_pin.osim.glenoid`). The robot of ``robots/opensim/tsm_rmr.yaml`` declares the weights and
+the cone; :func:`rmr_robot` sets RMR's activation bounds ``[0, 1]`` (RMR overrides the muscles' force,
+so the model's ``minimum_activation`` 0.01 does not bound it) and drops the damping. RMR's states are
+its filtered IK (:func:`rmr_kinematics`, :func:`rmr_states`). RMR's answers (``xsol``: 33
+activations, then the 17 controls in the model's actuator order, then a 51st column that RMR's
+``Results/RMR analysis/average_serratus_anterior.m`` appended afterwards: the mean of the three
+serratus anterior activations, columns 5-7) are compared with ours by :func:`rmr_objective` and
+:func:`rmr_in_our_problem`.
 
 In a shrug RMR frees the accelerations of ``plane_elv`` and ``axial_rot`` (poorly defined with the arm
 hanging); here their actuators then weigh 0 (free torques at the measured accelerations).
@@ -34,7 +39,7 @@ from ..problem import Problem
 from ..solvers.base import cone_violation_deg
 from .actuators import CONTROL_CAP
 from .document import read_osim
-from .motion import motion_states, read_table
+from .motion import Table, motion_states, read_table
 
 REPO = Path(__file__).resolve().parents[2]
 SIDECAR = REPO / "robots" / "opensim" / "tsm_rmr.yaml"
@@ -45,14 +50,15 @@ GH = "GlenoHumeral"
 
 
 def rmr_robot(motion: str = "abd01", sidecar=None) -> Robot:
-    """The TSM as RMR poses it (``sidecar``: default the repository's ``robots/opensim/tsm_rmr.yaml``): activations in [0, 1] (RMR's bounds: it overrides the muscles' force,
-    so the model's ``minimum_activation`` 0.01 does not apply); for a shrug, plane_elv's and
-    axial_rot's actuators weigh 0."""
+    """The TSM as RMR poses it (``sidecar``: default the repository's ``robots/opensim/tsm_rmr.yaml``):
+    activations in [0, 1] (RMR's bounds: it overrides the muscles' force, so the model's
+    ``minimum_activation`` 0.01 does not apply); no fibre damping in the passive force (RMR's
+    ``PMuscForce``); for a shrug, plane_elv's and axial_rot's actuators weigh 0."""
     from ..robot import Robot
 
     robot = Robot.load(SIDECAR if sidecar is None else sidecar)
     cables = robot.cables
-    muscles = OpenSimMuscles([dataclasses.replace(m, a_min=0.0) for m in cables.muscles.muscles])
+    muscles = OpenSimMuscles([dataclasses.replace(m, a_min=0.0, damping=0.0) for m in cables.muscles.muscles])
     cables = CableSet(robot.model, cables.cables, muscles=muscles, muscle_cables=muscles.names)
     acts = robot.actuators
     if motion.startswith("shrug"):
@@ -73,6 +79,34 @@ def frame_states(robot, files, rows):
     """``(q, v, a)`` at RMR's frames ``rows`` (frame k at ``k / RATE`` s) from the motion's coordinate,
     speed and acceleration tables ``files`` (:func:`~mcdm_pin.osim.motion.motion_states`)."""
     return motion_states(robot.source, read_osim(robot.source.maps.source), *files, np.asarray(rows) / RATE)
+
+
+IK_FOLDER = REPO / "robots" / "opensim" / "motions" / "ik"  # RMR's IK solutions (Results/IK solutions)
+LOWPASS_HZ = 3.0  # RMR's filter of the IK coordinates (loadFilterCropArray.m)
+
+
+def rmr_kinematics(ik_file) -> tuple:
+    """RMR's states, as ``RMR_analysis.m`` makes them from an IK solution (``.mot``): every coordinate
+    low-passed by a 4th-order Butterworth filter at 3 Hz run forwards and backwards (MATLAB's
+    ``filtfilt``: odd extension of ``3 (5 - 1)`` samples), then differentiated twice by MATLAB's
+    ``gradient`` (central differences, one-sided at the ends). Three :class:`Table` (coordinates,
+    speeds, accelerations) on the IK's time grid, row ``k`` at ``k / 100`` s (RMR's frame ``k``)."""
+    from scipy.signal import butter, filtfilt
+
+    ik = read_table(ik_file)
+    dt = float(ik.time[1] - ik.time[0])
+    b, a = butter(4, LOWPASS_HZ / (0.5 / dt), "low")
+    q = filtfilt(b, a, ik.data, axis=0, padtype="odd", padlen=3 * (max(len(a), len(b)) - 1))
+    u = np.gradient(q, dt, axis=0)
+    return tuple(Table(ik.labels, ik.time, x, ik.in_degrees) for x in (q, u, np.gradient(u, dt, axis=0)))
+
+
+def rmr_states(robot, motion: str, rows=None, folder=None):
+    """``(q, v, a)`` at RMR's frames ``rows`` (default: all) of a motion, from RMR's filtered IK
+    (:func:`rmr_kinematics` of ``<folder>/<MOTION>.mot``, default the committed copies)."""
+    tables = rmr_kinematics(Path(folder or IK_FOLDER) / f"{motion.upper()}.mot")
+    rows = np.arange(len(tables[0].time)) if rows is None else np.asarray(rows)
+    return motion_states(robot.source, read_osim(robot.source.maps.source), *tables, tables[0].time[rows])
 
 
 def excerpt_answers(folder, cone: bool):
@@ -101,27 +135,58 @@ def rmr_objective(robot, xrow) -> float:
 
 def rmr_in_our_problem(ident, terms, qp, xrow) -> dict:
     """RMR's answer as our unknowns ``[f; tau]`` at our state and how far it is from our constraints:
-    the equation of motion's residual (largest generalized force, N m or N, and relative), the
-    activation bounds, the cone (degrees beyond it). The actuators that weigh nothing (the thorax's,
-    the forearm's; in a shrug also plane_elv's and axial_rot's) are free in both problems: their
-    torques are refitted to our state (least squares on the residual), which changes no objective."""
+    the equation of motion's residual (largest generalized force, N m or N, and relative; ``eom_raw``
+    with RMR's own controls of the weightless actuators, ``eom_abs`` with those refitted to our state
+    by least squares, which changes no objective: the thorax's, the forearm's, in a shrug also
+    plane_elv's and axial_rot's actuators are free in both problems), the activation bounds, the cone
+    (degrees beyond it). ``closed_*``: RMR's answer completed by the least change of its unknowns
+    (activations and controls, minimum Euclidean norm ``closed_change``) that closes our equation of
+    motion exactly; its objective ``closed_objective``, bounds and cone (:func:`close_answer`)."""
     robot = ident.robot
-    x = np.asarray(xrow, dtype=float)
-    st = terms.muscles
-    k = robot.cables.muscle_index
-    f = np.zeros(robot.m)
-    f[k] = st.passive + st.gain * x[:N_MUSCLES]
-    f_opt, _ = actuator_weights(robot)
-    tau = f_opt * x[N_MUSCLES:N_MUSCLES + N_ACTUATORS]
-    y = np.concatenate([f, tau])
+    x = np.asarray(xrow, dtype=float)[:N_MUSCLES + N_ACTUATORS]
+    y = _unknowns(robot, terms.muscles, x)
     n = terms.tau.shape[0]
+    raw = float(np.abs(qp.A[:n] @ y - qp.b[:n]).max())
     free = robot.m + np.flatnonzero(np.array([a.weight for a in robot.actuators]) == 0.0)
-    r = qp.A[:n] @ y - qp.b[:n]
-    y[free] -= np.linalg.lstsq(qp.A[:n, free], r, rcond=None)[0]
+    y[free] -= np.linalg.lstsq(qp.A[:n, free], qp.A[:n] @ y - qp.b[:n], rcond=None)[0]
+    out = dict(_check(robot, terms, qp, y, x), eom_raw=raw)
+    z = close_answer(robot, terms, qp, x)
+    closed = _check(robot, terms, qp, _unknowns(robot, terms.muscles, z), z)
+    out.update({f"closed_{k}": v for k, v in closed.items()}, closed_change=float(np.linalg.norm(z - x)),
+               closed_objective=rmr_objective(robot, z))
+    return out
+
+
+def close_answer(robot, terms, qp, x) -> np.ndarray:
+    """``x + dx`` with ``dx`` the least-norm change of RMR's unknowns (33 activations, 17 controls)
+    that makes our equation of motion hold: ``dx = -B^+ r``, ``B`` the equation's rows in these units
+    (muscle columns times ``gain``, actuator columns times ``F_opt``), ``r`` the residual at ``x``.
+    Bounds and cone are not imposed (:func:`rmr_in_our_problem` reports them)."""
+    n = terms.tau.shape[0]
+    f_opt, _ = actuator_weights(robot)
+    scale = np.zeros(robot.m + len(f_opt))
+    scale[robot.cables.muscle_index] = terms.muscles.gain
+    scale[robot.m:] = f_opt
+    cols = np.concatenate([robot.cables.muscle_index, robot.m + np.arange(len(f_opt))])
+    B = qp.A[:n][:, cols] * scale[cols]
+    r = qp.A[:n] @ _unknowns(robot, terms.muscles, x) - qp.b[:n]
+    return x - np.linalg.lstsq(B, r, rcond=None)[0]
+
+
+def _unknowns(robot, st, x) -> np.ndarray:
+    """Our unknowns ``[f; tau]`` of RMR's ``x``: ``f = passive + gain a``, ``tau = F_opt c``."""
+    f = np.zeros(robot.m)
+    f[robot.cables.muscle_index] = st.passive + st.gain * x[:N_MUSCLES]
+    f_opt, _ = actuator_weights(robot)
+    return np.concatenate([f, f_opt * x[N_MUSCLES:N_MUSCLES + N_ACTUATORS]])
+
+
+def _check(robot, terms, qp, y, x) -> dict:
+    n = terms.tau.shape[0]
     r = qp.A[:n] @ y - qp.b[:n]
     scale = max(np.abs(terms.tau).max(), 1e-300)
     cone = float(cone_violation_deg(qp, y).max(initial=0.0)) if qp.cones else 0.0
-    a = x[:N_MUSCLES]
+    st, a = terms.muscles, x[:N_MUSCLES]
     return dict(eom_abs=float(np.abs(r).max()), eom_rel=float(np.abs(r).max() / scale),
                 bounds=float(max((st.a_min - a).max(), (a - st.a_max).max(), 0.0)), cone_deg=cone,
                 angle_deg=float(np.degrees(np.arccos(np.clip(
