@@ -1,7 +1,8 @@
-"""RMR's shoulder problem (mcdm_pin.osim.rmr) on the committed ABD01 excerpt: the sidecar's cone is
-the model's glenoid markers' (as RMR computes it), the excerpt reproduces the full motion where the
-reference data are present, and a few frames with and without the cone reach Clarabel's objective,
-hold our constraints, and land near RMR's activations."""
+"""RMR's shoulder problem (mcdm_pin.osim.rmr) on committed data (RMR's ABD01 IK and its answers in the
+excerpt): the sidecar's cone is the model's glenoid markers' (as RMR computes it), a few frames at RMR's
+states with and without the cone reach Clarabel's objective, hold our constraints and land near RMR's
+activations, xsol's 51st column is RMR's serratus mean, and RMR's residual in our equation is the one
+OpenSim predicts from RMR's own acceleration error."""
 
 from __future__ import annotations
 
@@ -12,12 +13,11 @@ import pytest
 
 from mcdm_pin.inverse_dynamics import InverseDynamics
 from mcdm_pin.osim.glenoid import glenoid_cone
-from mcdm_pin.osim.rmr import (GH, N_MUSCLES, excerpt_answers, frame_states, rmr_objective, rmr_problem,
-                               rmr_robot)
+from mcdm_pin.osim.rmr import (GH, N_MUSCLES, excerpt_answers, rmr_objective, rmr_problem, rmr_robot,
+                               rmr_states)
 
 REPO = Path(__file__).resolve().parents[1]
 EXCERPT = REPO / "robots" / "opensim" / "motions" / "abd01"
-FILES = tuple(EXCERPT / f"Kinematics_{k}.sto" for k in ("q", "u", "dudt"))
 ROWS = (100, 450, 700)  # frames k (k / 100 s): arm low, rising, high
 
 
@@ -43,7 +43,7 @@ def test_rmr_weights_and_bounds(robot):
 @pytest.mark.parametrize("cone", [False, True], ids=["without_GH", "with_GH"])
 def test_frames_match_clarabel_and_land_near_rmr(robot, cone):
     rows, X = excerpt_answers(EXCERPT, cone)
-    Q, V, A = frame_states(robot, FILES, ROWS)
+    Q, V, A = rmr_states(robot, "abd01", ROWS)  # RMR's own states: its filtered IK
     problem = rmr_problem(robot, cone)
     ours, ref = InverseDynamics(robot, problem), InverseDynamics(robot, problem, solver="clarabel")
     j = robot.joint_names.index(GH)
@@ -58,3 +58,50 @@ def test_frames_match_clarabel_and_land_near_rmr(robot, cone):
         act = res.activation[robot.cables.muscle_index]
         assert np.sqrt(np.mean((act - x[:N_MUSCLES]) ** 2)) < 0.02  # measured 0.001-0.009 (docs/opensim.md)
         assert abs(res.objective - rmr_objective(robot, x)) < 0.1 * rmr_objective(robot, x)
+
+
+def test_xsol_51st_column_is_the_serratus_anterior_mean():
+    """RMR's Results/RMR analysis/average_serratus_anterior.m appended it after solving: 33 activations,
+    17 controls, then the mean of the three serratus anterior activations (columns 5-7)."""
+    for cone in (False, True):
+        _, X = excerpt_answers(EXCERPT, cone)
+        assert X.shape[1] == 51
+        assert np.abs(X[:, 50] - X[:, 4:7].mean(axis=1)).max() < 1e-9  # the CSV's 10 digits
+
+
+def test_rmr_answer_in_our_equation_is_its_opensim_residual(robot):
+    """At RMR's own states (its filtered IK) and force model (no fibre damping), our muscle forces at
+    RMR's answer equal OpenSim's, and RMR's residual in our equation of motion is the one OpenSim's
+    forward dynamics predicts from RMR's acceleration error (fmincon's tolerance), -(N K)^T E^T M r."""
+    import importlib.util
+
+    from mcdm_pin.osim import speeds
+    from mcdm_pin.osim.rmr import IK_FOLDER, _unknowns, rmr_kinematics, rmr_states
+    from mcdm_pin.problem import Context
+
+    spec = importlib.util.spec_from_file_location("rmr_opensim", REPO / "tools" / "rmr_opensim.py")
+    rmr_opensim = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(rmr_opensim)
+    q_t, u_t, a_t = rmr_kinematics(IK_FOLDER / "ABD01.mot")
+    names = list(q_t.labels)
+    unit = np.array([1.0 if n.startswith("ground_thorax_t") else np.pi / 180.0 for n in names])
+    ref = rmr_opensim.OpenSimRMR(robot.source.maps.source, names)
+    maps = robot.source.maps
+    cv = [int(maps.coordinate_v[maps.coordinates.index(n)]) for n in names]
+    rows, X = excerpt_answers(EXCERPT, False)
+    ident = InverseDynamics(robot, rmr_problem(robot, False))
+    for k, q, v, a in zip(ROWS, *rmr_states(robot, "abd01", ROWS)):
+        x = X[list(rows).index(k), :50]
+        ref.frame(q_t.data[k] * unit, u_t.data[k] * unit)
+        r = ref.accelerations(x) - a_t.data[k] * unit
+        terms = ident.evaluate(q, v, a)
+        qp = ident.problem.assemble(terms, Context(robot))
+        y = _unknowns(robot, terms.muscles, x)
+        f_ours, f_osim = y[robot.cables.muscle_index], ref.muscle_forces(x)
+        assert np.abs(f_ours - f_osim).max() < 1e-6 * np.abs(f_osim).max()
+        n = terms.tau.shape[0]
+        tau = np.zeros(robot.model.nv)
+        tau[cv] = ref.times_mass(r)
+        predicted = -terms.basis.T @ speeds.forces_to_pin(maps.angular, q, tau)
+        ours = qp.A[:n] @ y - qp.b[:n]
+        assert np.abs(ours - predicted).max() < 0.01 * max(np.abs(predicted).max(), 0.1)  # measured 2e-3 N m

@@ -46,6 +46,7 @@ SIDECAR = REPO / "robots" / "opensim" / "tsm_rmr.yaml"
 RATE = 100.0  # Hz: RMR's frames, frame k at k / RATE s
 N_MUSCLES, N_ACTUATORS = 33, 17
 SHRUG_FREE = ("plane_elv_actuator", "axial_rot_actuator")
+SHRUG_FREED = ("plane_elv", "axial_rot")  # the coordinates whose accelerations RMR leaves free in a shrug
 GH = "GlenoHumeral"
 
 
@@ -133,23 +134,30 @@ def rmr_objective(robot, xrow) -> float:
     return float(np.sum(x[:N_MUSCLES] ** 2) + np.sum(w * x[N_MUSCLES:N_MUSCLES + N_ACTUATORS] ** 2))
 
 
-def rmr_in_our_problem(ident, terms, qp, xrow) -> dict:
+def rmr_in_our_problem(ident, terms, qp, xrow, freed=()) -> dict:
     """RMR's answer as our unknowns ``[f; tau]`` at our state and how far it is from our constraints:
     the equation of motion's residual (largest generalized force, N m or N, and relative; ``eom_raw``
     with RMR's own controls of the weightless actuators, ``eom_abs`` with those refitted to our state
     by least squares, which changes no objective: the thorax's, the forearm's, in a shrug also
     plane_elv's and axial_rot's actuators are free in both problems), the activation bounds, the cone
-    (degrees beyond it). ``closed_*``: RMR's answer completed by the least change of its unknowns
-    (activations and controls, minimum Euclidean norm ``closed_change``) that closes our equation of
-    motion exactly; its objective ``closed_objective``, bounds and cone (:func:`close_answer`)."""
+    (degrees beyond it). ``closed_*``: the point of our feasible set nearest RMR's answer
+    (:func:`close_answer`; ``closed_change`` the distance), with its objective ``closed_objective``
+    and its constraints checked as RMR's answer's are. ``eom_freed``: ``eom_raw`` with the accelerations
+    of the coordinates ``freed`` left free (least squares), as RMR leaves plane_elv's and axial_rot's in
+    a shrug."""
     robot = ident.robot
     x = np.asarray(xrow, dtype=float)[:N_MUSCLES + N_ACTUATORS]
     y = _unknowns(robot, terms.muscles, x)
     n = terms.tau.shape[0]
-    raw = float(np.abs(qp.A[:n] @ y - qp.b[:n]).max())
+    r = qp.A[:n] @ y - qp.b[:n]
+    raw = float(np.abs(r).max())
+    if freed:  # the residual moves by basis^T M e_j per unit acceleration of a freed coordinate j
+        maps = robot.source.maps
+        cols = terms.basis.T @ terms.M[:, [int(maps.coordinate_v[maps.coordinates.index(c)]) for c in freed]]
+        r = r - cols @ np.linalg.lstsq(cols, r, rcond=None)[0]
     free = robot.m + np.flatnonzero(np.array([a.weight for a in robot.actuators]) == 0.0)
     y[free] -= np.linalg.lstsq(qp.A[:n, free], qp.A[:n] @ y - qp.b[:n], rcond=None)[0]
-    out = dict(_check(robot, terms, qp, y, x), eom_raw=raw)
+    out = dict(_check(robot, terms, qp, y, x), eom_raw=raw, eom_freed=float(np.abs(r).max()))
     z = close_answer(robot, terms, qp, x)
     closed = _check(robot, terms, qp, _unknowns(robot, terms.muscles, z), z)
     out.update({f"closed_{k}": v for k, v in closed.items()}, closed_change=float(np.linalg.norm(z - x)),
@@ -158,19 +166,37 @@ def rmr_in_our_problem(ident, terms, qp, xrow) -> dict:
 
 
 def close_answer(robot, terms, qp, x) -> np.ndarray:
-    """``x + dx`` with ``dx`` the least-norm change of RMR's unknowns (33 activations, 17 controls)
-    that makes our equation of motion hold: ``dx = -B^+ r``, ``B`` the equation's rows in these units
-    (muscle columns times ``gain``, actuator columns times ``F_opt``), ``r`` the residual at ``x``.
-    Bounds and cone are not imposed (:func:`rmr_in_our_problem` reports them)."""
-    n = terms.tau.shape[0]
+    """The point of our problem's feasible set nearest RMR's answer ``x`` (33 activations, 17 controls;
+    Euclidean distance in these units): our equation of motion exactly, activations in their bounds, and
+    our cones (second-order cones, Clarabel). Our optimum is never above its objective."""
+    import clarabel
+    from scipy import sparse
+
+    n, k = terms.tau.shape[0], robot.cables.muscle_index
     f_opt, _ = actuator_weights(robot)
-    scale = np.zeros(robot.m + len(f_opt))
-    scale[robot.cables.muscle_index] = terms.muscles.gain
-    scale[robot.m:] = f_opt
-    cols = np.concatenate([robot.cables.muscle_index, robot.m + np.arange(len(f_opt))])
-    B = qp.A[:n][:, cols] * scale[cols]
-    r = qp.A[:n] @ _unknowns(robot, terms.muscles, x) - qp.b[:n]
-    return x - np.linalg.lstsq(B, r, rcond=None)[0]
+    nz = N_MUSCLES + N_ACTUATORS
+    x = np.asarray(x, dtype=float)[:nz]
+    D = np.zeros((qp.A.shape[1], nz))  # y = y0 + D z
+    D[k, np.arange(N_MUSCLES)] = terms.muscles.gain
+    D[robot.m + np.arange(N_ACTUATORS), N_MUSCLES + np.arange(N_ACTUATORS)] = f_opt
+    y0 = _unknowns(robot, terms.muscles, np.zeros(nz))
+    eye = np.eye(nz)[:N_MUSCLES]
+    rows = [qp.A[:n] @ D, -eye, eye]
+    rhs = [qp.b[:n] - qp.A[:n] @ y0, -terms.muscles.a_min, terms.muscles.a_max]
+    cones = [clarabel.ZeroConeT(n), clarabel.NonnegativeConeT(2 * N_MUSCLES)]
+    for c in qp.cones:  # (tan(angle) axis.F, basis F) in the second-order cone, F = g + G y
+        T = np.vstack([np.tan(np.radians(c.angle_deg)) * c.axis, c.basis])
+        rows.append(-T @ c.G @ D)
+        rhs.append(T @ (c.g + c.G @ y0))
+        cones.append(clarabel.SecondOrderConeT(3))
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    solver = clarabel.DefaultSolver(sparse.csc_matrix(2.0 * np.eye(nz)), -2.0 * x,
+                                    sparse.csc_matrix(np.vstack(rows)), np.concatenate(rhs), cones, settings)
+    sol = solver.solve()
+    if str(sol.status) not in ("Solved", "AlmostSolved"):
+        return np.full(nz, np.nan)
+    return np.array(sol.x)
 
 
 def _unknowns(robot, st, x) -> np.ndarray:
