@@ -2,20 +2,25 @@
 measured motions (ABD01, FLX01, SHRUG01) at 100 Hz, with and without the glenohumeral cone, against the
 RMR solver's answers (Belli et al., PLOS ONE 2023; data CC BY 4.0 in ../shared/reference/rmr).
 
-    PYTHONPATH=. python tools/rmr_study.py [--every K] [--motions abd01,flx01] [--json out.json]
+    PYTHONPATH=. python tools/rmr_study.py [--every K] [--motions abd01,flx01] [--states rmr|cmc]
+                                           [--json out.json] [--plot fig.png] [--reference DIR]
+    PYTHONPATH=. python tools/rmr_study.py --audit [--every K]     # RMR's constraint in OpenSim
+    PYTHONPATH=. python tools/rmr_study.py --check-excerpt         # the committed ABD01 excerpt
 
 Per motion and case: frames solved (status counts); our objective ``sum a^2 + sum w c^2`` against RMR's
 at RMR's answer (``xsol``: 33 activations, then the 17 CoordinateActuators' controls in the model's
-order; its 51st column matches no actuator of the model and is left out); how far RMR's answer is from
-our constraints at our states (equation of motion, activation bounds, cone); and the activation RMSE.
+actuator order; its 51st column, the mean of the three serratus anterior activations that RMR appended
+afterwards, is left out); how far RMR's answer is from our constraints (equation of motion, activation
+bounds, cone); the activation RMSE; and, on a common footing, RMR's answer closed onto our feasible set
+(``rmr.close_answer``) against our optimum, which must never be higher.
 
-Which problem runs: each frame on its own (a global optimum per frame). RMR couples frames through
-activation-dynamics bounds (10 ms activation, 40 ms deactivation) and solves the accelerations of
-filtered IK coordinates (3 Hz low-pass, finite differences); we take the motions' coordinates, speeds
-and accelerations as CMC wrote them (Kinematics_{q,u,dudt}.sto), sampled at RMR's 100 Hz frame times
-(frame k at k / 100 s, from 0). RMR's answers therefore satisfy RMR's equation, not ours, to the
-accuracy this tool reports. In SHRUG01 RMR frees the accelerations of plane_elv and axial_rot (poorly
-defined with the arm hanging); here their actuators weigh 0 (free), in both objectives.
+Which problem runs: each frame on its own (a global optimum per frame; RMR's inter-frame
+activation-dynamics bounds are not imposed), at RMR's own states by default (its IK solution low-passed
+at 3 Hz and differentiated twice, ``rmr.rmr_states``; frame k at k / 100 s, from 0) with RMR's force
+model (``rmr.rmr_robot``: no fibre damping), or at CMC's tables (``--states cmc``). In SHRUG01 RMR frees
+the accelerations of plane_elv and axial_rot; here their actuators weigh 0 (free torques at the measured
+accelerations), the one difference left; ``eom_freed`` reports RMR's residual with those accelerations
+free. ``--audit`` (tools/rmr_opensim.py) evaluates RMR's answers in OpenSim as RMR's code does.
 """
 
 from __future__ import annotations
