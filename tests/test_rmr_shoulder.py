@@ -105,3 +105,25 @@ def test_rmr_answer_in_our_equation_is_its_opensim_residual(robot):
         predicted = -terms.basis.T @ speeds.forces_to_pin(maps.angular, q, tau)
         ours = qp.A[:n] @ y - qp.b[:n]
         assert np.abs(ours - predicted).max() < 0.01 * max(np.abs(predicted).max(), 0.1)  # measured 2e-3 N m
+
+
+@pytest.mark.parametrize("cone", [False, True], ids=["without_GH", "with_GH"])
+def test_rmr_closed_onto_our_problem_is_never_below_our_optimum(robot, cone):
+    """RMR's exact problem as a cone program (rmr_socp: RMR's weights, our constraints) has our optimum,
+    and RMR's answer closed onto it (close_answer) is feasible and never below it."""
+    from mcdm_pin.osim.rmr import close_answer, rmr_exact_objective, rmr_in_our_problem, rmr_socp
+    from mcdm_pin.problem import Context
+
+    rows, X = excerpt_answers(EXCERPT, cone)
+    ident = InverseDynamics(robot, rmr_problem(robot, cone))
+    for k, q, v, a in zip(ROWS, *rmr_states(robot, "abd01", ROWS)):
+        res = ident.solve(q, v, a)
+        terms = ident.evaluate(q, v, a)
+        qp = ident.problem.assemble(terms, Context(robot))
+        x = X[list(rows).index(k)]
+        optimum = rmr_exact_objective(rmr_socp(robot, terms, qp))
+        assert abs(res.objective - optimum) <= 1e-6 * optimum
+        check = rmr_in_our_problem(ident, terms, qp, x)
+        assert check["closed_eom_rel"] < 1e-8 and check["closed_bounds"] < 1e-8 and check["closed_cone_deg"] < 1e-6
+        assert rmr_exact_objective(close_answer(robot, terms, qp, x)) >= res.objective * (1 - 1e-7)
+        assert check["closed_change"] < 0.02  # measured 0.001-0.003 at these frames

@@ -38,8 +38,9 @@ sys.path.insert(0, str(REPO))
 
 from mcdm_pin.inverse_dynamics import InverseDynamics  # noqa: E402
 from mcdm_pin.osim.motion import read_table  # noqa: E402
-from mcdm_pin.osim.rmr import (GH, N_MUSCLES, RATE, SHRUG_FREED, frame_rows, frame_states,  # noqa: E402
-                               rmr_in_our_problem, rmr_objective, rmr_problem, rmr_robot, rmr_states)
+from mcdm_pin.osim.rmr import (GH, N_MUSCLES, RATE, SHRUG_FREED, close_answer, frame_rows,  # noqa: E402
+                               frame_states, rmr_exact_objective, rmr_in_our_problem, rmr_objective, rmr_problem,
+                               rmr_robot, rmr_socp, rmr_states)
 from mcdm_pin.problem import Context  # noqa: E402
 
 REFERENCE = REPO.parent / "shared" / "reference" / "rmr"  # RMR's files beside the clone (../shared)
@@ -83,6 +84,8 @@ def run(motion: str, cone: bool, every: int = 1, solver: str = "default", files=
         freed = SHRUG_FREED if motion.startswith("shrug") else ()
         theirs = rmr_in_our_problem(ident, terms, qp, X[row], freed) if row < len(X) else None
         ours_a = res.activation[robot.cables.muscle_index] if res.found else np.full(N_MUSCLES, np.nan)
+        if theirs is not None:
+            theirs["exact"] = exact_problem(robot, terms, qp, X[row], freed)
         frames.append(dict(row=int(row), status=res.status, objective=float(res.objective), time_s=dt,
                            angle_deg=float(res.interaction_angle_deg[robot.joint_names.index(GH)]),
                            rmr_objective=rmr_objective(robot, X[row]) if row < len(X) else float("nan"),
@@ -109,6 +112,36 @@ def summarise(frames) -> dict:
                 rmr_cone_broken=int(np.sum(rmr("cone_deg") > 1e-6)), rmr_cone_max_deg=float(rmr("cone_deg").max()),
                 rmr_angle_max=float(rmr("angle_deg").max()), ours_angle_max=float(arr("angle_deg").max()),
                 time_p50_ms=float(np.median(arr("time_s")) * 1e3), **closed_summary(ours, rmr))
+
+
+def exact_problem(robot, terms, qp, x, freed) -> dict:
+    """RMR's exact problem at this frame (``rmr.rmr_socp``: RMR's weights, in a shrug its freed
+    accelerations), solved by Clarabel, and RMR's answer closed onto it: the objectives (RMR's own)."""
+    z = rmr_socp(robot, terms, qp, None, freed)
+    c = close_answer(robot, terms, qp, x, freed)
+    return dict(optimum=rmr_exact_objective(z), closed=rmr_exact_objective(c), rmr=rmr_exact_objective(x),
+                change=float(np.linalg.norm(c - x[:len(c)])))
+
+
+def exact_table(results) -> str:
+    """RMR's exact problem (markdown): its optimum against RMR's answer closed onto it."""
+    lines = ["| motion | cone | frames | optimum mean J | RMR closed mean J | RMR raw mean J | distance p50/max | "
+             "optimum > RMR closed | (closed - optimum) / closed, p50 / max | ours - optimum, max |",
+             "|" + "---|" * 10]
+    for r in results:
+        fr = [f for f in r["frames"] if f["rmr"] is not None and f["status"] == "optimal"]
+        if not fr:
+            continue
+        ex = lambda key: np.array([f["rmr"]["exact"][key] for f in fr])  # noqa: E731
+        opt, closed, gap = ex("optimum"), ex("closed"), (ex("closed") - ex("optimum")) / ex("closed")
+        ours = np.array([f["objective"] for f in fr])
+        diff = "-" if r["motion"].startswith("shrug") else f"{np.nanmax(np.abs(ours - opt)):.1e}"
+        lines.append(f"| {r['motion'].upper()} | {'with GH' if r['cone'] else 'without'} | {len(fr)} | "
+                     f"{np.nanmean(opt):.4f} | {np.nanmean(closed):.4f} | {np.nanmean(ex('rmr')):.4f} | "
+                     f"{np.nanmedian(ex('change')):.3g} / {np.nanmax(ex('change')):.3g} | "
+                     f"{int(np.sum(opt > closed * (1 + 1e-6) + 1e-9))} | {np.nanmedian(gap):.2%} / {np.nanmax(gap):.2%} | "
+                     f"{diff} |")
+    return "\n".join(lines)
 
 
 FEASIBLE = 1e-6  # activation-bound excess (1) and cone excess (deg) below which a closed answer counts as feasible
@@ -277,6 +310,8 @@ def main(argv=None) -> int:
     print(table(results))
     print()
     print(closed_table(results))
+    print()
+    print(exact_table(results))
     if args.plot:
         plot(results[:2], args.plot)
     if args.json:

@@ -165,38 +165,63 @@ def rmr_in_our_problem(ident, terms, qp, xrow, freed=()) -> dict:
     return out
 
 
-def close_answer(robot, terms, qp, x) -> np.ndarray:
+RMR_W = np.r_[np.zeros(8), np.full(9, 10.0)]  # RMR's w on its controls (the model's actuator order)
+
+
+def close_answer(robot, terms, qp, x, freed=()) -> np.ndarray:
     """The point of our problem's feasible set nearest RMR's answer ``x`` (33 activations, 17 controls;
-    Euclidean distance in these units): our equation of motion exactly, activations in their bounds, and
-    our cones (second-order cones, Clarabel). Our optimum is never above its objective."""
+    Euclidean distance in these units): our equation of motion exactly (with the accelerations of the
+    coordinates ``freed`` left free, as RMR's shrug), activations in their bounds, and our cones
+    (:func:`rmr_socp`). Our optimum of the same problem is never above its objective."""
+    return rmr_socp(robot, terms, qp, x, freed)
+
+
+def rmr_exact_objective(x) -> float:
+    """RMR's own objective ``sum a^2 + sum w c^2`` with RMR's ``w`` (:data:`RMR_W`: 10 also on
+    plane_elv's and axial_rot's controls in a shrug, where ours weigh 0)."""
+    x = np.asarray(x, dtype=float)
+    return float(np.sum(x[:N_MUSCLES] ** 2) + np.sum(RMR_W * x[N_MUSCLES:N_MUSCLES + N_ACTUATORS] ** 2))
+
+
+def rmr_socp(robot, terms, qp, target=None, freed=()) -> np.ndarray:
+    """A second-order-cone program over RMR's unknowns ``z`` (33 activations, 17 controls) on our
+    problem's constraints at this state (Clarabel): our equation of motion (projected off the
+    directions ``basis^T M e_j`` of the ``freed`` coordinates' accelerations, which are then free),
+    the activation bounds and the cones. Minimises ``|z - target|^2``, or without ``target`` RMR's
+    own objective (:func:`rmr_exact_objective`): RMR's exact problem, with ``freed`` its shrug's."""
     import clarabel
     from scipy import sparse
 
     n, k = terms.tau.shape[0], robot.cables.muscle_index
     f_opt, _ = actuator_weights(robot)
     nz = N_MUSCLES + N_ACTUATORS
-    x = np.asarray(x, dtype=float)[:nz]
     D = np.zeros((qp.A.shape[1], nz))  # y = y0 + D z
     D[k, np.arange(N_MUSCLES)] = terms.muscles.gain
     D[robot.m + np.arange(N_ACTUATORS), N_MUSCLES + np.arange(N_ACTUATORS)] = f_opt
     y0 = _unknowns(robot, terms.muscles, np.zeros(nz))
+    E, e = qp.A[:n] @ D, qp.b[:n] - qp.A[:n] @ y0
+    if freed:
+        maps = robot.source.maps
+        C = terms.basis.T @ terms.M[:, [int(maps.coordinate_v[maps.coordinates.index(c)]) for c in freed]]
+        Q = np.linalg.svd(C)[0][:, len(freed):]  # the equation's directions the freed accelerations miss
+        E, e = Q.T @ E, Q.T @ e
     eye = np.eye(nz)[:N_MUSCLES]
-    rows = [qp.A[:n] @ D, -eye, eye]
-    rhs = [qp.b[:n] - qp.A[:n] @ y0, -terms.muscles.a_min, terms.muscles.a_max]
-    cones = [clarabel.ZeroConeT(n), clarabel.NonnegativeConeT(2 * N_MUSCLES)]
+    rows, rhs = [E, -eye, eye], [e, -terms.muscles.a_min, terms.muscles.a_max]
+    cones = [clarabel.ZeroConeT(E.shape[0]), clarabel.NonnegativeConeT(2 * N_MUSCLES)]
     for c in qp.cones:  # (tan(angle) axis.F, basis F) in the second-order cone, F = g + G y
         T = np.vstack([np.tan(np.radians(c.angle_deg)) * c.axis, c.basis])
         rows.append(-T @ c.G @ D)
         rhs.append(T @ (c.g + c.G @ y0))
         cones.append(clarabel.SecondOrderConeT(3))
+    if target is None:
+        P, q = 2.0 * np.diag(np.r_[np.ones(N_MUSCLES), RMR_W]), np.zeros(nz)
+    else:
+        P, q = 2.0 * np.eye(nz), -2.0 * np.asarray(target, dtype=float)[:nz]
     settings = clarabel.DefaultSettings()
     settings.verbose = False
-    solver = clarabel.DefaultSolver(sparse.csc_matrix(2.0 * np.eye(nz)), -2.0 * x,
-                                    sparse.csc_matrix(np.vstack(rows)), np.concatenate(rhs), cones, settings)
-    sol = solver.solve()
-    if str(sol.status) not in ("Solved", "AlmostSolved"):
-        return np.full(nz, np.nan)
-    return np.array(sol.x)
+    sol = clarabel.DefaultSolver(sparse.csc_matrix(P), q, sparse.csc_matrix(np.vstack(rows)),
+                                 np.concatenate(rhs), cones, settings).solve()
+    return np.array(sol.x) if str(sol.status) in ("Solved", "AlmostSolved") else np.full(nz, np.nan)
 
 
 def _unknowns(robot, st, x) -> np.ndarray:
