@@ -94,6 +94,9 @@ PICTURES = (
     Picture("glenohumeral_abduction", "docs/glenohumeral.md", (
         "python tools/glenohumeral_study.py",
     )),
+    Picture("rmr_closed_abd01", "docs/opensim.md", (  # needs RMR's folder in ../shared
+        "PYTHONPATH=. python tools/rmr_study.py --json out.json --plot docs/img/rmr_closed_abd01.png",
+    )),
     Picture("control_loop_cogiro", "docs/control.md", (
         "python benchmarks/control_loop.py --robots cogiro --duration 1 --plot docs/img/control_loop_cogiro.png",
     )),
@@ -103,6 +106,8 @@ PICTURES = (
 def argv(command: str) -> list[str]:
     """The command as a process's arguments: ``mcdm-pin`` and ``python`` are this interpreter."""
     words = shlex.split(command)
+    while "=" in words[0] and not words[0].startswith("-"):  # `PYTHONPATH=. python ...`: run() sets it
+        words = words[1:]
     if words[0] == "mcdm-pin":
         return [sys.executable, "-m", "mcdm_pin", *words[1:]]
     if words[0] == "python":
