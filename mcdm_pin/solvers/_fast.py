@@ -25,7 +25,9 @@ from ..model.kernels import gram_lower
 from ..tolerances import UNIQUE_PENALTY
 from ._ipm_linalg import dot
 from ._ipm import CROSSOVER, INFEASIBLE_CERT, ipm_solve
-from ._kkt import FOUND, active_set_run, chol_lower, cone_force, next_guess
+from ._kkt import FOUND, active_set_run, next_guess
+from ._kkt_eq import cone_force
+from ._kkt_linalg import chol_lower
 
 
 @njit(cache=True, nogil=True)
