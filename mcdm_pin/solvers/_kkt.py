@@ -92,73 +92,45 @@ def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdi
 
     Every violated condition is exchanged at once (a block pivot) while the number of violations
     falls (Judice and Pires allow a few steps without progress; here none: on the neck that wandered
-    off and cycled); then, or when a block pivot leaves a singular
-    system (too many cables fixed for the equation of motion), only the worst violation changes
-    (Judice and Pires' safeguard).
+    off and cycled); then, or when a block pivot leaves a singular system (too many cables fixed for
+    the equation of motion), only the worst violation changes (Judice and Pires' safeguard).
+    ``reg_rel``: the Tikhonov terms of :func:`._kkt_eq.eq_solve` relative to each variable's
+    curvature (:func:`tikhonov`).
 
-    ``reg_rel``: the Tikhonov terms of :func:`._kkt_eq.eq_solve` relative to each variable's curvature (:func:`tikhonov`).
-
-    Returns ``(code, f, mus, grad, state, cact, dirs, next_state, y, sets, solves)``: ``code`` :data:`FOUND` or a
-    key of :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers, ``grad`` the bounds'
-    multipliers (> 0 at a lower bound), ``y`` the equations' multipliers, ``(state, cact, dirs)`` the optimum's active set and ``next_state`` the guess for
-    the next instant (the bounds whose multiplier is not negligible, 1e-12 of the largest);
-    ``sets`` the active sets tried (pivots + 1), ``solves`` the linear KKT systems solved for them
-    (one per active set without cones, one per Newton step with them).
+    Returns ``(code, f, mus, grad, state, cact, dirs, next_state, y, sets, solves)``: ``code``
+    :data:`FOUND` or a key of :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers,
+    ``grad`` the bounds' multipliers (> 0 at a lower bound), ``y`` the equations' multipliers,
+    ``(state, cact, dirs)`` the optimum's active set and ``next_state`` the guess for the next
+    instant (the bounds whose multiplier is not negligible, 1e-12 of the largest); ``sets`` the active
+    sets tried (pivots + 1), ``solves`` the linear KKT systems solved for them (one per active set
+    without cones, one per Newton step with them).
     """
     n = H.shape[0]
     reg = tikhonov(H, g, ub, reg_rel)
-    neq = A.shape[0]
-    nc = G.shape[0]
-    state = state0.copy()
-    for i in range(n):
-        # a variable can only be held at a finite bound (the least-norm stage frees some bounds)
-        if (state[i] == 1 and not np.isfinite(lb[i])) or (state[i] == 2 and not np.isfinite(ub[i])):
-            state[i] = 0
+    neq, nc = A.shape[0], G.shape[0]
+    state = _held_at_finite(state0, lb, ub)
     cact = cact0.copy()
     cdir = cdir0.copy()
-    hist_s = np.zeros((max_pivots, n), dtype=np.int8)
-    hist_c = np.zeros((max_pivots, nc), dtype=np.bool_)
-    f = np.zeros(n)
-    y = np.zeros(neq)
-    mus = np.zeros(nc)
-    grad = np.zeros(n)
+    hist_s, hist_c = np.zeros((max_pivots, n), dtype=np.int8), np.zeros((max_pivots, nc), dtype=np.bool_)
+    f, y, mus, grad = np.zeros(n), np.zeros(neq), np.zeros(nc), np.zeros(n)
     # the last verified-but-not-optimal point, to step back to when a block pivot fails
     have_prev = False
-    prev_state = state.copy()
-    prev_cact = cact.copy()
-    prev_grad = np.zeros(n)
+    prev_state, prev_cact, prev_grad, prev_dirs, prev_cone_dir, prev_in, prev_out = _memory(state, cact, cdir)
     prev_kind, prev_idx = -1, -1
-    prev_dirs = cdir.copy()
-    prev_cone_dir = cdir.copy()
-    prev_in = np.zeros(nc, dtype=np.bool_)
-    prev_out = np.zeros(nc, dtype=np.bool_)
     last_was_block = False
     best_ninf = n + nc + 1
     blocks_ok = True
     solves = 0
     for it in range(max_pivots):
-        for h in range(it):
-            same = True
-            for i in range(n):
-                if hist_s[h, i] != state[i]:
-                    same = False
-                    break
-            if same:
-                for k in range(nc):
-                    if hist_c[h, k] != cact[k]:
-                        same = False
-                        break
-            if same:
-                return CYCLE, f, mus, grad, state, cact, cdir, state, y, it, solves
+        if _seen(hist_s, hist_c, it, state, cact):
+            return CYCLE, f, mus, grad, state, cact, cdir, state, y, it, solves
         hist_s[it] = state
         hist_c[it] = cact
         code, f, y, mus, dirs, ns, LU, perm, lu_ok = eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn,
                                                               cact, cdir, max_newton, step_tol, reg)
         solves += ns
         if code == DROP:  # a cone pulls the force inwards: it is not active
-            for k in range(nc):
-                if cact[k] and mus[k] < 0.0:
-                    cact[k] = False
+            _drop_pulling(cact, mus)
             continue
         if code == SINGULAR and have_prev and last_was_block:
             # the block pivot fixed too much: step back and change only the worst violation
@@ -180,62 +152,162 @@ def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdi
         if vcode != KKT_PIVOT:
             return 20 + vcode, f, mus, grad, state, cact, cdir, state, y, it + 1, solves
         have_prev = True
-        prev_state[:] = state
-        prev_cact[:] = cact
-        prev_grad[:] = grad
+        _remember(prev_state, prev_cact, prev_grad, prev_dirs, prev_cone_dir, prev_in, prev_out, state, cact, grad,
+                  dirs, cone_dir, cone_in, cone_out)
         prev_kind, prev_idx = worst_kind, worst_idx
-        prev_dirs[:] = dirs
-        prev_cone_dir[:] = cone_dir
-        prev_in[:] = cone_in
-        prev_out[:] = cone_out
-        ninf = 0
-        for i in range(n):
-            ninf += release[i] + to_lower[i] + to_upper[i]
-        for k in range(nc):
-            ninf += cone_in[k] + cone_out[k]
+        ninf = _violations(release, to_lower, to_upper, cone_in, cone_out)
         # a block pivot only while the number of violations keeps falling
         block = blocks_ok and ninf < best_ninf
         best_ninf = min(best_ninf, ninf)
-        new_state = state.copy()
-        n_in = 0
-        n_out = 0
-        n_act = 0
-        for k in range(nc):
-            n_in += cone_in[k]
-            n_out += cone_out[k]
-            n_act += cact[k]
-        for i in range(n):
-            if release[i]:
-                new_state[i] = 0
-            if to_lower[i]:
-                new_state[i] = 1
-            if to_upper[i]:
-                new_state[i] = 2
-        if block and n - np.count_nonzero(new_state) >= neq + n_act - n_out + n_in:
-            state = new_state
-            for k in range(nc):
-                if cone_out[k]:
-                    cact[k] = False
-                if cone_in[k]:
-                    cact[k] = True
-            last_was_block = True
-        else:
-            enter = -1
-            if (worst_kind == 1 or worst_kind == 2) and n - np.count_nonzero(state) == neq + n_act:
-                # at a vertex (as many free cables as equations): a dual simplex step, the fixed
-                # cable to free chosen by the ratio test (keeps the other multipliers' signs)
-                enter = _ratio_test(A, G, gc, ax, tn, cact, dirs, state, grad, worst_kind, worst_idx, n,
-                                    LU, perm, lu_ok)
-            if enter >= 0:
-                state = state.copy()
-                state[worst_idx] = worst_kind
-                state[enter] = 0
-            else:
-                state, cact = _single_pivot(state, cact, grad, worst_kind, worst_idx, cone_in, cone_out,
-                                            neq, nc, n)
-            last_was_block = False
+        state, cact, last_was_block = _pivot(block, A, G, gc, ax, tn, state, cact, dirs, grad, release, to_lower,
+                                             to_upper, cone_in, cone_out, worst_kind, worst_idx, LU, perm, lu_ok)
         cdir = _next_dirs(cone_in, cone_dir, dirs, nc)
     return PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state, y, max_pivots, solves
+
+
+@njit(cache=True, nogil=True)
+def _memory(state, cact, cdir):
+    """Room for the last verified-but-not-optimal active set (:func:`_remember`): ``(state, cact,
+    grad, dirs, cone_dir, cone_in, cone_out)``."""
+    n = state.shape[0]
+    nc = cact.shape[0]
+    return (state.copy(), cact.copy(), np.zeros(n), cdir.copy(), cdir.copy(), np.zeros(nc, dtype=np.bool_),
+            np.zeros(nc, dtype=np.bool_))
+
+
+@njit(cache=True, nogil=True)
+def _remember(prev_state, prev_cact, prev_grad, prev_dirs, prev_cone_dir, prev_in, prev_out, state, cact, grad,
+              dirs, cone_dir, cone_in, cone_out):
+    """Copy a verified-but-not-optimal active set and its exchanges into :func:`_memory`'s arrays."""
+    prev_state[:] = state
+    prev_cact[:] = cact
+    prev_grad[:] = grad
+    prev_dirs[:] = dirs
+    prev_cone_dir[:] = cone_dir
+    prev_in[:] = cone_in
+    prev_out[:] = cone_out
+
+
+@njit(cache=True, nogil=True)
+def _drop_pulling(cact, mus):
+    """Let go (in ``cact``) of the held cones whose multiplier is negative: they pull the force
+    inwards, so they are not active."""
+    for k in range(cact.shape[0]):
+        if cact[k] and mus[k] < 0.0:
+            cact[k] = False
+
+
+@njit(cache=True, nogil=True)
+def _pivot(block, A, G, gc, ax, tn, state, cact, dirs, grad, release, to_lower, to_upper, cone_in, cone_out,
+           worst_kind, worst_idx, LU, perm, lu_ok):
+    """The next active set: every violation exchanged at once when ``block`` and it leaves enough
+    cables free (:func:`_block_pivot`), else only the worst (:func:`_one_change`). ``(state, cact,
+    was_block)``."""
+    fits, new_state, new_cact = _block_pivot(state, cact, release, to_lower, to_upper, cone_in, cone_out,
+                                             A.shape[0])
+    if block and fits:
+        return new_state, new_cact, True
+    state, cact = _one_change(A, G, gc, ax, tn, cact, dirs, state, grad, worst_kind, worst_idx, cone_in, cone_out,
+                              LU, perm, lu_ok)
+    return state, cact, False
+
+
+@njit(cache=True, nogil=True)
+def _held_at_finite(state0, lb, ub):
+    """``state0`` with the variables it holds at an infinite bound freed: a variable can only be held
+    at a finite bound (the least-norm stage frees some bounds)."""
+    state = state0.copy()
+    for i in range(state.shape[0]):
+        if (state[i] == 1 and not np.isfinite(lb[i])) or (state[i] == 2 and not np.isfinite(ub[i])):
+            state[i] = 0
+    return state
+
+
+@njit(cache=True, nogil=True)
+def _seen(hist_s, hist_c, it, state, cact):
+    """Whether the active set ``(state, cact)`` is one of the first ``it`` tried (the pivoting
+    cycles)."""
+    for h in range(it):
+        same = True
+        for i in range(state.shape[0]):
+            if hist_s[h, i] != state[i]:
+                same = False
+                break
+        if same:
+            for k in range(cact.shape[0]):
+                if hist_c[h, k] != cact[k]:
+                    same = False
+                    break
+        if same:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def _violations(release, to_lower, to_upper, cone_in, cone_out):
+    """How many conditions :func:`._kkt_verify.verify` found violated."""
+    ninf = 0
+    for i in range(release.shape[0]):
+        ninf += release[i] + to_lower[i] + to_upper[i]
+    for k in range(cone_in.shape[0]):
+        ninf += cone_in[k] + cone_out[k]
+    return ninf
+
+
+@njit(cache=True, nogil=True)
+def _block_pivot(state, cact, release, to_lower, to_upper, cone_in, cone_out, neq):
+    """Every violation exchanged at once (a block pivot): ``(fits, state, cact)`` after it, ``fits``
+    false when too few cables would stay free for the equations and the held cones."""
+    n = state.shape[0]
+    nc = cact.shape[0]
+    new_state = state.copy()
+    n_in = 0
+    n_out = 0
+    n_act = 0
+    for k in range(nc):
+        n_in += cone_in[k]
+        n_out += cone_out[k]
+        n_act += cact[k]
+    for i in range(n):
+        if release[i]:
+            new_state[i] = 0
+        if to_lower[i]:
+            new_state[i] = 1
+        if to_upper[i]:
+            new_state[i] = 2
+    new_cact = cact.copy()
+    for k in range(nc):
+        if cone_out[k]:
+            new_cact[k] = False
+        if cone_in[k]:
+            new_cact[k] = True
+    return n - np.count_nonzero(new_state) >= neq + n_act - n_out + n_in, new_state, new_cact
+
+
+@njit(cache=True, nogil=True)
+def _one_change(A, G, gc, ax, tn, cact, dirs, state, grad, worst_kind, worst_idx, cone_in, cone_out, LU, perm,
+                lu_ok):
+    """Only the worst violation changes: ``(state, cact)`` after it. At a vertex (as many free cables
+    as equations and held cones) a cable reaching a bound swaps with the fixed cable the ratio test
+    picks (:func:`_ratio_test`); otherwise, or when none is eligible, :func:`_single_pivot`."""
+    n = state.shape[0]
+    neq = A.shape[0]
+    nc = G.shape[0]
+    n_act = 0
+    for k in range(nc):
+        n_act += cact[k]
+    enter = -1
+    if (worst_kind == 1 or worst_kind == 2) and n - np.count_nonzero(state) == neq + n_act:
+        # at a vertex (as many free cables as equations): a dual simplex step, the fixed
+        # cable to free chosen by the ratio test (keeps the other multipliers' signs)
+        enter = _ratio_test(A, G, gc, ax, tn, cact, dirs, state, grad, worst_kind, worst_idx, n,
+                            LU, perm, lu_ok)
+    if enter >= 0:
+        new_state = state.copy()
+        new_state[worst_idx] = worst_kind
+        new_state[enter] = 0
+        return new_state, cact
+    return _single_pivot(state, cact, grad, worst_kind, worst_idx, cone_in, cone_out, neq, nc, n)
 
 
 @njit(cache=True, nogil=True)
