@@ -10,7 +10,8 @@ with ``P = diag(d) + F^T F`` (``F`` of few rows: the interaction objective's wei
 Mehrotra's predictor-corrector with Nesterov-Todd scaling (Vandenberghe, "The CVXOPT linear and
 quadratic cone program solvers", 2010, sections 3-4; the same steps as CVXOPT's ``coneqp``).
 
-**The Newton system** is solved through the problem's structure (:mod:`._ipm_newton`, on rows made once per solve by :mod:`._ipm_structure`): with the
+**The Newton system** is solved through the problem's structure (:mod:`._ipm_newton`, on rows made
+once per solve by :mod:`._ipm_structure`; the direction and step: :mod:`._ipm_direction`): with the
 bounds' multipliers eliminated and the cones' kept, one symmetric positive definite system of size
 ``rank(F) + 3K + k_eq`` (the neck: 24 in case 1, 48 in case 2, 72 in case 3, or 48 with each cone
 folded into its joint's force rows) instead of a Cholesky
@@ -167,8 +168,8 @@ def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, fl
     for q in range(nl):
         hl[q] = -lb[il[q]]
     x, y, zu, zl, zc = np.empty(n), np.empty(A.shape[0]), np.empty(nu), np.empty(nl), np.empty((K, 3))
-    newton_step(-c, b, hu, hl, t.copy(), B, rf, Ct, cg, fold, Km, dinv, dbar, Fm, T, A, Vc, iu, il, ru, rl, refine, ws, x,
-            y, zu, zl, zc)
+    newton_step(-c, b, hu, hl, t.copy(), B, rf, Ct, cg, fold, Km, dinv, dbar, Fm, T, A, Vc, iu, il, ru, rl, refine, ws,
+                x, y, zu, zl, zc)
     su, sl, sc = -zu / wb, -zl / wb, -zc
     _shift_into_cones(su, sl, sc)
     _shift_into_cones(zu, zl, zc)
@@ -298,56 +299,23 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
     ``zbox`` (n,) the bounds' multipliers (> 0 at an upper bound), ``zc`` (K, 3) the cones' duals;
     after a crossover ``state, cact, mus, dirs`` the verified active set (else empty).
     """
-    n = c.shape[0]
-    K = T.shape[0]
+    n, K = c.shape[0], T.shape[0]
     iu, il = _bounded(lb, ub)
     deg = iu.shape[0] + il.shape[0] + K
     bscale, hscale, cscale = _scales(b, lb, ub, t, c, iu, il)
-    hmax = 0.0
-    for i in range(n):
-        hmax = max(hmax, H[i, i])
-    floor = 1e-12 * max(hmax, 1e-300) if hmax > 0.0 else 1e-12
+    floor = _diagonal_floor(H)
     B, rf, M0inv, Ct, cg, fold = structure(Fm, T, A, rank_tol)
-    # every work array of the iterations, made once (a small array costs ~0.1-0.3 us to make)
-    neq, nu, nl = A.shape[0], iu.shape[0], il.shape[0]
-    folded = fold[0].shape[0] > 0  # the cones folded into their groups: no rows of their own
-    p = rf + neq if folded else rf + 3 * K + neq
-    Km = np.empty((p, p))
-    Kb = np.empty((B.shape[0], B.shape[0])) if Ct.shape[0] and not folded else Km
-    fw = (Kb, Km, np.empty((rf, rf)), np.empty((Ct.shape[0], rf)), np.empty((2, B.shape[1])))
-    ws = (np.empty(n), np.empty(n), np.empty(p), np.empty(rf))  # r1, u, rhs, wq
-    x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor, fw,
-                                          ws)
-    Px, rx, ry, rzu, rzl, rzc = np.empty(n), np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty((K, 3))
-    fx = np.empty(Fm.shape[0])
-    dbar, dinv, ru, rl = np.empty(n), np.empty(n), np.empty(nu), np.empty(nl)
-    rb = (np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty(nu), np.empty(nl), np.empty((K, 3)))
-    D = (np.empty((2, n)), np.empty((2, neq)), np.empty((2, nu)), np.empty((2, nl)), np.empty((2, K, 3)),
-         np.empty((2, nu)), np.empty((2, nl)), np.empty((2, K, 3)))
-    DX, DY, DZU, DZL, DZC, DSU, DSL, DSC = D
-    Wc2 = np.zeros((K, 3, 3))
-    Winv = np.zeros((K, 3, 3))
-    Wm = np.zeros((K, 3, 3))
-    lamc = np.zeros((K, 3))
-    attempts = 0
-    end = MAX_ITER
-    last_state = np.full(n, -1, dtype=np.int8)
-    last_cact = np.zeros(K, dtype=np.bool_)
-    it = 0
+    fw, ws, res, bar, rb, D, Wc = _work_arrays(n, A.shape[0], iu.shape[0], il.shape[0], K, B, rf, Ct, fold, Fm)
+    rx, ry, rzu, rzl, rzc = res[1], res[2], res[3], res[4], res[5]
+    dbar, dinv, ru, rl = bar
+    Wm, Winv, Wc2, lamc = Wc
+    x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor,
+                                          fw, ws)
+    attempts, end, it = 0, MAX_ITER, 0
+    last_state, last_cact = np.full(n, -1, dtype=np.int8), np.zeros(K, dtype=np.bool_)  # the last guess tried
     for it in range(max_iter):
-        pobj = _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, Px, rx, ry, rzu,
-                          rzl, rzc, fx)
-        gap = _gap(su, zu, sl, zl, sc, zc)
-        mu = gap / max(deg, 1)
-        pres = _primal_res(ry, rzu, rzl, rzc, bscale, hscale)
-        dres = _inf_norm(rx) / cscale
-        # relative to the objective; an objective below eps counts as zero (then the gap must reach
-        # eps^2). (An absolute floor of 1e-3 (1e-13 / eps) stopped a scaled problem whose optimum is
-        # 3.5e-11 at a gap of 1e-13, 1e-3 above its optimum, after its crossover attempts had been
-        # spent at relative gaps of order one: tests/test_properties.py::
-        # test_ipm_reaches_the_optimum_where_the_scaled_objective_is_tiny; an optimum of exactly
-        # zero still stops: tests/test_solvers.py::test_ipm_stops_on_a_problem_whose_optimum_is_zero)
-        gap_rel = gap / max(eps, abs(pobj), abs(pobj - gap))
+        mu, gap_rel, pres, dres = _measures(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, res,
+                                            deg, bscale, hscale, cscale, eps)
         done = pres <= eps and dres <= eps and gap_rel <= eps
         if done or (crossover_gap > 0.0 and gap_rel <= crossover_gap and pres <= 1e3 * crossover_gap
                     and attempts < 8):
@@ -368,30 +336,16 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
         # ---- scaling and the factor of the Newton system
         cone_scalings(sc, zc, Wm, Winv, Wc2, lamc)
         barrier(d0, iu, il, su, zu, sl, zl, floor, dbar, dinv, ru, rl)
-        dropped = newton.factor(B, rf, M0inv, Ct, cg, fold, Wc2, dinv, 1e-14, fw[4], Kb, Km, fw[2], fw[3])
+        dropped = newton.factor(B, rf, M0inv, Ct, cg, fold, Wc2, dinv, 1e-14, fw[4], fw[0], fw[1], fw[2], fw[3])
         refine = 1 if dropped or gap_rel < 1e-5 else 0
-        j, a = direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, fold, Km, dinv, dbar, Fm, T,
-                          A, Wc2, Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D)
+        j, a = direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, fold, fw[1], dinv, dbar,
+                         Fm, T, A, Wc2, Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D)
         a = min(1.0, 0.99 * a)
         if not (a > 1e-14) or not np.isfinite(a):
             end = NUMERICAL
             break
         end = MAX_ITER
-        dx, dy, dzu, dzl, dzc, dsu, dsl, dsc = DX[j], DY[j], DZU[j], DZL[j], DZC[j], DSU[j], DSL[j], DSC[j]
-        for i in range(n):
-            x[i] += a * dx[i]
-        for i in range(neq):
-            y[i] += a * dy[i]
-        for q in range(nu):
-            su[q] += a * dsu[q]
-            zu[q] += a * dzu[q]
-        for q in range(nl):
-            sl[q] += a * dsl[q]
-            zl[q] += a * dzl[q]
-        for k in range(K):
-            for e in range(3):
-                sc[k, e] += a * dsc[k, e]
-                zc[k, e] += a * dzc[k, e]
+        _take_step(a, j, D, x, y, su, zu, sl, zl, sc, zc)
     # no convergence: one last crossover from where the iterations stopped
     if crossover_gap > 0.0:
         tried, code, f, mus, grad, st, ca, dirs, yy = _crossover(
@@ -401,6 +355,84 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
             return (CROSSOVER, f, yy, -grad, zc, it + 1, st, ca, mus, dirs)
     return (end, x, y, _zbox(zu, zl, iu, il, n), zc, it + 1, np.zeros(0, dtype=np.int8),
             np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _diagonal_floor(H):
+    """The smallest diagonal entry the barrier's ``1 / (d + z/s)`` may divide by: 1e-12 of ``H``'s
+    largest diagonal entry (1e-12 when that is not positive)."""
+    hmax = 0.0
+    for i in range(H.shape[0]):
+        hmax = max(hmax, H[i, i])
+    return 1e-12 * max(hmax, 1e-300) if hmax > 0.0 else 1e-12
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _work_arrays(n, neq, nu, nl, K, B, rf, Ct, fold, Fm):
+    """Every work array of the iterations, made once (a small array costs ~0.1-0.3 us to make):
+    ``(fw, ws, res, bar, rb, D, Wc)`` with the Newton system's factor work ``fw = (Kb, Km, KFF, G1,
+    work)`` and solve work ``ws = (r1, u, rhs, wq)``, the residuals ``res = (Px, rx, ry, rzu, rzl,
+    rzc, fx)``, the barrier's ``bar = (dbar, dinv, ru, rl)``, the right-hand sides ``rb``, two slots
+    of directions ``D = (DX, DY, DZU, DZL, DZC, DSU, DSL, DSC)`` and the cones' scalings ``Wc = (W,
+    W^-1, W^2, lambda)``."""
+    folded = fold[0].shape[0] > 0  # the cones folded into their groups: no rows of their own
+    p = rf + neq if folded else rf + 3 * K + neq
+    Km = np.empty((p, p))
+    Kb = np.empty((B.shape[0], B.shape[0])) if Ct.shape[0] and not folded else Km
+    fw = (Kb, Km, np.empty((rf, rf)), np.empty((Ct.shape[0], rf)), np.empty((2, B.shape[1])))
+    ws = (np.empty(n), np.empty(n), np.empty(p), np.empty(rf))
+    res = (np.empty(n), np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty((K, 3)), np.empty(Fm.shape[0]))
+    bar = (np.empty(n), np.empty(n), np.empty(nu), np.empty(nl))
+    rb = (np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty(nu), np.empty(nl), np.empty((K, 3)))
+    D = (np.empty((2, n)), np.empty((2, neq)), np.empty((2, nu)), np.empty((2, nl)), np.empty((2, K, 3)),
+         np.empty((2, nu)), np.empty((2, nl)), np.empty((2, K, 3)))
+    Wc = (np.zeros((K, 3, 3)), np.zeros((K, 3, 3)), np.zeros((K, 3, 3)), np.zeros((K, 3)))
+    return fw, ws, res, bar, rb, D, Wc
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _measures(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, res, deg, bscale, hscale, cscale,
+              eps):
+    """The iterate's residuals (into ``res``, :func:`_work_arrays`) and how far it is from optimal:
+    ``(mu, gap_rel, pres, dres)``, the mean complementarity, the relative gap and the primal and
+    dual relative residuals."""
+    Px, rx, ry, rzu, rzl, rzc, fx = res
+    pobj = _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, Px, rx, ry, rzu,
+                      rzl, rzc, fx)
+    gap = _gap(su, zu, sl, zl, sc, zc)
+    mu = gap / max(deg, 1)
+    pres = _primal_res(ry, rzu, rzl, rzc, bscale, hscale)
+    dres = _inf_norm(rx) / cscale
+    # relative to the objective; an objective below eps counts as zero (then the gap must reach
+    # eps^2). (An absolute floor of 1e-3 (1e-13 / eps) stopped a scaled problem whose optimum is
+    # 3.5e-11 at a gap of 1e-13, 1e-3 above its optimum, after its crossover attempts had been
+    # spent at relative gaps of order one: tests/test_properties.py::
+    # test_ipm_reaches_the_optimum_where_the_scaled_objective_is_tiny; an optimum of exactly
+    # zero still stops: tests/test_solvers.py::test_ipm_stops_on_a_problem_whose_optimum_is_zero)
+    gap_rel = gap / max(eps, abs(pobj), abs(pobj - gap))
+    return mu, gap_rel, pres, dres
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _take_step(a, j, D, x, y, su, zu, sl, zl, sc, zc):
+    """The iterate moved (in place) by ``a`` times the direction in slot ``j`` of ``D``
+    (:func:`._ipm_direction.direction`)."""
+    DX, DY, DZU, DZL, DZC, DSU, DSL, DSC = D
+    dx, dy, dzu, dzl, dzc, dsu, dsl, dsc = DX[j], DY[j], DZU[j], DZL[j], DZC[j], DSU[j], DSL[j], DSC[j]
+    for i in range(x.shape[0]):
+        x[i] += a * dx[i]
+    for i in range(y.shape[0]):
+        y[i] += a * dy[i]
+    for q in range(su.shape[0]):
+        su[q] += a * dsu[q]
+        zu[q] += a * dzu[q]
+    for q in range(sl.shape[0]):
+        sl[q] += a * dsl[q]
+        zl[q] += a * dzl[q]
+    for k in range(sc.shape[0]):
+        for e in range(3):
+            sc[k, e] += a * dsc[k, e]
+            zc[k, e] += a * dzc[k, e]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

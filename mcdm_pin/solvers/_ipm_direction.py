@@ -118,8 +118,8 @@ def barrier(d0, iu, il, su, zu, sl, zl, floor, dbar, dinv, ru, rl):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def newton_step(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx,
-            dy, dzu, dzl, dzc):
+def newton_step(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws,
+                dx, dy, dzu, dzl, dzc):
     """The scaled Newton system's ``(dx, dy, dzu, dzl, dzc)`` (in place) for the right-hand sides
     ``P dx + A^T dy + G^T dz = bx, A dx = by, G dx - W^2 dz = bz``: the bounds' ``dz`` eliminated
     (``dz = (z/s) (G dx - bz)``, ``ru, rl`` the bounds' ``z/s``), the cones' kept
@@ -196,7 +196,7 @@ def _cone_corrector(lamc, Winv, Wm, dsc, dzc, rzc, smu, bzc):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2,
-               Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D):
+              Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D):
     """Mehrotra's predictor-corrector direction with Gondzio's centrality correctors on the bounds
     (at most ``ncorr``, each kept only when it lengthens the step). ``rb = (bx, by, bzu, bzl, rsu,
     rsl)`` and ``bzc``: right-hand-side work arrays; ``D = (DX, DY, DZU, DZL, DZC, DSU, DSL, DSC)``
@@ -219,8 +219,8 @@ def direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, 
         for e in range(3):
             bzc[k, e] = -rzc[k, e] + sc[k, e]
     dx, dy, dzu, dzl, dzc, dsu, dsl, dsc = DX[0], DY[0], DZU[0], DZL[0], DZC[0], DSU[0], DSL[0], DSC[0]
-    newton_step(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx,
-            dy, dzu, dzl, dzc)
+    newton_step(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws,
+                dx, dy, dzu, dzl, dzc)
     _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc)
     a_p = min(1.0, _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc))
     gap_aff = _gap_at(su, dsu, zu, dzu, a_p) + _gap_at(sl, dsl, zl, dzl, a_p)
@@ -247,8 +247,8 @@ def direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, 
             bzl[q] = -rzl[q] - rsl[q] / zl[q]
         dx, dy, dzu, dzl, dzc = DX[cur], DY[cur], DZU[cur], DZL[cur], DZC[cur]
         dsu, dsl, dsc = DSU[cur], DSL[cur], DSC[cur]
-        newton_step(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws,
-                dx, dy, dzu, dzl, dzc)
+        newton_step(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine,
+                    ws, dx, dy, dzu, dzl, dzc)
         _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc)
         a = _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc)
         if not np.isfinite(_dot(dx, dx) + _dot(dy, dy)):

@@ -71,14 +71,13 @@ held at a gap of 1e-10).
 A dependent equation (``A`` losing rank: the 2-link arm at q = 0) shows as a pivot at rounding level
 and is dropped (its multiplier set to zero); :func:`refine` then corrects against the exact operators.
 Rounding level is judged row by row, against the row's own diagonal entry
-(:func:`._ipm_linalg.chol_inplace`), and only the equations' rows are ever dropped. Against the largest diagonal entry of the whole matrix
-(as before), the ``M_0^{-1}`` block decided: where ``F`` is nearly rank deficient (generated robots
-without a diagonal weight, ``d_0 = 0``: ``F``'s singular values from 4 down to 5e-7, or rounding
-noise of 1e-16 taken for a direction) its entries reach 1e12-1e36, and every equation's pivot (of
-order ``A (D + P)^{-1} A^T``) fell below 1e-14 of that: all equations dropped, ``dy = 0``, the
-primal residual never fell, and the step vanished after 6-7 iterations or the iterations ran out
-(9 of the 100 instants of the property test; Clarabel answered them).
-"""
+(:func:`._ipm_linalg.chol_inplace`), and only the equations' rows are ever dropped. Against the largest
+diagonal entry of the whole matrix (as before), the ``M_0^{-1}`` block decided: where ``F`` is nearly
+rank deficient (generated robots without a diagonal weight, ``d_0 = 0``: ``F``'s singular values from 4
+down to 5e-7, or rounding noise of 1e-16 taken for a direction) its entries reach 1e12-1e36, and every
+equation's pivot (of order ``A (D + P)^{-1} A^T``) fell below 1e-14 of that: all equations dropped, ``dy
+= 0``, the primal residual never fell, and the step vanished after 6-7 iterations or the iterations ran
+out (9 of the 100 instants of the property test; Clarabel answered them). """
 
 from __future__ import annotations
 
