@@ -110,7 +110,7 @@ def test_uncompiled_kernels_call_no_dispatcher(monkeypatch):
 
     for module in ("model.kernels", "solvers._fast", "solvers._kkt", "solvers._kkt_eq", "solvers._kkt_verify",
                    "solvers._kkt_linalg", "solvers._ipm", "solvers._ipm_direction", "solvers._ipm_newton",
-                   "solvers._ipm_structure", "solvers._ipm_linalg"):
+                   "solvers._ipm_structure", "solvers._ipm_linalg", "solvers._unique"):
         real = importlib.import_module(f"mcdm_pin.{module}")
         plain = jit.kernels(module)
         names = [k for k, v in vars(real).items()

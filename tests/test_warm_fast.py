@@ -93,7 +93,7 @@ def test_uniqueness_shortcut_only_claims_what_the_null_space_test_proves():
     definite Hessians (both say unique), Hessians singular on null(J) (neither may: the shortcut
     must fail) and Hessians whose only null directions the rows see (the shortcut decides)."""
     from mcdm_pin import tolerances as tol
-    from mcdm_pin.solvers import _fast
+    from mcdm_pin.solvers import _unique
 
     rng = np.random.default_rng(3)
     claimed = {True: 0, False: 0}
@@ -117,7 +117,7 @@ def test_uniqueness_shortcut_only_claims_what_the_null_space_test_proves():
         hscale = float(np.abs(H).max())
         thr = tol.UNIQUE_REL * hscale
         exact = _exact_unique(H, J, thr)
-        compiled = bool(_fast.definite_beyond(np.ascontiguousarray(H), np.ascontiguousarray(J), rows, thr, hscale))
+        compiled = bool(_unique.definite_beyond(np.ascontiguousarray(H), np.ascontiguousarray(J), rows, thr, hscale))
         reference = LN._definite_beyond(H, J, thr, hscale)
         assert compiled == reference
         if compiled:

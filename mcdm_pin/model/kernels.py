@@ -246,7 +246,7 @@ def cone_batch(RT, u, R_socket, axes, index, socket):
 def gram_lower(X, rows, cols, out):
     """Add the lower triangle (diagonal included) of ``X[:rows, :cols]^T X[:rows, :cols]`` to ``out``
     (cols x cols), row by row, skipping zero entries: the Gram matrices of the interaction objective
-    (:func:`interaction_quadratic`), the uniqueness test (:func:`mcdm_pin.solvers._fast.unique_test`)
+    (:func:`interaction_quadratic`), the uniqueness test (:func:`mcdm_pin.solvers._unique.unique_test`)
     and the interior-point method's reduced system (:func:`mcdm_pin.solvers._ipm_structure.structure`)."""
     for t in range(rows):
         Xt = X[t]

@@ -246,8 +246,8 @@ def chol_lower(M, n, floor):
     """The Cholesky factor of ``M[:n, :n]``'s lower triangle, in place (column by column): ``(True,
     its smallest pivot)``, or ``(False, 0)`` at the first pivot (before its square root) at or below
     ``floor`` (then ``M`` is partly overwritten). Shared by the small factors of the active-set and
-    uniqueness tests (:func:`determined_solve`, :func:`mcdm_pin.solvers._fast.unique_test`,
-    :func:`mcdm_pin.solvers._fast.definite_beyond`)."""
+    uniqueness tests (:func:`determined_solve`, :func:`mcdm_pin.solvers._unique.unique_test`,
+    :func:`mcdm_pin.solvers._unique.definite_beyond`)."""
     dmin = np.inf
     for j in range(n):
         acc = M[j, j]
