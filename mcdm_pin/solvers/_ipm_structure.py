@@ -110,8 +110,6 @@ def structure(Fm, T, A, rank_tol):
     (``cg`` empty)."""
     r = Fm.shape[0]
     K = T.shape[0]
-    n = A.shape[1]
-    neq = A.shape[0]
     res = np.empty(r)
     big = 0.0
     for i in range(r):
@@ -127,76 +125,13 @@ def structure(Fm, T, A, rank_tol):
         rf = r
         inside = K > 0
     else:
-        W = Fm.copy()
         cg = np.empty(0, dtype=np.int64)
-        C = np.zeros((r, r))
-        used = np.zeros(r, dtype=np.bool_)
-        Q = np.empty((r, n))
-        rf = 0
-        for _ in range(r):
-            best, piv = 0.0, -1
-            for i in range(r):
-                if not used[i] and res[i] > keep and res[i] > best:
-                    best, piv = res[i], i
-            if piv < 0:
-                break
-            used[piv] = True
-            Wp = W[piv]
-            nrm = np.sqrt(dot(Wp, Wp))
-            q = Q[rf]
-            for t in range(n):
-                q[t] = Wp[t] / nrm
-            C[piv, rf] = nrm
-            for i in range(r):
-                if not used[i] and res[i] > 0.0:
-                    Wi = W[i]
-                    cc = dot(Wi, q)
-                    C[i, rf] = cc
-                    acc = 0.0
-                    for t in range(n):  # the projection removed and the rest's norm in one pass
-                        w = Wi[t] - cc * q[t]
-                        Wi[t] = w
-                        acc += w * w
-                    res[i] = acc
-            rf += 1
+        Q, C, rf = _global_basis(Fm, res, keep)
         # the cones' rows in the basis Q, when they lie in its span (the neck: each cone's rows are a
         # rotation of its joint's force rows): then only [Q; A] enters the products with D^-1
-        Ct = np.empty((3 * K, rf))
-        inside = K > 0
-        rrow = np.empty(n)
-        for k in range(K):
-            for e in range(3):
-                if not _in_span(T[k, e], Q, 0, rf, Ct[3 * k + e], rrow, rank_tol):
-                    inside = False
-        if not inside:
-            Ct = np.empty((0, rf))
-    nB = rf + neq if inside else rf + 3 * K + neq
-    # columns padded with zeros to a multiple of 8: the Gram products' loops then have no remainder
-    B = np.zeros((nB, (n + 7) // 8 * 8))
-    for i in range(rf):
-        B[i, :n] = Q[i]
-    o = rf
-    if not inside:
-        for k in range(K):
-            for e in range(3):
-                B[rf + 3 * k + e, :n] = T[k, e]
-        o = rf + 3 * K
-    for a in range(neq):
-        B[o + a, :n] = A[a]
-    M0inv = np.zeros((rf, rf))
-    if ok:  # C block diagonal: so are M0 and its inverse (eight 3 x 3 blocks on the neck, not 24 x 24)
-        X = np.empty((3, 3))
-        for j in range(rf // 3):
-            o = 3 * j
-            # (C_j^T C_j)^-1 = C_j^-1 C_j^-T: no temporaries, and C_j's condition, not its square
-            if inv3(C[o:o + 3, o:o + 3], X) != 0.0:
-                for a in range(3):
-                    for b in range(3):
-                        M0inv[o + a, o + b] = X[a, 0] * X[b, 0] + X[a, 1] * X[b, 1] + X[a, 2] * X[b, 2]
-            else:
-                _gram_inverse(C[o:o + 3, o:o + 3], 3, 3, M0inv[o:o + 3, o:o + 3])
-    else:
-        _gram_inverse(C, r, rf, M0inv)
+        Ct, inside = _cones_in_basis(T, Q, rf, rank_tol)
+    B = _stacked_rows(Q, T, A, rf, inside)
+    M0inv = _m0_inverse(C, rf, ok)
     fold = _fold_blocks(ok and inside, rf, K, M0inv, Ct, cg)
     return B, rf, M0inv, Ct, cg, fold
 
@@ -250,3 +185,107 @@ def _gram_inverse(C, rows, cols, out):
     for a in range(cols):
         for b in range(a):
             out[b, a] = out[a, b]
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def _global_basis(Fm, res, keep):
+    """Modified Gram-Schmidt with pivoting on the rows of ``Fm`` (``res``: their squared norms, then
+    what is left of them; a row left with ``keep`` or less counts as dependent): ``(Q, C, rf)`` with
+    ``Fm = C Q[:rf]``, ``Q``'s first ``rf`` rows orthonormal."""
+    r = Fm.shape[0]
+    n = Fm.shape[1]
+    W = Fm.copy()
+    C = np.zeros((r, r))
+    used = np.zeros(r, dtype=np.bool_)
+    Q = np.empty((r, n))
+    rf = 0
+    for _ in range(r):
+        best, piv = 0.0, -1
+        for i in range(r):
+            if not used[i] and res[i] > keep and res[i] > best:
+                best, piv = res[i], i
+        if piv < 0:
+            break
+        used[piv] = True
+        Wp = W[piv]
+        nrm = np.sqrt(dot(Wp, Wp))
+        q = Q[rf]
+        for t in range(n):
+            q[t] = Wp[t] / nrm
+        C[piv, rf] = nrm
+        for i in range(r):
+            if not used[i] and res[i] > 0.0:
+                Wi = W[i]
+                cc = dot(Wi, q)
+                C[i, rf] = cc
+                acc = 0.0
+                for t in range(n):  # the projection removed and the rest's norm in one pass
+                    w = Wi[t] - cc * q[t]
+                    Wi[t] = w
+                    acc += w * w
+                res[i] = acc
+        rf += 1
+    return Q, C, rf
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def _cones_in_basis(T, Q, rf, rank_tol):
+    """The cones' rows in the basis ``Q[:rf]``, ``T = Ct Q``, when every one lies in its span:
+    ``(Ct, True)``; else ``(Ct with no rows, False)``."""
+    K = T.shape[0]
+    n = T.shape[2]
+    Ct = np.empty((3 * K, rf))
+    inside = K > 0
+    rrow = np.empty(n)
+    for k in range(K):
+        for e in range(3):
+            if not _in_span(T[k, e], Q, 0, rf, Ct[3 * k + e], rrow, rank_tol):
+                inside = False
+    if not inside:
+        Ct = np.empty((0, rf))
+    return Ct, inside
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def _stacked_rows(Q, T, A, rf, inside):
+    """``B = [Q; T_1; ...; T_K; A]`` (without the cones' rows when they lie ``inside`` the basis),
+    its columns padded with zeros to a multiple of 8: the Gram products' loops then have no
+    remainder."""
+    K = T.shape[0]
+    n = A.shape[1]
+    neq = A.shape[0]
+    nB = rf + neq if inside else rf + 3 * K + neq
+    B = np.zeros((nB, (n + 7) // 8 * 8))
+    for i in range(rf):
+        B[i, :n] = Q[i]
+    o = rf
+    if not inside:
+        for k in range(K):
+            for e in range(3):
+                B[rf + 3 * k + e, :n] = T[k, e]
+        o = rf + 3 * K
+    for a in range(neq):
+        B[o + a, :n] = A[a]
+    return B
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def _m0_inverse(C, rf, ok):
+    """``M_0^{-1} = (C^T C)^{-1}`` (``rf x rf``); with the block basis (``ok``: :func:`_grouped`)
+    ``C``, and so ``M_0`` and its inverse, are block diagonal (3 x 3 blocks)."""
+    r = C.shape[0]
+    M0inv = np.zeros((rf, rf))
+    if ok:  # C block diagonal: so are M0 and its inverse (eight 3 x 3 blocks on the neck, not 24 x 24)
+        X = np.empty((3, 3))
+        for j in range(rf // 3):
+            o = 3 * j
+            # (C_j^T C_j)^-1 = C_j^-1 C_j^-T: no temporaries, and C_j's condition, not its square
+            if inv3(C[o:o + 3, o:o + 3], X) != 0.0:
+                for a in range(3):
+                    for b in range(3):
+                        M0inv[o + a, o + b] = X[a, 0] * X[b, 0] + X[a, 1] * X[b, 1] + X[a, 2] * X[b, 2]
+            else:
+                _gram_inverse(C[o:o + 3, o:o + 3], 3, 3, M0inv[o:o + 3, o:o + 3])
+    else:
+        _gram_inverse(C, r, rf, M0inv)
+    return M0inv
