@@ -8,7 +8,7 @@ captured as the arguments of ``_fast.ipm_answer``; then, per case, the median ov
 same call with the crossover switched off and the iteration limit at the count the whole call took:
 per iteration, that time over the count) and the difference (the crossover and the answer's duals,
 next guess and uniqueness test). Last, the LU factor of the crossover's non-square KKT systems
-(``_kkt._lu_factor``) on random dense matrices of 49 and 76 rows. ``--objective-scale G ...``: also
+(``_kkt_linalg.lu_factor``) on random dense matrices of 49 and 76 rows. ``--objective-scale G ...``: also
 the mean iteration count with the objective multiplied by each ``G`` (the start is not scale
 invariant). Default robot: the CASPR neck with
 the paper's weights and 15 deg cones (``_common.neck_case_options``), trajectory ``roll``. The
@@ -49,7 +49,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
 
     from mcdm_pin import InverseDynamics, Robot, jit
-    from mcdm_pin.solvers import _fast, _kkt
+    from mcdm_pin.solvers import _fast, _kkt_linalg
     from mcdm_pin.solvers import ipm as ipm_mod
     from mcdm_pin.trajectory import load_trajectory
     from _common import neck_case_options
@@ -98,7 +98,7 @@ def main(argv=None) -> int:
     rng = np.random.default_rng(0)
     for n in (49, 76):
         M = rng.standard_normal((n, n))
-        print(f"LU factor {n} x {n}: {_per_call(_kkt._lu_factor, (M,), 2000):.1f} us")
+        print(f"LU factor {n} x {n}: {_per_call(_kkt_linalg.lu_factor, (M,), 2000):.1f} us")
     return 0
 
 

@@ -166,7 +166,9 @@ def test_stamp_covers_every_kernel_source(tmp_path, monkeypatch):
     from mcdm_pin import jit
 
     names = {p.name for p in jit.kernel_sources()}
-    assert {"kernels.py", "_kkt.py", "_fast.py", "_ipm.py", "_ipm_linalg.py", "tolerances.py"} <= names
+    assert {"kernels.py", "_kkt.py", "_kkt_eq.py", "_kkt_verify.py", "_kkt_linalg.py", "_fast.py", "_ipm.py",
+            "_ipm_direction.py", "_ipm_newton.py", "_ipm_structure.py", "_ipm_linalg.py", "_unique.py",
+            "tolerances.py"} <= names
     assert "jit.py" not in names
     files = []
     for p in jit.kernel_sources():

@@ -108,7 +108,9 @@ def test_uncompiled_kernels_call_no_dispatcher(monkeypatch):
     assert not jit.prepare(policy="off") and not jit.compiled()
     import importlib
 
-    for module in ("model.kernels", "solvers._fast", "solvers._kkt", "solvers._ipm", "solvers._ipm_linalg"):
+    for module in ("model.kernels", "solvers._fast", "solvers._kkt", "solvers._kkt_eq", "solvers._kkt_verify",
+                   "solvers._kkt_linalg", "solvers._ipm", "solvers._ipm_direction", "solvers._ipm_newton",
+                   "solvers._ipm_structure", "solvers._ipm_linalg", "solvers._unique"):
         real = importlib.import_module(f"mcdm_pin.{module}")
         plain = jit.kernels(module)
         names = [k for k, v in vars(real).items()

@@ -16,7 +16,7 @@ from mcdm_pin import InverseDynamics, Robot, jit
 from mcdm_pin import inverse_dynamics as ID
 from mcdm_pin import scaling as SC
 from mcdm_pin.problem import Context
-from mcdm_pin.solvers import _kkt
+from mcdm_pin.solvers import _kkt, _kkt_linalg
 from mcdm_pin.solvers import least_norm as LN
 from mcdm_pin.trajectory import load_trajectory
 
@@ -93,7 +93,7 @@ def test_uniqueness_shortcut_only_claims_what_the_null_space_test_proves():
     definite Hessians (both say unique), Hessians singular on null(J) (neither may: the shortcut
     must fail) and Hessians whose only null directions the rows see (the shortcut decides)."""
     from mcdm_pin import tolerances as tol
-    from mcdm_pin.solvers import _fast
+    from mcdm_pin.solvers import _unique
 
     rng = np.random.default_rng(3)
     claimed = {True: 0, False: 0}
@@ -117,7 +117,7 @@ def test_uniqueness_shortcut_only_claims_what_the_null_space_test_proves():
         hscale = float(np.abs(H).max())
         thr = tol.UNIQUE_REL * hscale
         exact = _exact_unique(H, J, thr)
-        compiled = bool(_fast.definite_beyond(np.ascontiguousarray(H), np.ascontiguousarray(J), rows, thr, hscale))
+        compiled = bool(_unique.definite_beyond(np.ascontiguousarray(H), np.ascontiguousarray(J), rows, thr, hscale))
         reference = LN._definite_beyond(H, J, thr, hscale)
         assert compiled == reference
         if compiled:
@@ -158,12 +158,12 @@ def test_vertex_solve_is_the_kkt_systems_solution():
         K = np.block([[H, R.T], [R, np.zeros((nf, nf))]])
         rhs = rng.standard_normal(2 * nf)
         want = np.linalg.solve(K, rhs)
-        got = _kkt._vertex_solve(K, rhs, nf, True)
+        got = _kkt_linalg.vertex_solve(K, rhs, nf, True)
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-9 * np.abs(want).max())
     # a singular R: the fallback (least squares) gives NaN for an inconsistent system, as before
     K = np.zeros((4, 4))
     K[:2, :2] = np.eye(2)
-    got = _kkt._vertex_solve(K, np.ones(4), 2, True)
+    got = _kkt_linalg.vertex_solve(K, np.ones(4), 2, True)
     assert not np.all(np.isfinite(got))
 
 
@@ -300,7 +300,7 @@ def test_ratio_test_with_the_vertex_factors_is_the_fresh_ones():
         state[(state != 0) & (rng.random(n) < 0.3)] = 2
         free = np.flatnonzero(state == 0)
         grad = rng.standard_normal(n)
-        LU, perm, ok = _kkt._lu_factor(np.ascontiguousarray(A[:, free]))
+        LU, perm, ok = _kkt_linalg.lu_factor(np.ascontiguousarray(A[:, free]))
         assert ok
         G, z3 = np.zeros((0, 3, n)), np.zeros((0, 3))
         for kind in (1, 2):
@@ -369,11 +369,12 @@ def test_ipm_answer_is_the_numpy_ones(instants):
 
 def test_folded_cones_give_the_expanded_systems_directions(instants):
     """The interior-point method's Newton directions with the neck's cones folded into their joints'
-    force groups (:func:`mcdm_pin.solvers._ipm_linalg._fold_factor`: a 48 x 48 system instead of
+    force groups (:func:`mcdm_pin.solvers._ipm_newton._fold_factor`: a 48 x 48 system instead of
     72 x 72) equal those of the expanded system, to 1e-9 relative, for scalings from far off the
     cones (W^2 of order one) to a cone held at a gap of 1e-10 (W^2 of order 1e-10 in one direction)."""
-    from mcdm_pin.solvers import _fast, _ipm
-    from mcdm_pin.solvers import _ipm_linalg as la
+    from mcdm_pin.solvers import _fast, _ipm, _ipm_direction
+    from mcdm_pin.solvers import _ipm_newton as la
+    from mcdm_pin.solvers._ipm_structure import structure
     from mcdm_pin.solvers.ipm import ipm_arguments
 
     rng = np.random.default_rng(7)
@@ -384,7 +385,7 @@ def test_folded_cones_give_the_expanded_systems_directions(instants):
         args = ipm_arguments(qp)
         _, d0, F, _, _, A, _, _, _, G, gc, ax, _, _, cosr, basis = args[:16]
         T, t = _fast.cone_rows(G, gc, ax, cosr, basis)
-        B, rf, M0inv, Ct, cg, fold = la.structure(F, T, A, args[22])
+        B, rf, M0inv, Ct, cg, fold = structure(F, T, A, args[22])
         assert fold[0].shape[0] == 8  # every cone folded into its joint's group
         none = (np.empty((0, 3, 3)), np.empty(0, dtype=np.int64), np.empty((0, 3, 3)), np.empty((0, 3, 3)))
         n, K, neq = len(d0), 8, A.shape[0]
@@ -394,7 +395,7 @@ def test_folded_cones_give_the_expanded_systems_directions(instants):
             for k in range(K):
                 s = np.array([1.0, *(rng.uniform(-1, 1, 2) * (1 - gap) / np.sqrt(2))])
                 z = np.array([1.0, *(-s[1:])]) * rng.uniform(0.5, 2.0)
-                _ipm._soc_scaling(s, z, np.zeros((3, 3)), np.zeros((3, 3)), W2[k], np.zeros(3))
+                _ipm_direction._soc_scaling(s, z, np.zeros((3, 3)), np.zeros((3, 3)), W2[k], np.zeros(3))
             dinv = 1.0 / rng.uniform(1e-3, 1e3, n)
             r1, r2, r3 = rng.standard_normal(n), rng.standard_normal(neq), rng.standard_normal((K, 3))
             out = []

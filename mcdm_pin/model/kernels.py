@@ -44,14 +44,41 @@ def cable_terms(oM, Jt, point_local, point_key, seg_a, seg_b, seg_cable, seg_act
     """
     oR = oM[:, :3, :3]
     op = oM[:, :3, 3]
-    n_pts = point_local.shape[0]
     nv = Jt.shape[0]
+    X = _world_points(oR, op, point_local, point_key)
+    seg_len, lengths, L, Ww, bad = _segment_terms(X, Jt, point_key, seg_a, seg_b, seg_cable, seg_active, seg_scale,
+                                                  v_ptr, v_idx, a_ptr, a_idx, n_cables, n_joints)
+    RT = _joint_wrenches(Ww, oR, op, child_key)
+    R_socket = _socket_rotations(oR, parent_key, child_key, R_sp)
+    if bad < 0:
+        for c in range(n_cables):
+            for v in range(nv):
+                if not np.isfinite(L[c, v]):
+                    bad = -2
+    return X, seg_len, lengths, L, RT, R_socket, bad
+
+
+@njit(cache=True, nogil=True)
+def _world_points(oR, op, point_local, point_key):
+    """The route points in the world frame (P, 3), from their bodies' placements ``(oR, op)``."""
+    n_pts = point_local.shape[0]
     X = np.empty((n_pts, 3))
     for p in range(n_pts):
         k = point_key[p]
         for i in range(3):
             X[p, i] = (oR[k, i, 0] * point_local[p, 0] + oR[k, i, 1] * point_local[p, 1]
                        + oR[k, i, 2] * point_local[p, 2] + op[k, i])
+    return X
+
+
+@njit(cache=True, nogil=True)
+def _segment_terms(X, Jt, point_key, seg_a, seg_b, seg_cable, seg_active, seg_scale, v_ptr, v_idx, a_ptr, a_idx,
+                   n_cables, n_joints):
+    """Every segment's length and its ends' unit forces summed per cable (:func:`cable_terms`'
+    arguments): ``(seg_len, lengths, L, Ww, bad)`` with ``Ww`` (Jn, 6, m) the cables' wrenches on
+    each physical joint's subtree, in the world frame about the origin, and ``bad`` the first
+    spanning segment of zero length (-1 when none)."""
+    nv = Jt.shape[0]
     n_seg = seg_a.shape[0]
     seg_len = np.empty(n_seg)
     lengths = np.zeros(n_cables)
@@ -100,6 +127,14 @@ def cable_terms(oM, Jt, point_local, point_key, seg_a, seg_b, seg_cable, seg_act
                 Wj[3, c] += w3
                 Wj[4, c] += w4
                 Wj[5, c] += w5
+    return seg_len, lengths, L, Ww, bad
+
+
+@njit(cache=True, nogil=True)
+def _joint_wrenches(Ww, oR, op, child_key):
+    """The world wrenches ``Ww`` (overwritten: their moments moved to the joint points) in each
+    joint's child frame at the joint point, ``RT`` (Jn, 6, m)."""
+    n_joints, n_cables = Ww.shape[0], Ww.shape[2]
     # to each joint's child frame at the joint point: F = R^T F_w, M = R^T (M_w - t x F_w)
     RT = np.empty((n_joints, 6, n_cables))
     for j in range(n_joints):
@@ -117,7 +152,13 @@ def cable_terms(oM, Jt, point_local, point_key, seg_a, seg_b, seg_cable, seg_act
             for c in range(n_cables):
                 Rf[c] = r0 * F0[c] + r1 * F1[c] + r2 * F2[c]
                 Rm[c] = r0 * M0[c] + r1 * M1[c] + r2 * M2[c]
-    # R_socket = (R_parent R_sp)^T R_child
+    return RT
+
+
+@njit(cache=True, nogil=True)
+def _socket_rotations(oR, parent_key, child_key, R_sp):
+    """Each joint's rotation child frame -> socket frame (Jn, 3, 3): ``(R_parent R_sp)^T R_child``."""
+    n_joints = child_key.shape[0]
     R_socket = np.empty((n_joints, 3, 3))
     for j in range(n_joints):
         kp, kc = parent_key[j], child_key[j]
@@ -129,12 +170,7 @@ def cable_terms(oM, Jt, point_local, point_key, seg_a, seg_b, seg_cable, seg_act
                     rps = oR[kp, t, 0] * R_sp[j, 0, a] + oR[kp, t, 1] * R_sp[j, 1, a] + oR[kp, t, 2] * R_sp[j, 2, a]
                     acc += rps * oR[kc, t, b]
                 R_socket[j, a, b] = acc
-    if bad < 0:
-        for c in range(n_cables):
-            for v in range(nv):
-                if not np.isfinite(L[c, v]):
-                    bad = -2
-    return X, seg_len, lengths, L, RT, R_socket, bad
+    return R_socket
 
 
 @njit(cache=True, nogil=True)
@@ -246,8 +282,8 @@ def cone_batch(RT, u, R_socket, axes, index, socket):
 def gram_lower(X, rows, cols, out):
     """Add the lower triangle (diagonal included) of ``X[:rows, :cols]^T X[:rows, :cols]`` to ``out``
     (cols x cols), row by row, skipping zero entries: the Gram matrices of the interaction objective
-    (:func:`interaction_quadratic`), the uniqueness test (:func:`mcdm_pin.solvers._fast.unique_test`)
-    and the interior-point method's reduced system (:func:`mcdm_pin.solvers._ipm_linalg.structure`)."""
+    (:func:`interaction_quadratic`), the uniqueness test (:func:`mcdm_pin.solvers._unique.unique_test`)
+    and the interior-point method's reduced system (:func:`mcdm_pin.solvers._ipm_structure.structure`)."""
     for t in range(rows):
         Xt = X[t]
         for a in range(cols):

@@ -10,7 +10,8 @@ with ``P = diag(d) + F^T F`` (``F`` of few rows: the interaction objective's wei
 Mehrotra's predictor-corrector with Nesterov-Todd scaling (Vandenberghe, "The CVXOPT linear and
 quadratic cone program solvers", 2010, sections 3-4; the same steps as CVXOPT's ``coneqp``).
 
-**The Newton system** is solved through the problem's structure (:mod:`._ipm_linalg`): with the
+**The Newton system** is solved through the problem's structure (:mod:`._ipm_newton`, on rows made
+once per solve by :mod:`._ipm_structure`; the direction and step: :mod:`._ipm_direction`): with the
 bounds' multipliers eliminated and the cones' kept, one symmetric positive definite system of size
 ``rank(F) + 3K + k_eq`` (the neck: 24 in case 1, 48 in case 2, 72 in case 3, or 48 with each cone
 folded into its joint's force rows) instead of a Cholesky
@@ -58,66 +59,15 @@ from ..jit import njit
 
 from ..tolerances import IPM_START_BOX_WEIGHT
 from . import _ipm_linalg as la
+from . import _ipm_newton as newton
+from ._ipm_direction import barrier, cone_scalings, direction, newton_step
+from ._ipm_structure import structure
 from . import _kkt
 
 # return codes
 SOLVED, CROSSOVER, INFEASIBLE_CERT, MAX_ITER, NUMERICAL = 0, 1, 2, 3, 4
 
-_FM = {"reassoc", "contract"}  # reassociation lets numba vectorise the dot products; no NaN/inf flags
 _dot = la.dot
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _soc_scaling(s, z, W, Winv, W2, lam):
-    """Nesterov-Todd scaling of one 3-dimensional second-order cone, in place: ``W`` and ``W^-1`` (3x3,
-    symmetric) with ``W z = W^-1 s``, ``W2 = W W`` and ``lambda = W z``."""
-    ns = np.sqrt(max(s[0] * s[0] - s[1] * s[1] - s[2] * s[2], 1e-300))
-    nz = np.sqrt(max(z[0] * z[0] - z[1] * z[1] - z[2] * z[2], 1e-300))
-    sb0, sb1, sb2 = s[0] / ns, s[1] / ns, s[2] / ns
-    zb0, zb1, zb2 = z[0] / nz, z[1] / nz, z[2] / nz
-    gam = np.sqrt(max(0.5 * (1.0 + sb0 * zb0 + sb1 * zb1 + sb2 * zb2), 1e-300))
-    w0 = (sb0 + zb0) / (2.0 * gam)
-    w1 = (sb1 - zb1) / (2.0 * gam)
-    w2 = (sb2 - zb2) / (2.0 * gam)
-    eta = np.sqrt(ns / nz)
-    # v with v^T J v = 1 and W = eta (2 v v^T - J): v = (w + e) / sqrt(2 (w0 + 1))
-    nv = np.sqrt(2.0 * (w0 + 1.0))
-    v = ((w0 + 1.0) / nv, w1 / nv, w2 / nv)
-    J = (1.0, -1.0, -1.0)
-    for a in range(3):
-        for b in range(3):
-            jab = J[a] if a == b else 0.0
-            W[a, b] = eta * (2.0 * v[a] * v[b] - jab)
-            # W^-1 = (2 J v v^T J - J) / eta
-            Winv[a, b] = (2.0 * J[a] * v[a] * v[b] * J[b] - jab) / eta
-    for a in range(3):
-        lam[a] = W[a, 0] * z[0] + W[a, 1] * z[1] + W[a, 2] * z[2]
-    for e in range(3):  # W symmetric: row e of W W
-        for a in range(3):
-            W2[e, a] = W[a, 0] * W[e, 0] + W[a, 1] * W[e, 1] + W[a, 2] * W[e, 2]
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _soc_step(u, d):
-    """Largest ``alpha`` (capped at 1e300) with ``u + alpha d`` in the cone (``u`` inside)."""
-    a = d[0] * d[0] - d[1] * d[1] - d[2] * d[2]
-    b = 2.0 * (u[0] * d[0] - u[1] * d[1] - u[2] * d[2])
-    c = max(u[0] * u[0] - u[1] * u[1] - u[2] * u[2], 0.0)
-    best = 1e300
-    if d[0] < 0.0:
-        best = -u[0] / d[0]
-    disc = b * b - 4.0 * a * c
-    if a == 0.0:
-        if b < 0.0:
-            best = min(best, -c / b)
-        return best
-    if disc < 0.0:
-        return best
-    sq = np.sqrt(disc)
-    for root in ((-b - sq) / (2.0 * a), (-b + sq) / (2.0 * a)):
-        if root > 0.0:
-            best = min(best, root)
-    return best
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -146,36 +96,6 @@ def _shift_into_cones(su, sl, sc):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc):
-    """The slacks' step from the linearised constraints ``G dx + ds = -r_z`` (exact to rounding, so
-    primal feasibility improves with every step even when the cones' scaling is ill-conditioned
-    and ``W^2 W^-2`` is far from the identity), written into ``dsu, dsl, dsc``."""
-    for q in range(iu.shape[0]):
-        dsu[q] = -rzu[q] - dx[iu[q]]
-    for q in range(il.shape[0]):
-        dsl[q] = -rzl[q] + dx[il[q]]
-    K = T.shape[0]
-    la.rows_dot(T.reshape((3 * K, dx.shape[0])), 0, 3 * K, dx, dsc.reshape(3 * K), 0)
-    for k in range(K):
-        for e in range(3):
-            dsc[k, e] -= rzc[k, e]
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _max_step(su, dsu, sl, dsl, sc, dsc):
-    a = 1e300
-    for t in range(su.shape[0]):
-        if dsu[t] < 0.0:
-            a = min(a, -su[t] / dsu[t])
-    for t in range(sl.shape[0]):
-        if dsl[t] < 0.0:
-            a = min(a, -sl[t] / dsl[t])
-    for k in range(sc.shape[0]):
-        a = min(a, _soc_step(sc[k], dsc[k]))
-    return a
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
 def _inf_norm(v):
     m = 0.0
     for i in range(v.shape[0]):
@@ -190,7 +110,7 @@ def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T,
     K = T.shape[0]
     n = x.shape[0]
     T2 = T.reshape((3 * K, n))
-    la.apply_P(x, d0, Fm, Px, fx)
+    newton.apply_P(x, d0, Fm, Px, fx)
     for i in range(n):
         rx[i] = Px[i] + c[i]
     la.rows_axpy(A, 0, A.shape[0], y, 0, 1.0, rx)
@@ -215,47 +135,6 @@ def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T,
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _barrier(d0, iu, il, su, zu, sl, zl, floor, dbar, dinv, ru, rl):
-    """In place: ``D = d0 +`` the bounds' ``z/s`` (``dbar``; ``ru, rl`` the bounds' ``z/s``), and
-    ``dinv = 1 / max(D, floor)`` (a variable without bounds or weight: refinement against the exact
-    ``D`` corrects the floor)."""
-    for i in range(d0.shape[0]):
-        dbar[i] = d0[i]
-    for q in range(iu.shape[0]):
-        ru[q] = zu[q] / su[q]
-        dbar[iu[q]] += ru[q]
-    for q in range(il.shape[0]):
-        rl[q] = zl[q] / sl[q]
-        dbar[il[q]] += rl[q]
-    for i in range(d0.shape[0]):
-        dinv[i] = 1.0 / max(dbar[i], floor)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx,
-            dy, dzu, dzl, dzc):
-    """The scaled Newton system's ``(dx, dy, dzu, dzl, dzc)`` (in place) for the right-hand sides
-    ``P dx + A^T dy + G^T dz = bx, A dx = by, G dx - W^2 dz = bz``: the bounds' ``dz`` eliminated
-    (``dz = (z/s) (G dx - bz)``, ``ru, rl`` the bounds' ``z/s``), the cones' kept
-    (:func:`._ipm_linalg.solve`: no ``W^-2`` is ever formed, whose entries grow like ``1/mu`` on an
-    active cone). ``ws = (r1, u, rhs, wq)``: work arrays."""
-    r1, u, rhs, wq = ws
-    for i in range(bx.shape[0]):
-        r1[i] = bx[i]
-    for q in range(iu.shape[0]):
-        r1[iu[q]] += ru[q] * bzu[q]
-    for q in range(il.shape[0]):
-        r1[il[q]] -= rl[q] * bzl[q]
-    la.solve(B, rf, Ct, cg, fold, LK, dinv, r1, bzc, by, u, rhs, wq, dx, dy, dzc)
-    if refine:
-        la.refine(B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, W2, A, r1, bzc, by, dx, dy, dzc, refine, u, rhs, wq)
-    for q in range(iu.shape[0]):
-        dzu[q] = ru[q] * (dx[iu[q]] - bzu[q])
-    for q in range(il.shape[0]):
-        dzl[q] = rl[q] * (-dx[il[q]] - bzl[q])
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
 def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor, fw, ws):
     """CVXOPT's initial point: ``x, y`` of the Newton system with the identity scaling (the least
     squares point of the slacks on the equations, with the objective; without cones the bounds
@@ -273,9 +152,9 @@ def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, fl
             Vc[k, e, e] = 1.0
     dbar, dinv = np.empty(n), np.empty(n)
     ru, rl = np.empty(nu), np.empty(nl)
-    _barrier(d0, iu, il, one_u, wb * one_u, one_l, wb * one_l, floor, dbar, dinv, ru, rl)
+    barrier(d0, iu, il, one_u, wb * one_u, one_l, wb * one_l, floor, dbar, dinv, ru, rl)
     Kb, Km, KFF, G1, gw = fw
-    dropped = la.factor(B, rf, M0inv, Ct, cg, fold, Vc, dinv, 1e-14, gw, Kb, Km, KFF, G1)
+    dropped = newton.factor(B, rf, M0inv, Ct, cg, fold, Vc, dinv, 1e-14, gw, Kb, Km, KFF, G1)
     # refined only when the factor is not that of the exact system: a dropped equation, or a variable
     # whose D fell below the floor (without bounds or weight)
     refine = 1 if dropped else 0
@@ -289,8 +168,8 @@ def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, fl
     for q in range(nl):
         hl[q] = -lb[il[q]]
     x, y, zu, zl, zc = np.empty(n), np.empty(A.shape[0]), np.empty(nu), np.empty(nl), np.empty((K, 3))
-    _newton(-c, b, hu, hl, t.copy(), B, rf, Ct, cg, fold, Km, dinv, dbar, Fm, T, A, Vc, iu, il, ru, rl, refine, ws, x,
-            y, zu, zl, zc)
+    newton_step(-c, b, hu, hl, t.copy(), B, rf, Ct, cg, fold, Km, dinv, dbar, Fm, T, A, Vc, iu, il, ru, rl, refine, ws,
+                x, y, zu, zl, zc)
     su, sl, sc = -zu / wb, -zl / wb, -zc
     _shift_into_cones(su, sl, sc)
     _shift_into_cones(zu, zl, zc)
@@ -303,130 +182,6 @@ def _gap(su, zu, sl, zl, sc, zc):
     for k in range(sc.shape[0]):
         g += sc[k, 0] * zc[k, 0] + sc[k, 1] * zc[k, 1] + sc[k, 2] * zc[k, 2]
     return g
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc):
-    return min(_max_step(su, dsu, sl, dsl, sc, dsc), _max_step(zu, dzu, zl, dzl, zc, dzc))
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _centring(s, ds, z, dz, a, lo, hi, rs):
-    """Gondzio's correction of the bounds' complementarity targets ``rs`` (in place): the products
-    ``s_i z_i`` a longer step ``a`` would reach, pulled back into ``[lo, hi]``."""
-    for q in range(s.shape[0]):
-        v = (s[q] + a * ds[q]) * (z[q] + a * dz[q])
-        if v < lo:
-            rs[q] += lo - v
-        elif v > hi:
-            rs[q] += max(hi - v, -hi)
-
-
-@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def _gap_at(s, ds, z, dz, a):
-    """``(s + a ds)^T (z + a dz)`` without temporaries."""
-    g = 0.0
-    for i in range(s.shape[0]):
-        g += (s[i] + a * ds[i]) * (z[i] + a * dz[i])
-    return g
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _cone_corrector(lamc, Winv, Wm, dsc, dzc, rzc, smu, bzc):
-    """The cones' corrector right-hand side ``bz = -r_z - W (lam \\ rs)`` (into ``bzc``) with
-    ``rs = -lam o lam - (W^-1 ds_a) o (W dz_a) + sigma mu e`` (scalar code: no small arrays)."""
-    K = lamc.shape[0]
-    for k in range(K):
-        Wi, Wk, ds, dz, lam = Winv[k], Wm[k], dsc[k], dzc[k], lamc[k]
-        u0 = Wi[0, 0] * ds[0] + Wi[0, 1] * ds[1] + Wi[0, 2] * ds[2]
-        u1 = Wi[1, 0] * ds[0] + Wi[1, 1] * ds[1] + Wi[1, 2] * ds[2]
-        u2 = Wi[2, 0] * ds[0] + Wi[2, 1] * ds[1] + Wi[2, 2] * ds[2]
-        v0 = Wk[0, 0] * dz[0] + Wk[0, 1] * dz[1] + Wk[0, 2] * dz[2]
-        v1 = Wk[1, 0] * dz[0] + Wk[1, 1] * dz[1] + Wk[1, 2] * dz[2]
-        v2 = Wk[2, 0] * dz[0] + Wk[2, 1] * dz[1] + Wk[2, 2] * dz[2]
-        l0, l1, l2 = lam[0], lam[1], lam[2]
-        # rs = -(lam o lam) - (u o v) + smu e
-        r0 = -(l0 * l0 + l1 * l1 + l2 * l2) - (u0 * v0 + u1 * v1 + u2 * v2) + smu
-        r1 = -2.0 * l0 * l1 - (u0 * v1 + v0 * u1)
-        r2 = -2.0 * l0 * l2 - (u0 * v2 + v0 * u2)
-        # x = lam \ rs
-        det = l0 * l0 - l1 * l1 - l2 * l2
-        x0 = (l0 * r0 - l1 * r1 - l2 * r2) / det
-        x1 = (r1 - x0 * l1) / l0
-        x2 = (r2 - x0 * l2) / l0
-        for e in range(3):
-            bzc[k, e] = -rzc[k, e] - (Wk[e, 0] * x0 + Wk[e, 1] * x1 + Wk[e, 2] * x2)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2,
-               Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D):
-    """Mehrotra's predictor-corrector direction with Gondzio's centrality correctors on the bounds
-    (at most ``ncorr``, each kept only when it lengthens the step). ``rb = (bx, by, bzu, bzl, rsu,
-    rsl)`` and ``bzc``: right-hand-side work arrays; ``D = (DX, DY, DZU, DZL, DZC, DSU, DSL, DSC)``
-    two slots of directions. Returns the slot of the direction and its largest step."""
-    K = T.shape[0]
-    nu, nl = su.shape[0], sl.shape[0]
-    gap = mu * (nu + nl + K)
-    bx, by, bzu, bzl, rsu, rsl, bzc = rb
-    DX, DY, DZU, DZL, DZC, DSU, DSL, DSC = D
-    for i in range(rx.shape[0]):
-        bx[i] = -rx[i]
-    for a in range(ry.shape[0]):
-        by[a] = -ry[a]
-    # predictor (affine scaling): bz = -rz + s
-    for q in range(nu):
-        bzu[q] = -rzu[q] + su[q]
-    for q in range(nl):
-        bzl[q] = -rzl[q] + sl[q]
-    for k in range(K):
-        for e in range(3):
-            bzc[k, e] = -rzc[k, e] + sc[k, e]
-    dx, dy, dzu, dzl, dzc, dsu, dsl, dsc = DX[0], DY[0], DZU[0], DZL[0], DZC[0], DSU[0], DSL[0], DSC[0]
-    _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws, dx,
-            dy, dzu, dzl, dzc)
-    _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc)
-    a_p = min(1.0, _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc))
-    gap_aff = _gap_at(su, dsu, zu, dzu, a_p) + _gap_at(sl, dsl, zl, dzl, a_p)
-    for k in range(K):
-        for e in range(3):
-            gap_aff += (sc[k, e] + a_p * dsc[k, e]) * (zc[k, e] + a_p * dzc[k, e])
-    sigma = min(1.0, max(0.0, gap_aff / max(gap, 1e-300))) ** 3
-    smu = sigma * mu
-    # corrector: rs = -lam o lam - (W^-1 ds_a) o (W dz_a) + sigma mu e
-    for q in range(nu):
-        lq = np.sqrt(su[q] * zu[q])
-        rsu[q] = -lq * lq - dsu[q] * dzu[q] + smu
-    for q in range(nl):
-        lq = np.sqrt(sl[q] * zl[q])
-        rsl[q] = -lq * lq - dsl[q] * dzl[q] + smu
-    _cone_corrector(lamc, Winv, Wm, dsc, dzc, rzc, smu, bzc)
-    best, best_a = 0, 0.0
-    cur = 0  # the predictor's slot is free again
-    for j in range(ncorr + 1):
-        # W (lam \ rs) = rs / z on the bounds
-        for q in range(nu):
-            bzu[q] = -rzu[q] - rsu[q] / zu[q]
-        for q in range(nl):
-            bzl[q] = -rzl[q] - rsl[q] / zl[q]
-        dx, dy, dzu, dzl, dzc = DX[cur], DY[cur], DZU[cur], DZL[cur], DZC[cur]
-        dsu, dsl, dsc = DSU[cur], DSL[cur], DSC[cur]
-        _newton(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws,
-                dx, dy, dzu, dzl, dzc)
-        _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc)
-        a = _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc)
-        if not np.isfinite(_dot(dx, dx) + _dot(dy, dy)):
-            a = 0.0
-        if j > 0 and not a > 1.01 * best_a:
-            break
-        best, best_a = cur, a
-        if a >= 0.9:  # long enough: a corrector would cost more than it gains
-            break
-        at = min(1.0, a + 0.5)
-        _centring(su, dsu, zu, dzu, at, 0.1 * smu, 10.0 * smu, rsu)
-        _centring(sl, dsl, zl, dzl, at, 0.1 * smu, 10.0 * smu, rsl)
-        cur = 1 - cur
-    return best, best_a
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -506,13 +261,6 @@ def _primal_res(ry, rzu, rzl, rzc, bscale, hscale):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _cone_scalings(sc, zc, Wm, Winv, Wc2, lamc):
-    """Every cone's Nesterov-Todd ``W``, ``W^-1``, ``W^2`` and ``lambda = W z``, in place."""
-    for k in range(sc.shape[0]):
-        _soc_scaling(sc[k], zc[k], Wm[k], Winv[k], Wc2[k], lamc[k])
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
 def _crossover(x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots,
                as_tols, last_state, last_cact):
     """The active set the iterate points at, verified by the compiled active-set solver when it
@@ -551,56 +299,23 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
     ``zbox`` (n,) the bounds' multipliers (> 0 at an upper bound), ``zc`` (K, 3) the cones' duals;
     after a crossover ``state, cact, mus, dirs`` the verified active set (else empty).
     """
-    n = c.shape[0]
-    K = T.shape[0]
+    n, K = c.shape[0], T.shape[0]
     iu, il = _bounded(lb, ub)
     deg = iu.shape[0] + il.shape[0] + K
     bscale, hscale, cscale = _scales(b, lb, ub, t, c, iu, il)
-    hmax = 0.0
-    for i in range(n):
-        hmax = max(hmax, H[i, i])
-    floor = 1e-12 * max(hmax, 1e-300) if hmax > 0.0 else 1e-12
-    B, rf, M0inv, Ct, cg, fold = la.structure(Fm, T, A, rank_tol)
-    # every work array of the iterations, made once (a small array costs ~0.1-0.3 us to make)
-    neq, nu, nl = A.shape[0], iu.shape[0], il.shape[0]
-    folded = fold[0].shape[0] > 0  # the cones folded into their groups: no rows of their own
-    p = rf + neq if folded else rf + 3 * K + neq
-    Km = np.empty((p, p))
-    Kb = np.empty((B.shape[0], B.shape[0])) if Ct.shape[0] and not folded else Km
-    fw = (Kb, Km, np.empty((rf, rf)), np.empty((Ct.shape[0], rf)), np.empty((2, B.shape[1])))
-    ws = (np.empty(n), np.empty(n), np.empty(p), np.empty(rf))  # r1, u, rhs, wq
-    x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor, fw,
-                                          ws)
-    Px, rx, ry, rzu, rzl, rzc = np.empty(n), np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty((K, 3))
-    fx = np.empty(Fm.shape[0])
-    dbar, dinv, ru, rl = np.empty(n), np.empty(n), np.empty(nu), np.empty(nl)
-    rb = (np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty(nu), np.empty(nl), np.empty((K, 3)))
-    D = (np.empty((2, n)), np.empty((2, neq)), np.empty((2, nu)), np.empty((2, nl)), np.empty((2, K, 3)),
-         np.empty((2, nu)), np.empty((2, nl)), np.empty((2, K, 3)))
-    DX, DY, DZU, DZL, DZC, DSU, DSL, DSC = D
-    Wc2 = np.zeros((K, 3, 3))
-    Winv = np.zeros((K, 3, 3))
-    Wm = np.zeros((K, 3, 3))
-    lamc = np.zeros((K, 3))
-    attempts = 0
-    end = MAX_ITER
-    last_state = np.full(n, -1, dtype=np.int8)
-    last_cact = np.zeros(K, dtype=np.bool_)
-    it = 0
+    floor = _diagonal_floor(H)
+    B, rf, M0inv, Ct, cg, fold = structure(Fm, T, A, rank_tol)
+    fw, ws, res, bar, rb, D, Wc = _work_arrays(n, A.shape[0], iu.shape[0], il.shape[0], K, B, rf, Ct, fold, Fm)
+    rx, ry, rzu, rzl, rzc = res[1], res[2], res[3], res[4], res[5]
+    dbar, dinv, ru, rl = bar
+    Wm, Winv, Wc2, lamc = Wc
+    x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor,
+                                          fw, ws)
+    attempts, end, it = 0, MAX_ITER, 0
+    last_state, last_cact = np.full(n, -1, dtype=np.int8), np.zeros(K, dtype=np.bool_)  # the last guess tried
     for it in range(max_iter):
-        pobj = _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, Px, rx, ry, rzu,
-                          rzl, rzc, fx)
-        gap = _gap(su, zu, sl, zl, sc, zc)
-        mu = gap / max(deg, 1)
-        pres = _primal_res(ry, rzu, rzl, rzc, bscale, hscale)
-        dres = _inf_norm(rx) / cscale
-        # relative to the objective; an objective below eps counts as zero (then the gap must reach
-        # eps^2). (An absolute floor of 1e-3 (1e-13 / eps) stopped a scaled problem whose optimum is
-        # 3.5e-11 at a gap of 1e-13, 1e-3 above its optimum, after its crossover attempts had been
-        # spent at relative gaps of order one: tests/test_properties.py::
-        # test_ipm_reaches_the_optimum_where_the_scaled_objective_is_tiny; an optimum of exactly
-        # zero still stops: tests/test_solvers.py::test_ipm_stops_on_a_problem_whose_optimum_is_zero)
-        gap_rel = gap / max(eps, abs(pobj), abs(pobj - gap))
+        mu, gap_rel, pres, dres = _measures(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, res,
+                                            deg, bscale, hscale, cscale, eps)
         done = pres <= eps and dres <= eps and gap_rel <= eps
         if done or (crossover_gap > 0.0 and gap_rel <= crossover_gap and pres <= 1e3 * crossover_gap
                     and attempts < 8):
@@ -619,32 +334,18 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
             return (INFEASIBLE_CERT, x, y, _zbox(zu, zl, iu, il, n), zc, it, np.zeros(0, dtype=np.int8),
                     np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
         # ---- scaling and the factor of the Newton system
-        _cone_scalings(sc, zc, Wm, Winv, Wc2, lamc)
-        _barrier(d0, iu, il, su, zu, sl, zl, floor, dbar, dinv, ru, rl)
-        dropped = la.factor(B, rf, M0inv, Ct, cg, fold, Wc2, dinv, 1e-14, fw[4], Kb, Km, fw[2], fw[3])
+        cone_scalings(sc, zc, Wm, Winv, Wc2, lamc)
+        barrier(d0, iu, il, su, zu, sl, zl, floor, dbar, dinv, ru, rl)
+        dropped = newton.factor(B, rf, M0inv, Ct, cg, fold, Wc2, dinv, 1e-14, fw[4], fw[0], fw[1], fw[2], fw[3])
         refine = 1 if dropped or gap_rel < 1e-5 else 0
-        j, a = _direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, fold, Km, dinv, dbar, Fm, T,
-                          A, Wc2, Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D)
+        j, a = direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, fold, fw[1], dinv, dbar,
+                         Fm, T, A, Wc2, Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D)
         a = min(1.0, 0.99 * a)
         if not (a > 1e-14) or not np.isfinite(a):
             end = NUMERICAL
             break
         end = MAX_ITER
-        dx, dy, dzu, dzl, dzc, dsu, dsl, dsc = DX[j], DY[j], DZU[j], DZL[j], DZC[j], DSU[j], DSL[j], DSC[j]
-        for i in range(n):
-            x[i] += a * dx[i]
-        for i in range(neq):
-            y[i] += a * dy[i]
-        for q in range(nu):
-            su[q] += a * dsu[q]
-            zu[q] += a * dzu[q]
-        for q in range(nl):
-            sl[q] += a * dsl[q]
-            zl[q] += a * dzl[q]
-        for k in range(K):
-            for e in range(3):
-                sc[k, e] += a * dsc[k, e]
-                zc[k, e] += a * dzc[k, e]
+        _take_step(a, j, D, x, y, su, zu, sl, zl, sc, zc)
     # no convergence: one last crossover from where the iterations stopped
     if crossover_gap > 0.0:
         tried, code, f, mus, grad, st, ca, dirs, yy = _crossover(
@@ -654,6 +355,84 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
             return (CROSSOVER, f, yy, -grad, zc, it + 1, st, ca, mus, dirs)
     return (end, x, y, _zbox(zu, zl, iu, il, n), zc, it + 1, np.zeros(0, dtype=np.int8),
             np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _diagonal_floor(H):
+    """The smallest diagonal entry the barrier's ``1 / (d + z/s)`` may divide by: 1e-12 of ``H``'s
+    largest diagonal entry (1e-12 when that is not positive)."""
+    hmax = 0.0
+    for i in range(H.shape[0]):
+        hmax = max(hmax, H[i, i])
+    return 1e-12 * max(hmax, 1e-300) if hmax > 0.0 else 1e-12
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _work_arrays(n, neq, nu, nl, K, B, rf, Ct, fold, Fm):
+    """Every work array of the iterations, made once (a small array costs ~0.1-0.3 us to make):
+    ``(fw, ws, res, bar, rb, D, Wc)`` with the Newton system's factor work ``fw = (Kb, Km, KFF, G1,
+    work)`` and solve work ``ws = (r1, u, rhs, wq)``, the residuals ``res = (Px, rx, ry, rzu, rzl,
+    rzc, fx)``, the barrier's ``bar = (dbar, dinv, ru, rl)``, the right-hand sides ``rb``, two slots
+    of directions ``D = (DX, DY, DZU, DZL, DZC, DSU, DSL, DSC)`` and the cones' scalings ``Wc = (W,
+    W^-1, W^2, lambda)``."""
+    folded = fold[0].shape[0] > 0  # the cones folded into their groups: no rows of their own
+    p = rf + neq if folded else rf + 3 * K + neq
+    Km = np.empty((p, p))
+    Kb = np.empty((B.shape[0], B.shape[0])) if Ct.shape[0] and not folded else Km
+    fw = (Kb, Km, np.empty((rf, rf)), np.empty((Ct.shape[0], rf)), np.empty((2, B.shape[1])))
+    ws = (np.empty(n), np.empty(n), np.empty(p), np.empty(rf))
+    res = (np.empty(n), np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty((K, 3)), np.empty(Fm.shape[0]))
+    bar = (np.empty(n), np.empty(n), np.empty(nu), np.empty(nl))
+    rb = (np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty(nu), np.empty(nl), np.empty((K, 3)))
+    D = (np.empty((2, n)), np.empty((2, neq)), np.empty((2, nu)), np.empty((2, nl)), np.empty((2, K, 3)),
+         np.empty((2, nu)), np.empty((2, nl)), np.empty((2, K, 3)))
+    Wc = (np.zeros((K, 3, 3)), np.zeros((K, 3, 3)), np.zeros((K, 3, 3)), np.zeros((K, 3)))
+    return fw, ws, res, bar, rb, D, Wc
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _measures(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, res, deg, bscale, hscale, cscale,
+              eps):
+    """The iterate's residuals (into ``res``, :func:`_work_arrays`) and how far it is from optimal:
+    ``(mu, gap_rel, pres, dres)``, the mean complementarity, the relative gap and the primal and
+    dual relative residuals."""
+    Px, rx, ry, rzu, rzl, rzc, fx = res
+    pobj = _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, Px, rx, ry, rzu,
+                      rzl, rzc, fx)
+    gap = _gap(su, zu, sl, zl, sc, zc)
+    mu = gap / max(deg, 1)
+    pres = _primal_res(ry, rzu, rzl, rzc, bscale, hscale)
+    dres = _inf_norm(rx) / cscale
+    # relative to the objective; an objective below eps counts as zero (then the gap must reach
+    # eps^2). (An absolute floor of 1e-3 (1e-13 / eps) stopped a scaled problem whose optimum is
+    # 3.5e-11 at a gap of 1e-13, 1e-3 above its optimum, after its crossover attempts had been
+    # spent at relative gaps of order one: tests/test_properties.py::
+    # test_ipm_reaches_the_optimum_where_the_scaled_objective_is_tiny; an optimum of exactly
+    # zero still stops: tests/test_solvers.py::test_ipm_stops_on_a_problem_whose_optimum_is_zero)
+    gap_rel = gap / max(eps, abs(pobj), abs(pobj - gap))
+    return mu, gap_rel, pres, dres
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _take_step(a, j, D, x, y, su, zu, sl, zl, sc, zc):
+    """The iterate moved (in place) by ``a`` times the direction in slot ``j`` of ``D``
+    (:func:`._ipm_direction.direction`)."""
+    DX, DY, DZU, DZL, DZC, DSU, DSL, DSC = D
+    dx, dy, dzu, dzl, dzc, dsu, dsl, dsc = DX[j], DY[j], DZU[j], DZL[j], DZC[j], DSU[j], DSL[j], DSC[j]
+    for i in range(x.shape[0]):
+        x[i] += a * dx[i]
+    for i in range(y.shape[0]):
+        y[i] += a * dy[i]
+    for q in range(su.shape[0]):
+        su[q] += a * dsu[q]
+        zu[q] += a * dzu[q]
+    for q in range(sl.shape[0]):
+        sl[q] += a * dsl[q]
+        zl[q] += a * dzl[q]
+    for k in range(sc.shape[0]):
+        for e in range(3):
+            sc[k, e] += a * dsc[k, e]
+            zc[k, e] += a * dzc[k, e]
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

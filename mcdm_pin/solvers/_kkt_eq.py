@@ -1,0 +1,267 @@
+r"""The equality-constrained solve of one active set (:func:`eq_solve`, for :mod:`._kkt`'s pivoting
+loop): the cables of the set fixed at their bounds, the held cones on their surfaces (Newton steps
+on the surfaces' curvature), the equations of motion as equations.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from ..jit import njit
+
+from ._kkt_linalg import determined_solve, kkt_solve, matvec, vertex_solve_lu
+
+# eq_solve codes
+OK, SINGULAR, NO_CONVERGENCE, DROP, VANISHED = 0, 1, 2, 3, 5
+
+
+@njit(cache=True, nogil=True, inline="always")
+def cone_force(G, gc, ax, k, x):
+    """Cone ``k``'s force ``F = g_k + G_k x`` at ``x``, its component along the axis and the part
+    perpendicular to it: ``(F0, F1, F2, along, p0, p1, p2)``."""
+    F0, F1, F2 = gc[k, 0], gc[k, 1], gc[k, 2]
+    for i in range(x.shape[0]):
+        xi = x[i]
+        F0 += G[k, 0, i] * xi
+        F1 += G[k, 1, i] * xi
+        F2 += G[k, 2, i] * xi
+    al = ax[k, 0] * F0 + ax[k, 1] * F1 + ax[k, 2] * F2
+    return F0, F1, F2, al, F0 - al * ax[k, 0], F1 - al * ax[k, 1], F2 - al * ax[k, 2]
+
+
+@njit(cache=True, nogil=True)
+def _on_surfaces(f, G, gc, ax, tn, act, tol):
+    """Every cone of ``act`` has ``| |F_perp| - tan a.F | <= tol |F|`` at ``f``."""
+    for s in range(act.shape[0]):
+        k = act[s]
+        F = gc[k] + G[k] @ f
+        al = ax[k, 0] * F[0] + ax[k, 1] * F[1] + ax[k, 2] * F[2]
+        p0, p1, p2 = F[0] - al * ax[k, 0], F[1] - al * ax[k, 1], F[2] - al * ax[k, 2]
+        perp = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+        if not abs(perp - tn[k] * al) <= tol * np.sqrt(F[0] * F[0] + F[1] * F[1] + F[2] * F[2]):
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, step_tol, reg):
+    """Minimise ``1/2 f^T H f + g^T f`` with ``A f = b``, the cables of ``state`` fixed at their
+    bounds and the cones of ``cact`` held on their surface (Newton steps with the cones' curvature
+    weighted by their multipliers).
+
+    ``reg`` (n,) > 0 is added to the free cables' diagonal (a Tikhonov term ``1/2 sum reg_i f_i^2``):
+    with a positive semidefinite objective whose optimum is a flat ridge (case 2 with ``beta = 0``)
+    the system is otherwise singular and its solution arbitrary along the ridge; with it, the point
+    of the ridge nearest the origin in that weighted norm. The KKT check of the original problem
+    decides whether the point is accepted (its stationarity residual ``reg_i f_i``: ~1e-12 of the
+    gradient's scale, :func:`._kkt.tikhonov`).
+
+    Returns ``(code, f, y, mus, dirs, solves, LU, perm, lu_ok)``: ``mus`` (nc,) the active cones'
+    multipliers (0 elsewhere), ``dirs`` (nc, 3) their surface directions at ``f``, ``solves`` the
+    linear KKT systems solved (1 without active cones; one per Newton step with them); at a vertex,
+    ``(LU, perm)`` the factors of the last solve's rows on the free cables (:func:`._kkt_linalg.vertex_solve_lu`;
+    ``lu_ok`` false otherwise).
+    """
+    neq = A.shape[0]
+    nc = G.shape[0]
+    f, free = _fixed_point(state, lb, ub)
+    act = _held(cact)
+    nf, na = free.shape[0], act.shape[0]
+    mus = np.zeros(nc)
+    dirs = cdir.copy()
+    # fewer free cables than equations is fine when the equations are dependent (e.g. the 2-link
+    # arm at q = 0): the KKT system is then solved in the least-squares sense (and verified)
+    square = nf >= neq + na
+    N = nf + neq + na
+    # fixed part of the gradient and of the equations (f is zero on the free cables here)
+    Hf = matvec(H, f)
+    Af = matvec(A, f)
+    f_cur = f.copy()
+    x_prev = np.zeros(nf)
+    have_cur = False
+    have_prev = False
+    y = np.zeros(neq)
+    iters = max_newton if na > 0 else 1
+    converged = False
+    solves = 0
+    LU = np.empty((0, 0))
+    perm = np.empty(0, dtype=np.int64)
+    lu_ok = False
+    for _ in range(iters):
+        K = np.zeros((N, N))
+        rhs = np.empty(N)
+        _linear_rows(H, g, A, b, reg, free, Hf, Af, K, rhs)
+        if not _cone_rows(G, gc, ax, tn, state, f, f_cur, have_cur, free, neq, act, mus, dirs, K, rhs):
+            return VANISHED, f, y, mus, dirs, solves, LU, perm, False
+        sol, LU, perm, lu_ok = _solve_rows(K, rhs, nf, neq, na, square)
+        solves += 1
+        for i in range(N):
+            if not np.isfinite(sol[i]):
+                return SINGULAR, f, y, mus, dirs, solves, LU, perm, False
+        for p in range(nf):
+            f[free[p]] = sol[p]
+        y = sol[nf:nf + neq].copy()
+        for s in range(na):
+            mus[act[s]] = sol[nf + neq + s]
+        if na == 0:
+            converged = True
+            break
+        if have_cur:
+            for s in range(na):
+                if mus[act[s]] < 0.0:
+                    return DROP, f, y, mus, dirs, solves, LU, perm, lu_ok
+        if have_prev and _settled(sol, x_prev, f, G, gc, ax, tn, act, step_tol):
+            converged = True
+            break
+        for p in range(nf):
+            x_prev[p] = sol[p]
+        have_prev = True
+        f_cur[:] = f
+        have_cur = True
+    if not converged:
+        return NO_CONVERGENCE, f, y, mus, dirs, solves, LU, perm, lu_ok
+    return OK, f, y, mus, dirs, solves, LU, perm, lu_ok
+
+
+@njit(cache=True, nogil=True)
+def _fixed_point(state, lb, ub):
+    """The cables that ``state`` fixes at their bounds (zero on the free ones) and the free cables'
+    indices: ``(f, free)``."""
+    n = state.shape[0]
+    f = np.zeros(n)
+    nf = 0
+    for i in range(n):
+        if state[i] == 1:
+            f[i] = lb[i]
+        elif state[i] == 2:
+            f[i] = ub[i]
+        else:
+            nf += 1
+    free = np.empty(nf, dtype=np.int64)
+    t = 0
+    for i in range(n):
+        if state[i] == 0:
+            free[t] = i
+            t += 1
+    return f, free
+
+
+@njit(cache=True, nogil=True)
+def _held(cact):
+    """The indices of the cones held on their surface (``cact`` true)."""
+    na = 0
+    for k in range(cact.shape[0]):
+        if cact[k]:
+            na += 1
+    act = np.empty(na, dtype=np.int64)
+    t = 0
+    for k in range(cact.shape[0]):
+        if cact[k]:
+            act[t] = k
+            t += 1
+    return act
+
+
+@njit(cache=True, nogil=True)
+def _linear_rows(H, g, A, b, reg, free, Hf, Af, K, rhs):
+    """The rows of the free cables and of the equations in the KKT system ``K`` (zeros on entry) and
+    its right-hand side: ``[[H_FF + diag(reg_F), A_F^T], [A_F, 0]]`` and ``[-(g + H f_fixed)_F, b -
+    A f_fixed]`` (``Hf``, ``Af``: the fixed cables' products)."""
+    nf = free.shape[0]
+    neq = A.shape[0]
+    for p in range(nf):
+        i = free[p]
+        for q in range(nf):
+            K[p, q] = H[i, free[q]]
+        K[p, p] += reg[i]
+        for r in range(neq):
+            K[p, nf + r] = A[r, i]
+            K[nf + r, p] = A[r, i]
+        rhs[p] = -(g[i] + Hf[i])
+    for r in range(neq):
+        rhs[nf + r] = b[r] - Af[r]
+
+
+@njit(cache=True, nogil=True)
+def _cone_rows(G, gc, ax, tn, state, f, f_cur, have_cur, free, neq, act, mus, dirs, K, rhs):
+    """The held cones' rows of the KKT system: each cone's surface linearised along its direction
+    ``dirs[k]``. From the second Newton step on (``have_cur``) each direction is renewed from the
+    cone's force at ``f_cur`` (in ``dirs``) and the surface's curvature, weighted by the cone's
+    multiplier, is added to the free cables' block. False when a held cone's force lies on its axis
+    (no surface direction: :data:`VANISHED`)."""
+    n = f.shape[0]
+    nf = free.shape[0]
+    na = act.shape[0]
+    for s in range(na):
+        k = act[s]
+        d0, d1, d2 = dirs[k, 0], dirs[k, 1], dirs[k, 2]
+        if have_cur:
+            F = gc[k] + G[k] @ f_cur
+            al = ax[k, 0] * F[0] + ax[k, 1] * F[1] + ax[k, 2] * F[2]
+            p0, p1, p2 = F[0] - al * ax[k, 0], F[1] - al * ax[k, 1], F[2] - al * ax[k, 2]
+            nrm = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+            if nrm <= 1e-300:
+                return False
+            d0, d1, d2 = p0 / nrm, p1 / nrm, p2 / nrm
+            dirs[k, 0], dirs[k, 1], dirs[k, 2] = d0, d1, d2
+            mu = mus[k]
+            if mu > 0.0:
+                # curvature mu G^T (I - a a^T - d d^T) G / |F_perp| = mu/|F_perp| v v^T with
+                # v = G^T e, e = a x d (the projector is rank one: e e^T)
+                e0 = ax[k, 1] * d2 - ax[k, 2] * d1
+                e1 = ax[k, 2] * d0 - ax[k, 0] * d2
+                e2 = ax[k, 0] * d1 - ax[k, 1] * d0
+                v = e0 * G[k, 0] + e1 * G[k, 1] + e2 * G[k, 2]
+                sc = mu / nrm
+                # centred at f_cur: + 1/2 (f - f_cur)^T D (f - f_cur); on the free cables the
+                # gradient gains D (f_fixed - f_cur) restricted to free rows
+                vdf = 0.0
+                for i in range(n):
+                    if state[i] != 0:
+                        vdf += v[i] * (f[i] - f_cur[i])
+                    else:
+                        vdf -= v[i] * f_cur[i]
+                for p in range(nf):
+                    vp = sc * v[free[p]]
+                    for q in range(nf):
+                        K[p, q] += vp * v[free[q]]
+                    rhs[p] -= vp * vdf
+        w0 = d0 - tn[k] * ax[k, 0]
+        w1 = d1 - tn[k] * ax[k, 1]
+        w2 = d2 - tn[k] * ax[k, 2]
+        row = w0 * G[k, 0] + w1 * G[k, 1] + w2 * G[k, 2]
+        rr = -(w0 * gc[k, 0] + w1 * gc[k, 1] + w2 * gc[k, 2])
+        for i in range(n):
+            if state[i] != 0:
+                rr -= row[i] * f[i]
+        for p in range(nf):
+            K[p, nf + neq + s] = row[free[p]]
+            K[nf + neq + s, p] = row[free[p]]
+        rhs[nf + neq + s] = rr
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _solve_rows(K, rhs, nf, neq, na, square):
+    """The KKT system's solution ``(sol, LU, perm, lu_ok)``: at a vertex (as many free cables as
+    equations and held cones) through the rows alone (:func:`._kkt_linalg.vertex_solve_lu`, whose
+    factors come back), else by LU when square and by :func:`._kkt_linalg.determined_solve` when
+    not (then ``lu_ok`` is false)."""
+    if nf == neq + na:
+        return vertex_solve_lu(K, rhs, nf, square)
+    sol = kkt_solve(K, rhs, square) if square else determined_solve(K, rhs, nf)
+    return sol, np.empty((0, 0)), np.empty(0, dtype=np.int64), False
+
+
+@njit(cache=True, nogil=True)
+def _settled(sol, x_prev, f, G, gc, ax, tn, act, step_tol):
+    """Whether the Newton steps on the cone surfaces have settled: the free cables' step from
+    ``x_prev`` to ``sol`` below ``step_tol`` (relative), or, on an ill-conditioned system whose
+    rounding floor is above it, below 1e-8 with every held cone on its surface to 1e-11 of ``|F|``
+    (the KKT check that follows decides in both cases)."""
+    dx = 0.0
+    xx = 0.0
+    for p in range(x_prev.shape[0]):
+        dx += (sol[p] - x_prev[p]) ** 2
+        xx += sol[p] ** 2
+    step = np.sqrt(dx) / (1.0 + np.sqrt(xx))
+    return step <= step_tol or (step <= 1e-8 and _on_surfaces(f, G, gc, ax, tn, act, 1e-11))

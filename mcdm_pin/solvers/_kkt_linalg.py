@@ -1,0 +1,294 @@
+r"""The small dense solves of the compiled active-set solver (:mod:`._kkt`): the KKT system of one
+active set by LU, at a vertex through its rows alone, with dependent rows by a Cholesky of the
+normal matrix, and by least squares otherwise.
+
+At these sizes (a KKT system of ~50 unknowns on the neck) plain loops beat calls into LAPACK or
+BLAS, whose copies and per-call overhead cost more than the arithmetic.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from ..jit import njit
+
+from ._ipm_linalg import dot
+
+
+@njit(cache=True, nogil=True)
+def _lu_solve(K, rhs):
+    """``K x = rhs`` by LU with partial pivoting (:func:`lu_factor`, then :func:`lu_apply`): LAPACK's
+    ``dgesv`` without the copies to Fortran order that ``np.linalg.solve`` makes, 3x faster at these
+    sizes. Returns ``(x, ok)``; ``ok`` false when a pivot is exactly zero or not finite."""
+    LU, perm, ok = lu_factor(K)
+    if not ok:
+        return rhs.copy(), False
+    return lu_apply(LU, perm, rhs), True
+
+
+@njit(cache=True, nogil=True)
+def kkt_solve(K, rhs, square):
+    """``K x = rhs`` by LU; least squares when ``K`` is not square-solvable (then the residual must be
+    at rounding level, else NaNs: a singular, inconsistent system)."""
+    if square:
+        sol, ok = _lu_solve(K, rhs)
+        if ok:
+            ok = np.all(np.isfinite(sol))
+        if ok:
+            return sol
+    sol = np.linalg.lstsq(K, rhs)[0]
+    scale = 1.0
+    for i in range(rhs.shape[0]):
+        scale = max(scale, abs(rhs[i]))
+    r = K @ sol - rhs
+    for i in range(rhs.shape[0]):
+        if not abs(r[i]) <= 1e-10 * scale:
+            sol[:] = np.nan
+            break
+    return sol
+
+
+@njit(cache=True, nogil=True)
+def vertex_solve(K, rhs, nf, square):
+    """``K = [[Hxx, R^T], [R, 0]]`` with a square ``R`` (nf x nf: at a vertex, as many free variables
+    as equations and held cone surfaces, the usual warm instant): ``x`` is fixed by the rows alone,
+    ``R x = r_c``, and the multipliers by ``R^T l = r_x - Hxx x``: one LU of ``R`` (nf unknowns)
+    instead of one of ``K`` (2 nf: 8x the arithmetic). Falls back to :func:`kkt_solve` when ``R``
+    is singular (then so is ``K``)."""
+    return vertex_solve_lu(K, rhs, nf, square)[0]
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def vertex_solve_lu(K, rhs, nf, square):
+    """:func:`vertex_solve`, also returning ``R``'s factors ``(LU, perm, ok)`` (:func:`lu_factor`;
+    ``ok`` false when the solution did not come from them): the ratio test of the next pivot solves
+    with ``R^T`` again (:func:`._kkt._ratio_test`)."""
+    N = K.shape[0]
+    R = np.empty((nf, nf))
+    for i in range(nf):
+        for j in range(nf):
+            R[i, j] = K[nf + i, j]
+    LU, perm, ok = lu_factor(R)
+    if not ok:
+        return kkt_solve(K, rhs, square), LU, perm, False
+    x = lu_apply(LU, perm, rhs[nf:])
+    w = np.empty(nf)
+    for a in range(nf):
+        acc = rhs[a]
+        for b in range(nf):
+            acc -= K[a, b] * x[b]
+        w[a] = acc
+    lam = lu_apply_t(LU, perm, w)
+    sol = np.empty(N)
+    for i in range(nf):
+        sol[i] = x[i]
+        sol[nf + i] = lam[i]
+    for i in range(N):
+        if not np.isfinite(sol[i]):
+            return kkt_solve(K, rhs, square), LU, perm, False
+    return sol, LU, perm, True
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def lu_factor(R):
+    """``R[perm] = L U`` by partial pivoting (L unit lower, both in one array). Returns
+    ``(LU, perm, ok)``; ``ok`` false when a pivot is exactly zero or not finite."""
+    n = R.shape[0]
+    M = R.copy()
+    perm = np.arange(n)
+    for k in range(n):
+        p = k
+        big = abs(M[k, k])
+        for i in range(k + 1, n):
+            v = abs(M[i, k])
+            if v > big:
+                big, p = v, i
+        if not (big > 0.0) or not np.isfinite(big):
+            return M, perm, False
+        if p != k:
+            for j in range(n):
+                M[k, j], M[p, j] = M[p, j], M[k, j]
+            perm[k], perm[p] = perm[p], perm[k]
+        inv = 1.0 / M[k, k]
+        Mk = M[k, k + 1:]
+        for i in range(k + 1, n):
+            l = M[i, k] * inv
+            M[i, k] = l
+            if l != 0.0:
+                _axpy(-l, Mk, M[i, k + 1:])
+    return M, perm, True
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"}, inline="always")
+def _axpy(a, x, y):
+    """``y += a x`` over slices (a loop from 0 over ``range(len)``: numba then knows the index is not
+    negative and vectorises it; the loop ``for j in range(k + 1, n)`` it replaces did not, 2x slower
+    for the 49 x 49 KKT systems of the crossover). Inlined, unlike :func:`._ipm_linalg.axpy`: called
+    once per row, that one made the 49 x 49 factor 24 us instead of 14."""
+    for t in range(x.shape[0]):
+        y[t] += a * x[t]
+
+
+@njit(cache=True, nogil=True)
+def lu_apply(LU, perm, b):
+    """``R^-1 b`` from :func:`lu_factor`."""
+    n = LU.shape[0]
+    y = np.empty(n)
+    for i in range(n):
+        acc = b[perm[i]]
+        for k in range(i):
+            acc -= LU[i, k] * y[k]
+        y[i] = acc
+    for i in range(n - 1, -1, -1):
+        acc = y[i]
+        for k in range(i + 1, n):
+            acc -= LU[i, k] * y[k]
+        y[i] = acc / LU[i, i]
+    return y
+
+
+@njit(cache=True, nogil=True)
+def lu_apply_t(LU, perm, c):
+    """``R^-T c`` from :func:`lu_factor` (``R^T = U^T L^T P``)."""
+    n = LU.shape[0]
+    z = np.empty(n)
+    for i in range(n):
+        acc = c[i]
+        for k in range(i):
+            acc -= LU[k, i] * z[k]
+        z[i] = acc / LU[i, i]
+    for i in range(n - 1, -1, -1):
+        acc = z[i]
+        for k in range(i + 1, n):
+            acc -= LU[k, i] * z[k]
+        z[i] = acc
+    out = np.empty(n)
+    for i in range(n):
+        out[perm[i]] = z[i]
+    return out
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def determined_solve(K, rhs, nf):
+    """``K = [[Hxx, R^T], [R, 0]]`` with fewer unknowns ``nf`` than rows of ``R`` (at a vertex whose
+    equations are dependent: the neck at its optimum has 16 free cables for 24 equations). When
+    ``R`` has full column rank, ``x`` is fixed by the (consistent) rows alone, ``x = (R^T R)^-1 R^T
+    r_c``, and the multipliers are the least-norm solution of ``R^T l = r_x - Hxx x``: what least
+    squares on the whole system gives, from one Cholesky of ``R^T R`` instead of an SVD of ``K``
+    (10x faster). Rows inconsistent beyond what least squares could pass (a wrong guess of the
+    active set) give NaNs at once, as :func:`kkt_solve` would after its SVD. Falls back to
+    :func:`kkt_solve` otherwise."""
+    N = K.shape[0]
+    m = N - nf
+    Nm = np.zeros((nf, nf))
+    for i in range(m):
+        Ri = K[nf + i]
+        for a in range(nf):
+            ra = Ri[a]
+            if ra != 0.0:
+                for b in range(a + 1):
+                    Nm[a, b] += ra * Ri[b]
+    scale = 1e-300
+    for a in range(nf):
+        scale = max(scale, Nm[a, a])
+    if not chol_lower(Nm, nf, 1e-12 * scale)[0]:
+        return kkt_solve(K, rhs, False)
+    # x = N^-1 R^T r_c
+    v = np.zeros(nf)
+    for i in range(m):
+        ri = rhs[nf + i]
+        for a in range(nf):
+            v[a] += K[nf + i, a] * ri
+    x = _chol_apply(Nm, v)
+    # the rows must be consistent (else the instant's active set is wrong: lstsq decides)
+    rscale = 1.0
+    for i in range(m):
+        rscale = max(rscale, abs(rhs[nf + i]))
+    worst = 0.0
+    for i in range(m):
+        acc = -rhs[nf + i]
+        for a in range(nf):
+            acc += K[nf + i, a] * x[a]
+        if not abs(acc) <= worst:
+            worst = abs(acc)
+    if not worst <= 1e-10 * rscale:
+        # lstsq's answer would fail its own check (NaNs) whenever this x, the rows' least-squares
+        # point, misses by more than sqrt(m) times its threshold: no x' meets every row within
+        # 1e-10 max|rhs| then (|R x' - r_c|_inf >= |R x - r_c|_2 / sqrt(m)). Said without the SVD
+        # (~250 us on the neck: a wrong crossover guess cost more than its instant's iterations)
+        full = 1.0
+        for i in range(N):
+            full = max(full, abs(rhs[i]))
+        if worst > np.sqrt(m) * 1e-10 * full:
+            out = np.empty(N)
+            out[:] = np.nan
+            return out
+        return kkt_solve(K, rhs, False)
+    # l = R N^-1 (r_x - Hxx x)
+    w = np.empty(nf)
+    for a in range(nf):
+        acc = rhs[a]
+        for b in range(nf):
+            acc -= K[a, b] * x[b]
+        w[a] = acc
+    u = _chol_apply(Nm, w)
+    sol = np.empty(N)
+    sol[:nf] = x
+    for i in range(m):
+        acc = 0.0
+        for a in range(nf):
+            acc += K[nf + i, a] * u[a]
+        sol[nf + i] = acc
+    return sol
+
+
+@njit(cache=True, nogil=True)
+def chol_lower(M, n, floor):
+    """The Cholesky factor of ``M[:n, :n]``'s lower triangle, in place (column by column): ``(True,
+    its smallest pivot)``, or ``(False, 0)`` at the first pivot (before its square root) at or below
+    ``floor`` (then ``M`` is partly overwritten). Shared by the small factors of the active-set and
+    uniqueness tests (:func:`determined_solve`, :func:`mcdm_pin.solvers._unique.unique_test`,
+    :func:`mcdm_pin.solvers._unique.definite_beyond`)."""
+    dmin = np.inf
+    for j in range(n):
+        acc = M[j, j]
+        for k in range(j):
+            acc -= M[j, k] * M[j, k]
+        if not acc > floor:
+            return False, 0.0
+        d = np.sqrt(acc)
+        M[j, j] = d
+        dmin = min(dmin, d)
+        for i in range(j + 1, n):
+            t = M[i, j]
+            for k in range(j):
+                t -= M[i, k] * M[j, k]
+            M[i, j] = t / d
+    return True, dmin
+
+
+@njit(cache=True, nogil=True)
+def _chol_apply(L, r):
+    """``(L L^T)^-1 r``."""
+    n = L.shape[0]
+    y = r.copy()
+    for i in range(n):
+        t = y[i]
+        for k in range(i):
+            t -= L[i, k] * y[k]
+        y[i] = t / L[i, i]
+    for i in range(n - 1, -1, -1):
+        t = y[i]
+        for k in range(i + 1, n):
+            t -= L[k, i] * y[k]
+        y[i] = t / L[i, i]
+    return y
+
+
+@njit(cache=True, nogil=True)
+def matvec(M, x):
+    """``M x`` by rows (:func:`._ipm_linalg.dot`): at these sizes numba's ``@`` (a BLAS call) costs
+    more than the arithmetic."""
+    out = np.empty(M.shape[0])
+    for i in range(M.shape[0]):
+        out[i] = dot(M[i], x)
+    return out

@@ -1,0 +1,192 @@
+r"""The compiled uniqueness test of an optimum (:func:`unique_test`):
+:func:`mcdm_pin.solvers.least_norm.is_unique` after its first two tests, the same steps and
+thresholds (the strongly active constraints, their rows' rank on the free variables, the Hessian
+of the Lagrangian on the null space of those rows); the numpy code stays the reference. The
+answer kernels of :mod:`._fast` call it, and :mod:`.least_norm` calls it through :mod:`._fast`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from ..jit import njit
+
+from ..model.kernels import gram_lower
+from ..tolerances import UNIQUE_PENALTY
+from ._ipm_linalg import dot
+from ._kkt_eq import cone_force
+from ._kkt_linalg import chol_lower
+
+
+@njit(cache=True, nogil=True)
+def definite_beyond(H, J, rows, thr, hscale):
+    """Whether ``H + gamma J^T J - thr I`` has a Cholesky factor (``J = J[:rows]``, ``gamma =
+    UNIQUE_PENALTY hscale / max |J^T J|``): then ``z^T H z > thr |z|^2`` for every ``z`` with
+    ``J z = 0``, the uniqueness test's conclusion without the null space
+    (:mod:`mcdm_pin.solvers.least_norm`, "The shortcut")."""
+    nf = H.shape[0]
+    M = np.zeros((nf, nf))
+    gram_lower(J, rows, nf, M)
+    big = 0.0
+    for a in range(nf):
+        for b in range(a + 1):
+            big = max(big, abs(M[a, b]))
+    gam = UNIQUE_PENALTY * hscale / big if big > 0.0 else 0.0
+    for a in range(nf):
+        for b in range(a + 1):
+            M[a, b] = H[a, b] + gam * M[a, b]
+        M[a, a] -= thr
+    return chol_lower(M, nf, 0.0)[0]
+
+
+@njit(cache=True, nogil=True)
+def unique_test(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel):
+    """:func:`mcdm_pin.solvers.least_norm.is_unique` after its first two tests (its
+    ``_strongly_active``, the Cholesky of ``J^T J``, the Cholesky of ``H + gamma J^T J - thr I``
+    (:func:`definite_beyond`), then the null space of ``J`` by an SVD and the reduced Hessian's
+    smallest eigenvalue): 1 unique, 0 not proven unique."""
+    gscale = _gradient_scale(x, c, P)
+    thr = unique_rel * gscale
+    free, nf = _not_strongly_active(x, z, lb, ub, near, thr)
+    if nf == 0:
+        return 1
+    crow, nr, cv, cs, ncv = _held_cone_rows(G, gc, ax, tn, cosr, zc, x, thr)
+    m = A.shape[0]
+    rows = m + nr
+    J = np.empty((rows, nf))
+    for r in range(rows):
+        for a in range(nf):
+            J[r, a] = A[r, free[a]] if r < m else crow[r - m, free[a]]
+    # the usual case (a vertex): J has full column rank, the null space is empty
+    if rows >= nf and _full_column_rank(J, rows, nf):
+        return 1
+    H, hscale = _reduced_hessian(P, free, nf, cv, cs, ncv)
+    if definite_beyond(H, J, rows, unique_rel * hscale, hscale):
+        return 1
+    return _null_space_curvature(J, H, rows, nf, unique_rel * hscale)
+
+
+@njit(cache=True, nogil=True)
+def _gradient_scale(x, c, P):
+    """The scale of the objective's gradient ``P x + c``: the largest entry of it and of ``c``."""
+    n = x.shape[0]
+    grad = c.copy()  # the objective's gradient P x + c
+    for i in range(n):
+        grad[i] += dot(P[i], x)  # (vectorised: a plain loop's sum waited on each product; 3 of 14 us)
+    gscale = 1e-300
+    for i in range(n):
+        gscale = max(gscale, abs(grad[i]), abs(c[i]))
+    return gscale
+
+
+@njit(cache=True, nogil=True)
+def _not_strongly_active(x, z, lb, ub, near, thr):
+    """The variables not at a bound (within ``near``) with a multiplier beyond ``thr``: ``(free,
+    nf)``, their indices in ``free[:nf]``."""
+    n = x.shape[0]
+    free = np.empty(n, dtype=np.int64)
+    nf = 0
+    for i in range(n):
+        at_l = (x[i] - lb[i] <= near * (1.0 + abs(lb[i]))) and (z[i] < -thr)
+        at_u = (ub[i] - x[i] <= near * (1.0 + abs(ub[i]))) and (z[i] > thr)
+        if not (at_l or at_u):
+            free[nf] = i
+            nf += 1
+    return free, nf
+
+
+@njit(cache=True, nogil=True)
+def _held_cone_rows(G, gc, ax, tn, cosr, zc, x, thr):
+    """The rows the cones held at ``x`` (multiplier beyond ``thr``) add to the active constraints'
+    Jacobian, ``crow[:nr]`` (every row of ``G`` for a cone held at its apex, else its surface's
+    normal and its tangent across the axis), and their curvature ``sum_k cs[k] cv[k] cv[k]^T``
+    (``k < ncv``): ``(crow, nr, cv, cs, ncv)``."""
+    n = x.shape[0]
+    K = G.shape[0]
+    crow = np.empty((3 * K, n))
+    cv = np.empty((K, n))  # the held cones' curvature: sum_k cs[k] cv[k] cv[k]^T
+    cs = np.empty(K)
+    ncv = 0
+    nr = 0
+    for k in range(K):
+        mu = zc[k, 0] * cosr[k]
+        if not mu > thr:
+            continue
+        F0, F1, F2, al, p0, p1, p2 = cone_force(G, gc, ax, k, x)
+        p = np.array([p0, p1, p2])
+        perp = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+        nF = np.sqrt(F0 * F0 + F1 * F1 + F2 * F2)
+        if perp <= 1e-12 * max(nF, 1e-300):  # held at the apex: every row of G
+            for a in range(3):
+                crow[nr] = G[k, a]
+                nr += 1
+            continue
+        h = p / perp
+        w = h - tn[k] * ax[k]
+        e0 = ax[k, 1] * h[2] - ax[k, 2] * h[1]
+        e1 = ax[k, 2] * h[0] - ax[k, 0] * h[2]
+        e2 = ax[k, 0] * h[1] - ax[k, 1] * h[0]
+        crow[nr] = w[0] * G[k, 0] + w[1] * G[k, 1] + w[2] * G[k, 2]
+        crow[nr + 1] = e0 * G[k, 0] + e1 * G[k, 1] + e2 * G[k, 2]
+        nr += 2
+        # curvature mu G^T (I - a a^T - h h^T) G / |F_perp| = mu/|F_perp| v v^T, v = G^T (a x h)
+        cv[ncv] = crow[nr - 1]
+        cs[ncv] = mu / perp
+        ncv += 1
+    return crow, nr, cv, cs, ncv
+
+
+@njit(cache=True, nogil=True)
+def _full_column_rank(J, rows, nf):
+    """Whether ``J[:rows]`` (``nf`` columns) has full column rank: the Cholesky factor of ``J^T J``
+    exists with its smallest pivot squared above 1e-10 of ``J^T J``'s largest entry."""
+    JtJ = np.zeros((nf, nf))
+    gram_lower(J, rows, nf, JtJ)
+    big = 1e-300
+    for a in range(nf):
+        for bb in range(a + 1):
+            JtJ[bb, a] = JtJ[a, bb]
+            big = max(big, abs(JtJ[a, bb]))
+    ok, dmin = chol_lower(JtJ, nf, 0.0)
+    return ok and dmin * dmin > 1e-10 * big
+
+
+@njit(cache=True, nogil=True)
+def _reduced_hessian(P, free, nf, cv, cs, ncv):
+    """The Hessian of the Lagrangian on the free variables, ``P_FF`` plus the held cones'
+    curvature, and the scale of ``P`` (its largest entry): ``(H, hscale)``."""
+    n = P.shape[0]
+    H = np.empty((nf, nf))
+    hscale = 1e-300
+    for i in range(n):
+        for j in range(n):
+            hscale = max(hscale, abs(P[i, j]))
+    for a in range(nf):
+        for bb in range(nf):
+            hab = P[free[a], free[bb]]
+            for k in range(ncv):
+                hab += cs[k] * cv[k, free[a]] * cv[k, free[bb]]
+            H[a, bb] = hab
+    return H, hscale
+
+
+@njit(cache=True, nogil=True)
+def _null_space_curvature(J, H, rows, nf, floor):
+    """1 if ``H`` restricted to the null space of ``J[:rows]`` (by an SVD) has its smallest
+    eigenvalue above ``floor`` (or the null space is empty), else 0."""
+    if rows > 0:
+        _, sv, Vt = np.linalg.svd(J, full_matrices=True)
+        smax = 0.0
+        for i in range(sv.shape[0]):
+            smax = max(smax, sv[i])
+        rank = 0
+        for i in range(sv.shape[0]):
+            if sv[i] > 1e-10 * max(smax, 1e-300):
+                rank += 1
+        Z = np.ascontiguousarray(Vt[rank:].T)
+    else:
+        Z = np.eye(nf)
+    if Z.shape[1] == 0:
+        return 1
+    Hr = Z.T @ H @ Z
+    lam = np.linalg.eigvalsh(0.5 * (Hr + Hr.T))
+    return 1 if lam.min() > floor else 0
