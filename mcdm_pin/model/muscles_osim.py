@@ -323,6 +323,12 @@ class OpenSimMuscles:
         sin_max = np.sin(self.max_pennation)
         self._pen_min = np.where(self.max_pennation > SIGNIFICANT, self.h / sin_max, 0.01 * self.lo)
         self._sin_max = sin_max
+        # constants of fiber(): the pennation floor's threshold, the masks, the speed's scale
+        self._floor_along = self._pen_min * np.cos(self.max_pennation)
+        self._pennate = self.alpha0 > np.finfo(float).eps
+        self._slack_below = self.ls - SIGNIFICANT
+        self._pennated = self.millard | self.thelen
+        self._speed_scale = self.lo * self.vmax
 
     @property
     def size(self) -> int:
@@ -341,25 +347,24 @@ class OpenSimMuscles:
         lf = np.sqrt(along * along + self.h * self.h)
         # Millard: the pennation model's floor, the fiber clamp, the pennation angle's limits
         pen_min = self._pen_min
-        lf_m = np.maximum(np.where(along >= pen_min * np.cos(self.max_pennation), lf, pen_min), self.min_fiber)
+        lf_m = np.maximum(np.where(along >= self._floor_along, lf, pen_min), self.min_fiber)
         sin_m = self.h / lf_m
-        phi = np.where((self.alpha0 > np.finfo(float).eps) & (lf_m > pen_min),
-                       np.arcsin(np.minimum(sin_m, 1.0)), self.max_pennation)
+        phi = np.where(self._pennate & (lf_m > pen_min), np.arcsin(np.minimum(sin_m, 1.0)), self.max_pennation)
         phi = np.where(sin_m >= self._sin_max, self.max_pennation, phi)
-        phi = np.where(self.alpha0 > np.finfo(float).eps, phi, 0.0)
+        phi = np.where(self._pennate, phi, 0.0)
         cos_m = np.cos(phi)
-        slack = ell - lf_m * cos_m < self.ls - SIGNIFICANT
+        slack = ell - lf_m * cos_m < self._slack_below
         dl_m = np.where(slack, 0.0, ell_dot * cos_m)
         clamped = ((lf_m <= self.min_fiber) & (dl_m <= 0)) | (lf_m < self.min_fiber)
         dl_m = np.where(clamped, 0.0, dl_m)
         cos_d = along / lf
         # Thelen: the same pennation model, no slack rule; no force at or below the minimum length
-        pennated = self.millard | self.thelen
+        pennated = self._pennated
         lf = np.where(pennated, lf_m, lf)
         cos_a = np.where(pennated, cos_m, cos_d)
         dl = np.where(self.millard, dl_m, ell_dot * cos_a)
         clamped = np.where(self.thelen, lf_m <= pen_min, self.millard & clamped)
-        return lf / self.lo, dl / (self.lo * self.vmax), cos_a, clamped
+        return lf / self.lo, dl / self._speed_scale, cos_a, clamped
 
     def force_range(self, tendon_lengths, tendon_velocities):
         """The tension range (:class:`~mcdm_pin.model.muscles.MuscleState`) at one instant."""
