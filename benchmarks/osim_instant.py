@@ -93,7 +93,7 @@ def main(argv=None):
           f"MCDM_PIN_JIT={os.environ.get('MCDM_PIN_JIT', 'auto')}, {len(terms)} instants")
     print(f"  route pass                                  {_stats(route[1::2])}")
     print(f"  terms (route pass, L, M, h, wrench maps)    {_stats(terms)}")
-    print(f"  muscles' force range (numpy)                {_stats(fr)}")
+    print(f"  muscles' force range (one Bezier kernel)   {_stats(fr)}")
     print(f"  terms with the force range (one call)       {_stats(full)}")
 
 

@@ -89,33 +89,6 @@ def _scale_curviness(c):
 
 
 _BINOM5 = np.array([1.0, 5.0, 10.0, 10.0, 5.0, 1.0])
-_BINOM4 = np.array([1.0, 4.0, 6.0, 4.0, 1.0])
-
-
-def _bezier(u, P):
-    """Quintic Bézier value at parameters ``u`` (n,) for control points ``P`` (n, 6)."""
-    i = np.arange(6)
-    basis = _BINOM5 * (1 - u[:, None]) ** (5 - i) * u[:, None] ** i
-    return (basis * P).sum(axis=1)
-
-
-def _bezier_du(u, P):
-    i = np.arange(5)
-    basis = _BINOM4 * (1 - u[:, None]) ** (4 - i) * u[:, None] ** i
-    return 5.0 * (basis * np.diff(P, axis=1)).sum(axis=1)
-
-
-_POW = np.arange(6)
-
-
-def _bezier_and_du(u, P, dP):
-    """:func:`_bezier` and :func:`_bezier_du` from one set of powers (the same numbers as the two):
-    ``dP = np.diff(P, axis=1)``."""
-    up = u[:, None] ** _POW  # u^i
-    sp = (1 - u[:, None]) ** _POW  # (1 - u)^i
-    value = (_BINOM5 * sp[:, ::-1] * up * P).sum(axis=1)
-    du = 5.0 * (_BINOM4 * sp[:, 4::-1] * up[:, :5] * dP).sum(axis=1)
-    return value, du
 
 
 @dataclass(frozen=True)
@@ -134,26 +107,13 @@ class BezierCurve:
     dydx1: float
 
     def __call__(self, x) -> np.ndarray:
+        """The curve at abscissae ``x`` (the kernel of :func:`_evaluate`, one row per abscissa)."""
         x = np.atleast_1d(np.asarray(x, dtype=float))
-        out = np.empty_like(x)
-        lo, hi = x < self.x0, x > self.x1
-        out[lo] = self.y0 + self.dydx0 * (x[lo] - self.x0)
-        out[hi] = self.y1 + self.dydx1 * (x[hi] - self.x1)
-        mid = ~(lo | hi)
-        if mid.any():
-            xm = x[mid]
-            seg = np.clip(np.searchsorted(self.px[:, 5], xm, side="left"), 0, len(self.px) - 1)
-            PX, PY = self.px[seg], self.py[seg]
-            u = np.clip((xm - PX[:, 0]) / (PX[:, 5] - PX[:, 0]), 0.0, 1.0)
-            for _ in range(60):  # Newton's method on u (x(u) is monotone on each segment)
-                f = _bezier(u, PX) - xm
-                d = _bezier_du(u, PX)
-                step = np.where(d != 0, f / np.where(d != 0, d, 1.0), 0.0)
-                u = np.clip(u - step, 0.0, 1.0)
-                if np.all(np.abs(f) <= 4 * np.finfo(float).eps * np.maximum(1.0, np.abs(xm))):
-                    break
-            out[mid] = _bezier(u, PY)
-        return out
+        n = len(x)
+        rows = BezierCurve(*(np.ascontiguousarray(np.broadcast_to(np.asarray(getattr(self, f), dtype=float),
+                                                                  (n,) + np.shape(getattr(self, f))))
+                             for f in ("px", "py", "x0", "x1", "y0", "y1", "dydx0", "dydx1")))
+        return _evaluate(_tables(rows), x)
 
 
 def _curve(points, x0, x1, y0, y1, dydx0, dydx1) -> BezierCurve:
@@ -313,52 +273,20 @@ def _grid(c) -> np.ndarray:
     return c.px @ basis.T
 
 
-def _start(xm, XG) -> np.ndarray:
-    """Newton's first Bézier parameters: ``x(u)`` interpolated linearly between the table's
-    abscissae ``XG`` (n, G) (increasing along a segment) around each ``xm`` (n,)."""
-    G = XG.shape[1]
-    i = np.clip((XG < xm[:, None]).sum(axis=1), 1, G - 1)
-    rows = np.arange(len(xm))
-    lo, hi = XG[rows, i - 1], XG[rows, i]
-    width = hi - lo
-    t = np.where(width > 0, (xm - lo) / np.where(width > 0, width, 1.0), 0.0)
-    return np.clip((i - 1 + t) / (G - 1), 0.0, 1.0)
+def _tables(c) -> tuple:
+    """The arguments of :func:`mcdm_pin.model.bezier_kernels.bezier_values` for a stacked curve
+    (:func:`_stack`): control points, ends, start tables (C-ordered, built once per muscle set)."""
+    ends = np.stack([c.x0, c.x1, c.y0, c.y1, c.dydx0, c.dydx1], axis=1)
+    return tuple(np.ascontiguousarray(a, dtype=float) for a in (c.px, c.py, ends, _grid(c)))
 
 
-def _evaluate(triples) -> list:
-    """Stacked curves (:func:`_stack`) at one abscissa per muscle: ``[(c, x, grid), ...]`` (``grid``
-    :func:`_grid` of ``c``) -> the values ``[y, ...]``; every curve's Bézier parameters are solved in
-    one Newton iteration (x(u) is monotone on each segment) from the tables' interpolation."""
-    outs, rows_x, rows_y, rows_g, xs, where = [], [], [], [], [], []
-    for c, x, grid in triples:
-        x = np.asarray(x, dtype=float)
-        out = np.where(x < c.x0, c.y0 + c.dydx0 * (x - c.x0), c.y1 + c.dydx1 * (x - c.x1))
-        mid = np.flatnonzero((x >= c.x0) & (x <= c.x1))
-        xm = x[mid]
-        seg = np.minimum((xm[:, None] > c.px[mid, :, 5]).sum(axis=1), c.px.shape[1] - 1)
-        rows_x.append(c.px[mid, seg])
-        rows_y.append(c.py[mid, seg])
-        rows_g.append(grid[mid, seg])
-        xs.append(xm)
-        where.append(mid)
-        outs.append(out)
-    PX, PY, xm = np.concatenate(rows_x), np.concatenate(rows_y), np.concatenate(xs)
-    if len(xm):
-        u = _start(xm, np.concatenate(rows_g))
-        tol = 4 * np.finfo(float).eps * np.maximum(1.0, np.abs(xm))
-        dPX = np.diff(PX, axis=1)
-        for _ in range(60):
-            f, d = _bezier_and_du(u, PX, dPX)
-            f = f - xm
-            if np.all(np.abs(f) <= tol):
-                break
-            u = np.clip(u - np.where(d != 0, f / np.where(d != 0, d, 1.0), 0.0), 0.0, 1.0)
-        y = _bezier(u, PY)
-        k = 0
-        for out, mid in zip(outs, where):
-            out[mid] = y[k:k + len(mid)]
-            k += len(mid)
-    return outs
+def _evaluate(tables, x) -> np.ndarray:
+    """A stacked curve (its :func:`_tables`) at one abscissa per row ``x``: one compiled call
+    (:mod:`mcdm_pin.model.bezier_kernels`: Newton's method on the Bézier parameter from the tables'
+    interpolation, OpenSim's linear extensions beyond the ends)."""
+    from .. import jit
+
+    return jit.kernels("model.bezier_kernels").bezier_values(*tables, np.ascontiguousarray(x, dtype=float))
 
 
 class OpenSimMuscles:
@@ -388,14 +316,19 @@ class OpenSimMuscles:
         mill = [self.muscles[i] for i in self._mi]
         self._curves = tuple(_stack([m.curves[k] for m in mill]) for k in range(3)) if mill else None
         # the three curves (active force-length, force-velocity, passive) solved as one
-        self._all = _concat(self._curves) if mill else None
-        self._grid = _grid(self._all) if mill else None
+        self._all = _tables(_concat(self._curves)) if mill else None
         dg = [self.muscles[i] for i in self._di]
         self._dg = tuple(np.array([m.curves[k] for m in dg], dtype=float) for k in range(3))
         self.h = self.lo * np.sin(self.alpha0)
         sin_max = np.sin(self.max_pennation)
         self._pen_min = np.where(self.max_pennation > SIGNIFICANT, self.h / sin_max, 0.01 * self.lo)
         self._sin_max = sin_max
+        # constants of fiber(): the pennation floor's threshold, the masks, the speed's scale
+        self._floor_along = self._pen_min * np.cos(self.max_pennation)
+        self._pennate = self.alpha0 > np.finfo(float).eps
+        self._slack_below = self.ls - SIGNIFICANT
+        self._pennated = self.millard | self.thelen
+        self._speed_scale = self.lo * self.vmax
 
     @property
     def size(self) -> int:
@@ -414,25 +347,24 @@ class OpenSimMuscles:
         lf = np.sqrt(along * along + self.h * self.h)
         # Millard: the pennation model's floor, the fiber clamp, the pennation angle's limits
         pen_min = self._pen_min
-        lf_m = np.maximum(np.where(along >= pen_min * np.cos(self.max_pennation), lf, pen_min), self.min_fiber)
+        lf_m = np.maximum(np.where(along >= self._floor_along, lf, pen_min), self.min_fiber)
         sin_m = self.h / lf_m
-        phi = np.where((self.alpha0 > np.finfo(float).eps) & (lf_m > pen_min),
-                       np.arcsin(np.minimum(sin_m, 1.0)), self.max_pennation)
+        phi = np.where(self._pennate & (lf_m > pen_min), np.arcsin(np.minimum(sin_m, 1.0)), self.max_pennation)
         phi = np.where(sin_m >= self._sin_max, self.max_pennation, phi)
-        phi = np.where(self.alpha0 > np.finfo(float).eps, phi, 0.0)
+        phi = np.where(self._pennate, phi, 0.0)
         cos_m = np.cos(phi)
-        slack = ell - lf_m * cos_m < self.ls - SIGNIFICANT
+        slack = ell - lf_m * cos_m < self._slack_below
         dl_m = np.where(slack, 0.0, ell_dot * cos_m)
         clamped = ((lf_m <= self.min_fiber) & (dl_m <= 0)) | (lf_m < self.min_fiber)
         dl_m = np.where(clamped, 0.0, dl_m)
         cos_d = along / lf
         # Thelen: the same pennation model, no slack rule; no force at or below the minimum length
-        pennated = self.millard | self.thelen
+        pennated = self._pennated
         lf = np.where(pennated, lf_m, lf)
         cos_a = np.where(pennated, cos_m, cos_d)
         dl = np.where(self.millard, dl_m, ell_dot * cos_a)
         clamped = np.where(self.thelen, lf_m <= pen_min, self.millard & clamped)
-        return lf / self.lo, dl / (self.lo * self.vmax), cos_a, clamped
+        return lf / self.lo, dl / self._speed_scale, cos_a, clamped
 
     def force_range(self, tendon_lengths, tendon_velocities):
         """The tension range (:class:`~mcdm_pin.model.muscles.MuscleState`) at one instant."""
@@ -442,7 +374,7 @@ class OpenSimMuscles:
         fl, fv, fp = np.zeros(self.size), np.zeros(self.size), np.zeros(self.size)
         mi, di = self._mi, self._di
         if mi.size:
-            y = _evaluate([(self._all, np.concatenate([l[mi], v[mi], l[mi]]), self._grid)])[0]
+            y = _evaluate(self._all, np.concatenate([l[mi], v[mi], l[mi]]))
             fl[mi], fv[mi], fp[mi] = np.split(y, 3)
         if di.size:
             width, e0, use_passive = self._dg

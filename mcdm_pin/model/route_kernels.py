@@ -186,6 +186,48 @@ def osim_route_pass(oM, q, route_int, pt_kind, pt_q, pt_v, pt_fun, pt_float, fun
                 pt_dP, lever)
 
 
+@njit(cache=True, nogil=True)
+def osim_levers(lever, seg_a, seg_b, seg_cable, seg_active, seg_scale, point_key, X, oM, Jt, sub_v, sub_phys,
+                child_key, L, RT):
+    """:func:`mcdm_pin.model.routes.add_levers` (its docstring) in one pass over the segments, in
+    place on ``L`` (m, nv) and ``RT`` (Jn, 6, m); ``Jt`` (nv, 6) the world Jacobian's transpose."""
+    for s in range(seg_a.shape[0]):
+        if not (seg_scale[s] > 0 and seg_active[s]):
+            continue
+        a, b = seg_a[s], seg_b[s]
+        if not (_moved(lever, a) or _moved(lever, b)):
+            continue
+        d0, d1, d2 = X[b, 0] - X[a, 0], X[b, 1] - X[a, 1], X[b, 2] - X[a, 2]
+        c = seg_scale[s] / np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        u = (d0 * c, d1 * c, d2 * c)
+        for e, sign in ((b, 1.0), (a, -1.0)):
+            if _moved(lever, e):
+                _lever_moment(lever, e, sign, u, point_key[e], seg_cable[s], oM, Jt, sub_v, sub_phys, child_key,
+                              L, RT)
+
+
+@register_jitable
+def _moved(lever, p):
+    return abs(lever[p, 0]) + abs(lever[p, 1]) + abs(lever[p, 2]) > 0
+
+
+@register_jitable
+def _lever_moment(lever, e, sign, u, k, cable, oM, Jt, sub_v, sub_phys, child_key, L, RT):
+    """End ``e``'s moment ``m = sign (R_k lever_e) x u`` (world) into ``L[cable]`` and ``RT[:, 3:6, cable]``."""
+    d = [0.0, 0.0, 0.0]
+    for i in range(3):
+        d[i] = oM[k, i, 0] * lever[e, 0] + oM[k, i, 1] * lever[e, 1] + oM[k, i, 2] * lever[e, 2]
+    m = (sign * (d[1] * u[2] - d[2] * u[1]), sign * (d[2] * u[0] - d[0] * u[2]), sign * (d[0] * u[1] - d[1] * u[0]))
+    for v in range(Jt.shape[0]):
+        if sub_v[v, k] != 0:
+            L[cable, v] += m[0] * Jt[v, 3] + m[1] * Jt[v, 4] + m[2] * Jt[v, 5]
+    for j in range(sub_phys.shape[0]):
+        if sub_phys[j, k] != 0:
+            ck = child_key[j]
+            for i in range(3):
+                RT[j, 3 + i, cable] += oM[ck, 0, i] * m[0] + oM[ck, 1, i] * m[1] + oM[ck, 2, i] * m[2]
+
+
 def warm_calls():
     """This module's kernel with example arguments of the types :class:`~mcdm_pin.model.routes.RoutePaths`
     passes (registered with :mod:`mcdm_pin.jit`)."""
@@ -209,9 +251,13 @@ def warm_calls():
     qf = np.zeros((1, NQ_FLOAT))
     qf[0, QB_LOCAL], qf[0, Q_AXIS + 2], qf[0, Q_DIR + 1] = 1.0, 1.0, 1.0
     qf[0, Q_RADIUS], qf[0, Q_SCALE], qf[0, Q_LEAD], qf[0, Q_REF] = 0.05, 1.0, 0.005, 1.0
-    return [(route_pass, (oM, wi, wf, qi, qf, np.zeros((4, 3)), np.array([1], dtype=i64), np.array([False]),
+    i1 = np.array([1], dtype=i64)
+    lever_args = (np.zeros((2, 3)), np.array([0], dtype=i64), i1, np.array([0], dtype=i64), np.array([True]),
+                  np.ones(1), np.zeros(2, dtype=i64), np.array([[0.0, 0, 0], [1, 0, 0]]), oM, np.zeros((1, 6)),
+                  np.ones((1, 1)), np.ones((1, 1)), np.zeros(1, dtype=i64), np.zeros((1, 1)), np.zeros((1, 6, 1)))
+    return [(route_pass, (oM, wi, wf, qi, qf, np.zeros((4, 3)), i1, np.array([False]),
                           np.zeros(2), np.zeros(1), np.zeros(1, dtype=np.bool_), 1)),
-            (osim_route_pass, osim_args)]
+            (osim_route_pass, osim_args), (osim_levers, lever_args)]
 
 
 def _register() -> None:

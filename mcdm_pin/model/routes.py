@@ -174,25 +174,10 @@ def add_levers(routes, L, RT, J, X, oM, sub_v, sub_phys, child_key) -> None:
     that move the end's body (``sub_v`` (nv, K); :math:`\omega_v` the angular rows ``J[3:]`` of the
     world Jacobian), and ``RT`` (Jn, 6, m) the moment :math:`R_c^T m_e` for every physical joint whose
     subtree holds that body (``sub_phys`` (Jn, K); :math:`R_c` the child frame's rotation, key
-    ``child_key``). ``X`` (P, 3): the points the kernel used."""
-    lever = routes.lever
-    moved = np.abs(lever).sum(axis=1) > 0
-    if not moved.any():
-        return
-    s = np.flatnonzero((routes.seg_scale > 0) & routes.seg_active & (moved[routes.seg_a] | moved[routes.seg_b]))
-    if not s.size:
-        return
-    a, b = routes.seg_a[s], routes.seg_b[s]
-    u = X[b] - X[a]
-    u *= (routes.seg_scale[s] / np.linalg.norm(u, axis=1))[:, None]
-    # every moved end of those segments: its point, sign, cable and segment direction
-    ends, sign = np.concatenate([b, a]), np.repeat([1.0, -1.0], len(s))
-    cable, u = np.tile(routes.seg_cable[s], 2), np.vstack([u, u])
-    keep = moved[ends]
-    ends, sign, cable, u = ends[keep], sign[keep], cable[keep], u[keep]
-    k = routes.point_key[ends]
-    m = sign[:, None] * np.cross(np.einsum("nij,nj->ni", oM[k, :3, :3], lever[ends]), u)  # (n, 3) world
-    np.add.at(L, cable, (m @ J[3:6]) * (sub_v[:, k].T != 0))
-    # R_c^T m for every physical joint, kept where the joint's subtree holds the end's body
-    moments = np.einsum("jab,na->jbn", oM[child_key, :3, :3], m) * (sub_phys[:, k] != 0)[:, None, :]
-    np.add.at(RT, (slice(None), slice(3, 6), cable), moments)
+    ``child_key``). ``X`` (P, 3): the points the kernel used. One pass over the segments:
+    :func:`mcdm_pin.model.route_kernels.osim_levers` (compiled or not: mcdm_pin/jit.py)."""
+    from .. import jit
+
+    jit.kernels("model.route_kernels").osim_levers(
+        routes.lever, routes.seg_a, routes.seg_b, routes.seg_cable, routes.seg_active, routes.seg_scale,
+        routes.point_key, X, oM, np.ascontiguousarray(J.T), sub_v, sub_phys, child_key, L, RT)

@@ -62,15 +62,32 @@ class PointLoops:
         self.names = tuple(n for n, _, _ in self.loops)
         self.k = 3 * len(self.loops)
         self.data = model.createData()
-        # per loop point: (columns of its loop, sign, frame, its joint and the joint's ancestors)
-        self._points = []
+        # the wrench map's pairs (a loop point, a joint whose subtree holds it: the point's joint and
+        # its ancestors): the joint, the point's frame, its sign and its loop, as index arrays
+        pairs = []
         for i, (_, a, b) in enumerate(self.loops):
             for fid, sign in ((b, 1.0), (a, -1.0)):
-                chain, j = [], int(model.frames[fid].parentJoint)
+                j = int(model.frames[fid].parentJoint)
                 while j > 0:
-                    chain.append(j)
+                    pairs.append((j, fid, sign, i))
                     j = int(model.parents[j])
-                self._points.append((slice(3 * i, 3 * i + 3), sign, fid, chain, np.array(chain, dtype=int)))
+        joints = sorted({p[0] for p in pairs})
+        frames = sorted({p[1] for p in pairs})
+        # placements read through element references into self.data (they follow every update and
+        # cost far less than indexing data.oMi, data.oMf anew)
+        self._refs = [self.data.oMi[j] for j in joints] + [self.data.oMf[f] for f in frames]
+        self._pair_joint = np.array([joints.index(p[0]) for p in pairs], dtype=int)
+        self._pair_frame = np.array([len(joints) + frames.index(p[1]) for p in pairs], dtype=int)
+        self._pair_sign = np.array([p[2] for p in pairs], dtype=float)
+        # W = E (blocks C): E (njoints, pairs) puts a pair's block on its joint's row, C (pairs, 3, 3k)
+        # on its loop's columns
+        self._pair_rows = np.zeros((model.njoints, len(pairs)))
+        self._pair_cols = np.zeros((len(pairs), 3, self.k))
+        for n, (j, _, _, i) in enumerate(pairs):
+            self._pair_rows[j, n] = 1.0
+            self._pair_cols[n, :, 3 * i:3 * i + 3] = np.eye(3)
+        self._eye = np.eye(model.nv)
+        self._eye.flags.writeable = False
 
     def residual(self, q) -> np.ndarray:
         """(3k,) ``x_2 - x_1`` per loop, world axes (m)."""
@@ -101,7 +118,7 @@ class PointLoops:
         return self.jacobian(q) @ np.asarray(a, dtype=float) + self.bias(q, v)
 
     def _coupling_basis(self, q) -> np.ndarray:
-        return np.eye(self.model.nv) if self.couplings is None else self.couplings.basis(q)
+        return self._eye if self.couplings is None else self.couplings.basis(q)
 
     def basis(self, q) -> np.ndarray:
         """(nv, n - 3k) ``N K``: the velocities the couplings and the loops allow (orthonormal ``K``).
@@ -173,21 +190,17 @@ class PointLoops:
         return self._wrench_map()
 
     def _wrench_map(self) -> np.ndarray:
-        """:meth:`wrench_map` at the placements in ``self.data`` (joints' and frames')."""
-        d = self.data
-        W = np.zeros((self.model.njoints, 6, self.k))
-        for cols, sign, fid, chain, rows in self._points:
-            if not chain:
-                continue
-            RT = np.array([d.oMi[j].rotation.T for j in chain])  # (c, 3, 3) world -> joint
-            r = d.oMf[fid].translation - np.array([d.oMi[j].translation for j in chain])  # (c, 3)
-            # the moment about the joint of a unit force along e_i at the point, joint axes: R^T skew(r)
-            sk = np.zeros((len(chain), 3, 3))
-            sk[:, 0, 1], sk[:, 0, 2], sk[:, 1, 2] = -r[:, 2], r[:, 1], -r[:, 0]
-            sk[:, 1, 0], sk[:, 2, 0], sk[:, 2, 1] = r[:, 2], -r[:, 1], r[:, 0]
-            W[rows, :3, cols] -= sign * RT
-            W[rows, 3:, cols] -= sign * (RT @ sk)
-        return W
+        """:meth:`wrench_map` at the placements in ``self.data`` (joints' and frames'), for every
+        (loop point, joint holding it) pair at once."""
+        P = np.array([M.homogeneous for M in self._refs])
+        RT = P[self._pair_joint, :3, :3].transpose(0, 2, 1)  # (n, 3, 3) world -> joint
+        r = P[self._pair_frame, :3, 3] - P[self._pair_joint, :3, 3]  # (n, 3)
+        # the moment about the joint of a unit force along e_i at the point, joint axes: R^T skew(r)
+        sk = np.zeros((len(r), 3, 3))
+        sk[:, 0, 1], sk[:, 0, 2], sk[:, 1, 2] = -r[:, 2], r[:, 1], -r[:, 0]
+        sk[:, 1, 0], sk[:, 2, 0], sk[:, 2, 1] = r[:, 2], -r[:, 1], r[:, 0]
+        blocks = np.concatenate([RT, RT @ sk], axis=1) * -self._pair_sign[:, None, None]  # (n, 6, 3)
+        return np.tensordot(self._pair_rows, blocks @ self._pair_cols, axes=1)
 
     def project(self, q, free=None, iterations: int = 50, tol: float = 1e-13) -> np.ndarray:
         """``q`` moved onto the loops: Gauss-Newton on ``phi`` along the couplings' directions, smallest
