@@ -218,27 +218,39 @@ class _Actuation:
         """``qp`` over ``[f; tau_act]``: the equation of motion's rows gain ``-S`` (:meth:`rows`), every
         other row a zero block, every cone a zero block or, on a joint that carries a closed loop's
         force, that force's share of the torques (``terms.RT_act``); the actuators' bounds and
-        ``w |tau|^2`` are added."""
+        ``w |tau|^2`` are added. What ``qp`` has formed already (its dense Hessian, its cones' stacked
+        arrays and constants) is padded, not formed again from the structure."""
         m, k = qp.n, self.n
-        A = np.hstack([qp.A, np.zeros((qp.A.shape[0], k))])
+        n = m + k
+        A = np.zeros((qp.A.shape[0], n))
+        A[:, :m] = qp.A
         if eom:
             A[:nv, m:] = -self.rows(terms)
         RT_act = getattr(terms, "RT_act", None)
-        pad = lambda G: np.hstack([G, np.zeros((G.shape[0], k))])  # noqa: E731
-        cones = [ConeData(c.joint, np.hstack([c.G, self._cone_block(c, terms, RT_act, cone_frames)]), c.g,
-                          c.axis, c.angle_deg, c.basis) for c in qp.cones]
-        if qp.structured:
-            P, P_diag, P_factor = None, np.concatenate([qp.P_diag, self.weight]), pad(qp.P_factor)
-        else:
-            P = np.zeros((m + k, m + k))
+        G0, g, axis, tan, basis0 = qp.cone_arrays()
+        G = np.zeros((len(g), 3, n))
+        G[:, :, :m] = G0
+        if RT_act is not None:
+            for i, c in enumerate(qp.cones):
+                G[i, :, m:] = self._cone_block(c, terms, RT_act, cone_frames)
+        cones = [ConeData(c.joint, G[i], c.g, c.axis, c.angle_deg, c.basis) for i, c in enumerate(qp.cones)]
+        P = None
+        if qp._P is not None or not qp.structured:
+            # the dense Hessian the objective gave (a compiled Gram product), padded: forming it
+            # again from the padded factor would cost a dense (rows, n) x (n, n) product
+            P = np.zeros((n, n))
             P[:m, :m] = qp.P
-            P[m:, m:] = np.diag(self.weight)
-            P_diag = P_factor = None
+            P.flat[m * (n + 1):: n + 1] = self.weight
+        P_diag = P_factor = None
+        if qp.structured:
+            P_diag = np.concatenate([qp.P_diag, self.weight])
+            P_factor = np.zeros((qp.P_factor.shape[0], n))
+            P_factor[:, :m] = qp.P_factor
         norm_weight = None if qp.norm_weight is None else np.concatenate([qp.norm_weight, np.ones(k)])
         return QPData(P, np.concatenate([qp.c, np.zeros(k)]), qp.r, A, qp.b,
                       np.concatenate([qp.lb, self.lo]), np.concatenate([qp.ub, self.hi]), cones,
-                      P_diag=P_diag, P_factor=P_factor, norm_weight=norm_weight)
-
+                      P_diag=P_diag, P_factor=P_factor, norm_weight=norm_weight,
+                      cone_arrays=(G, g, axis, tan, basis0), cone_consts=qp.cone_consts())
 
     def _cone_block(self, cone, terms, RT_act, cone_frames) -> np.ndarray:
         """(rows of ``cone.G``, n_act): how the actuator torques move the cone's force."""

@@ -179,17 +179,31 @@ def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool =
 
 
 def apply_scaling(qp: QPData, s: Scaling) -> QPData:
-    """The scaled copy of ``qp`` (module docstring)."""
+    """The scaled copy of ``qp`` (module docstring). Its cones' stacked arrays are scaled as a whole
+    and its cones' constants (names, angles, bases) carried over, not stacked again from the cones."""
     d, r, obj = s.d, s.r, s.obj
-    A = r[:, None] * qp.A * d[None, :]
+    # the factors are powers of two, so every product with them is exact and their order is free:
+    # the matrices are scaled in place, one pass per factor
+    A = np.multiply(qp.A, d[None, :])
+    A *= r[:, None]
     P_diag = None if qp.P_diag is None else d * qp.P_diag * d / obj
-    P_factor = None if qp.P_factor is None else qp.P_factor * d[None, :] / np.sqrt(obj)
-    P = None if (P_factor is not None and qp._P is None) else d[:, None] * qp.P * d[None, :] / obj
-    cones = [ConeData(c.joint, s.cone[k] * c.G * d[None, :], s.cone[k] * c.g, c.axis, c.angle_deg, c.basis)
-             for k, c in enumerate(qp.cones)]
+    P_factor = None
+    if qp.P_factor is not None:
+        P_factor = np.multiply(qp.P_factor, d[None, :])
+        P_factor /= np.sqrt(obj)
+    P = None
+    if P_factor is None or qp._P is not None:
+        P = np.multiply(qp.P, d[:, None])
+        P *= d / obj
+    G0, g0, axis, tan, basis0 = qp.cone_arrays()
+    G = np.multiply(G0, d[None, None, :])
+    G *= s.cone[:, None, None]
+    g = s.cone[:, None] * g0
+    cones = [ConeData(c.joint, G[k], g[k], c.axis, c.angle_deg, c.basis) for k, c in enumerate(qp.cones)]
     norm_w = d * d if qp.norm_weight is None else qp.norm_weight * d * d
     return QPData(P, d * qp.c / obj, qp.r / obj, A, r * qp.b, qp.lb / d, qp.ub / d, cones, P_diag=P_diag,
-                  P_factor=P_factor, norm_weight=norm_w)
+                  P_factor=P_factor, norm_weight=norm_w, cone_arrays=(G, g, axis, tan, basis0),
+                  cone_consts=qp.cone_consts())
 
 
 def scale_problem(qp: QPData, f_scale: np.ndarray | None = None, force: bool = False):

@@ -171,6 +171,13 @@ def optimal_face_rows(qp, sol: Solution | None = None) -> np.ndarray:
     row normalised first, the threshold relative to the largest singular value of the whole, at
     least 1). On MyoSuite's arm (85 variables, ~60 of them in ``S``) that SVD is 4x25 instead of 8x85
     in flops' terms: most of the stage's cost."""
+    active = None if sol is None or sol.z is None else _strongly_active(qp, sol, curvature=False)
+    return _face_rows(qp, active)
+
+
+def _face_rows(qp, active) -> np.ndarray:
+    """:func:`optimal_face_rows` given the answer's strongly active set (``(free, cone rows, _)`` of
+    :func:`_strongly_active`; ``None``: no duals)."""
     n = qp.n
     unit = np.zeros(n, dtype=bool)  # variables whose unit row is among the rows
     if qp.P_factor is not None and qp.P_diag is not None:
@@ -180,8 +187,8 @@ def optimal_face_rows(qp, sol: Solution | None = None) -> np.ndarray:
         w, V = np.linalg.eigh(qp.P)
         rows = [V[:, w > 1e-12 * max(np.abs(w).max(initial=0.0), 1e-300)].T]
     rows += [qp.A, qp.c[None, :]]
-    if sol is not None and sol.z is not None:
-        free, cone_rows, _ = _strongly_active(qp, sol, curvature=False)
+    if active is not None:
+        free, cone_rows, _ = active
         unit |= ~free
         rows += [r[None, :] for _, r in cone_rows]
     N = np.vstack(rows)
@@ -206,10 +213,11 @@ def stage2_problem(qp, sol: Solution):
     them (their inequalities are dropped: on the face they hold with equality, and an inequality
     without interior would stall an interior-point method)."""
     n = qp.n
-    E = optimal_face_rows(qp, sol)
+    active = None if sol.z is None else _strongly_active(qp, sol, curvature=False)
+    E = _face_rows(qp, active)
     lb, ub, cones = qp.lb, qp.ub, qp.cones
-    if sol.z is not None:
-        free, cone_rows, _ = _strongly_active(qp, sol, curvature=False)
+    if active is not None:
+        free, cone_rows, _ = active
         lb, ub = np.where(free, qp.lb, -np.inf), np.where(free, qp.ub, np.inf)
         held = {k for k, _ in cone_rows}
         cones = [c for k, c in enumerate(qp.cones) if k not in held]
