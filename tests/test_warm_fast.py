@@ -16,6 +16,7 @@ from mcdm_pin import InverseDynamics, Robot, jit
 from mcdm_pin import inverse_dynamics as ID
 from mcdm_pin import scaling as SC
 from mcdm_pin.problem import Context
+from mcdm_pin.settings import DEFAULT
 from mcdm_pin.solvers import _kkt, _kkt_linalg
 from mcdm_pin.solvers import least_norm as LN
 from mcdm_pin.trajectory import load_trajectory
@@ -92,7 +93,6 @@ def test_uniqueness_shortcut_only_claims_what_the_null_space_test_proves():
     exact test's "unique", on random problems with free directions left (more columns than rows):
     definite Hessians (both say unique), Hessians singular on null(J) (neither may: the shortcut
     must fail) and Hessians whose only null directions the rows see (the shortcut decides)."""
-    from mcdm_pin import tolerances as tol
     from mcdm_pin.solvers import _unique
 
     rng = np.random.default_rng(3)
@@ -115,10 +115,11 @@ def test_uniqueness_shortcut_only_claims_what_the_null_space_test_proves():
             H = F.T @ F
         H *= 10.0 ** rng.uniform(-4, 4)
         hscale = float(np.abs(H).max())
-        thr = tol.UNIQUE_REL * hscale
+        thr, penalty = DEFAULT.unique_rel * hscale, DEFAULT.unique_penalty
         exact = _exact_unique(H, J, thr)
-        compiled = bool(_unique.definite_beyond(np.ascontiguousarray(H), np.ascontiguousarray(J), rows, thr, hscale))
-        reference = LN._definite_beyond(H, J, thr, hscale)
+        compiled = bool(_unique.definite_beyond(np.ascontiguousarray(H), np.ascontiguousarray(J), rows, thr, hscale,
+                                                penalty))
+        reference = LN._definite_beyond(H, J, thr, hscale, penalty)
         assert compiled == reference
         if compiled:
             assert exact  # never "unique" where the null space test would not say so
@@ -210,7 +211,7 @@ def _reference_try(qp, guess, max_pivots):
     c_ = np.ascontiguousarray
     code, x, mus, grad, state, cact, dirs, nxt, y, _, solves = _kkt.active_set_run(
         c_(qp.P), qp.c, c_(qp.A), qp.b, qp.lb, qp.ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, 10,
-        *AS._AS_TOLS)
+        *AS.as_tols(DEFAULT))
     if code != _kkt.FOUND:
         return None
     return AS.active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt, iterations=int(solves))

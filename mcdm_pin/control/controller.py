@@ -37,6 +37,7 @@ import numpy as np
 
 from ..exceptions import McdmError, ProblemError, SolverError
 from ..inverse_dynamics import InverseDynamics
+from ..settings import DEFAULT
 from ..problem import Problem
 from ..solvers import OPTIMAL
 
@@ -80,12 +81,12 @@ class Controller:
             raise ProblemError(f"deadline_s: expected a finite time > 0 s, got {deadline_s!r}")
         if not (0.0 < budget <= 1.0):
             raise ProblemError(f"budget: expected a share of the deadline in (0, 1], got {budget!r}")
+        settings = DEFAULT.replace(budget_s=budget * deadline_s)
         if isinstance(problem, Problem):
-            self.ident = InverseDynamics(robot, problem, solver=solver, diagnose=False,
-                                         budget_s=budget * deadline_s)
+            self.ident = InverseDynamics(robot, problem, solver=solver, diagnose=False, settings=settings)
         else:
-            self.ident = InverseDynamics.for_case(robot, problem, solver=solver, diagnose=False,
-                                                  budget_s=budget * deadline_s, **options)
+            self.ident = InverseDynamics.for_case(robot, problem, solver=solver, diagnose=False, settings=settings,
+                                                  **options)
         self.robot, self.law = robot, law
         self.deadline_s = float(deadline_s)
         self.fallbacks: Counter = Counter()
