@@ -344,7 +344,7 @@ def test_ipm_answer_is_the_numpy_ones(instants):
         T, t = qp.cone_rows()
         c_ = np.ascontiguousarray
         code, x, y, z, zc, it, state, cact, mus, dirs = _ipm.ipm_solve(
-            H, d0, F, c, A, b, lb, ub, c_(T), c_(t), *args[16:19], G, gc, ax, tn, basis0, *args[19:23])
+            H, d0, F, c, A, b, lb, ub, c_(T), c_(t), *args[16:19], G, gc, ax, tn, basis0, *args[19:24])
         assert got.iterations == it
         if code != _ipm.CROSSOVER:
             assert got.active is None
