@@ -34,7 +34,7 @@ from .exceptions import SolverError
 class Settings:
     """The solvers' and the answer check's tolerances, pivot limits and budget (module docstring).
     Every field has the library's value as its default; each is documented where it is defined
-    (``mcdm_pin/settings.py``) and in docs/api/settings.md. Invalid values raise
+    (``mcdm_pin/settings.py``) and in docs/api/mcdm_pin.settings.md. Invalid values raise
     :class:`~mcdm_pin.exceptions.SolverError` naming the field."""
 
     # ----------------------------------------------------------------------------- acceptance
