@@ -132,13 +132,13 @@ def test_uniqueness_shortcut_only_claims_what_the_null_space_test_proves():
 def test_answer_check_and_outputs_equal_the_numpy_ones(instants):
     for qp, terms, sol, idp in instants:
         m = idp.robot.m
-        (s1, eom1), (s2, eom2) = ID._check(qp, terms, sol, m), _numpy(ID._check, qp, terms, sol, m)
+        (s1, eom1), (s2, eom2) = ID._check(qp, terms, sol, m, DEFAULT), _numpy(ID._check, qp, terms, sol, m, DEFAULT)
         assert s1.status == s2.status and s1.message == s2.message
         # the residual of an exact answer is itself rounding (~1e-16): the order of the sums decides
         # its digits; anything that matters (the check's 1e-8) is far above 1e-14
         assert eom1 == pytest.approx(eom2, rel=1e-9, abs=1e-14)
         reference = _numpy(ID._outputs, terms, sol.x[:m], len(idp.robot.joints))
-        s3, eom3, fused = ID._check(qp, terms, sol, m, with_outputs=True)  # the runner's one pass
+        s3, eom3, fused = ID._check(qp, terms, sol, m, DEFAULT, with_outputs=True)  # the runner's one pass
         assert s3.status == s1.status and s3.message == s1.message and eom3 == eom1
         for outputs in (ID._outputs(terms, sol.x[:m], len(idp.robot.joints)), fused):
             for a, b in zip(outputs, reference):
@@ -146,8 +146,8 @@ def test_answer_check_and_outputs_equal_the_numpy_ones(instants):
     # a broken answer is reported by both paths with the same message
     qp, terms, sol, idp = instants[0]
     bad = sol.but(x=sol.x + 1.0)
-    assert ID._check(qp, terms, bad, idp.robot.m)[0].message == \
-        _numpy(ID._check, qp, terms, bad, idp.robot.m)[0].message != ""
+    assert ID._check(qp, terms, bad, idp.robot.m, DEFAULT)[0].message == \
+        _numpy(ID._check, qp, terms, bad, idp.robot.m, DEFAULT)[0].message != ""
 
 
 def test_vertex_solve_is_the_kkt_systems_solution():
