@@ -51,6 +51,7 @@ def main(argv=None) -> int:
     from mcdm_pin import InverseDynamics, Robot, jit
     from mcdm_pin.solvers import _fast, _kkt_linalg
     from mcdm_pin.solvers import ipm as ipm_mod
+    from mcdm_pin.settings import DEFAULT
     from mcdm_pin.trajectory import load_trajectory
     from _common import neck_case_options
 
@@ -66,8 +67,8 @@ def main(argv=None) -> int:
         captured = []
         original = ipm_mod.ipm_arguments
 
-        def capture(qp, **options):
-            args = original(qp, **options)
+        def capture(qp, settings=DEFAULT):
+            args = original(qp, settings)
             captured.append(args)
             return args
 

@@ -20,6 +20,7 @@ from .objectives import MinCableForces, MinCableForceSum, MinInteractions, Smoot
 from .problem import Problem, case_problem
 from .results import InstantResult, TrajectoryResult
 from .robot import Robot
+from .settings import Settings
 from .sidecar import load_sidecar
 from .solvers import get_solver
 from .model.terms import Terms, TermsEvaluator, compute_terms
@@ -31,7 +32,7 @@ __all__ = [
     "Robot", "load_sidecar", "Terms", "TermsEvaluator", "compute_terms", "Trajectory",
     "load_trajectory", "quintic_trajectory", "csv_trajectory", "Problem", "case_problem",
     "MinCableForces", "MinCableForceSum", "MinInteractions", "Smoothing", "EquationOfMotion",
-    "CableForceBounds", "InteractionCone", "get_solver", "InverseDynamics", "InstantResult",
+    "CableForceBounds", "InteractionCone", "get_solver", "InverseDynamics", "Settings", "InstantResult",
     "TrajectoryResult", "McdmError", "SidecarError", "ModelError", "StateError", "TrajectoryError",
     "ProblemError", "SolverError", "ResultsError", "MissingPackageError",
 ]

@@ -41,7 +41,7 @@ class Recipe:
         self.runner = type(ident)  # (pickled by reference: its module and name)
         self.data = pickle.dumps((ident.robot, ident.problem), protocol=pickle.HIGHEST_PROTOCOL)
         self.options = dict(solver=ident.solver_spec, soften=ident.soften, diagnose=ident.diagnose,
-                            blas_threads=ident.blas_threads, budget_s=ident.budget_spec)
+                            blas_threads=ident.blas_threads, settings=ident.settings)
 
     def build(self):
         """A runner of its own (a :class:`~mcdm_pin.solvers.Solver` given is copied fresh: tasks on

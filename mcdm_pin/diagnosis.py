@@ -13,13 +13,15 @@ from scipy.optimize import linprog
 
 from .model.actuators import actuator_names
 from .qp import QPData
+from .settings import DEFAULT, Settings
 from .solvers import INFEASIBLE, OPTIMAL, SOFTENED, Solution
 from .solvers.clarabel_ import clarabel_solve
 from .solvers.margins import needed_cone_deg, needed_f_max
 
 
-def diagnose_infeasible(qp: QPData, cable_names=None):
-    """What cannot be met at an infeasible instant, and what would make it feasible.
+def diagnose_infeasible(qp: QPData, cable_names=None, settings: Settings = DEFAULT):
+    """What cannot be met at an infeasible instant, and what would make it feasible (the cone programs'
+    tolerances: ``settings``).
 
     Returns ``(message, needed_f_max, needed_cone_deg)``:
 
@@ -52,7 +54,7 @@ def diagnose_infeasible(qp: QPData, cable_names=None):
     if not qp.cones:
         return ("solver: reported infeasible, but the equation of motion can be met within the bounds "
                 "(a numerical failure of the solver)", nan, nan)
-    need = needed_cone_deg(qp)
+    need = needed_cone_deg(qp, settings=settings)
     if len(qp.cones) == 1:
         cone = qp.cones[0]
         where = (f"feasible from {need:.4f} deg" if need < 90.0 else
@@ -65,18 +67,18 @@ def diagnose_infeasible(qp: QPData, cable_names=None):
         return (f"cones: the stability cones of {names_c} cannot be met together within the cable bounds; "
                 f"{'only half-spaces would do' if need == 90.0 else 'no common cone will do: a force must point out of its socket'}",
                 nan, float(need))
-    binding = _binding_cones(qp, need)
+    binding = _binding_cones(qp, need, settings)
     return (f"cones: the stability cones of {names_c} cannot be met together within the cable bounds; "
             f"a common half-angle of {need:.4f} deg would do (binding there: {', '.join(binding)})",
             nan, float(need))
 
 
-def _binding_cones(qp: QPData, angle_deg: float) -> list[str]:
+def _binding_cones(qp: QPData, angle_deg: float, settings: Settings) -> list[str]:
     """The cones at their limit when every cone is at ``angle_deg`` (solved by Clarabel)."""
     if not np.isfinite(angle_deg) or angle_deg >= 90.0:
         return [c.joint for c in qp.cones]
     wide = qp.with_cones([c.with_angle(max(c.angle_deg, angle_deg) + 1e-6) for c in qp.cones])
-    sol = clarabel_solve(wide)
+    sol = clarabel_solve(wide, settings)
     if sol.status != OPTIMAL:
         return [c.joint for c in qp.cones]
     return [c.joint for c in wide.cones if c.angle_of(sol.x) >= angle_deg - 1e-3]
@@ -110,11 +112,12 @@ def _elastic_bounds(qp: QPData, rel: float = 1e-9):
     return (lo_i[s_lo > rel * (1.0 + np.abs(lb))].tolist(), hi_i[s_hi > rel * (1.0 + np.abs(ub))].tolist())
 
 
-def soften_cones(qp: QPData, solver, needed: float | None = None) -> tuple[Solution, float]:
+def soften_cones(qp: QPData, solver, needed: float | None = None,
+                 settings: Settings = DEFAULT) -> tuple[Solution, float]:
     """Every cone at least at the smallest common half-angle that makes the instant feasible
-    (``needed``: that angle when known), solved there. Returns the solution (status ``softened``)
+    (``needed``: that angle when known, else found to ``settings``' tolerances), solved there. Returns the solution (status ``softened``)
     and the largest widening, degrees."""
-    need = needed_cone_deg(qp) if needed is None or not np.isfinite(needed) else needed
+    need = needed_cone_deg(qp, settings=settings) if needed is None or not np.isfinite(needed) else needed
     if not np.isfinite(need) or need >= 90.0:
         return Solution(np.full(qp.n, np.nan), INFEASIBLE, float("nan"),
                         message="no force presses the balls into their sockets at all"), 0.0

@@ -2,7 +2,7 @@
 
 Every answer is checked before it is returned: the solver chain's last stage checks the KKT conditions
 (:mod:`mcdm_pin.solvers.check`), and here the equation-of-motion residual, the bounds and the cones
-must hold on the *original* problem to the tolerances of :mod:`mcdm_pin.tolerances`, otherwise the
+must hold on the *original* problem to the runner's settings (:class:`~mcdm_pin.settings.Settings`), otherwise the
 instant is reported ``inaccurate`` (no point that silently breaks a constraint is returned as optimal).
 An infeasible instant is diagnosed (:func:`~mcdm_pin.diagnosis.diagnose_infeasible`): the message
 says whether the cable bounds or the cones cannot be met, and the f_max or cone angle that would do.
@@ -17,7 +17,6 @@ import time
 import numpy as np
 
 from . import jit
-from . import tolerances as tol
 from .batch import solve_batch
 from .blas import BlasLimit
 from .conditioning import wrench_closure
@@ -31,13 +30,9 @@ from .problem import Context, Problem, case_problem
 from .qp import QPData
 from .results import InstantResult, TrajectoryResult, instant_columns
 from .scaling import ScaledSolver
+from .settings import DEFAULT, Settings
 from .solvers import ERROR, INACCURATE, INFEASIBLE, OPTIMAL, SOFTENED, Solution, get_solver
 from .solvers.base import cone_violation_deg
-
-EOM_TOL = tol.EOM_REL
-BOUND_TOL = tol.BOUND_ABS
-CONE_TOL_DEG = tol.CONE_DEG
-
 
 class InverseDynamics:
     """Solve an inverse-dynamics problem on a robot, instant by instant.
@@ -53,9 +48,12 @@ class InverseDynamics:
         diagnose: for infeasible instants, find what conflicts and the f_max or cone angle that
             would make them feasible (:func:`diagnose_infeasible`: an LP and a few cone programs).
             Off: the message only says that the instant is infeasible.
-        budget_s: per-instant time budget of the solver chain, seconds (``None``: none): a solve
-            that has not answered by then is reported with status ``budget``. While the kernels run
-            uncompiled it is multiplied by :data:`mcdm_pin.jit.UNCOMPILED_SLOWDOWN`.
+        settings: the tolerances, pivot limits and time budget (:class:`~mcdm_pin.settings.Settings`),
+            passed to the solver chain built from a name, to the answer check and to the diagnosis. A
+            solve that has not answered within ``settings.budget_s`` is reported with status
+            ``budget``; while the kernels run uncompiled the budget is multiplied by
+            :data:`mcdm_pin.jit.UNCOMPILED_SLOWDOWN`. A :class:`~mcdm_pin.solvers.Solver` given
+            keeps the settings it was built with.
         blas_threads: threads the BLAS library may use while solving (default 1; ``None``: leave
             it alone). The matrices of one instant are small, and waking BLAS worker threads cost
             milliseconds on a loaded machine: with them the model of a 16-link chain's case 3 took
@@ -65,30 +63,32 @@ class InverseDynamics:
     """
 
     def __init__(self, robot, problem: Problem, solver="default", soften: bool = False,
-                 diagnose: bool = True, blas_threads: int | None = 1, budget_s: float | None = tol.BUDGET_S):
+                 diagnose: bool = True, blas_threads: int | None = 1, settings: Settings = DEFAULT):
         self.robot = robot
         self.blas_threads = blas_threads
         self._blas = BlasLimit()
-        self.solver_spec, self.budget_spec = solver, budget_s  # as given (batch mode rebuilds from them)
+        self.solver_spec, self.settings = solver, settings  # as given (batch mode rebuilds from them)
         self.diagnose = diagnose
         self.problem = problem
         # the kernels run compiled when `mcdm-pin compile` has cached them, else as the same Python
         # functions (mcdm_pin/jit.py): one path, one answer. Uncompiled they take longer, and the
         # time budget grows by the same factor, so that an instant answers alike on both
+        budget_s = settings.budget_s
         if not jit.prepare() and budget_s is not None:
             budget_s = budget_s * jit.UNCOMPILED_SLOWDOWN
         # every back-end solves a copy scaled to magnitudes of order one (mcdm_pin/scaling.py);
         # well-scaled problems pass straight through
-        self.solver = ScaledSolver(get_solver(solver, budget_s=budget_s) if isinstance(solver, str) else solver)
+        chain = get_solver(solver, settings.replace(budget_s=budget_s)) if isinstance(solver, str) else solver
+        self.solver = ScaledSolver(chain)
         self.soften = soften
         self.evaluate = TermsEvaluator(robot)
 
     @classmethod
     def for_case(cls, robot, case: int, solver="default", soften: bool = False, diagnose: bool = True,
-                 blas_threads: int | None = 1, budget_s: float | None = tol.BUDGET_S, **options):
+                 blas_threads: int | None = 1, settings: Settings = DEFAULT, **options):
         """The paper's case 1, 2 or 3 (options as :func:`~mcdm_pin.problem.case_problem`)."""
         return cls(robot, case_problem(robot, case, **options), solver=solver, soften=soften,
-                   diagnose=diagnose, blas_threads=blas_threads, budget_s=budget_s)
+                   diagnose=diagnose, blas_threads=blas_threads, settings=settings)
 
     def reset(self) -> None:
         """Forget every warm start (the next instant is solved cold, as if it were the first)."""
@@ -133,7 +133,7 @@ class InverseDynamics:
         softened = 0.0
         needed_f_max = needed_cone = float("nan")
         if sol.status == INFEASIBLE and self.diagnose:
-            message, needed_f_max, needed_cone = diagnose_infeasible(qp, variable_names(self.robot))
+            message, needed_f_max, needed_cone = diagnose_infeasible(qp, variable_names(self.robot), self.settings)
             if message.startswith("bounds"):
                 closure = wrench_closure(self.robot, terms.q, terms.L)
                 if not closure.closed:
@@ -141,7 +141,7 @@ class InverseDynamics:
             elif message.startswith("solver"):
                 sol = sol.but(status=INACCURATE)
             if self.soften and qp.cones and message.startswith("cone"):
-                sol, softened = soften_cones(qp, self.solver, needed_cone)
+                sol, softened = soften_cones(qp, self.solver, needed_cone, self.settings)
                 if sol.status == SOFTENED:
                     message = f"cones widened by {softened:.6g} deg: {message}"
         t2 = time.perf_counter()
@@ -151,7 +151,7 @@ class InverseDynamics:
         outputs = None
         if sol.found:
             # the answer checked on the original problem (and, compiled, the outputs in the same pass)
-            sol, eom, outputs = _check(qp, terms, sol, m, act, with_outputs=True)
+            sol, eom, outputs = _check(qp, terms, sol, m, self.settings, act, with_outputs=True)
             message = sol.message or message
         f, tau_act = sol.x[:m], sol.x[m:]
         if sol.found:
@@ -168,7 +168,8 @@ class InverseDynamics:
             interaction_angle_deg=angles, iterations=sol.iterations, rounds=sol.rounds,
             time_model_s=t1 - t0, time_solve_s=t2 - t1, message=message, softened_deg=softened,
             needed_f_max=needed_f_max, needed_cone_deg=needed_cone, unique=bool(sol.unique and sol.found),
-            stage=sol.stage, tau_act=tau_act, activation=_activations(terms, f if sol.found else None, self.robot.cables))
+            stage=sol.stage, tau_act=tau_act, activation=_activations(terms, f if sol.found else None, self.robot.cables,
+                                                                        self.settings.bound_abs))
 
     def solve_trajectory(self, traj, progress: bool | None = None, workers: int = 1,
                          scheduler: str = "local") -> TrajectoryResult:
@@ -302,19 +303,22 @@ def _outputs(terms, f, n_joints: int, tau_act=None):
     return wrench, F_socket, interaction_angles(F_socket, terms.socket_axes)
 
 
-def _activations(terms, f, cables) -> np.ndarray:
+def _activations(terms, f, cables, bound_abs: float) -> np.ndarray:
     """The muscles' activations at tensions ``f`` ((m,), NaN on other cables and where ``f`` is
-    ``None``); (0,) for a robot without muscles."""
+    ``None``; ``bound_abs``: :func:`~mcdm_pin.model.muscles.activation`'s); (0,) for a robot without
+    muscles."""
     if terms.muscles is None:
         return np.zeros(0)
     out = np.full(cables.m, np.nan)
     if f is not None:
-        out[cables.muscle_index] = activation(terms.muscles, f[cables.muscle_index])
+        out[cables.muscle_index] = activation(terms.muscles, f[cables.muscle_index], bound_abs)
     return out
 
 
-def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None, with_outputs: bool = False):
-    """Downgrade a solution that breaks a constraint beyond tolerance to ``inaccurate``. Returns the
+def _check(qp: QPData, terms, sol: Solution, m: int, settings: Settings, actuation=None,
+           with_outputs: bool = False):
+    """Downgrade a solution that breaks a constraint beyond ``settings``' tolerances (``eom_rel``,
+    ``bound_abs``, ``cone_deg``) to ``inaccurate``. Returns the
     solution and its relative equation-of-motion residual (``m`` cables; ``actuation``: the problem's
     actuated joints, whose torques follow the cable forces in ``sol.x``); ``with_outputs``: and the
     :func:`_outputs` at its forces when they came in the same compiled pass (else ``None``)."""
@@ -343,11 +347,11 @@ def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None, with_output
             viol = cone_violation_deg(qp, f)
             k = int(np.argmax(viol))
             worst = viol[k]
-    if not eom <= tol.EOM_REL:
-        problems.append(f"equation-of-motion residual {eom:.2e} > {tol.EOM_REL:g}")
-    if not broken <= tol.BOUND_ABS:
+    if not eom <= settings.eom_rel:
+        problems.append(f"equation-of-motion residual {eom:.2e} > {settings.eom_rel:g}")
+    if not broken <= settings.bound_abs:
         problems.append(f"cable (or actuator) bounds broken by {broken:.2e}")
-    if qp.cones and sol.status == OPTIMAL and not worst <= tol.CONE_DEG:
+    if qp.cones and sol.status == OPTIMAL and not worst <= settings.cone_deg:
         problems.append(f"cone of {qp.cones[k].joint!r} broken by {worst:.2e} deg")
     if problems:
         sol = sol.but(status=INACCURATE, message="; ".join(problems))
@@ -357,4 +361,4 @@ def _check(qp: QPData, terms, sol: Solution, m: int, actuation=None, with_output
 _NO_1 = np.zeros(0)
 
 
-__all__ = ["InverseDynamics", "diagnose_infeasible", "soften_cones", "EOM_TOL", "BOUND_TOL", "CONE_TOL_DEG"]
+__all__ = ["InverseDynamics", "diagnose_infeasible", "soften_cones"]

@@ -23,8 +23,8 @@ uncompiled kernel never triggers a compile of the kernels it calls). The answers
 same code, to rounding (``fastmath`` reassociation in two modules, docs/speed.md).
 
 The stamp (:data:`STAMP`, in the cache folder of the kernels) holds the digest of every kernel
-module's source and of ``tolerances.py`` (some kernels read its constants when compiled), the
-``(mtime, size)`` of each kernel source (numba's own cache key: a touched file would make numba
+module's source (no kernel reads a setting when compiled: :class:`~mcdm_pin.settings.Settings`' values
+are arguments), the ``(mtime, size)`` of each kernel source (numba's own cache key: a touched file would make numba
 recompile on load), and the numba and Python versions. It is removed before a compile starts and
 written, by an atomic rename, only after every kernel is compiled and cached (every worker ended
 well and the final pass loaded every entry point): a compile that is interrupted, or still running,
@@ -158,16 +158,16 @@ def kernels(module: str):
 @functools.lru_cache(maxsize=None)
 def kernel_sources() -> tuple[Path, ...]:
     """The package's source files that define numba kernels (those that import numba's ``njit``, or
-    ``extending`` for functions compiled inline into kernels),
-    and ``tolerances.py``: kernels read some of its constants when they are compiled
-    (``UNIQUE_PENALTY``, ``IPM_START_BOX_WEIGHT``), so a changed constant must recompile them too."""
+    ``extending`` for functions compiled inline into kernels). No kernel reads a module constant of
+    another file when compiled: the settings (:class:`~mcdm_pin.settings.Settings`) reach them as
+    arguments, so a changed setting needs no recompile."""
     root = Path(__file__).resolve().parent
     # njit kernels, and register_jitable functions compiled inline into them (numba.extending)
     # (or that decorate with them, imported from another kernel module: wrapping_osim_ellipsoid.py)
     pattern = re.compile(r"^(from (numba(\.\w+)?|\.+jit) import .*\b(njit|extending|register_jitable)\b"
                          r"|@(njit|register_jitable|extending\.register_jitable)\b)", re.M)
     found = {p for p in root.rglob("*.py") if pattern.search(p.read_text(encoding="utf-8"))}
-    return tuple(sorted(found | {root / "tolerances.py"}))
+    return tuple(sorted(found))
 
 
 def sources_digest(paths=None) -> str:
@@ -185,7 +185,7 @@ def _kernel_modules() -> dict[str, types.ModuleType]:
     sources = set(kernel_sources())
     return {name: mod for name, mod in list(sys.modules.items())
             if name.startswith("mcdm_pin.") and getattr(mod, "__file__", None)
-            and Path(mod.__file__).resolve() in sources and name != "mcdm_pin.tolerances"}
+            and Path(mod.__file__).resolve() in sources}
 
 
 def _is_kernel(v) -> bool:

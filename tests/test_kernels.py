@@ -161,15 +161,15 @@ def _stand_in_cache(monkeypatch, tmp_path, calls):
 
 def test_stamp_covers_every_kernel_source(tmp_path, monkeypatch):
     """numba invalidates a cached kernel when its own file changes, not when a kernel it calls in
-    another module does (``_fast.py`` calls ``_kkt.py``): the stamp is the digest of every kernel module
-    and of tolerances.py, with each file's (mtime, size), numba's own key of its index."""
+    another module does (``_fast.py`` calls ``_kkt.py``): the stamp is the digest of every kernel module,
+    with each file's (mtime, size), numba's own key of its index. The settings reach the kernels as
+    arguments, so settings.py is not among them."""
     from mcdm_pin import jit
 
     names = {p.name for p in jit.kernel_sources()}
     assert {"kernels.py", "_kkt.py", "_kkt_eq.py", "_kkt_verify.py", "_kkt_linalg.py", "_fast.py", "_ipm.py",
-            "_ipm_direction.py", "_ipm_newton.py", "_ipm_structure.py", "_ipm_linalg.py", "_unique.py",
-            "tolerances.py"} <= names
-    assert "jit.py" not in names
+            "_ipm_direction.py", "_ipm_newton.py", "_ipm_structure.py", "_ipm_linalg.py", "_unique.py"} <= names
+    assert "jit.py" not in names and "settings.py" not in names
     files = []
     for p in jit.kernel_sources():
         files.append(tmp_path / p.name)
@@ -235,7 +235,7 @@ def test_constructor_starts_no_process_and_compiles_nothing(monkeypatch, two_lin
     import subprocess
 
     from mcdm_pin import InverseDynamics, jit
-    from mcdm_pin import tolerances as tol
+    from mcdm_pin.settings import DEFAULT
 
     def no_process(*a, **k):
         raise AssertionError("a library constructor started a process")
@@ -246,7 +246,7 @@ def test_constructor_starts_no_process_and_compiles_nothing(monkeypatch, two_lin
     monkeypatch.setenv("MCDM_PIN_JIT", "auto")
     ident = InverseDynamics.for_case(two_link, 3)
     assert not jit.compiled()
-    assert ident.solver.inner.budget_s == pytest.approx(tol.BUDGET_S * jit.UNCOMPILED_SLOWDOWN)
+    assert ident.solver.inner.budget_s == pytest.approx(DEFAULT.budget_s * jit.UNCOMPILED_SLOWDOWN)
     assert ident.solve(np.zeros(two_link.nq)).status in ("optimal", "infeasible")
 
 

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 import yaml
 
-from mcdm_pin import InverseDynamics, Robot, load_trajectory
+from mcdm_pin import InverseDynamics, Robot, Settings, load_trajectory
 
 REPO = Path(__file__).resolve().parents[1]
 BACKENDS = ("default", "proxqp", "clarabel")
@@ -106,6 +106,7 @@ def test_budget_turns_a_stall_into_a_status(arm):
     ident = InverseDynamics.for_case(arm, 3, cones={"shoulder": 4.95374})
     res = ident.solve(tr.q[k], tr.qd[k], tr.qdd[k])
     assert res.status in ("optimal", "infeasible"), res.message
-    stalled = InverseDynamics.for_case(arm, 3, cones={"shoulder": 4.95374}, budget_s=0.0, diagnose=False)
+    stalled = InverseDynamics.for_case(arm, 3, cones={"shoulder": 4.95374}, settings=Settings(budget_s=0.0),
+                                       diagnose=False)
     out = stalled.solve(tr.q[k], tr.qd[k], tr.qdd[k])
     assert out.status == "budget" and "budget" in out.message and np.isnan(out.f).all()

@@ -235,6 +235,7 @@ def test_the_budget_holds_inside_a_proxqp_call(tmp_path, solver):
 
     from mcdm_pin.model.terms import TermsEvaluator
     from mcdm_pin.problem import Context, case_problem
+    from mcdm_pin.settings import Settings
     from mcdm_pin.solvers import get_solver
     from mcdm_pin.trajectory import load_trajectory
 
@@ -245,7 +246,7 @@ def test_the_budget_holds_inside_a_proxqp_call(tmp_path, solver):
     qp = case_problem(robot, 1).assemble(terms, Context(robot))
     qp = qp.replace(lb=np.full(robot.m, 1e-300), ub=np.full(robot.m, 1e-290))
     t0 = time.perf_counter()
-    r = get_solver(solver, budget_s=0.3).solve(qp)
+    r = get_solver(solver, Settings(budget_s=0.3)).solve(qp)
     elapsed = time.perf_counter() - t0
     assert elapsed < 0.3 + 0.5, (elapsed, r.status, r.message)
     assert r.status in ("budget", "infeasible"), (r.status, r.message)

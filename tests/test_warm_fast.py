@@ -16,6 +16,7 @@ from mcdm_pin import InverseDynamics, Robot, jit
 from mcdm_pin import inverse_dynamics as ID
 from mcdm_pin import scaling as SC
 from mcdm_pin.problem import Context
+from mcdm_pin.settings import DEFAULT
 from mcdm_pin.solvers import _kkt, _kkt_linalg
 from mcdm_pin.solvers import least_norm as LN
 from mcdm_pin.trajectory import load_trajectory
@@ -92,7 +93,6 @@ def test_uniqueness_shortcut_only_claims_what_the_null_space_test_proves():
     exact test's "unique", on random problems with free directions left (more columns than rows):
     definite Hessians (both say unique), Hessians singular on null(J) (neither may: the shortcut
     must fail) and Hessians whose only null directions the rows see (the shortcut decides)."""
-    from mcdm_pin import tolerances as tol
     from mcdm_pin.solvers import _unique
 
     rng = np.random.default_rng(3)
@@ -115,10 +115,11 @@ def test_uniqueness_shortcut_only_claims_what_the_null_space_test_proves():
             H = F.T @ F
         H *= 10.0 ** rng.uniform(-4, 4)
         hscale = float(np.abs(H).max())
-        thr = tol.UNIQUE_REL * hscale
+        thr, penalty = DEFAULT.unique_rel * hscale, DEFAULT.unique_penalty
         exact = _exact_unique(H, J, thr)
-        compiled = bool(_unique.definite_beyond(np.ascontiguousarray(H), np.ascontiguousarray(J), rows, thr, hscale))
-        reference = LN._definite_beyond(H, J, thr, hscale)
+        compiled = bool(_unique.definite_beyond(np.ascontiguousarray(H), np.ascontiguousarray(J), rows, thr, hscale,
+                                                penalty))
+        reference = LN._definite_beyond(H, J, thr, hscale, penalty)
         assert compiled == reference
         if compiled:
             assert exact  # never "unique" where the null space test would not say so
@@ -131,13 +132,13 @@ def test_uniqueness_shortcut_only_claims_what_the_null_space_test_proves():
 def test_answer_check_and_outputs_equal_the_numpy_ones(instants):
     for qp, terms, sol, idp in instants:
         m = idp.robot.m
-        (s1, eom1), (s2, eom2) = ID._check(qp, terms, sol, m), _numpy(ID._check, qp, terms, sol, m)
+        (s1, eom1), (s2, eom2) = ID._check(qp, terms, sol, m, DEFAULT), _numpy(ID._check, qp, terms, sol, m, DEFAULT)
         assert s1.status == s2.status and s1.message == s2.message
         # the residual of an exact answer is itself rounding (~1e-16): the order of the sums decides
         # its digits; anything that matters (the check's 1e-8) is far above 1e-14
         assert eom1 == pytest.approx(eom2, rel=1e-9, abs=1e-14)
         reference = _numpy(ID._outputs, terms, sol.x[:m], len(idp.robot.joints))
-        s3, eom3, fused = ID._check(qp, terms, sol, m, with_outputs=True)  # the runner's one pass
+        s3, eom3, fused = ID._check(qp, terms, sol, m, DEFAULT, with_outputs=True)  # the runner's one pass
         assert s3.status == s1.status and s3.message == s1.message and eom3 == eom1
         for outputs in (ID._outputs(terms, sol.x[:m], len(idp.robot.joints)), fused):
             for a, b in zip(outputs, reference):
@@ -145,8 +146,8 @@ def test_answer_check_and_outputs_equal_the_numpy_ones(instants):
     # a broken answer is reported by both paths with the same message
     qp, terms, sol, idp = instants[0]
     bad = sol.but(x=sol.x + 1.0)
-    assert ID._check(qp, terms, bad, idp.robot.m)[0].message == \
-        _numpy(ID._check, qp, terms, bad, idp.robot.m)[0].message != ""
+    assert ID._check(qp, terms, bad, idp.robot.m, DEFAULT)[0].message == \
+        _numpy(ID._check, qp, terms, bad, idp.robot.m, DEFAULT)[0].message != ""
 
 
 def test_vertex_solve_is_the_kkt_systems_solution():
@@ -210,7 +211,7 @@ def _reference_try(qp, guess, max_pivots):
     c_ = np.ascontiguousarray
     code, x, mus, grad, state, cact, dirs, nxt, y, _, solves = _kkt.active_set_run(
         c_(qp.P), qp.c, c_(qp.A), qp.b, qp.lb, qp.ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, 10,
-        *AS._AS_TOLS)
+        *AS.as_tols(DEFAULT))
     if code != _kkt.FOUND:
         return None
     return AS.active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt, iterations=int(solves))
@@ -343,7 +344,7 @@ def test_ipm_answer_is_the_numpy_ones(instants):
         T, t = qp.cone_rows()
         c_ = np.ascontiguousarray
         code, x, y, z, zc, it, state, cact, mus, dirs = _ipm.ipm_solve(
-            H, d0, F, c, A, b, lb, ub, c_(T), c_(t), *args[16:19], G, gc, ax, tn, basis0, *args[19:23])
+            H, d0, F, c, A, b, lb, ub, c_(T), c_(t), *args[16:19], G, gc, ax, tn, basis0, *args[19:24])
         assert got.iterations == it
         if code != _ipm.CROSSOVER:
             assert got.active is None

@@ -13,6 +13,8 @@ dependency beyond the standard library.
 from __future__ import annotations
 
 import argparse
+import ast
+import dataclasses
 import importlib
 import inspect
 import re
@@ -28,6 +30,7 @@ MODULES = [
     ("mcdm_pin.trajectory", "trajectories: quintic, CSV, plans at any time"),
     ("mcdm_pin.ik", "task-space trajectories -> joint trajectories by inverse kinematics (pink)"),
     ("mcdm_pin.inverse_dynamics", "InverseDynamics: state -> forces, one instant or a trajectory"),
+    ("mcdm_pin.settings", "Settings: every tolerance, pivot limit and budget, passed down to the stages"),
     ("mcdm_pin.diagnosis", "what an infeasible instant cannot meet, and what would do"),
     ("mcdm_pin.batch", "batch mode: a trajectory in pieces on Dask"),
     ("mcdm_pin.runtime", "the Dask runtime of workspaces and batches"),
@@ -198,11 +201,42 @@ def _where(obj) -> str:
     return f" *(from `{mod}`)*" if mod else ""
 
 
+def field_docs(cls) -> dict[str, str]:
+    """A dataclass's field docstrings: the string literal right after each annotated field."""
+    try:
+        body = ast.parse(inspect.getsource(cls).lstrip()).body[0].body
+    except (OSError, TypeError, SyntaxError, IndexError, AttributeError):
+        return {}
+    out = {}
+    for a, b in zip(body, body[1:]):
+        if (isinstance(a, ast.AnnAssign) and isinstance(a.target, ast.Name) and isinstance(b, ast.Expr)
+                and isinstance(b.value, ast.Constant) and isinstance(b.value.value, str)):
+            out[a.target.id] = inspect.cleandoc(b.value.value)
+    return out
+
+
+def document_fields(cls, name: str) -> list[str]:
+    """A dataclass's fields with their defaults and docstrings (:func:`field_docs`)."""
+    docs, out = (field_docs(cls) if dataclasses.is_dataclass(cls) else {}), []
+    if not docs:  # (a dataclass whose fields its docstring describes)
+        return []
+    for f in dataclasses.fields(cls):
+        if f.name.startswith("_"):
+            continue
+        default = "" if f.default is dataclasses.MISSING else f" = {f.default!r}"
+        out += [f"### `{name}.{f.name}`{default}", ""]
+        if f.name in docs:
+            out.append(markdown(docs[f.name]))
+    return out
+
+
 def document_class(cls, name: str, module_name: str) -> list[str]:
     out = [f"## `{name}`", "", "```python", f"class {signature(cls, name)}", "```", ""]
     if cls.__module__ != module_name:
         out += [f"Defined in `{cls.__module__}`.", ""]
     out.append(markdown(inspect.getdoc(cls)))
+    if cls.__module__ == module_name:
+        out += document_fields(cls, name)
     members = []
     for attr, value in vars(cls).items():
         if attr.startswith("_") and attr != "__call__":

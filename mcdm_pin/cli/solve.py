@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..settings import DEFAULT, Settings
 from ..vocabulary import CASES, CONE_FRAMES
 from ._common import UsageError, check_outputs, parse_cones, parse_weights, printable, table
 from ._files import robot_file
@@ -26,8 +27,8 @@ def add(sub):
                    help="default (the compiled active set and interior-point method, ProxQP and "
                         "Clarabel as fallbacks), or one method alone: compiled, proxqp, clarabel "
                         "(the exact reference)")
-    p.add_argument("--budget", type=float, default=1.0, metavar="SECONDS",
-                   help="time budget per instant (default 1 s): an instant not solved by then is "
+    p.add_argument("--budget", type=float, default=DEFAULT.budget_s, metavar="SECONDS",
+                   help=f"time budget per instant (default {DEFAULT.budget_s:g} s): an instant not solved by then is "
                         "reported with status 'budget'")
     p.add_argument("--samples", type=int, help="solve N instants spread over the trajectory")
     p.add_argument("--smoothing", type=float, default=0.0, help="weight of |f - f_prev|^2 (default 0)")
@@ -72,7 +73,7 @@ def run_solve(args):
     if not args.budget > 0:
         raise UsageError(f"--budget: expected a positive number of seconds, got {args.budget}")
     ident = InverseDynamics(robot, problem, solver=args.solver, soften=args.soften,
-                            diagnose=not args.no_diagnosis, budget_s=args.budget)
+                            diagnose=not args.no_diagnosis, settings=Settings(budget_s=args.budget))
     if args.workers < 1:
         raise UsageError(f"--workers: expected a positive number, got {args.workers}")
     result = ident.solve_trajectory(traj, progress=False if args.quiet else None, workers=args.workers)

@@ -37,6 +37,7 @@ import numpy as np
 
 from ..exceptions import McdmError, ProblemError, SolverError
 from ..inverse_dynamics import InverseDynamics
+from ..settings import DEFAULT
 from ..problem import Problem
 from ..solvers import OPTIMAL
 
@@ -80,12 +81,12 @@ class Controller:
             raise ProblemError(f"deadline_s: expected a finite time > 0 s, got {deadline_s!r}")
         if not (0.0 < budget <= 1.0):
             raise ProblemError(f"budget: expected a share of the deadline in (0, 1], got {budget!r}")
+        settings = DEFAULT.replace(budget_s=budget * deadline_s)
         if isinstance(problem, Problem):
-            self.ident = InverseDynamics(robot, problem, solver=solver, diagnose=False,
-                                         budget_s=budget * deadline_s)
+            self.ident = InverseDynamics(robot, problem, solver=solver, diagnose=False, settings=settings)
         else:
-            self.ident = InverseDynamics.for_case(robot, problem, solver=solver, diagnose=False,
-                                                  budget_s=budget * deadline_s, **options)
+            self.ident = InverseDynamics.for_case(robot, problem, solver=solver, diagnose=False, settings=settings,
+                                                  **options)
         self.robot, self.law = robot, law
         self.deadline_s = float(deadline_s)
         self.fallbacks: Counter = Counter()
@@ -102,11 +103,12 @@ class Controller:
         self.fallbacks.clear()
         self.misses = 0
         chain = self.ident.solver.inner  # the solver chain (a Cascade) inside the scaling wrapper
-        budget, chain.budget_s = chain.budget_s, None
+        settings = chain.settings  # (its budget lifted for this solve)
+        chain.settings = settings.replace(budget_s=None)
         try:
             res = self.ident.solve(q, v, self.law(q, v, q_r, v_r, a_r))
         finally:
-            chain.budget_s = budget
+            chain.settings = settings
         if res.status != OPTIMAL:
             raise SolverError(f"Controller.start: the initial state has no optimal force distribution "
                               f"({res.status}: {res.message})")
@@ -122,8 +124,8 @@ class Controller:
         budget), then :meth:`start` and ``ticks`` ticks at this state. Call :meth:`start` afterwards:
         it forgets the warm start, the law's integral and the counters."""
         chain = self.ident.solver.inner  # the solver chain (a Cascade) inside the scaling wrapper
-        stages, budget = chain.stages, chain.budget_s
-        chain.budget_s = None
+        stages, settings = chain.stages, chain.settings
+        chain.settings = settings.replace(budget_s=None)
         try:
             for alone in [s for s in stages if not s.refines]:
                 chain.stages = [alone] + [s for s in stages if s.refines]
@@ -133,7 +135,7 @@ class Controller:
                 except McdmError:  # (a stage that refuses this problem alone: nothing of it to warm)
                     pass
         finally:
-            chain.stages, chain.budget_s = stages, budget
+            chain.stages, chain.settings = stages, settings
         self.start(q, v, q_r, v_r, a_r)
         for _ in range(ticks):
             self.tick(q, v, q_r, v_r, a_r)

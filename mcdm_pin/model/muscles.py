@@ -70,7 +70,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..exceptions import ModelError, StateError
-from ..tolerances import BOUND_ABS
+from ..settings import DEFAULT
 
 MINVAL = 1e-15
 """MuJoCo's ``mjMINVAL``: the floor of every denominator of the muscle curves."""
@@ -407,12 +407,12 @@ def length_slopes(params: MuscleParams, tendon_lengths, tendon_velocities):
     return d_passive, d_gain
 
 
-def activation(state: MuscleState, f) -> np.ndarray:
+def activation(state: MuscleState, f, bound_abs: float = DEFAULT.bound_abs) -> np.ndarray:
     """Activation ``a = (f - passive) / gain`` that makes tensions ``f`` (N) at ``state``.
 
     Not clipped: ``f`` outside ``[f_min, f_max]`` gives ``a`` outside ``[a_min, a_max]``. Where ``gain``
     is 0 every activation gives the passive force: the answer is ``a_min`` (the least effort) when ``f``
-    is within ``BOUND_ABS`` of it, NaN otherwise (no activation makes that tension).
+    is within ``bound_abs`` (N; the answer check's, :attr:`~mcdm_pin.settings.Settings.bound_abs`) of it, NaN otherwise (no activation makes that tension).
     """
     f = np.asarray(f, dtype=float)
     if f.shape != np.shape(state.gain):
@@ -420,7 +420,7 @@ def activation(state: MuscleState, f) -> np.ndarray:
     gain = np.asarray(state.gain)
     zero = gain == 0
     a = (f - state.passive) / np.where(zero, 1.0, gain)
-    at_passive = np.abs(f - state.passive) <= BOUND_ABS
+    at_passive = np.abs(f - state.passive) <= bound_abs
     return np.where(zero, np.where(at_passive, state.a_min, np.nan), a)
 
 

@@ -115,7 +115,7 @@ def instant_outputs(u, RT, R_socket, axes, f):
 @njit(cache=True, nogil=True)
 def active_set_answer(H, g, r, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, dirs0, cosr, basis,
                       max_pivots, max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel, strict, near,
-                      unique_rel):
+                      unique_rel, penalty):
     """:func:`._kkt.active_set_run` from the guess ``(state0, cact0, dirs0)`` (``dirs0``: the held
     cones' surface directions; the others start from ``basis0``), then, at a verified point, what
     :func:`mcdm_pin.solvers.active_set.active_solution` makes of it: the bounds' multipliers ``z``
@@ -124,7 +124,7 @@ def active_set_answer(H, g, r, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact
     objective ``1/2 f^T H f + g^T f + r`` and the cones held with a positive multiplier.
 
     And whether the optimum is provably unique (:func:`answer_unique`: ``strict``, the objective
-    is strictly convex; ``near``, ``unique_rel``: :func:`unique_test`'s thresholds), so that the
+    is strictly convex; ``near``, ``unique_rel``, ``penalty``: :func:`unique_test`'s thresholds), so that the
     least-norm stage need not ask again.
 
     Returns ``(code, f, y, z, z_cone, objective, held, mus, dirs, next_state, solves, unique)``
@@ -144,17 +144,17 @@ def active_set_answer(H, g, r, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact
         return code, f, y, np.zeros(n), np.zeros((nc, 3)), np.nan, np.zeros(nc, dtype=np.bool_), mus, dirs, nxt, \
             solves, 0
     z, zc, obj, held = answer_duals(H, g, r, f, grad, state, cact, mus, dirs, cosr, basis)
-    unique = answer_unique(f, z, g, lb, ub, A, H, G, gc, ax, tn, cosr, zc, strict, near, unique_rel)
+    unique = answer_unique(f, z, g, lb, ub, A, H, G, gc, ax, tn, cosr, zc, strict, near, unique_rel, penalty)
     return code, f, y, z, zc, obj, held, mus, dirs, nxt, solves, unique
 
 
 @njit(cache=True, nogil=True)
-def answer_unique(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, strict, near, unique_rel):
+def answer_unique(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, strict, near, unique_rel, penalty):
     """:func:`mcdm_pin.solvers.least_norm.is_unique` of an answer with its duals: 1 when ``strict``
     (its first test: a strictly convex objective), else :func:`unique_test`."""
     if strict:
         return 1
-    return unique_test(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel)
+    return unique_test(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel, penalty)
 
 
 @njit(cache=True, nogil=True)
@@ -214,7 +214,7 @@ def cone_rows(G, g, ax, cosr, basis):
 
 @njit(cache=True, nogil=True)
 def ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, G, g, ax, tn, basis0, cosr, basis, max_iter, eps, crossover_gap,
-               max_pivots, as_tols, ncorr, rank_tol, strict, near, unique_rel):
+               max_pivots, as_tols, ncorr, rank_tol, box_weight, strict, near, unique_rel, penalty):
     """:func:`._ipm.ipm_solve` on a problem's stacked arrays (its cone rows made here:
     :func:`cone_rows`) and, after a crossover, the answer's duals and objective (:func:`answer_duals`)
     and the next instant's guess of the bounds (multipliers below 1e-12 of the largest free their
@@ -233,28 +233,28 @@ def ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, G, g, ax, tn, basis0, cosr, basis,
     fixed, free = fixed_split(lb, ub)
     if fixed.shape[0] == 0 or free.shape[0] == 0:
         return _ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, T, t, G, g, ax, tn, basis0, cosr, basis, max_iter, eps,
-                           crossover_gap, max_pivots, as_tols, ncorr, rank_tol, strict, near, unique_rel)
+                           crossover_gap, max_pivots, as_tols, ncorr, rank_tol, box_weight, strict, near, unique_rel, penalty)
     Hr, d0r, Fr, cr, rr, Ar, br, Tr, tr, Gr, gr = without_fixed(H, d0, Fm, c, r, A, b, lb, T, t, G, g, fixed, free)
     code, x, y, z, zc, obj, it, held, mus, dirs, nxt, unique = _ipm_answer(
         Hr, d0r, Fr, cr, rr, Ar, br, lb[free], ub[free], Tr, tr, Gr, gr, ax, tn, basis0, cosr, basis, max_iter,
-        eps, crossover_gap, max_pivots, as_tols, ncorr, rank_tol, strict, near, unique_rel)
+        eps, crossover_gap, max_pivots, as_tols, ncorr, rank_tol, box_weight, strict, near, unique_rel, penalty)
     xf, zf, objf, nxtf = with_fixed(code, x, y, z, zc, nxt, H, c, r, A, lb, T, fixed, free)
     return code, xf, y, zf, zc, objf if code == CROSSOVER else obj, it, held, mus, dirs, nxtf, unique
 
 
 @njit(cache=True, nogil=True)
 def _ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, T, t, G, g, ax, tn, basis0, cosr, basis, max_iter, eps, crossover_gap,
-                max_pivots, as_tols, ncorr, rank_tol, strict, near, unique_rel):
+                max_pivots, as_tols, ncorr, rank_tol, box_weight, strict, near, unique_rel, penalty):
     """:func:`ipm_answer` once the cone rows ``T, t`` are made and no variable is fixed."""
     code, x, y, z, zc, it, state, cact, mus, dirs = ipm_solve(
         H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, g, ax, tn, basis0, max_pivots,
-        as_tols, ncorr, rank_tol)
+        as_tols, ncorr, rank_tol, box_weight)
     if code != CROSSOVER:
         return code, x, y, z, zc, np.nan, it, np.zeros(0, dtype=np.bool_), mus, dirs, state, 0
     grad = -z
     nxt = next_guess(state, grad)
     zb, zcone, obj, held = answer_duals(H, c, r, x, grad, state, cact, mus, dirs, cosr, basis)
-    unique = answer_unique(x, zb, c, lb, ub, A, H, G, g, ax, tn, cosr, zcone, strict, near, unique_rel)
+    unique = answer_unique(x, zb, c, lb, ub, A, H, G, g, ax, tn, cosr, zcone, strict, near, unique_rel, penalty)
     return code, x, y, zb, zcone, obj, it, held, mus, dirs, nxt, unique
 
 
@@ -412,9 +412,9 @@ def warm_calls():
     tols = (1e-12, 1e-9, 1e-9, 1e-9, 1e-12)
     calls = [(active_set_answer, (z((n, n)), z(n), 0.0, z((1, n)), z(1), z(n), z(n), z(n, dtype=np.int8),
                                   z((1, 3, n)), z((1, 3)), z((1, 3)), z(1), z((1, 3)), z(1, dtype=np.bool_),
-                                  z((1, 3)), z(1), z((1, 2, 3)), 2, 2, *tols, False, 1e-8, 1e-9))]
+                                  z((1, 3)), z(1), z((1, 2, 3)), 2, 2, *tols, False, 1e-8, 1e-9, 1e3))]
     return calls + [(unique_test, (z(n), z(n), z(n), z(n), z(n), z((1, n)), z((n, n)), z((1, 3, n)), z((1, 3)),
-                           z((1, 3)), z(1), z(1), z((1, 3)), 1e-8, 1e-9)),
+                           z((1, 3)), z(1), z(1), z((1, 3)), 1e-8, 1e-9, 1e3)),
             (answer_check, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1))),
             (answer_check_outputs, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1),
                                     z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)))),

@@ -26,7 +26,7 @@ point of the slacks, with the objective: the middle of the box), ``s = h - G x``
 shifted into its cone. The steps from there are long from the first iteration on (on the neck 11
 iterations to the crossover in all three cases); a start at the least-squares forces on the
 equations (~1 N, where the optimum reaches 20 N) took 25-45 short steps in cases 2 and 3. Without
-cones the bounds weigh ``IPM_START_BOX_WEIGHT`` (0.2) instead of one in that least-squares problem
+cones the bounds weigh ``box_weight`` (:attr:`~mcdm_pin.settings.Settings.ipm_start_box_weight`, 0.2) instead of one in that least-squares problem
 (the start nearer the objective's own optimum; ``s = -z / 0.2``): iterations to the crossover, mean
 over 14 instants (neck: ``roll`` with the paper's weights; 2-link arm: ``traj1``; human arm:
 ``abduct``), weight 1 -> 0.2: neck case 1 10.9 -> 9.3, case 2 10.6 -> 9.8; 2-link 8.6 -> 7.5 and
@@ -57,7 +57,6 @@ from __future__ import annotations
 import numpy as np
 from ..jit import njit
 
-from ..tolerances import IPM_START_BOX_WEIGHT
 from . import _ipm_linalg as la
 from . import _ipm_newton as newton
 from ._ipm_direction import barrier, cone_scalings, direction, newton_step
@@ -135,16 +134,16 @@ def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T,
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor, fw, ws):
+def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor, fw, ws, box_weight):
     """CVXOPT's initial point: ``x, y`` of the Newton system with the identity scaling (the least
     squares point of the slacks on the equations, with the objective; without cones the bounds
-    weigh ``IPM_START_BOX_WEIGHT``, module docstring), ``s = h - G x``, ``z = -s`` (``-w s``),
+    weigh ``box_weight``, module docstring), ``s = h - G x``, ``z = -s`` (``-w s``),
     each shifted into its cone's interior when it is not (:func:`_shift_into_cones`). Starting from
     the middle of the box costs nothing in iterations: every step is long (on the neck 11-13
     iterations to the crossover, where a start at the least-squares forces took 25-45 short ones).
     ``fw``, ``ws``: the factor's and the solves' work arrays (:func:`ipm_solve`)."""
     n, nu, nl, K = c.shape[0], iu.shape[0], il.shape[0], T.shape[0]
-    wb = IPM_START_BOX_WEIGHT if K == 0 else 1.0  # the bounds' weight (module docstring)
+    wb = box_weight if K == 0 else 1.0  # the bounds' weight (module docstring)
     one_u, one_l = np.ones(nu), np.ones(nl)
     Vc = np.zeros((K, 3, 3))
     for k in range(K):
@@ -276,7 +275,7 @@ def _crossover(x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax,
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax, tn, basis0,
-              max_pivots, as_tols, ncorr, rank_tol):
+              max_pivots, as_tols, ncorr, rank_tol, box_weight):
     """The interior-point method with crossover (module docstring).
 
     Args:
@@ -288,11 +287,11 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
         crossover_gap: try the active set once the relative gap is below this (0: never).
         G, gc, ax, tn, basis0: the cones in the active-set solver's form (``F = gc + G x``, axis,
             tan, a normal) for the crossover.
-        max_pivots: pivot limit of each crossover attempt.
+        max_pivots, ncorr: pivots of each crossover attempt; centrality correctors per iteration (limits).
         as_tols (5,): the active-set solver's step, primal, dual, equation-of-motion and
             regularisation tolerances.
-        ncorr: at most this many centrality correctors per iteration.
         rank_tol: relative residual below which a row of ``[Fm; T]`` counts as dependent.
+        box_weight: the bounds' weight in the start without cones (module docstring, "The start").
 
     Returns ``(code, x, y, zbox, zc, iterations, state, cact, mus, dirs)``: ``code`` one of SOLVED,
     CROSSOVER, INFEASIBLE_CERT (then ``y, zbox, zc`` are the certificate), MAX_ITER, NUMERICAL;
@@ -310,7 +309,7 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
     dbar, dinv, ru, rl = bar
     Wm, Winv, Wc2, lamc = Wc
     x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor,
-                                          fw, ws)
+                                          fw, ws, box_weight)
     attempts, end, it = 0, MAX_ITER, 0
     last_state, last_cact = np.full(n, -1, dtype=np.int8), np.zeros(K, dtype=np.bool_)  # the last guess tried
     for it in range(max_iter):

@@ -11,16 +11,16 @@ import numpy as np
 from ..jit import njit
 
 from ..model.kernels import gram_lower
-from ..tolerances import UNIQUE_PENALTY
 from ._ipm_linalg import dot
 from ._kkt_eq import cone_force
 from ._kkt_linalg import chol_lower
 
 
 @njit(cache=True, nogil=True)
-def definite_beyond(H, J, rows, thr, hscale):
+def definite_beyond(H, J, rows, thr, hscale, penalty):
     """Whether ``H + gamma J^T J - thr I`` has a Cholesky factor (``J = J[:rows]``, ``gamma =
-    UNIQUE_PENALTY hscale / max |J^T J|``): then ``z^T H z > thr |z|^2`` for every ``z`` with
+    penalty hscale / max |J^T J|``, ``penalty``:
+    :attr:`~mcdm_pin.settings.Settings.unique_penalty`): then ``z^T H z > thr |z|^2`` for every ``z`` with
     ``J z = 0``, the uniqueness test's conclusion without the null space
     (:mod:`mcdm_pin.solvers.least_norm`, "The shortcut")."""
     nf = H.shape[0]
@@ -30,7 +30,7 @@ def definite_beyond(H, J, rows, thr, hscale):
     for a in range(nf):
         for b in range(a + 1):
             big = max(big, abs(M[a, b]))
-    gam = UNIQUE_PENALTY * hscale / big if big > 0.0 else 0.0
+    gam = penalty * hscale / big if big > 0.0 else 0.0
     for a in range(nf):
         for b in range(a + 1):
             M[a, b] = H[a, b] + gam * M[a, b]
@@ -39,7 +39,7 @@ def definite_beyond(H, J, rows, thr, hscale):
 
 
 @njit(cache=True, nogil=True)
-def unique_test(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel):
+def unique_test(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel, penalty):
     """:func:`mcdm_pin.solvers.least_norm.is_unique` after its first two tests (its
     ``_strongly_active``, the Cholesky of ``J^T J``, the Cholesky of ``H + gamma J^T J - thr I``
     (:func:`definite_beyond`), then the null space of ``J`` by an SVD and the reduced Hessian's
@@ -60,7 +60,7 @@ def unique_test(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel
     if rows >= nf and _full_column_rank(J, rows, nf):
         return 1
     H, hscale = _reduced_hessian(P, free, nf, cv, cs, ncv)
-    if definite_beyond(H, J, rows, unique_rel * hscale, hscale):
+    if definite_beyond(H, J, rows, unique_rel * hscale, hscale, penalty):
         return 1
     return _null_space_curvature(J, H, rows, nf, unique_rel * hscale)
 

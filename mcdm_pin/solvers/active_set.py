@@ -6,7 +6,7 @@ the optimum for that active set solves an equality-constrained problem: one line
 bounds, a few Newton (SQP) steps for the cones (each cone's surface
 :math:`c_k(x) = \|F_\perp\| - \tan\rho^*_k\, a^T F = 0` linearised, its curvature weighted by its
 multiplier). The point is returned only if it satisfies *all* the KKT conditions of the full convex
-problem to tight tolerances (:mod:`mcdm_pin.tolerances`, ``ACTIVE_SET_*``):
+problem to tight tolerances (:class:`mcdm_pin.settings.Settings`, ``active_set_*``):
 
 - primal: equation of motion, every bound, every inactive cone (within its angle), active cones on
   the right nappe (``a . F > 0``);
@@ -29,14 +29,19 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import jit
-from .. import tolerances as tol
 from ..qp import QPData
+from ..settings import DEFAULT, Settings
 from . import _fast
 from . import _kkt as K
 from .base import OPTIMAL, Solution, Stage
 
-_AS_TOLS = np.array([tol.ACTIVE_SET_STEP, tol.ACTIVE_SET_PRIMAL, tol.ACTIVE_SET_DUAL, tol.ACTIVE_SET_EOM,
-                     tol.ACTIVE_SET_REG])
+
+
+def as_tols(settings: Settings) -> np.ndarray:
+    """The compiled active-set solver's tolerances, in its order: step, primal, dual, equation of
+    motion, regularisation (:class:`~mcdm_pin.settings.Settings`' ``active_set_*``)."""
+    s = settings
+    return np.array([s.active_set_step, s.active_set_primal, s.active_set_dual, s.active_set_eom, s.active_set_reg])
 
 
 @dataclass
@@ -76,7 +81,7 @@ class ActiveSet:
 
     @classmethod
     def from_solution(cls, qp: QPData, x: np.ndarray, cone_mult: dict, bound_mult=None,
-                      rel: float = tol.ACTIVE_SET_FROM_SOLUTION):
+                      rel: float = DEFAULT.active_set_from_solution):
         """The active set of a point: variables within ``rel`` (relative) of a bound whose
         multiplier pushes them onto it (``bound_mult``: > 0 at a lower bound, < 0 at an upper bound;
         None: position only), and cones with a positive multiplier whose force is on the surface."""
@@ -102,16 +107,16 @@ class ActiveSet:
         return cls(np.flatnonzero(near_l), np.flatnonzero(near_u), cones)
 
     @classmethod
-    def from_duals(cls, qp: QPData, sol: Solution) -> "ActiveSet":
+    def from_duals(cls, qp: QPData, sol: Solution, rel: float = DEFAULT.active_set_from_solution) -> "ActiveSet":
         """The active set of an answer with duals (:mod:`.base` convention); position only when it
-        has none."""
+        has none (``rel``: :meth:`from_solution`'s)."""
         mult = {}
         if qp.cones and sol.z_cone is not None:
             cosr = np.cos(np.radians([c.angle_deg for c in qp.cones]))
             mult = {c.joint: float(sol.z_cone[k, 0] * cosr[k]) for k, c in enumerate(qp.cones)}
         elif qp.cones:
             mult = {c.joint: 1.0 for c in qp.cones}
-        return cls.from_solution(qp, sol.x, mult, None if sol.z is None else -sol.z)
+        return cls.from_solution(qp, sol.x, mult, None if sol.z is None else -sol.z, rel)
 
 
 def cone_duals(qp: QPData, mus: np.ndarray, dirs: np.ndarray) -> np.ndarray:
@@ -126,7 +131,8 @@ def cone_duals(qp: QPData, mus: np.ndarray, dirs: np.ndarray) -> np.ndarray:
     return out
 
 
-def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newton: int = 10, stage: str = ""):
+def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, stage: str = "",
+                   settings: Settings = DEFAULT):
     """The verified optimum reached from ``guess`` (a :class:`~.base.Solution` whose ``active`` is
     the guess for the next instant, and whose ``iterations`` count the linear KKT systems solved: one
     per active set tried, one per Newton step when cones are held), or ``None``.
@@ -134,7 +140,8 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     Starting from ``guess``, the active set is corrected by block principal pivoting (free variables
     that leave their bounds are fixed there, fixed ones whose multiplier has the wrong sign are
     freed, broken cones join, cones with a negative multiplier leave) for at most ``max_pivots``
-    equality-constrained solves; a repeated active set stops it. One compiled call
+    equality-constrained solves; a repeated active set stops it (tolerances and Newton steps:
+    ``settings``). One compiled call
     (:func:`._fast.active_set_answer`: the kernel and the answer's duals, what
     :func:`active_solution` computes in numpy)."""
     c, A, b, lb, ub, G, gc, ax, tn, basis0 = qp.kernel_arrays()
@@ -146,8 +153,8 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, max_newto
     answer = jit.kernels("solvers._fast").active_set_answer
     code, x, y, z, zc, objective, held, mus, dirs, nxt_state, solves, unique = answer(
         c_(qp.P, dtype=float), c, qp.r, A, b, lb, ub, c_(state, dtype=np.int8), G, gc, ax, tn, basis0,
-        c_(cact, dtype=np.bool_), c_(cdir, dtype=float), cosr, basis, int(max_pivots), int(max_newton), *_AS_TOLS,
-        *unique_args(qp))
+        c_(cact, dtype=np.bool_), c_(cdir, dtype=float), cosr, basis, int(max_pivots),
+        int(settings.active_set_max_newton), *as_tols(settings), *unique_args(qp, settings))
     if code != K.FOUND:
         _miss(K.REASONS[code])
         return None
@@ -168,13 +175,14 @@ def compiled_answer(qp: QPData, x, y, z, zc, objective, held, mus, dirs, nxt_sta
                     verified=True, unique=True if unique else None, **fields)
 
 
-def unique_args(qp: QPData) -> tuple:
+def unique_args(qp: QPData, settings: Settings = DEFAULT) -> tuple:
     """The compiled answers' arguments of the uniqueness test (:func:`._fast.answer_unique`):
-    ``(strict, near, unique_rel)``, ``strict`` when ``P = diag(d) + F^T F`` with ``d > 0``
+    ``(strict, near, unique_rel, penalty)`` (the last three from ``settings``), ``strict`` when ``P = diag(d) + F^T F`` with ``d > 0``
     (:func:`.least_norm.is_unique`'s first test). An answer proven unique carries ``unique=True``
     and the least-norm stage passes it on; one not proven is asked again there (``None``)."""
     strict = qp.P_diag is not None and qp.P_diag.size > 0 and float(qp.P_diag.min()) > 0.0
-    return bool(strict), float(tol.ACTIVE_SET_FROM_SOLUTION), float(tol.UNIQUE_REL)
+    return (bool(strict), float(settings.active_set_from_solution), float(settings.unique_rel),
+            float(settings.unique_penalty))
 
 
 def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state, **fields) -> Solution:
@@ -197,34 +205,29 @@ def _miss(reason: str) -> None:
     MISSES[reason] = MISSES.get(reason, 0) + 1
 
 
-WARM_MAX_PIVOTS = 50
-"""Pivot limit of the warm stage. A pivot (one active set's KKT solve and check) costs ~10-25 us on the
-neck, a cold solve by the interior-point method a few ms: at the turning point of the neck's
-``roll`` (cases 2 and 3) the active set needs 33 pivots (~0.7 ms), and with a limit of 30 that
-instant cost the pivots *and* the cold solve (~4 ms, the trajectory's 99th percentile). 50 pivots
-keep a warm start that fails under ~1 ms of pivoting."""
 
 
 class WarmActiveSet(Stage):
     """Answering stage: the previous answer's active set (see the module docstring).
 
     Args:
-        max_pivots: pivot limit (block principal pivoting) per instant.
+        settings: the pivot limit per instant (``warm_max_pivots``) and the tolerances.
     """
 
     name = "warm_active_set"
 
-    def __init__(self, max_pivots: int = WARM_MAX_PIVOTS):
-        self.max_pivots = max_pivots
+    def __init__(self, settings: Settings = DEFAULT):
+        self.settings = settings
         self.guess: ActiveSet | None = None
 
     def run(self, qp, sol, deadline):
         if self.guess is None or not jit.ready():
             return None
-        return try_active_set(qp, self.guess, self.max_pivots, stage=self.name)
+        return try_active_set(qp, self.guess, self.settings.warm_max_pivots, stage=self.name, settings=self.settings)
 
     def learn(self, qp, sol):
-        self.guess = sol.active if sol.active is not None else ActiveSet.from_duals(qp, sol)
+        self.guess = sol.active if sol.active is not None else ActiveSet.from_duals(
+            qp, sol, self.settings.active_set_from_solution)
 
     def seed(self, hint):
         self.guess = hint.active
@@ -236,29 +239,31 @@ class WarmActiveSet(Stage):
 class Polish(Stage):
     """Refining stage: the exact KKT point of the active set of another stage's answer (bounds and
     the equation of motion then hold to rounding instead of to that stage's tolerance), if it
-    verifies; the answer unchanged otherwise."""
+    verifies; the answer unchanged otherwise (pivot limit ``settings.polish_max_pivots``)."""
 
     name = "polish"
     refines = True
 
-    def __init__(self, max_pivots: int = 30):
-        self.max_pivots = max_pivots
+    def __init__(self, settings: Settings = DEFAULT):
+        self.settings = settings
 
     def run(self, qp, sol, deadline):
         if sol.active is not None:  # an active-set stage's answer is exact already
             return sol
         if not jit.ready():  # kernels switched off (a test's numpy reference): bounds-only polish in numpy
-            hit = numpy_polish(qp, sol)
+            hit = numpy_polish(qp, sol, self.settings)
             return sol if hit is None else hit.but(stage=f"{sol.stage}>{self.name}", iterations=sol.iterations,
                                                     rounds=sol.rounds, message=sol.message)
-        hit = try_active_set(qp, ActiveSet.from_duals(qp, sol), max_pivots=self.max_pivots)
+        s = self.settings
+        hit = try_active_set(qp, ActiveSet.from_duals(qp, sol, s.active_set_from_solution), s.polish_max_pivots,
+                             settings=s)
         if hit is None:
             return sol
         return hit.but(stage=f"{sol.stage}>{self.name}", iterations=sol.iterations, rounds=sol.rounds,
                        message=sol.message)
 
 
-def numpy_polish(qp: QPData, sol: Solution) -> Solution | None:
+def numpy_polish(qp: QPData, sol: Solution, settings: Settings = DEFAULT) -> Solution | None:
     """The polish without the compiled kernels, where no cone binds: the exact KKT point of the
     bounds that ``sol``'s multipliers hold (a least-squares solve of the KKT system, so a dependent
     equation does no harm), kept if the freed variables stay within their bounds and the held ones'
@@ -287,7 +292,7 @@ def numpy_polish(qp: QPData, sol: Solution) -> Solution | None:
     sol_k = np.linalg.lstsq(K, rhs, rcond=None)[0]
     x[F] = sol_k[:len(F)]
     y = sol_k[len(F):]
-    if len(qp.b) and not _eom_met(qp, x):  # the held bounds leave the equations unmet (rounding-size
+    if len(qp.b) and not _eom_met(qp, x, settings.eom_rel):  # the held bounds leave the equations unmet (rounding-size
         return None                        # multipliers of a constant objective read as binding)
     slack = 1e-12 * (1.0 + np.maximum(np.abs(qp.lb), np.abs(qp.ub)))
     if np.any(x[F] < qp.lb[F] - slack[F]) or np.any(x[F] > qp.ub[F] + slack[F]):
@@ -301,10 +306,10 @@ def numpy_polish(qp: QPData, sol: Solution) -> Solution | None:
     return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z, z_cone=zc, verified=False)
 
 
-def _eom_met(qp: QPData, x) -> bool:
-    """``A x = b`` to the answer check's tolerance (:data:`~mcdm_pin.tolerances.EOM_REL`, relative)."""
+def _eom_met(qp: QPData, x, eom_rel: float) -> bool:
+    """``A x = b`` to the answer check's tolerance (``eom_rel``: :attr:`~mcdm_pin.settings.Settings.eom_rel`)."""
     scale = max(np.abs(qp.b).max(initial=0.0), (np.abs(qp.A) @ np.abs(x)).max(initial=0.0), 1e-300)
-    return bool(np.abs(qp.A @ x - qp.b).max(initial=0.0) <= tol.EOM_REL * scale)
+    return bool(np.abs(qp.A @ x - qp.b).max(initial=0.0) <= eom_rel * scale)
 
 
 def warm_calls():

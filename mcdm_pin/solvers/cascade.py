@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import copy
 
-from .. import tolerances as tol
+from ..settings import DEFAULT, Settings
 from .base import BUDGET, ERROR, OPTIMAL, Solution, Solver, failure, now
 
 
@@ -19,15 +19,22 @@ class Cascade(Solver):
     Args:
         stages: the :class:`~.base.Stage` objects.
         name: the back-end's name (reported in results).
-        budget_s: per-instant time budget, seconds (``None``: none). A solve that has no final answer
-            when it runs out stops before the next stage with status ``budget``.
+        settings: the chain's :class:`~mcdm_pin.settings.Settings`, of which the chain reads the
+            per-instant time budget ``budget_s`` (seconds, ``None``: none): a solve that has no final
+            answer when it runs out stops before the next stage with status ``budget``. The stages
+            hold the same object (:mod:`.chains` builds them with it).
     """
 
-    def __init__(self, stages, name: str = "cascade", budget_s: float | None = tol.BUDGET_S, factory=None):
+    def __init__(self, stages, name: str = "cascade", settings: Settings = DEFAULT, factory=None):
         self.stages = list(stages)
         self.name = name
-        self.budget_s = budget_s
+        self.settings = settings
         self._factory = factory
+
+    @property
+    def budget_s(self) -> float | None:
+        """The per-instant time budget, seconds (``settings.budget_s``)."""
+        return self.settings.budget_s
 
     def __repr__(self) -> str:
         return f"Cascade({self.name!r}: {' -> '.join(s.name for s in self.stages)})"

@@ -27,8 +27,8 @@ options.
 
 from __future__ import annotations
 
-from .. import tolerances as tol
 from ..exceptions import SolverError
+from ..settings import DEFAULT, Settings
 from ..vocabulary import BACKENDS
 from .active_set import Polish, WarmActiveSet
 from .cascade import Cascade
@@ -38,54 +38,65 @@ from .ipm import IPMStage
 from .least_norm import LeastNorm
 from .proxqp_ import ProxQPStage, SQPPolish
 
-def chain(name: str, first, budget_s: float | None, factory, polish: bool = True) -> Cascade:
-    """``first`` (stage factories: the answering stages), then the polish (``polish``) and the
-    projection, then the least-norm stage (running the same stages on the least-norm problem) and
-    the check; ``factory`` makes a fresh copy (:meth:`Cascade.fresh`)."""
+
+def chain(name: str, first, settings: Settings, factory, polish: bool = True) -> Cascade:
+    """``first`` (stage factories, each called with ``settings``: the answering stages), then the
+    polish (``polish``) and the projection, then the least-norm stage (running the same stages on the
+    least-norm problem) and the check; every stage and both chains hold ``settings`` (the inner chain
+    without a budget of its own: the outer one's deadline bounds it); ``factory`` makes a fresh copy
+    (:meth:`Cascade.fresh`)."""
 
     # the polish gives the exact KKT point of the answer's active set: the least-norm stage pins
     # P x at the first stage's answer, and an interior point's P x is accurate to ~1e-5 only where
     # the objective is flat
     def stages():
-        return [f() for f in first] + ([Polish()] if polish else []) + [Project()]
+        return [f(settings) for f in first] + ([Polish(settings)] if polish else []) + [Project(settings)]
 
-    inner = Cascade(stages(), name=f"{name} (least-norm stage)", budget_s=None)
-    return Cascade(stages() + [LeastNorm(inner), Check()], name=name, budget_s=budget_s, factory=factory)
+    inner = Cascade(stages(), name=f"{name} (least-norm stage)", settings=settings.replace(budget_s=None))
+    return Cascade(stages() + [LeastNorm(inner, settings), Check(settings)], name=name, settings=settings,
+                   factory=factory)
 
 
-def make_solver(name: str = "default", budget_s: float | None = tol.BUDGET_S, **options) -> Cascade:
-    """The chain called ``name`` (:data:`BACKENDS`; ``options``: the named back-end's stage's)."""
-    factory = lambda: make_solver(name, budget_s, **options)  # noqa: E731
+def make_solver(name: str = "default", settings: Settings = DEFAULT, **options) -> Cascade:
+    """The chain called ``name`` (:data:`BACKENDS`) with ``settings`` (tolerances, pivot limits, budget:
+    :class:`~mcdm_pin.settings.Settings`); ``options``: the ProxQP stage's (:class:`~.proxqp_.ProxQPStage`)
+    for the chains that have one."""
+    factory = lambda: make_solver(name, settings, **options)  # noqa: E731
+    proxqp = lambda s: ProxQPStage(s, **options)  # noqa: E731
     if name == "default":
         # Clarabel before ProxQP: where the compiled method breaks down (an instant infeasible by a
         # few micro-degrees of cone) Clarabel's exact cone program answers in milliseconds, where
         # the cutting planes' SQP polish may run millions of ProxQP iterations before failing
-        first = [WarmActiveSet, IPMStage, ClarabelStage, lambda: ProxQPStage(**options), SQPPolish]
+        first = [WarmActiveSet, IPMStage, ClarabelStage, proxqp, SQPPolish]
     elif name == "compiled":
         first = [WarmActiveSet, IPMStage]
     elif name == "proxqp":
-        first = [lambda: ProxQPStage(**options), SQPPolish]
+        first = [proxqp, SQPPolish]
     elif name == "clarabel":
-        first = [lambda: ClarabelStage(**options)]
+        first = [ClarabelStage]
     else:
         raise SolverError(f"unknown solver {name!r}; expected one of {', '.join(BACKENDS)}")
-    return chain(name, first, budget_s, factory)
+    if options and name in ("compiled", "clarabel"):
+        raise SolverError(f"solver {name!r} takes no options (got {', '.join(options)}); its tolerances and "
+                          f"limits are settings (mcdm_pin.settings.Settings)")
+    return chain(name, first, settings, factory)
 
 
-def ProxQPSolver(active_set: bool = True, fallback: bool = True, budget_s: float | None = tol.BUDGET_S,
+def ProxQPSolver(active_set: bool = True, fallback: bool = True, settings: Settings = DEFAULT,
                  **options) -> Cascade:
     """A ProxQP-based chain, as the library's default was before the compiled interior-point method:
     ``active_set`` adds the warm active set and the polish, ``fallback`` Clarabel for the instants on
     which ProxQP stalls; ``options``: :class:`~.proxqp_.ProxQPStage`'s."""
-    first = ([WarmActiveSet] if active_set else []) + [lambda: ProxQPStage(**options), SQPPolish]
+    first = ([WarmActiveSet] if active_set else []) + [lambda s: ProxQPStage(s, **options), SQPPolish]
     first += [ClarabelStage] if fallback else []
-    return chain("proxqp", first, budget_s, polish=active_set,
-                 factory=lambda: ProxQPSolver(active_set, fallback, budget_s, **options))
+    return chain("proxqp", first, settings, polish=active_set,
+                 factory=lambda: ProxQPSolver(active_set, fallback, settings, **options))
 
 
-def ClarabelSolver(tol: float = tol.CLARABEL_TOL, max_iter: int = 200) -> Cascade:
-    """The Clarabel-only chain (``make_solver("clarabel")``)."""
-    return make_solver("clarabel", tol=tol, max_iter=max_iter)
+def ClarabelSolver(settings: Settings = DEFAULT) -> Cascade:
+    """The Clarabel-only chain (``make_solver("clarabel")``; its tolerances: ``settings``'
+    ``clarabel_*``)."""
+    return make_solver("clarabel", settings)
 
 
 __all__ = ["BACKENDS", "chain", "make_solver", "ProxQPSolver", "ClarabelSolver"]

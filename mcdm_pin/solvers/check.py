@@ -15,8 +15,8 @@ convex problem (:class:`~mcdm_pin.qp.QPData`; duals as in :mod:`.base`):
   variables' size, and every cone dual in the second-order cone.
 
 For a convex problem these conditions are sufficient: an answer that meets them is optimal to the
-stated tolerances (:mod:`mcdm_pin.tolerances`), whatever produced it. An answer without duals is
-checked for feasibility only.
+stated tolerances (the acceptance fields of :class:`mcdm_pin.settings.Settings`), whatever produced
+it. An answer without duals is checked for feasibility only.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import jit
-from .. import tolerances as tol
+from ..settings import DEFAULT, Settings
 from .base import INACCURATE, OPTIMAL, Solution, Stage, cone_violation_deg
 
 
@@ -37,9 +37,9 @@ def eom_residual(qp, x) -> float:
     return float(np.abs(r).max(initial=0.0) / scale)
 
 
-def kkt_residuals(qp, sol: Solution) -> dict:
+def kkt_residuals(qp, sol: Solution, settings: Settings = DEFAULT) -> dict:
     """The residuals described in the module docstring (``stationarity`` and ``complementarity`` are
-    NaN when the solution has no duals)."""
+    NaN when the solution has no duals; ``settings``: the gradient floor ``kkt_grad_floor``)."""
     x = sol.x
     out = dict(eom=eom_residual(qp, x),
                bound=float(max((qp.lb - x).max(initial=0.0), (x - qp.ub).max(initial=0.0))),
@@ -51,7 +51,7 @@ def kkt_residuals(qp, sol: Solution) -> dict:
     Aty = qp.A.T @ sol.y if len(qp.b) else np.zeros(qp.n)
     terms = [np.abs(grad - qp.c).max(initial=0.0), np.abs(qp.c).max(initial=0.0),
              np.abs(Aty).max(initial=0.0), np.abs(sol.z).max(initial=0.0),
-             _hessian_size(qp, x), tol.KKT_GRAD_FLOOR if _constant(qp) else 1e-300]
+             _hessian_size(qp, x), settings.kkt_grad_floor if _constant(qp) else 1e-300]
     g = grad + Aty + sol.z
     comp = 0.0
     if qp.cones:
@@ -100,33 +100,34 @@ def _hessian_size(qp, x) -> float:
     return float((np.abs(qp.P) @ ax).max(initial=0.0))
 
 
-def kkt_problems(qp, sol: Solution) -> list[str]:
-    """What the answer breaks, as messages (empty: it passes)."""
-    r = kkt_residuals(qp, sol)
+def kkt_problems(qp, sol: Solution, settings: Settings = DEFAULT) -> list[str]:
+    """What the answer breaks, as messages (empty: it passes; tolerances: ``settings``' acceptance)."""
+    s = settings
+    r = kkt_residuals(qp, sol, s)
     problems = []
-    if not r["eom"] <= tol.EOM_REL:
-        problems.append(f"equation-of-motion residual {r['eom']:.2e} > {tol.EOM_REL:g}")
-    if not r["bound"] <= tol.BOUND_ABS:
+    if not r["eom"] <= s.eom_rel:
+        problems.append(f"equation-of-motion residual {r['eom']:.2e} > {s.eom_rel:g}")
+    if not r["bound"] <= s.bound_abs:
         problems.append(f"bounds broken by {r['bound']:.2e}")
-    if not r["cone_deg"] <= tol.CONE_DEG:
+    if not r["cone_deg"] <= s.cone_deg:
         problems.append(f"a cone broken by {r['cone_deg']:.2e} deg")
     if np.isfinite(r["stationarity"]) or np.isfinite(r["complementarity"]):
-        if not r["stationarity"] <= tol.KKT_DUAL_REL:
+        if not r["stationarity"] <= s.kkt_dual_rel:
             problems.append(f"not stationary (relative residual {r['stationarity']:.1e})")
-        if not r["complementarity"] <= tol.KKT_GAP_REL:
+        if not r["complementarity"] <= s.kkt_gap_rel:
             problems.append(f"multipliers inconsistent with the active set (relative gap "
                             f"{r['complementarity']:.1e})")
     return problems
 
 
-def project_to_bounds(qp, sol: Solution) -> Solution:
-    """``x`` projected onto the bounds when it misses them by at most ``BOUND_SNAP_REL`` (relative):
+def project_to_bounds(qp, sol: Solution, settings: Settings = DEFAULT) -> Solution:
+    """``x`` projected onto the bounds when it misses them by at most ``settings.bound_snap_rel`` (relative):
     iterative back-ends meet bounds to their tolerance, which at forces of 1e6 N is beyond the
     check's absolute 1e-9 N. A larger miss is left for the check to flag."""
     x = sol.x
     if not _outside(x, qp.lb, qp.ub):
         return sol
-    slack = tol.BOUND_SNAP_REL * (1.0 + np.maximum(np.abs(qp.lb), np.abs(qp.ub)))
+    slack = settings.bound_snap_rel * (1.0 + np.maximum(np.abs(qp.lb), np.abs(qp.ub)))
     if np.all(x >= qp.lb - slack) and np.all(x <= qp.ub + slack):
         x = np.clip(x, qp.lb, qp.ub)
         return sol.but(x=x, objective=qp.objective(x))
@@ -148,21 +149,27 @@ class Project(Stage):
     name = "project"
     refines = True
 
+    def __init__(self, settings: Settings = DEFAULT):
+        self.settings = settings
+
     def run(self, qp, sol, deadline):
-        return project_to_bounds(qp, sol)
+        return project_to_bounds(qp, sol, self.settings)
 
 
 class Check(Stage):
     """Refining stage, last of every chain: an optimal answer that fails :func:`kkt_problems` is
-    downgraded to ``inaccurate`` with the reasons in its message."""
+    downgraded to ``inaccurate`` with the reasons in its message (tolerances: ``settings``)."""
 
     name = "check"
     refines = True
 
+    def __init__(self, settings: Settings = DEFAULT):
+        self.settings = settings
+
     def run(self, qp, sol, deadline):
         if sol.verified:  # checked by the compiled active-set solver, to tighter tolerances
             return sol
-        problems = kkt_problems(qp, sol)
+        problems = kkt_problems(qp, sol, self.settings)
         if not problems:
             return sol
         note = f"{sol.stage or 'the solver'}'s answer fails the KKT check: " + "; ".join(problems)

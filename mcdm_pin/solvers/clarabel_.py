@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import tolerances as tol
 from ..exceptions import SolverError
 from ..qp import QPData
+from ..settings import DEFAULT, Settings
 from .base import BUDGET, INACCURATE, INFEASIBLE, MAX_ITER, OPTIMAL, Solution, Stage, failure, now
 
 
@@ -77,23 +77,23 @@ def independent_rows(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     return keep
 
 
-def clarabel_solve(qp: QPData, tol_: float = tol.CLARABEL_TOL, max_iter: int = 200,
-                   time_limit: float | None = None) -> Solution:
-    """Solve ``qp`` with Clarabel; the answer with its duals."""
+def clarabel_solve(qp: QPData, settings: Settings = DEFAULT, time_limit: float | None = None) -> Solution:
+    """Solve ``qp`` with Clarabel (tolerances and iteration limit: ``settings``' ``clarabel_*``); the
+    answer with its duals."""
     import clarabel
 
     n = qp.n
     P, c, A, b, cones, (rows, hi, lo) = conic_form(qp)
     neq = len(rows)
-    settings = clarabel.DefaultSettings()
-    settings.verbose = False
-    settings.max_iter = max_iter
-    settings.tol_gap_abs = settings.tol_gap_rel = tol_
-    settings.tol_feas = tol_
-    settings.tol_ktratio = tol.CLARABEL_KTRATIO
+    opts = clarabel.DefaultSettings()
+    opts.verbose = False
+    opts.max_iter = settings.clarabel_max_iter
+    opts.tol_gap_abs = opts.tol_gap_rel = settings.clarabel_tol
+    opts.tol_feas = settings.clarabel_tol
+    opts.tol_ktratio = settings.clarabel_ktratio
     if time_limit is not None and np.isfinite(time_limit):
-        settings.time_limit = max(float(time_limit), 1e-3)
-    sol = clarabel.DefaultSolver(P, c, A, b, cones, settings).solve()
+        opts.time_limit = max(float(time_limit), 1e-3)
+    sol = clarabel.DefaultSolver(P, c, A, b, cones, opts).solve()
     status = str(sol.status)
     it = int(sol.iterations)
     if status in ("Solved", "AlmostSolved"):
@@ -120,20 +120,20 @@ def clarabel_solve(qp: QPData, tol_: float = tol.CLARABEL_TOL, max_iter: int = 2
 
 
 class ClarabelStage(Stage):
-    """Answering stage: :func:`clarabel_solve` (``tol``, ``max_iter`` as there)."""
+    """Answering stage: :func:`clarabel_solve` (``settings`` as there)."""
 
     name = "clarabel"
 
-    def __init__(self, tol: float = tol.CLARABEL_TOL, max_iter: int = 200):
+    def __init__(self, settings: Settings = DEFAULT):
         try:
             import clarabel  # noqa: F401
         except ImportError:
             raise SolverError("the clarabel back-end needs the clarabel package (a dependency of "
                               "mcdm-pin): pip install clarabel") from None
-        self.tol, self.max_iter = tol, max_iter
+        self.settings = settings
 
     def run(self, qp, sol, deadline):
-        out = clarabel_solve(qp, self.tol, self.max_iter, deadline - now())
+        out = clarabel_solve(qp, self.settings, deadline - now())
         if sol is not None and not out.final and sol.message:
             out = out.but(message=f"{sol.message}; {out.message}")
         elif sol is not None and out.status == OPTIMAL and sol.stage and sol.stage != self.name:

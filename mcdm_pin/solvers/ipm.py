@@ -14,10 +14,10 @@ import numpy as np
 
 from .. import jit
 from ..jit import njit
-from .. import tolerances as tol
 from ..qp import ConeData, QPData, perpendicular_basis
 from . import _fast, _ipm, _kkt
-from .active_set import _AS_TOLS, compiled_answer, unique_args
+from ..settings import DEFAULT, Settings
+from .active_set import as_tols, compiled_answer, unique_args
 from .base import INACCURATE, INFEASIBLE, OPTIMAL, Solution, Stage, failure
 
 REASONS = {_ipm.MAX_ITER: "iteration limit", _ipm.NUMERICAL: "numerical breakdown (the step vanished)"}
@@ -38,27 +38,28 @@ def p_structure(qp) -> tuple[np.ndarray, np.ndarray]:
     return np.zeros(qp.n), (np.sqrt(w[keep])[:, None] * V[:, keep].T)
 
 
-def ipm_arguments(qp, max_iter: int = tol.IPM_MAX_ITER, eps: float = tol.IPM_EPS,
-                  crossover_gap: float = tol.IPM_CROSSOVER_GAP, max_pivots: int = tol.IPM_CROSSOVER_PIVOTS,
-                  correctors: int = tol.IPM_CORRECTORS, rank_tol: float = tol.IPM_RANK_TOL) -> tuple:
+def ipm_arguments(qp, settings: Settings = DEFAULT) -> tuple:
     """The arguments of :func:`._fast.ipm_answer` for ``qp`` (C-ordered float arrays and Python
-    scalars: one compiled specialisation serves every call)."""
+    scalars: one compiled specialisation serves every call), the limits and tolerances ``settings``'
+    (``ipm_*``, ``active_set_*``, ``unique_*``)."""
+    s = settings
     c_ = np.ascontiguousarray
     c, A, b, lb, ub, G, gc, ax, tn, basis0 = qp.kernel_arrays()  # made once per problem
     _, _, cosr, basis = qp.cone_consts()
     d0, F = p_structure(qp)
     return (c_(qp.P, dtype=float), c_(d0, dtype=float), c_(F, dtype=float), c, float(qp.r), A, b, lb, ub, G, gc, ax,
-            tn, basis0, cosr, basis, int(max_iter), float(eps), float(crossover_gap), int(max_pivots), _AS_TOLS,
-            int(correctors), float(rank_tol), *unique_args(qp))
+            tn, basis0, cosr, basis, int(s.ipm_max_iter), float(s.ipm_eps), float(s.ipm_crossover_gap),
+            int(s.ipm_crossover_pivots), as_tols(s), int(s.ipm_correctors), float(s.ipm_rank_tol),
+            float(s.ipm_start_box_weight), *unique_args(qp, s))
 
 
-def ipm_solve(qp, **options) -> Solution:
-    """Solve ``qp`` with the compiled interior-point method (``options``: :func:`ipm_arguments`): one
+def ipm_solve(qp, settings: Settings = DEFAULT) -> Solution:
+    """Solve ``qp`` with the compiled interior-point method (``settings``: :func:`ipm_arguments`): one
     compiled call (:func:`._fast.ipm_answer`) makes the cone rows, solves, and after a crossover
     computes the answer's duals, the next guess (:func:`.active_set.active_solution` in numpy) and
     whether the optimum is provably unique (:func:`.least_norm.is_unique`)."""
     code, x, y, z, zc, obj, it, held, mus, dirs, nxt, unique = jit.kernels("solvers._fast").ipm_answer(
-        *ipm_arguments(qp, **options))
+        *ipm_arguments(qp, settings))
     n = qp.n
     if code == _ipm.CROSSOVER:
         return compiled_answer(qp, x, y, z, zc, obj, held, mus, dirs, nxt, unique, iterations=int(it), stage="ipm")
@@ -78,13 +79,13 @@ class IPMStage(Stage):
 
     name = "ipm"
 
-    def __init__(self, **options):
-        self.options = options
+    def __init__(self, settings: Settings = DEFAULT):
+        self.settings = settings
 
     def run(self, qp, sol, deadline):
         if not jit.ready():
             return None
-        out = ipm_solve(qp, **self.options)
+        out = ipm_solve(qp, self.settings)
         if not out.final and sol is not None:
             return None  # leave the earlier stage's note
         return out

@@ -20,7 +20,7 @@ the same back-end's chain (``w``: ``QPData.norm_weight``, ones unless the proble
 
 **Skipped when unique.** The first-stage optimum is unique when the Hessian (plus the active cones'
 curvature) is positive definite on the null space of the strongly active constraints (the equations,
-the bounds and cones whose multiplier exceeds ``UNIQUE_REL`` of the gradient's scale): the
+the bounds and cones whose multiplier exceeds ``unique_rel`` of the gradient's scale): the
 second-order sufficient condition, which for a convex problem means a unique minimiser. At a vertex
 (as many free variables as active equations) the null space is empty. :func:`is_unique` decides it;
 the answer records it (``Solution.unique``, the results' ``unique`` column).
@@ -28,7 +28,7 @@ the answer records it (``Solution.unique``, the results' ``unique`` column).
 **The shortcut.** With more free variables than active rows ``J`` (the neck's cases 2 and 3: 25 free
 cables, 24 equations) the null space needs an SVD of ``J`` and the reduced Hessian an eigenvalue
 solve: ~100 us of a cold instant's ~0.5 ms. First, a Cholesky factor of ``H + gamma J^T J - thr I``
-(``thr = UNIQUE_REL`` times the Hessian's largest entry, ``gamma = UNIQUE_PENALTY`` times that entry
+(``thr = unique_rel`` times the Hessian's largest entry, ``gamma = unique_penalty`` times that entry
 over ``J^T J``'s) is tried: if it exists, ``z^T H z = z^T (H + gamma J^T J) z > thr |z|^2`` for
 every ``z`` with ``J z = 0``, which is the exact test's conclusion (its null space also holds the
 directions whose singular value is below ``1e-10`` of ``J``'s largest; ``gamma`` charges them less
@@ -45,20 +45,21 @@ from __future__ import annotations
 import numpy as np
 
 from .. import jit
-from .. import tolerances as tol
+from ..settings import DEFAULT, Settings
 from .active_set import ActiveSet
 from .base import OPTIMAL, Solution, Stage
 from .check import project_to_bounds
 
 
-def _strongly_active(qp, sol: Solution, curvature: bool = True):
+def _strongly_active(qp, sol: Solution, settings: Settings, curvature: bool = True):
     """(free mask, rows of the active cones' gradients, their curvature) at ``sol`` (``curvature``
-    false: the curvature is not formed, ``None``)."""
+    false: the curvature is not formed, ``None``; thresholds: ``settings``' ``unique_rel`` and
+    ``active_set_from_solution``)."""
     x, z = sol.x, sol.z
     grad = qp.gradient(x)
     gscale = max(np.abs(grad).max(initial=0.0), np.abs(qp.c).max(initial=0.0), 1e-300)
-    thr = tol.UNIQUE_REL * gscale
-    near = tol.ACTIVE_SET_FROM_SOLUTION
+    thr = settings.unique_rel * gscale
+    near = settings.active_set_from_solution
     at_l = (x - qp.lb <= near * (1.0 + np.abs(qp.lb))) & (z < -thr)
     at_u = (qp.ub - x <= near * (1.0 + np.abs(qp.ub))) & (z > thr)
     free = ~(at_l | at_u)
@@ -85,17 +86,17 @@ def _strongly_active(qp, sol: Solution, curvature: bool = True):
     return free, rows, curv
 
 
-def is_unique(qp, sol: Solution) -> bool:
+def is_unique(qp, sol: Solution, settings: Settings = DEFAULT) -> bool:
     """Whether the optimum ``sol`` is provably unique (module docstring). Needs its duals; ``False``
     without them (not proven)."""
     if qp.P_diag is not None and qp.P_diag.size and float(qp.P_diag.min()) > 0.0:
         return True  # P = diag(d) + F^T F with d > 0 is positive definite: strictly convex (case 1)
     if sol.z is None or (qp.cones and sol.z_cone is None):
         return False
-    decided = _compiled_unique(qp, sol)
+    decided = _compiled_unique(qp, sol, settings)
     if decided is not None:
         return decided
-    free, rows, _ = _strongly_active(qp, sol, curvature=False)  # the curvature only if needed below
+    free, rows, _ = _strongly_active(qp, sol, settings, curvature=False)  # the curvature only if needed below
     nf = int(free.sum())
     if nf == 0:
         return True
@@ -110,10 +111,10 @@ def is_unique(qp, sol: Solution) -> bool:
                 return True
         except np.linalg.LinAlgError:
             pass
-    curv = _strongly_active(qp, sol)[2]
+    curv = _strongly_active(qp, sol, settings)[2]
     H = (qp.P + curv)[np.ix_(free, free)]
     hscale = max(np.abs(qp.P).max(initial=0.0), 1e-300)
-    if _definite_beyond(H, J, tol.UNIQUE_REL * hscale, hscale):
+    if _definite_beyond(H, J, settings.unique_rel * hscale, hscale, settings.unique_penalty):
         return True
     if J.shape[0]:
         _, s, Vt = np.linalg.svd(J, full_matrices=True)
@@ -124,15 +125,15 @@ def is_unique(qp, sol: Solution) -> bool:
     if Z.shape[1] == 0:
         return True
     Hr = Z.T @ H @ Z
-    return bool(np.linalg.eigvalsh(0.5 * (Hr + Hr.T)).min() > tol.UNIQUE_REL * hscale)
+    return bool(np.linalg.eigvalsh(0.5 * (Hr + Hr.T)).min() > settings.unique_rel * hscale)
 
 
-def _definite_beyond(H, J, thr: float, hscale: float) -> bool:
+def _definite_beyond(H, J, thr: float, hscale: float, penalty: float) -> bool:
     """The shortcut of the module docstring: whether ``H + gamma J^T J - thr I`` is positive definite
-    (has a Cholesky factor)."""
+    (has a Cholesky factor; ``gamma`` from ``penalty``, :attr:`~mcdm_pin.settings.Settings.unique_penalty`)."""
     JtJ = J.T @ J
     big = float(np.abs(JtJ).max(initial=0.0))
-    gam = tol.UNIQUE_PENALTY * hscale / big if big > 0.0 else 0.0
+    gam = penalty * hscale / big if big > 0.0 else 0.0
     try:
         np.linalg.cholesky(H + gam * JtJ - thr * np.eye(len(H)))
     except np.linalg.LinAlgError:
@@ -140,7 +141,7 @@ def _definite_beyond(H, J, thr: float, hscale: float) -> bool:
     return True
 
 
-def _compiled_unique(qp, sol: Solution) -> bool | None:
+def _compiled_unique(qp, sol: Solution, settings: Settings) -> bool | None:
     """The rest of :func:`is_unique` compiled (:func:`._fast.unique_test`, the same steps and
     thresholds); ``None`` while the kernels are not compiled."""
     if not jit.ready():
@@ -152,14 +153,14 @@ def _compiled_unique(qp, sol: Solution) -> bool | None:
     return bool(jit.kernels("solvers._fast").unique_test(
         c_(sol.x, dtype=float), c_(sol.z, dtype=float), c, lb, ub, A, c_(qp.P, dtype=float), G, gc, ax, tn,
         c_(cosr, dtype=float), c_(zc, dtype=float).reshape(len(gc), 3),
-        float(tol.ACTIVE_SET_FROM_SOLUTION), float(tol.UNIQUE_REL)))
+        float(settings.active_set_from_solution), float(settings.unique_rel), float(settings.unique_penalty)))
 
 
 _NO_3 = np.zeros((0, 3))
 _NO_1 = np.zeros(0)
 
 
-def optimal_face_rows(qp, sol: Solution | None = None) -> np.ndarray:
+def optimal_face_rows(qp, sol: Solution | None = None, settings: Settings = DEFAULT) -> np.ndarray:
     """An orthonormal basis of the rows that are constant on the optimal face: the equations, the rows
     of ``P``, ``c^T``, and, from the duals of ``sol`` (the same for every optimal point), the bounds
     and cone surfaces whose multiplier is not zero (complementarity holds them for every optimum).
@@ -171,7 +172,7 @@ def optimal_face_rows(qp, sol: Solution | None = None) -> np.ndarray:
     row normalised first, the threshold relative to the largest singular value of the whole, at
     least 1). On MyoSuite's arm (85 variables, ~60 of them in ``S``) that SVD is 4x25 instead of 8x85
     in flops' terms: most of the stage's cost."""
-    active = None if sol is None or sol.z is None else _strongly_active(qp, sol, curvature=False)
+    active = None if sol is None or sol.z is None else _strongly_active(qp, sol, settings, curvature=False)
     return _face_rows(qp, active)
 
 
@@ -207,13 +208,13 @@ def _face_rows(qp, active) -> np.ndarray:
     return E
 
 
-def stage2_problem(qp, sol: Solution):
+def stage2_problem(qp, sol: Solution, settings: Settings = DEFAULT):
     """The least-norm problem over the optimal face of ``qp`` through ``sol.x`` (module docstring):
     every row constant on the face is an equation; the strongly active bounds and cones are among
     them (their inequalities are dropped: on the face they hold with equality, and an inequality
     without interior would stall an interior-point method)."""
     n = qp.n
-    active = None if sol.z is None else _strongly_active(qp, sol, curvature=False)
+    active = None if sol.z is None else _strongly_active(qp, sol, settings, curvature=False)
     E = _face_rows(qp, active)
     lb, ub, cones = qp.lb, qp.ub, qp.cones
     if active is not None:
@@ -232,13 +233,16 @@ class LeastNorm(Stage):
     Args:
         inner: the chain that solves stage 2 (a :class:`~.cascade.Cascade` of the same back-end, without
             this stage), seeded with the first stage's answer.
+        settings: the uniqueness test's thresholds and the projection's (``unique_*``,
+            ``active_set_from_solution``, ``bound_snap_rel``).
     """
 
     name = "least_norm"
     refines = True
 
-    def __init__(self, inner):
+    def __init__(self, inner, settings: Settings = DEFAULT):
         self.inner = inner
+        self.settings = settings
 
     def reset(self):
         self.inner.reset()
@@ -246,17 +250,18 @@ class LeastNorm(Stage):
     def run(self, qp, sol, deadline):
         if sol.unique is not None:
             return sol
-        if is_unique(qp, sol):
+        s = self.settings
+        if is_unique(qp, sol, s):
             return sol.but(unique=True)
-        stage2 = stage2_problem(qp, sol)
+        stage2 = stage2_problem(qp, sol, s)
         if sol.active is None:
-            sol = sol.but(active=ActiveSet.from_duals(qp, sol))
+            sol = sol.but(active=ActiveSet.from_duals(qp, sol, s.active_set_from_solution))
         out = self.inner.solve(stage2, hint=sol, deadline=deadline)
         if out.status != OPTIMAL:
             note = (f"least-norm stage failed ({out.status}: {out.message}); the answer is optimal but "
                     f"may not be the least-norm one")
             return sol.but(unique=False, message=f"{sol.message}; {note}" if sol.message else note)
-        x = project_to_bounds(qp, out).x
+        x = project_to_bounds(qp, out, s).x
         # stage 2's multipliers of the original rows are not those of the original problem: the
         # first stage's duals stay (they certify x too: x lies on the same optimal face)
         return sol.but(x=x, objective=qp.objective(x), unique=False, stage=f"{sol.stage}>{self.name}",

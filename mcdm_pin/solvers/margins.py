@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import tolerances as tol
+from ..settings import DEFAULT, Settings
 from ..exceptions import SolverError
 
 
@@ -135,7 +135,7 @@ def _ratios(qp, x, which):
     return perp, along
 
 
-def needed_cone_deg(qp, cones=None, max_solves: int = 30) -> float:
+def needed_cone_deg(qp, cones=None, max_solves: int = 30, settings: Settings = DEFAULT) -> float:
     """The smallest common half-angle (degrees) of ``cones`` (indices into ``qp.cones`` or joint
     names; default: all) that makes ``qp`` feasible (module docstring)."""
     if not qp.cones:
@@ -193,7 +193,7 @@ def needed_cone_deg(qp, cones=None, max_solves: int = 30) -> float:
         if not np.all(along > 0):
             break
         tau_new = float((perp / along).max())
-        if v[n] >= -tol.MARGIN_REL * max(tau, 1e-12) or tau_new >= tau * (1.0 - tol.MARGIN_REL):
+        if v[n] >= -settings.margin_rel * max(tau, 1e-12) or tau_new >= tau * (1.0 - settings.margin_rel):
             tau = min(tau, tau_new)
             break
         x, tau = x_new, tau_new

@@ -9,7 +9,7 @@ vector :math:`n \perp a` the half-space
 contains it: a valid *outer cut*, linear in :math:`x` because :math:`F = g + G x`.
 
 1. **Cutting planes** (:class:`ProxQPStage`). Solve the QP with the cuts at hand; while some force
-   :math:`F_k` lies outside its cone by more than ``CUT_CONE_DEG``, add the cut with
+   :math:`F_k` lies outside its cone by more than ``cut_cone_deg`` (a setting), add the cut with
    :math:`n = F_{k,\perp}/\|F_{k,\perp}\|` (it separates :math:`F_k`) and re-solve, warm-started. Every
    relaxation contains the true feasible set, so its optimum is a lower bound, and a relaxation that
    is infeasible *proves* the instant infeasible. Cuts are only dropped when inactive, so the bounds
@@ -38,8 +38,8 @@ from __future__ import annotations
 import numpy as np
 from proxsuite import proxqp
 
-from .. import tolerances as tol
 from ..qp import QPData
+from ..settings import DEFAULT, Settings
 from .base import BUDGET, INACCURATE, INFEASIBLE, MAX_ITER, OPTIMAL, Solution, Stage, failure, now
 
 _STATUS = proxqp.QPSolverOutput
@@ -47,7 +47,7 @@ _STATUS = proxqp.QPSolverOutput
 
 class ProxQPRunner:
     """One ProxQP solve of ``min 1/2 x^T H x + g^T x, A x = b, l <= C x <= u`` with the fallbacks of the
-    module docstring. Args: tolerances and iteration limits (defaults from :mod:`mcdm_pin.tolerances`);
+    module docstring. Args: ``settings``, the tolerances and iteration limits (``proxqp_*``);
     ``reuse``: keep the last ProxQP workspace and pass a problem of the same shape (variables,
     equations, rows of ``C``) to it through ProxQP's ``update``, the proximal parameters reset to
     their defaults, instead of allocating a new workspace per solve. The preconditioner (Ruiz
@@ -55,11 +55,10 @@ class ProxQPRunner:
     and recomputed when cone cuts are among its rows (a stale one slowed the cutting planes
     tenfold, docs/speed.md)."""
 
-    def __init__(self, eps_abs=tol.PROXQP_EPS_ABS, eps_rel=tol.PROXQP_EPS_REL, max_iter=1000,
-                 eps_infeasible=tol.PROXQP_EPS_INFEASIBLE, max_iter_retry=5_000, reuse: bool = True):
-        self.eps_abs, self.eps_rel = eps_abs, eps_rel
-        self.max_iter, self.max_iter_retry = max_iter, max_iter_retry
-        self.eps_infeasible = eps_infeasible
+    def __init__(self, settings: Settings = DEFAULT, reuse: bool = True):
+        self.eps_abs, self.eps_rel = settings.proxqp_eps_abs, settings.proxqp_eps_rel
+        self.max_iter, self.max_iter_retry = settings.proxqp_max_iter, settings.proxqp_max_iter_retry
+        self.eps_infeasible = settings.proxqp_eps_infeasible
         self.reuse = reuse
         self.workspace = None  # (shape and settings, the ProxQP object) of the last solve
         self.created = 0  # ProxQP workspaces allocated (the others were updated)
@@ -187,14 +186,16 @@ class ProxQPStage(Stage):
         max_rounds: largest number of QP solves per instant (cut rounds + 1).
         warm_start: start from the previous instant's answer.
         keep_cuts: keep the binding cut directions from one instant to the next.
-        other keywords: :class:`ProxQPRunner`'s.
+        settings: the tolerances (``proxqp_*``, ``cut_cone_deg``, ``same_cut_cos``).
+        reuse: :class:`ProxQPRunner`'s.
     """
 
     name = "proxqp"
 
-    def __init__(self, cuts_per_cone: int = 24, max_rounds: int = 200, warm_start: bool = True,
-                 keep_cuts: bool = True, **runner):
-        self.runner = ProxQPRunner(**runner)
+    def __init__(self, settings: Settings = DEFAULT, cuts_per_cone: int = 24, max_rounds: int = 200,
+                 warm_start: bool = True, keep_cuts: bool = True, reuse: bool = True):
+        self.settings = settings
+        self.runner = ProxQPRunner(settings, reuse)
         self.cuts_per_cone, self.max_rounds = cuts_per_cone, max_rounds
         self.warm_start, self.keep_cuts = warm_start, keep_cuts
         self.reset()
@@ -250,7 +251,7 @@ class ProxQPStage(Stage):
                 return failure(n, INACCURATE, f"ProxQP: {status.name}", iterations, rounds, self.name)
             warm = (x, y, z)
             zc = z[n:]
-            violated = [(k, d) for k, d in ((k, _violation(cone, x)) for k, cone in enumerate(cones))
+            violated = [(k, d) for k, d in ((k, _violation(cone, x, self.settings.cut_cone_deg)) for k, cone in enumerate(cones))
                         if d is not None]
             duals = [zc[owner == k] for k in range(len(cones))]
             ys, zb, z_cone = _duals(qp, y, z, owner, cuts)
@@ -262,7 +263,7 @@ class ProxQPStage(Stage):
                                 iterations=iterations, rounds=rounds, stage=self.name)
             crowded = False
             for k, d in violated:
-                if _parallel_cuts(cones[k], cuts[k], d):
+                if _parallel_cuts(cones[k], cuts[k], d, self.settings.same_cut_cos):
                     crowded = True
                 if len(cuts[k]) >= self.cuts_per_cone:
                     # drop inactive cuts only: the relaxation never loosens where it binds, so the
@@ -287,12 +288,14 @@ SQP_HANDOVER = "cone cuts crowd: SQP polish takes over"
 
 class SQPPolish(Stage):
     """Answering stage after :class:`ProxQPStage`'s hand-over: sequential quadratic programming from
-    the cutting planes' point (module docstring). ProxQP solves each subproblem."""
+    the cutting planes' point (module docstring). ProxQP solves each subproblem (``settings``: the
+    tolerances, ``proxqp_*``, ``cut_cone_deg``, ``sqp_step``; ``reuse``: :class:`ProxQPRunner`'s)."""
 
     name = "sqp_polish"
 
-    def __init__(self, max_rounds: int = 50, **runner):
-        self.runner = ProxQPRunner(**runner)
+    def __init__(self, settings: Settings = DEFAULT, max_rounds: int = 50, reuse: bool = True):
+        self.settings = settings
+        self.runner = ProxQPRunner(settings, reuse)
         self.max_rounds = max_rounds
 
     def applies(self, sol):
@@ -306,7 +309,7 @@ class SQPPolish(Stage):
         dirs: list = [None] * len(cones)
         for k, cone in enumerate(cones):
             d = _perp_dir(cone, x_prev)
-            if d is not None and (mult[k] > 0 or _violation(cone, x_prev) is not None):
+            if d is not None and (mult[k] > 0 or _violation(cone, x_prev, self.settings.cut_cone_deg) is not None):
                 dirs[k] = d
         iterations, warm = sol.iterations, None
         obj_prev = np.inf
@@ -334,13 +337,13 @@ class SQPPolish(Stage):
                                sol.rounds + rounds, self.name)
             warm = (x, y, z)
             zc = z[n:]
-            violated = [k for k, cone in enumerate(cones) if _violation(cone, x) is not None]
+            violated = [k for k, cone in enumerate(cones) if _violation(cone, x, self.settings.cut_cone_deg) is not None]
             step = np.linalg.norm(x - x_prev) / (1.0 + np.linalg.norm(x))
             obj = qp.objective(x)
             # where the optimum is not unique (a positive semidefinite objective) the iterates may
             # slide along the optimal face: a settled objective ends the loop too (the polish and
             # least-norm stages then pick the face's point, the check stage verifies it)
-            settled = rounds > 1 and abs(obj - obj_prev) <= tol.SQP_STEP * max(abs(obj), 1e-12)
+            settled = rounds > 1 and abs(obj - obj_prev) <= self.settings.sqp_step * max(abs(obj), 1e-12)
             obj_prev = obj
             x_prev = x
             for k, cone in enumerate(cones):
@@ -348,7 +351,7 @@ class SQPPolish(Stage):
                 d = _perp_dir(cone, x)
                 if (dirs[k] is not None or k in violated) and d is not None:
                     dirs[k], mult[k] = d, m
-            if not violated and (step <= tol.SQP_STEP or settled):
+            if not violated and (step <= self.settings.sqp_step or settled):
                 ys, zb, z_cone = _duals(qp, y, z, owner, [[dirs[k]] if dirs[k] is not None else []
                                                            for k in range(len(cones))])
                 return Solution(x, OPTIMAL, qp.objective(x), y=ys, z=zb, z_cone=z_cone, iterations=iterations,
@@ -364,13 +367,13 @@ def _perp_dir(cone, x):
     return perp_vec / perp if perp > 1e-300 else None
 
 
-def _violation(cone, x):
-    """The separating cut direction if the cone is broken by more than ``CUT_CONE_DEG``, else None."""
+def _violation(cone, x, cut_cone_deg: float):
+    """The separating cut direction if the cone is broken by more than ``cut_cone_deg``, else None."""
     F = cone.force(x)
     along = float(cone.axis @ F)
     perp_vec = F - along * cone.axis
     perp = float(np.linalg.norm(perp_vec))
-    if np.degrees(np.arctan2(perp, along)) > cone.angle_deg + tol.CUT_CONE_DEG:
+    if np.degrees(np.arctan2(perp, along)) > cone.angle_deg + cut_cone_deg:
         return perp_vec / perp if perp > 1e-300 else cone.basis[0]
     return None
 
@@ -421,7 +424,7 @@ def feasible_point(A, b, C, l, u):
     return res.x if res.status == 0 else None
 
 
-def _parallel_cuts(cone, cuts, d) -> list[int]:
+def _parallel_cuts(cone, cuts, d, same_cut_cos: float) -> list[int]:
     """Indices of existing cuts whose rows in x are nearly parallel to the new cut's."""
     if not cuts:
         return []
@@ -429,4 +432,4 @@ def _parallel_cuts(cone, cuts, d) -> list[int]:
     W = (np.asarray(cuts) - t * cone.axis) @ cone.G
     w = (d - t * cone.axis) @ cone.G
     cos = W @ w / (np.linalg.norm(W, axis=1) * np.linalg.norm(w) + 1e-300)
-    return [int(i) for i in np.flatnonzero(cos > tol.SAME_CUT_COS)]
+    return [int(i) for i in np.flatnonzero(cos > same_cut_cos)]

@@ -8,12 +8,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..tolerances import CONE_DEG
+from ..settings import DEFAULT
 from . import three
 from .colors import ARROW_RGB, CONE_OK_RGB, CONE_OUT_RGB, NO_ANSWER_RGB, tension_rgb
 from .export import label_png
 
-CONE_TOL_DEG = CONE_DEG  # a cone is drawn broken where the answer's check calls it broken
+CONE_TOL_DEG = DEFAULT.cone_deg  # a cone is drawn broken where the default answer check calls it broken
 ARROW_LENGTH = 0.5  # the run's largest interaction force is drawn this share of the robot's extent
 # (x arrow_share: less for more than two arrows)
 FORCE_FLOOR = 1e-6  # forces below this share of the run's peak (interaction or cable) are not drawn
