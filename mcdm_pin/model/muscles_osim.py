@@ -374,8 +374,8 @@ class OpenSimMuscles:
         fl, fv, fp = np.zeros(self.size), np.zeros(self.size), np.zeros(self.size)
         mi, di = self._mi, self._di
         if mi.size:
-            y = _evaluate(self._all, np.concatenate([l[mi], v[mi], l[mi]]))
-            fl[mi], fv[mi], fp[mi] = np.split(y, 3)
+            y = _evaluate(self._all, np.concatenate([l[mi], v[mi], l[mi]])).reshape(3, -1)
+            fl[mi], fv[mi], fp[mi] = y
         if di.size:
             width, e0, use_passive = self._dg
             x = (l[di] - 1.0) / width + 1.0
