@@ -329,6 +329,7 @@ class OpenSimMuscles:
         self._slack_below = self.ls - SIGNIFICANT
         self._pennated = self.millard | self.thelen
         self._speed_scale = self.lo * self.vmax
+        self._only_millard = bool(self.size and self.millard.all())  # Millard's alone: no masks, gathers or scatters
 
     @property
     def size(self) -> int:
@@ -357,6 +358,8 @@ class OpenSimMuscles:
         dl_m = np.where(slack, 0.0, ell_dot * cos_m)
         clamped = ((lf_m <= self.min_fiber) & (dl_m <= 0)) | (lf_m < self.min_fiber)
         dl_m = np.where(clamped, 0.0, dl_m)
+        if self._only_millard:
+            return lf_m / self.lo, dl_m / self._speed_scale, cos_m, clamped
         cos_d = along / lf
         # Thelen: the same pennation model, no slack rule; no force at or below the minimum length
         pennated = self._pennated
@@ -371,9 +374,12 @@ class OpenSimMuscles:
         from .muscles import MuscleState
 
         l, v, cos_a, clamped = self.fiber(tendon_lengths, tendon_velocities)
-        fl, fv, fp = np.zeros(self.size), np.zeros(self.size), np.zeros(self.size)
         mi, di = self._mi, self._di
-        if mi.size:
+        if self._only_millard:
+            fl, fv, fp = _evaluate(self._all, np.concatenate([l, v, l])).reshape(3, -1)
+        else:
+            fl, fv, fp = np.zeros(self.size), np.zeros(self.size), np.zeros(self.size)
+        if mi.size and not self._only_millard:
             y = _evaluate(self._all, np.concatenate([l[mi], v[mi], l[mi]])).reshape(3, -1)
             fl[mi], fv[mi], fp[mi] = y
         if di.size:
