@@ -265,12 +265,8 @@ class TermsEvaluator:
         self._sub_v = sub[owner]  # (nv, K)
         self._sub_phys = sub[self._child]  # (J, K)
         self._axes = np.array([j.socket_axis for j in js], dtype=float).reshape(len(js), 3)
-        # Pinocchio's placements and joint wrenches are read through strided views of this evaluator's
-        # own data (they follow every update): one gather per instant for the rows needed
         self._keys_i, self._child_i = np.array(keys, dtype=int), np.array(self._child, dtype=int)
-        self._oR = stacked_view(self.data.oMi, nj, lambda M: M.rotation)
-        self._op = stacked_view(self.data.oMi, nj, lambda M: M.translation)
-        self._f = stacked_view(self.data.f, nj, lambda f: f.vector)
+        self._views()
         self._h0 = np.zeros((len(keys), 4, 4))
         self._h0[:, 3, 3] = 1.0
         self._zeros = np.zeros(model.nv)
@@ -407,6 +403,14 @@ class TermsEvaluator:
                      finite=bad != -2 and bool(np.isfinite(tau.sum())), f_min=f_min, f_max=f_max,
                      muscles=state, basis=basis, L_full=L_full, spring_lengths=spring_lengths,
                      spring_forces=spring_forces, **loop)
+
+    def _views(self) -> None:
+        """Pinocchio's placements and joint wrenches read through strided views of this evaluator's own
+        data (they follow every update): one gather per instant for the rows needed."""
+        nj, d = self.model.njoints, self.data
+        self._oR = stacked_view(d.oMi, nj, lambda M: M.rotation)
+        self._op = stacked_view(d.oMi, nj, lambda M: M.translation)
+        self._f = stacked_view(d.f, nj, lambda f: f.vector)
 
     def placements(self) -> np.ndarray:
         """(K, 4, 4) the homogeneous placements of the key joints in the evaluator's own data (as

@@ -50,6 +50,7 @@ RANK_TOL = 1e-10  # relative singular-value threshold of G N's rank
 # skew(r) (row-major 3x3) as r[_SKEW_FROM] * _SKEW_SIGN: one gather for every pair's cross-product matrix
 _SKEW_FROM = np.array([0, 2, 1, 2, 0, 0, 1, 0, 0])
 _SKEW_SIGN = np.array([0.0, -1.0, 1.0, 1.0, 0.0, -1.0, -1.0, 1.0, 0.0])
+_VIEWS = ("_oR", "_op", "_fp")  # PointLoops' views of its data: made again, never pickled
 
 
 class PointLoops:
@@ -75,11 +76,7 @@ class PointLoops:
                 while j > 0:
                     pairs.append((j, fid, sign, i))
                     j = int(model.parents[j])
-        # placements read through strided views of self.data (they follow every update): one gather
-        # per instant for the pairs' joints and points
-        self._oR = stacked_view(self.data.oMi, model.njoints, lambda M: M.rotation)
-        self._op = stacked_view(self.data.oMi, model.njoints, lambda M: M.translation)
-        self._fp = stacked_view(self.data.oMf, model.nframes, lambda M: M.translation)
+        self._views()
         self._pair_joint = np.array([p[0] for p in pairs], dtype=int)
         self._pair_frame = np.array([p[1] for p in pairs], dtype=int)
         self._pair_sign = np.array([p[2] for p in pairs], dtype=float)
@@ -92,6 +89,21 @@ class PointLoops:
             self._pair_cols[n, :, 3 * i:3 * i + 3] = np.eye(3)
         self._eye = np.eye(model.nv)
         self._eye.flags.writeable = False
+
+    def _views(self) -> None:
+        """The placements read through strided views of ``self.data`` (they follow every update): one
+        gather per instant for the pairs' joints and points."""
+        m, d = self.model, self.data
+        self._oR = stacked_view(d.oMi, m.njoints, lambda M: M.rotation)
+        self._op = stacked_view(d.oMi, m.njoints, lambda M: M.translation)
+        self._fp = stacked_view(d.oMf, m.nframes, lambda M: M.translation)
+
+    def __getstate__(self):
+        return {k: v for k, v in self.__dict__.items() if k not in _VIEWS}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._views()  # views of the unpickled data, not copies of the pickled one's memory
 
     def residual(self, q) -> np.ndarray:
         """(3k,) ``x_2 - x_1`` per loop, world axes (m)."""
