@@ -329,7 +329,8 @@ class OpenSimMuscles:
         self._slack_below = self.ls - SIGNIFICANT
         self._pennated = self.millard | self.thelen
         self._speed_scale = self.lo * self.vmax
-        self._only_millard = bool(self.size and self.millard.all())  # Millard's alone: no masks, gathers or scatters
+        # Millard's muscles alone: fiber() and force_range() need no kinds' masks, gathers or scatters
+        self._only_millard = bool(self.size and self.millard.all())
 
     @property
     def size(self) -> int:
@@ -375,13 +376,12 @@ class OpenSimMuscles:
 
         l, v, cos_a, clamped = self.fiber(tendon_lengths, tendon_velocities)
         mi, di = self._mi, self._di
-        if self._only_millard:
+        if self._only_millard:  # every muscle Millard's, in order: no gather, no scatter
             fl, fv, fp = _evaluate(self._all, np.concatenate([l, v, l])).reshape(3, -1)
         else:
             fl, fv, fp = np.zeros(self.size), np.zeros(self.size), np.zeros(self.size)
-        if mi.size and not self._only_millard:
-            y = _evaluate(self._all, np.concatenate([l[mi], v[mi], l[mi]])).reshape(3, -1)
-            fl[mi], fv[mi], fp[mi] = y
+            if mi.size:
+                fl[mi], fv[mi], fp[mi] = _evaluate(self._all, np.concatenate([l[mi], v[mi], l[mi]])).reshape(3, -1)
         if di.size:
             width, e0, use_passive = self._dg
             x = (l[di] - 1.0) / width + 1.0
