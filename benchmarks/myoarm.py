@@ -211,7 +211,7 @@ def time_parts(robot, traj, repeat: int) -> dict:
 
     def kinematics(s):
         pin.computeJointJacobians(model, data, s[0])
-        last["oM"] = np.array([M.homogeneous for M in ev._oMi_refs])
+        last["oM"] = ev.placements()
         last["J"] = np.ascontiguousarray(data.J.reshape(6, -1).T)
 
     def routes(s):

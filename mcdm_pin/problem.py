@@ -153,14 +153,7 @@ class Problem:
             qp.cones = batch(terms)[0] + cones
         if self.actuation is None:
             return qp
-        return self.actuation.extend(qp, plan["eom"], terms.L.shape[1], terms, self._cone_frames)
-
-    @property
-    def _cone_frames(self) -> dict:
-        """``{joint: (index, frame)}`` of the problem's cones (the actuators' block of a cone on a
-        joint that carries a closed loop's force)."""
-        names = self.robot.joint_names
-        return {c.joint: (names.index(c.joint), c.frame) for c in self.cone_constraints}
+        return self.actuation.extend(qp, plan["eom"], terms.L.shape[1], terms, plan["cone_frames"])
 
     def _make_plan(self) -> dict:
         """What :meth:`assemble` does at every instant, decided once: the equation of motion and the
@@ -176,7 +169,11 @@ class Problem:
                 cone_cons.append(con)
             else:
                 general.append(con)
-        return dict(general=general, eom=eom, bounds=bounds,
+        # {joint: (index, frame)} of the cones (the actuators' block of a cone on a joint that carries
+        # a closed loop's force)
+        names = self.robot.joint_names
+        cone_frames = {c.joint: (names.index(c.joint), c.frame) for c in self.cone_constraints}
+        return dict(general=general, eom=eom, bounds=bounds, cone_frames=cone_frames,
                     cones=ConeBatch(cone_cons) if cone_cons else None)
 
     def value(self, terms, f, context: Context, qp: QPData | None = None) -> float:

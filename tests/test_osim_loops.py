@@ -140,6 +140,16 @@ def test_the_compiled_kernel_path_gives_the_same_loop_terms():
         assert np.allclose(getattr(slow, name), getattr(fast, name), rtol=0, atol=1e-10), name
 
 
+def test_unpickled_loops_read_their_own_data():
+    import pickle
+
+    robot = _robot()
+    q, _, _ = _state(robot, np.random.default_rng(5))
+    loops = robot.source.loops
+    copy = pickle.loads(pickle.dumps(loops))
+    assert np.array_equal(copy.wrench_map(q), loops.wrench_map(q))
+
+
 def test_a_solve_on_the_loop_closes_and_reports_the_loop_force_in_the_wrenches():
     """Case-1-like problem with an active cone on the sternoclavicular joint (which carries the loop
     force, and so a share of the girdle actuators' torques): the answer satisfies the reduced

@@ -329,6 +329,8 @@ class OpenSimMuscles:
         self._slack_below = self.ls - SIGNIFICANT
         self._pennated = self.millard | self.thelen
         self._speed_scale = self.lo * self.vmax
+        # Millard's muscles alone: fiber() and force_range() need no kinds' masks, gathers or scatters
+        self._only_millard = bool(self.size and self.millard.all())
 
     @property
     def size(self) -> int:
@@ -357,6 +359,8 @@ class OpenSimMuscles:
         dl_m = np.where(slack, 0.0, ell_dot * cos_m)
         clamped = ((lf_m <= self.min_fiber) & (dl_m <= 0)) | (lf_m < self.min_fiber)
         dl_m = np.where(clamped, 0.0, dl_m)
+        if self._only_millard:
+            return lf_m / self.lo, dl_m / self._speed_scale, cos_m, clamped
         cos_d = along / lf
         # Thelen: the same pennation model, no slack rule; no force at or below the minimum length
         pennated = self._pennated
@@ -371,11 +375,13 @@ class OpenSimMuscles:
         from .muscles import MuscleState
 
         l, v, cos_a, clamped = self.fiber(tendon_lengths, tendon_velocities)
-        fl, fv, fp = np.zeros(self.size), np.zeros(self.size), np.zeros(self.size)
         mi, di = self._mi, self._di
-        if mi.size:
-            y = _evaluate(self._all, np.concatenate([l[mi], v[mi], l[mi]]))
-            fl[mi], fv[mi], fp[mi] = np.split(y, 3)
+        if self._only_millard:  # every muscle Millard's, in order: no gather, no scatter
+            fl, fv, fp = _evaluate(self._all, np.concatenate([l, v, l])).reshape(3, -1)
+        else:
+            fl, fv, fp = np.zeros(self.size), np.zeros(self.size), np.zeros(self.size)
+            if mi.size:
+                fl[mi], fv[mi], fp[mi] = _evaluate(self._all, np.concatenate([l[mi], v[mi], l[mi]])).reshape(3, -1)
         if di.size:
             width, e0, use_passive = self._dg
             x = (l[di] - 1.0) / width + 1.0

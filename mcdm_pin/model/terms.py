@@ -50,6 +50,7 @@ from .charts import check_configuration
 from .geometry import CableMaps, cable_geometry
 from .joints import PhysicalJoint, massless_members, resolve_joints
 from .muscles import tension_state
+from .placements import stacked_view
 from .routes import RoutePaths, add_levers
 
 
@@ -264,13 +265,10 @@ class TermsEvaluator:
         self._sub_v = sub[owner]  # (nv, K)
         self._sub_phys = sub[self._child]  # (J, K)
         self._axes = np.array([j.socket_axis for j in js], dtype=float).reshape(len(js), 3)
-        # Pinocchio's placements and joint wrenches are read through element references into this
-        # evaluator's own data (they follow every update; 3x cheaper than indexing data.oMi anew)
-        self._oMi_refs = [self.data.oMi[j] for j in keys]
-        self._f_refs = [self.data.f[c] for c in self._child]
-        # ... and the joint wrenches' vectors are views of that data (4x cheaper to stack than
-        # asking each wrench for its vector at every instant)
-        self._u_views = [f.vector for f in self._f_refs]
+        self._keys_i, self._child_i = np.array(keys, dtype=int), np.array(self._child, dtype=int)
+        self._views()
+        self._h0 = np.zeros((len(keys), 4, 4))
+        self._h0[:, 3, 3] = 1.0
         self._zeros = np.zeros(model.nv)
         self._tril = np.tril_indices(model.nv, -1)
         # wrapped routes: their path arrays are rebuilt at every instant and read by the kernel (the
@@ -350,7 +348,7 @@ class TermsEvaluator:
         data = self.data if own else data
         pin.computeJointJacobians(model, data, q)
         if own:
-            oMi = np.array([M.homogeneous for M in self._oMi_refs])
+            oMi = self.placements()
         else:
             oMi = np.array([data.oMi[j].homogeneous for j in self._keys])
         # (6, nv): each column's motion in the world frame at the origin (eigenpy gives (6,) if nv = 1)
@@ -381,7 +379,7 @@ class TermsEvaluator:
             bad = -1 if np.isfinite(L).all() else -2
         tau = pin.rnea(model, data, q, qd, qdd).copy()
         if own:
-            u = np.array(self._u_views).reshape(len(self._child), 6)
+            u = self._f[self._child_i]
         else:
             u = np.array([data.f[c].vector for c in self._child]).reshape(len(self._child), 6)
         if self.passive is not None:  # known joint forces (springs, dampers) help the cables
@@ -405,6 +403,22 @@ class TermsEvaluator:
                      finite=bad != -2 and bool(np.isfinite(tau.sum())), f_min=f_min, f_max=f_max,
                      muscles=state, basis=basis, L_full=L_full, spring_lengths=spring_lengths,
                      spring_forces=spring_forces, **loop)
+
+    def _views(self) -> None:
+        """Pinocchio's placements and joint wrenches read through strided views of this evaluator's own
+        data (they follow every update): one gather per instant for the rows needed."""
+        nj, d = self.model.njoints, self.data
+        self._oR = stacked_view(d.oMi, nj, lambda M: M.rotation)
+        self._op = stacked_view(d.oMi, nj, lambda M: M.translation)
+        self._f = stacked_view(d.f, nj, lambda f: f.vector)
+
+    def placements(self) -> np.ndarray:
+        """(K, 4, 4) the homogeneous placements of the key joints in the evaluator's own data (as
+        updated by the last kinematics pass)."""
+        oMi = self._h0.copy()
+        oMi[:, :3, :3] = self._oR[self._keys_i]
+        oMi[:, :3, 3] = self._op[self._keys_i]
+        return oMi
 
     def _loop_terms(self, q, tau, L, u, RT):
         """``(basis, u, RT, extra)`` with the closed loops (module docstring): the basis ``N K``,

@@ -44,8 +44,13 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ModelError
+from ..model.placements import stacked_view
 
 RANK_TOL = 1e-10  # relative singular-value threshold of G N's rank
+# skew(r) (row-major 3x3) as r[_SKEW_FROM] * _SKEW_SIGN: one gather for every pair's cross-product matrix
+_SKEW_FROM = np.array([0, 2, 1, 2, 0, 0, 1, 0, 0])
+_SKEW_SIGN = np.array([0.0, -1.0, 1.0, 1.0, 0.0, -1.0, -1.0, 1.0, 0.0])
+_VIEWS = ("_oR", "_op", "_fp")  # PointLoops' views of its data: made again, never pickled
 
 
 class PointLoops:
@@ -71,13 +76,9 @@ class PointLoops:
                 while j > 0:
                     pairs.append((j, fid, sign, i))
                     j = int(model.parents[j])
-        joints = sorted({p[0] for p in pairs})
-        frames = sorted({p[1] for p in pairs})
-        # placements read through element references into self.data (they follow every update and
-        # cost far less than indexing data.oMi, data.oMf anew)
-        self._refs = [self.data.oMi[j] for j in joints] + [self.data.oMf[f] for f in frames]
-        self._pair_joint = np.array([joints.index(p[0]) for p in pairs], dtype=int)
-        self._pair_frame = np.array([len(joints) + frames.index(p[1]) for p in pairs], dtype=int)
+        self._views()
+        self._pair_joint = np.array([p[0] for p in pairs], dtype=int)
+        self._pair_frame = np.array([p[1] for p in pairs], dtype=int)
         self._pair_sign = np.array([p[2] for p in pairs], dtype=float)
         # W = E (blocks C): E (njoints, pairs) puts a pair's block on its joint's row, C (pairs, 3, 3k)
         # on its loop's columns
@@ -88,6 +89,21 @@ class PointLoops:
             self._pair_cols[n, :, 3 * i:3 * i + 3] = np.eye(3)
         self._eye = np.eye(model.nv)
         self._eye.flags.writeable = False
+
+    def _views(self) -> None:
+        """The placements read through strided views of ``self.data`` (they follow every update): one
+        gather per instant for the pairs' joints and points."""
+        m, d = self.model, self.data
+        self._oR = stacked_view(d.oMi, m.njoints, lambda M: M.rotation)
+        self._op = stacked_view(d.oMi, m.njoints, lambda M: M.translation)
+        self._fp = stacked_view(d.oMf, m.nframes, lambda M: M.translation)
+
+    def __getstate__(self):
+        return {k: v for k, v in self.__dict__.items() if k not in _VIEWS}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._views()  # views of the unpickled data, not copies of the pickled one's memory
 
     def residual(self, q) -> np.ndarray:
         """(3k,) ``x_2 - x_1`` per loop, world axes (m)."""
@@ -192,15 +208,12 @@ class PointLoops:
     def _wrench_map(self) -> np.ndarray:
         """:meth:`wrench_map` at the placements in ``self.data`` (joints' and frames'), for every
         (loop point, joint holding it) pair at once."""
-        P = np.array([M.homogeneous for M in self._refs])
-        RT = P[self._pair_joint, :3, :3].transpose(0, 2, 1)  # (n, 3, 3) world -> joint
-        r = P[self._pair_frame, :3, 3] - P[self._pair_joint, :3, 3]  # (n, 3)
+        RT = self._oR[self._pair_joint].transpose(0, 2, 1)  # (n, 3, 3) world -> joint
+        r = self._fp[self._pair_frame] - self._op[self._pair_joint]  # (n, 3)
         # the moment about the joint of a unit force along e_i at the point, joint axes: R^T skew(r)
-        sk = np.zeros((len(r), 3, 3))
-        sk[:, 0, 1], sk[:, 0, 2], sk[:, 1, 2] = -r[:, 2], r[:, 1], -r[:, 0]
-        sk[:, 1, 0], sk[:, 2, 0], sk[:, 2, 1] = r[:, 2], -r[:, 1], r[:, 0]
+        sk = (r[:, _SKEW_FROM] * _SKEW_SIGN).reshape(-1, 3, 3)
         blocks = np.concatenate([RT, RT @ sk], axis=1) * -self._pair_sign[:, None, None]  # (n, 6, 3)
-        return np.tensordot(self._pair_rows, blocks @ self._pair_cols, axes=1)
+        return (self._pair_rows @ (blocks @ self._pair_cols).reshape(len(r), -1)).reshape(-1, 6, self.k)
 
     def project(self, q, free=None, iterations: int = 50, tol: float = 1e-13) -> np.ndarray:
         """``q`` moved onto the loops: Gauss-Newton on ``phi`` along the couplings' directions, smallest
