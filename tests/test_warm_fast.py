@@ -344,7 +344,7 @@ def test_ipm_answer_is_the_numpy_ones(instants):
         T, t = qp.cone_rows()
         c_ = np.ascontiguousarray
         code, x, y, z, zc, it, state, cact, mus, dirs = _ipm.ipm_solve(
-            H, d0, F, c, A, b, lb, ub, c_(T), c_(t), *args[16:19], G, gc, ax, tn, basis0, *args[19:24])
+            H, d0, F, c, A, b, lb, ub, c_(T), c_(t), *args[16:19], G, gc, ax, tn, basis0, *args[19:25])
         assert got.iterations == it
         if code != _ipm.CROSSOVER:
             assert got.active is None
@@ -386,7 +386,7 @@ def test_folded_cones_give_the_expanded_systems_directions(instants):
         args = ipm_arguments(qp)
         _, d0, F, _, _, A, _, _, _, G, gc, ax, _, _, cosr, basis = args[:16]
         T, t = _fast.cone_rows(G, gc, ax, cosr, basis)
-        B, rf, M0inv, Ct, cg, fold = structure(F, T, A, args[22])
+        B, rf, M0inv, Ct, cg, fold = structure(F, T, A, args[23])
         assert fold[0].shape[0] == 8  # every cone folded into its joint's group
         none = (np.empty((0, 3, 3)), np.empty(0, dtype=np.int64), np.empty((0, 3, 3)), np.empty((0, 3, 3)))
         n, K, neq = len(d0), 8, A.shape[0]

@@ -214,7 +214,7 @@ def cone_rows(G, g, ax, cosr, basis):
 
 @njit(cache=True, nogil=True)
 def ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, G, g, ax, tn, basis0, cosr, basis, max_iter, eps, crossover_gap,
-               max_pivots, as_tols, ncorr, rank_tol, box_weight, strict, near, unique_rel, penalty):
+               max_pivots, max_newton, as_tols, ncorr, rank_tol, box_weight, strict, near, unique_rel, penalty):
     """:func:`._ipm.ipm_solve` on a problem's stacked arrays (its cone rows made here:
     :func:`cone_rows`) and, after a crossover, the answer's duals and objective (:func:`answer_duals`)
     and the next instant's guess of the bounds (multipliers below 1e-12 of the largest free their
@@ -233,22 +233,24 @@ def ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, G, g, ax, tn, basis0, cosr, basis,
     fixed, free = fixed_split(lb, ub)
     if fixed.shape[0] == 0 or free.shape[0] == 0:
         return _ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, T, t, G, g, ax, tn, basis0, cosr, basis, max_iter, eps,
-                           crossover_gap, max_pivots, as_tols, ncorr, rank_tol, box_weight, strict, near, unique_rel, penalty)
+                           crossover_gap, max_pivots, max_newton, as_tols, ncorr, rank_tol, box_weight, strict, near,
+                           unique_rel, penalty)
     Hr, d0r, Fr, cr, rr, Ar, br, Tr, tr, Gr, gr = without_fixed(H, d0, Fm, c, r, A, b, lb, T, t, G, g, fixed, free)
     code, x, y, z, zc, obj, it, held, mus, dirs, nxt, unique = _ipm_answer(
         Hr, d0r, Fr, cr, rr, Ar, br, lb[free], ub[free], Tr, tr, Gr, gr, ax, tn, basis0, cosr, basis, max_iter,
-        eps, crossover_gap, max_pivots, as_tols, ncorr, rank_tol, box_weight, strict, near, unique_rel, penalty)
+        eps, crossover_gap, max_pivots, max_newton, as_tols, ncorr, rank_tol, box_weight, strict, near, unique_rel,
+        penalty)
     xf, zf, objf, nxtf = with_fixed(code, x, y, z, zc, nxt, H, c, r, A, lb, T, fixed, free)
     return code, xf, y, zf, zc, objf if code == CROSSOVER else obj, it, held, mus, dirs, nxtf, unique
 
 
 @njit(cache=True, nogil=True)
 def _ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, T, t, G, g, ax, tn, basis0, cosr, basis, max_iter, eps, crossover_gap,
-                max_pivots, as_tols, ncorr, rank_tol, box_weight, strict, near, unique_rel, penalty):
+                max_pivots, max_newton, as_tols, ncorr, rank_tol, box_weight, strict, near, unique_rel, penalty):
     """:func:`ipm_answer` once the cone rows ``T, t`` are made and no variable is fixed."""
     code, x, y, z, zc, it, state, cact, mus, dirs = ipm_solve(
         H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, g, ax, tn, basis0, max_pivots,
-        as_tols, ncorr, rank_tol, box_weight)
+        max_newton, as_tols, ncorr, rank_tol, box_weight)
     if code != CROSSOVER:
         return code, x, y, z, zc, np.nan, it, np.zeros(0, dtype=np.bool_), mus, dirs, state, 0
     grad = -z

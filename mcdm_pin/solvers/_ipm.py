@@ -260,7 +260,7 @@ def _primal_res(ry, rzu, rzl, rzc, bscale, hscale):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _crossover(x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots,
+def _crossover(x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots, max_newton,
                as_tols, last_state, last_cact):
     """The active set the iterate points at, verified by the compiled active-set solver when it
     differs from the last one tried: ``(tried, code, x, mus, grad, state, cact, dirs, y)``."""
@@ -268,14 +268,14 @@ def _crossover(x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax,
     if not _new_guess(state, cact, last_state, last_cact):
         return (0, -1, x, np.zeros(0), np.zeros(0), state, cact, np.zeros((0, 3)), np.zeros(0))
     code, f, mus, grad, st, ca, dirs, nxt, yy = _kkt.active_set_solve(
-        H, c, A, b, lb, ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, 10,
+        H, c, A, b, lb, ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, max_newton,
         as_tols[0], as_tols[1], as_tols[2], as_tols[3], as_tols[4])
     return (1, code, f, mus, grad, st, ca, dirs, yy)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax, tn, basis0,
-              max_pivots, as_tols, ncorr, rank_tol, box_weight):
+              max_pivots, max_newton, as_tols, ncorr, rank_tol, box_weight):
     """The interior-point method with crossover (module docstring).
 
     Args:
@@ -287,7 +287,7 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
         crossover_gap: try the active set once the relative gap is below this (0: never).
         G, gc, ax, tn, basis0: the cones in the active-set solver's form (``F = gc + G x``, axis,
             tan, a normal) for the crossover.
-        max_pivots, ncorr: pivots of each crossover attempt; centrality correctors per iteration (limits).
+        max_pivots, max_newton, ncorr: pivots, cone Newton steps per crossover; correctors per iteration.
         as_tols (5,): the active-set solver's step, primal, dual, equation-of-motion and
             regularisation tolerances.
         rank_tol: relative residual below which a row of ``[Fm; T]`` counts as dependent.
@@ -322,7 +322,7 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
             if crossover_gap > 0.0:
                 tried, code, f, mus, grad, st, ca, dirs, yy = _crossover(
                     x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots,
-                    as_tols, last_state, last_cact)
+                    max_newton, as_tols, last_state, last_cact)
                 attempts += tried
                 if code == _kkt.FOUND:
                     return (CROSSOVER, f, yy, -grad, zc, it, st, ca, mus, dirs)
@@ -348,8 +348,8 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
     # no convergence: one last crossover from where the iterations stopped
     if crossover_gap > 0.0:
         tried, code, f, mus, grad, st, ca, dirs, yy = _crossover(
-            x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots, as_tols,
-            last_state, last_cact)
+            x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots, max_newton,
+            as_tols, last_state, last_cact)
         if code == _kkt.FOUND:
             return (CROSSOVER, f, yy, -grad, zc, it + 1, st, ca, mus, dirs)
     return (end, x, y, _zbox(zu, zl, iu, il, n), zc, it + 1, np.zeros(0, dtype=np.int8),

@@ -49,8 +49,8 @@ def ipm_arguments(qp, settings: Settings = DEFAULT) -> tuple:
     d0, F = p_structure(qp)
     return (c_(qp.P, dtype=float), c_(d0, dtype=float), c_(F, dtype=float), c, float(qp.r), A, b, lb, ub, G, gc, ax,
             tn, basis0, cosr, basis, int(s.ipm_max_iter), float(s.ipm_eps), float(s.ipm_crossover_gap),
-            int(s.ipm_crossover_pivots), as_tols(s), int(s.ipm_correctors), float(s.ipm_rank_tol),
-            float(s.ipm_start_box_weight), *unique_args(qp, s))
+            int(s.ipm_crossover_pivots), int(s.active_set_max_newton), as_tols(s), int(s.ipm_correctors),
+            float(s.ipm_rank_tol), float(s.ipm_start_box_weight), *unique_args(qp, s))
 
 
 def ipm_solve(qp, settings: Settings = DEFAULT) -> Solution:
@@ -103,15 +103,14 @@ def warm_calls():
 
 
 @njit(cache=True, nogil=True)
-def crossover_active_set(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots, step_tol,
-                         primal_tol, dual_tol, eom_tol, reg_rel):
-    """:func:`._kkt.active_set_solve` as the crossover of :func:`._ipm.ipm_solve` calls it (``max_newton``
-    the literal 10 there and here: numba compiles a kernel called from a kernel once per literal
-    argument). Compiled as an entry point of its own, so that a parallel compile
-    (:func:`mcdm_pin.jit.compile_plan`) makes that specialisation beside the interior-point method,
-    which then loads it from numba's cache; the library does not call it."""
-    return _kkt.active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots, 10,
-                                 step_tol, primal_tol, dual_tol, eom_tol, reg_rel)
+def crossover_active_set(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots, max_newton,
+                         step_tol, primal_tol, dual_tol, eom_tol, reg_rel):
+    """:func:`._kkt.active_set_solve` as the crossover of :func:`._ipm.ipm_solve` calls it (the types of
+    :func:`._fast.active_set_answer`'s call, so one specialisation serves both). Compiled as an entry
+    point of its own, so that a parallel compile (:func:`mcdm_pin.jit.compile_plan`) makes it beside
+    the interior-point method, which then loads it from numba's cache; the library does not call it."""
+    return _kkt.active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
+                                 max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel)
 
 
 def _crossover_call() -> list:
