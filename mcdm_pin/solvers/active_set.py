@@ -36,7 +36,6 @@ from . import _kkt as K
 from .base import OPTIMAL, Solution, Stage
 
 
-
 def as_tols(settings: Settings) -> np.ndarray:
     """The compiled active-set solver's tolerances, in its order: step, primal, dual, equation of
     motion, regularisation (:class:`~mcdm_pin.settings.Settings`' ``active_set_*``)."""
@@ -203,8 +202,6 @@ MISSES: dict[str, int] = {}  # why guesses were rejected (counts, for profiling)
 
 def _miss(reason: str) -> None:
     MISSES[reason] = MISSES.get(reason, 0) + 1
-
-
 
 
 class WarmActiveSet(Stage):
