@@ -472,7 +472,7 @@ def scale_factors(A, b, lb, ub, c, P, P_diag, P_factor, structured, G, g, f_scal
         return False, ones_n, ones_m, 1.0, np.ones(K)
     wide = m > 0 and spread(A, np.zeros(0)) > limit
     if wide:
-        r, d = ruiz(A, 10)
+        r, d = ruiz(A, np.int64(10))
     else:
         r, d = ones_m, ones_n.copy()
     if has_f and m > 0:

@@ -212,7 +212,7 @@ def cone_rows(G, g, ax, cosr, basis):
     return T, t
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, G, g, ax, tn, basis0, cosr, basis, max_iter, eps, crossover_gap,
                max_pivots, max_newton, as_tols, ncorr, rank_tol, box_weight, strict, near, unique_rel, penalty):
     """:func:`._ipm.ipm_solve` on a problem's stacked arrays (its cone rows made here:
@@ -231,33 +231,27 @@ def ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, G, g, ax, tn, basis0, cosr, basis,
     the certificate), the rest empty and ``unique`` 0."""
     T, t = cone_rows(G, g, ax, cosr, basis)
     fixed, free = fixed_split(lb, ub)
-    if fixed.shape[0] == 0 or free.shape[0] == 0:
-        return _ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, T, t, G, g, ax, tn, basis0, cosr, basis, max_iter, eps,
-                           crossover_gap, max_pivots, max_newton, as_tols, ncorr, rank_tol, box_weight, strict, near,
-                           unique_rel, penalty)
-    Hr, d0r, Fr, cr, rr, Ar, br, Tr, tr, Gr, gr = without_fixed(H, d0, Fm, c, r, A, b, lb, T, t, G, g, fixed, free)
-    code, x, y, z, zc, obj, it, held, mus, dirs, nxt, unique = _ipm_answer(
-        Hr, d0r, Fr, cr, rr, Ar, br, lb[free], ub[free], Tr, tr, Gr, gr, ax, tn, basis0, cosr, basis, max_iter,
-        eps, crossover_gap, max_pivots, max_newton, as_tols, ncorr, rank_tol, box_weight, strict, near, unique_rel,
-        penalty)
+    reduce = fixed.shape[0] > 0 and free.shape[0] > 0
+    if reduce:
+        Hr, d0r, Fr, cr, rr, Ar, br, Tr, tr, Gr, gr = without_fixed(H, d0, Fm, c, r, A, b, lb, T, t, G, g, fixed,
+                                                                    free)
+        lbr, ubr = lb[free], ub[free]
+    else:
+        Hr, d0r, Fr, cr, rr, Ar, br, Tr, tr, Gr, gr, lbr, ubr = H, d0, Fm, c, r, A, b, T, t, G, g, lb, ub
+    code, x, y, z, zc, it, state, cact, mus, dirs = ipm_solve(
+        Hr, d0r, Fr, cr, Ar, br, lbr, ubr, Tr, tr, max_iter, eps, crossover_gap, Gr, gr, ax, tn, basis0, max_pivots,
+        max_newton, as_tols, ncorr, rank_tol, box_weight)
+    obj, held, nxt, unique = np.nan, np.zeros(0, dtype=np.bool_), state, 0
+    if code == CROSSOVER:
+        grad = -z
+        nxt = next_guess(state, grad)
+        z, zc, obj, held = answer_duals(Hr, cr, rr, x, grad, state, cact, mus, dirs, cosr, basis)
+        unique = answer_unique(x, z, cr, lbr, ubr, Ar, Hr, Gr, gr, ax, tn, cosr, zc, strict, near, unique_rel,
+                               penalty)
+    if not reduce:
+        return code, x, y, z, zc, obj, it, held, mus, dirs, nxt, unique
     xf, zf, objf, nxtf = with_fixed(code, x, y, z, zc, nxt, H, c, r, A, lb, T, fixed, free)
     return code, xf, y, zf, zc, objf if code == CROSSOVER else obj, it, held, mus, dirs, nxtf, unique
-
-
-@njit(cache=True, nogil=True)
-def _ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, T, t, G, g, ax, tn, basis0, cosr, basis, max_iter, eps, crossover_gap,
-                max_pivots, max_newton, as_tols, ncorr, rank_tol, box_weight, strict, near, unique_rel, penalty):
-    """:func:`ipm_answer` once the cone rows ``T, t`` are made and no variable is fixed."""
-    code, x, y, z, zc, it, state, cact, mus, dirs = ipm_solve(
-        H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, g, ax, tn, basis0, max_pivots,
-        max_newton, as_tols, ncorr, rank_tol, box_weight)
-    if code != CROSSOVER:
-        return code, x, y, z, zc, np.nan, it, np.zeros(0, dtype=np.bool_), mus, dirs, state, 0
-    grad = -z
-    nxt = next_guess(state, grad)
-    zb, zcone, obj, held = answer_duals(H, c, r, x, grad, state, cact, mus, dirs, cosr, basis)
-    unique = answer_unique(x, zb, c, lb, ub, A, H, G, g, ax, tn, cosr, zcone, strict, near, unique_rel, penalty)
-    return code, x, y, zb, zcone, obj, it, held, mus, dirs, nxt, unique
 
 
 @njit(cache=True, nogil=True)
@@ -415,8 +409,8 @@ def warm_calls():
     calls = [(active_set_answer, (z((n, n)), z(n), 0.0, z((1, n)), z(1), z(n), z(n), z(n, dtype=np.int8),
                                   z((1, 3, n)), z((1, 3)), z((1, 3)), z(1), z((1, 3)), z(1, dtype=np.bool_),
                                   z((1, 3)), z(1), z((1, 2, 3)), 2, 2, *tols, False, 1e-8, 1e-9, 1e3))]
-    return calls + [(unique_test, (z(n), z(n), z(n), z(n), z(n), z((1, n)), z((n, n)), z((1, 3, n)), z((1, 3)),
-                           z((1, 3)), z(1), z(1), z((1, 3)), 1e-8, 1e-9, 1e3)),
+    return calls + [(answer_unique, (z(n), z(n), z(n), z(n), z(n), z((1, n)), z((n, n)), z((1, 3, n)), z((1, 3)),
+                             z((1, 3)), z(1), z(1), z((1, 3)), False, 1e-8, 1e-9, 1e3)),
             (answer_check, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1))),
             (answer_check_outputs, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1),
                                     z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)))),

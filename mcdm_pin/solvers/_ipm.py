@@ -42,7 +42,7 @@ longer trial step, each kept only when it lengthens the step.
 **Crossover.** Once the relative duality gap is below ``crossover_gap``, the active set read off the
 iterate (bounds whose slack is below their multiplier, cones whose slack is nearer the cone's
 boundary than its multiplier is to zero: Tapia's indicators) is handed to the compiled active-set
-solver (:func:`._kkt.active_set_solve`), whose point is accepted only if it passes the full KKT check.
+solver (:func:`._kkt.active_set_run`), whose point is accepted only if it passes the full KKT check.
 That turns an interior point accurate to ~1e-6 into the exact optimum (to rounding) a few
 iterations early.
 
@@ -112,18 +112,18 @@ def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T,
     newton.apply_P(x, d0, Fm, Px, fx)
     for i in range(n):
         rx[i] = Px[i] + c[i]
-    la.rows_axpy(A, 0, A.shape[0], y, 0, 1.0, rx)
+    la.rows_axpy(A, np.int64(0), A.shape[0], y, np.int64(0), 1.0, rx)
     for q in range(iu.shape[0]):
         rx[iu[q]] += zu[q]
     for q in range(il.shape[0]):
         rx[il[q]] -= zl[q]
-    la.rows_axpy(T2, 0, 3 * K, zc.reshape(3 * K), 0, -1.0, rx)
+    la.rows_axpy(T2, np.int64(0), 3 * K, zc.reshape(3 * K), np.int64(0), -1.0, rx)
     rz2 = rzc.reshape(3 * K)
-    la.rows_dot(T2, 0, 3 * K, x, rz2, 0)
+    la.rows_dot(T2, np.int64(0), 3 * K, x, rz2, np.int64(0))
     for k in range(K):
         for e in range(3):
             rzc[k, e] = -rzc[k, e] + sc[k, e] - t[k, e]
-    la.rows_dot(A, 0, A.shape[0], x, ry, 0)
+    la.rows_dot(A, np.int64(0), A.shape[0], x, ry, np.int64(0))
     for a in range(A.shape[0]):
         ry[a] -= b[a]
     for q in range(iu.shape[0]):
@@ -133,7 +133,7 @@ def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T,
     return 0.5 * _dot(Px, x) + _dot(c, x)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor, fw, ws, box_weight):
     """CVXOPT's initial point: ``x, y`` of the Newton system with the identity scaling (the least
     squares point of the slacks on the equations, with the objective; without cones the bounds
@@ -259,7 +259,7 @@ def _primal_res(ry, rzu, rzl, rzc, bscale, hscale):
     return pres
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def _crossover(x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots, max_newton,
                as_tols, last_state, last_cact):
     """The active set the iterate points at, verified by the compiled active-set solver when it
@@ -267,13 +267,13 @@ def _crossover(x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax,
     state, cact, cdir = _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, G, gc, ax, basis0)
     if not _new_guess(state, cact, last_state, last_cact):
         return (0, -1, x, np.zeros(0), np.zeros(0), state, cact, np.zeros((0, 3)), np.zeros(0))
-    code, f, mus, grad, st, ca, dirs, nxt, yy = _kkt.active_set_solve(
+    code, f, mus, grad, st, ca, dirs, _, yy, _, _ = _kkt.active_set_run(
         H, c, A, b, lb, ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, max_newton,
         as_tols[0], as_tols[1], as_tols[2], as_tols[3], as_tols[4])
     return (1, code, f, mus, grad, st, ca, dirs, yy)
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax, tn, basis0,
               max_pivots, max_newton, as_tols, ncorr, rank_tol, box_weight):
     """The interior-point method with crossover (module docstring).
@@ -389,7 +389,7 @@ def _work_arrays(n, neq, nu, nl, K, B, rf, Ct, fold, Fm):
     return fw, ws, res, bar, rb, D, Wc
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def _measures(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, res, deg, bscale, hscale, cscale,
               eps):
     """The iterate's residuals (into ``res``, :func:`_work_arrays`) and how far it is from optimal:
@@ -434,7 +434,7 @@ def _take_step(a, j, D, x, y, su, zu, sl, zl, sc, zc):
             zc[k, e] += a * dzc[k, e]
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
 def _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, G, gc, ax, basis0):
     """The active set an interior iterate points at (Tapia's indicators): a bound whose slack is
     below its multiplier, a cone whose slack is nearer the cone's boundary than its multiplier is

@@ -80,7 +80,7 @@ def _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc):
     for q in range(il.shape[0]):
         dsl[q] = -rzl[q] + dx[il[q]]
     K = T.shape[0]
-    la.rows_dot(T.reshape((3 * K, dx.shape[0])), 0, 3 * K, dx, dsc.reshape(3 * K), 0)
+    la.rows_dot(T.reshape((3 * K, dx.shape[0])), np.int64(0), 3 * K, dx, dsc.reshape(3 * K), np.int64(0))
     for k in range(K):
         for e in range(3):
             dsc[k, e] -= rzc[k, e]

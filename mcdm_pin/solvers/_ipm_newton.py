@@ -332,7 +332,7 @@ def _fold_solve(B, rf, cg, fold, LK, dinv, r1, r3, r2, u, rhs, dx, dy, dzc):
     neq = p - rf
     for t in range(n):
         u[t] = dinv[t] * r1[t]
-    rows_dot(B, 0, p, u, rhs, 0)
+    rows_dot(B, np.int64(0), p, u, rhs, np.int64(0))
     for a in range(neq):
         rhs[rf + a] -= r2[a]
     for k in range(K):
@@ -349,7 +349,7 @@ def _fold_solve(B, rf, cg, fold, LK, dinv, r1, r3, r2, u, rhs, dx, dy, dzc):
     chol_solve_inplace(LK, rhs)
     for t in range(n):
         dx[t] = r1[t]
-    rows_axpy(B, 0, p, rhs, 0, -1.0, dx)
+    rows_axpy(B, np.int64(0), p, rhs, np.int64(0), -1.0, dx)
     for t in range(n):
         dx[t] *= dinv[t]
     for a in range(neq):
@@ -387,7 +387,7 @@ def solve(B, rf, Ct, cg, fold, LK, dinv, r1, r3, r2, u, rhs, wq, dx, dy, dzc):
         u[t] = dinv[t] * r1[t]
     inside = Ct.shape[0] > 0
     if inside:  # B = [Q; A]
-        rows_dot(B, 0, rf, u, rhs, 0)
+        rows_dot(B, np.int64(0), rf, u, rhs, np.int64(0))
         rows_dot(B, rf, rf + neq, u, rhs, nw)
         if cg.shape[0]:
             for i in range(m):
@@ -397,7 +397,7 @@ def solve(B, rf, Ct, cg, fold, LK, dinv, r1, r3, r2, u, rhs, wq, dx, dy, dzc):
             for i in range(m):
                 rhs[rf + i] = dot(Ct[i], rhs[:rf])
     else:  # B = [Q; T; A]: its rows are the unknowns'
-        rows_dot(B, 0, p, u, rhs, 0)
+        rows_dot(B, np.int64(0), p, u, rhs, np.int64(0))
     for a in range(neq):
         rhs[nw + a] -= r2[a]
     for k in range(K):
@@ -419,10 +419,10 @@ def solve(B, rf, Ct, cg, fold, LK, dinv, r1, r3, r2, u, rhs, wq, dx, dy, dzc):
         else:
             for i in range(m):
                 axpy(rhs[rf + i], Ct[i], wq)
-        rows_axpy(B, 0, rf, wq, 0, -1.0, dx)
+        rows_axpy(B, np.int64(0), rf, wq, np.int64(0), -1.0, dx)
         rows_axpy(B, rf, rf + neq, rhs, nw, -1.0, dx)
     else:
-        rows_axpy(B, 0, p, rhs, 0, -1.0, dx)
+        rows_axpy(B, np.int64(0), p, rhs, np.int64(0), -1.0, dx)
     for t in range(n):
         dx[t] *= dinv[t]
     for k in range(K):
@@ -437,8 +437,8 @@ def apply_P(x, d0, Fm, out, fx):
     """``out <- P x = d0 x + F^T F x`` (``fx`` (r,): work, ``F x``)."""
     for t in range(x.shape[0]):
         out[t] = d0[t] * x[t]
-    rows_dot(Fm, 0, Fm.shape[0], x, fx, 0)
-    rows_axpy(Fm, 0, Fm.shape[0], fx, 0, 1.0, out)
+    rows_dot(Fm, np.int64(0), Fm.shape[0], x, fx, np.int64(0))
+    rows_axpy(Fm, np.int64(0), Fm.shape[0], fx, np.int64(0), 1.0, out)
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")

@@ -239,7 +239,7 @@ def _cones_in_basis(T, Q, rf, rank_tol):
     rrow = np.empty(n)
     for k in range(K):
         for e in range(3):
-            if not _in_span(T[k, e], Q, 0, rf, Ct[3 * k + e], rrow, rank_tol):
+            if not _in_span(T[k, e], Q, np.int64(0), rf, Ct[3 * k + e], rrow, rank_tol):
                 inside = False
     if not inside:
         Ct = np.empty((0, rf))
@@ -276,16 +276,20 @@ def _m0_inverse(C, rf, ok):
     r = C.shape[0]
     M0inv = np.zeros((rf, rf))
     if ok:  # C block diagonal: so are M0 and its inverse (eight 3 x 3 blocks on the neck, not 24 x 24)
-        X = np.empty((3, 3))
+        X, Cj, Mj = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+        three = np.int64(3)  # typed, not a literal: the specialisation the other calls use
         for j in range(rf // 3):
             o = 3 * j
+            Cj[:, :] = C[o:o + 3, o:o + 3]  # contiguous: one specialisation of the kernels below
             # (C_j^T C_j)^-1 = C_j^-1 C_j^-T: no temporaries, and C_j's condition, not its square
-            if inv3(C[o:o + 3, o:o + 3], X) != 0.0:
+            if inv3(Cj, X) != 0.0:
                 for a in range(3):
                     for b in range(3):
                         M0inv[o + a, o + b] = X[a, 0] * X[b, 0] + X[a, 1] * X[b, 1] + X[a, 2] * X[b, 2]
             else:
-                _gram_inverse(C[o:o + 3, o:o + 3], 3, 3, M0inv[o:o + 3, o:o + 3])
+                Mj[:, :] = 0.0
+                _gram_inverse(Cj, three, three, Mj)
+                M0inv[o:o + 3, o:o + 3] = Mj
     else:
         _gram_inverse(C, r, rf, M0inv)
     return M0inv

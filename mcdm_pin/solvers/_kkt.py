@@ -19,23 +19,13 @@ from ._kkt_eq import DROP, NO_CONVERGENCE, OK, SINGULAR, VANISHED, eq_solve
 from ._kkt_linalg import lu_apply_t
 from ._kkt_verify import KKT_EOM, KKT_OPTIMAL, KKT_PIVOT, KKT_STATIONARY, KKT_SURFACE, verify
 
-# active_set_solve codes (besides OPTIMAL = 0 and the eq_solve / verify failures, shifted)
+# active_set_run codes (besides OPTIMAL = 0 and the eq_solve / verify failures, shifted)
 FOUND, CYCLE, PIVOT_LIMIT = 0, 10, 11
 REASONS = {SINGULAR: "singular KKT system", NO_CONVERGENCE: "Newton steps on the cone surfaces did not converge",
            VANISHED: "a cone's force vanished", 20 + KKT_EOM: "equation of motion not met",
            20 + KKT_STATIONARY: "not stationary",
            20 + KKT_SURFACE: "a held cone's force off its surface",
            CYCLE: "the active set cycles", PIVOT_LIMIT: "no verified point within the pivot limit"}
-
-
-@njit(cache=True, nogil=True)
-def active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
-                     max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel):
-    """:func:`active_set_run` without its counts: ``(code, f, mus, grad, state, cact, dirs,
-    next_state, y)`` (the signature the interior-point method's crossover uses)."""
-    out = active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
-                         max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel)
-    return out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8]
 
 
 @njit(cache=True, nogil=True)
@@ -116,7 +106,7 @@ def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdi
     # the last verified-but-not-optimal point, to step back to when a block pivot fails
     have_prev = False
     prev_state, prev_cact, prev_grad, prev_dirs, prev_cone_dir, prev_in, prev_out = _memory(state, cact, cdir)
-    prev_kind, prev_idx = -1, -1
+    prev_kind, prev_idx = np.int64(-1), np.int64(-1)
     last_was_block = False
     best_ninf = n + nc + 1
     blocks_ok = True
@@ -197,7 +187,7 @@ def _drop_pulling(cact, mus):
             cact[k] = False
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _pivot(block, A, G, gc, ax, tn, state, cact, dirs, grad, release, to_lower, to_upper, cone_in, cone_out,
            worst_kind, worst_idx, LU, perm, lu_ok):
     """The next active set: every violation exchanged at once when ``block`` and it leaves enough
@@ -284,7 +274,7 @@ def _block_pivot(state, cact, release, to_lower, to_upper, cone_in, cone_out, ne
     return n - np.count_nonzero(new_state) >= neq + n_act - n_out + n_in, new_state, new_cact
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _one_change(A, G, gc, ax, tn, cact, dirs, state, grad, worst_kind, worst_idx, cone_in, cone_out, LU, perm,
                 lu_ok):
     """Only the worst violation changes: ``(state, cact)`` after it. At a vertex (as many free cables
@@ -310,7 +300,7 @@ def _one_change(A, G, gc, ax, tn, cact, dirs, state, grad, worst_kind, worst_idx
     return _single_pivot(state, cact, grad, worst_kind, worst_idx, cone_in, cone_out, neq, nc, n)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _ratio_test(A, G, gc, ax, tn, cact, dirs, state, grad, kind, r, n, LU, perm, lu_ok):
     """The fixed cable whose release lets the leaving free cable ``r`` reach its bound (``kind`` 1:
     it is below its lower bound, 2: above its upper bound) at the least dual cost: min over eligible

@@ -42,7 +42,7 @@ def _on_surfaces(f, G, gc, ax, tn, act, tol):
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, step_tol, reg):
     """Minimise ``1/2 f^T H f + g^T f`` with ``A f = b``, the cables of ``state`` fixed at their
     bounds and the cones of ``cact`` held on their surface (Newton steps with the cones' curvature
@@ -240,7 +240,7 @@ def _cone_rows(G, gc, ax, tn, state, f, f_cur, have_cur, free, neq, act, mus, di
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _solve_rows(K, rhs, nf, neq, na, square):
     """The KKT system's solution ``(sol, LU, perm, lu_ok)``: at a vertex (as many free cables as
     equations and held cones) through the rows alone (:func:`._kkt_linalg.vertex_solve_lu`, whose

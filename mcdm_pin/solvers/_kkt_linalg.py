@@ -35,6 +35,13 @@ def kkt_solve(K, rhs, square):
             ok = np.all(np.isfinite(sol))
         if ok:
             return sol
+    return lstsq_solve(K, rhs)
+
+
+@njit(cache=True, nogil=True)
+def lstsq_solve(K, rhs):
+    """``K x = rhs`` by least squares; NaNs unless the residual is at rounding level (a singular,
+    inconsistent system)."""
     sol = np.linalg.lstsq(K, rhs)[0]
     scale = 1.0
     for i in range(rhs.shape[0]):
@@ -175,8 +182,8 @@ def determined_solve(K, rhs, nf):
     r_c``, and the multipliers are the least-norm solution of ``R^T l = r_x - Hxx x``: what least
     squares on the whole system gives, from one Cholesky of ``R^T R`` instead of an SVD of ``K``
     (10x faster). Rows inconsistent beyond what least squares could pass (a wrong guess of the
-    active set) give NaNs at once, as :func:`kkt_solve` would after its SVD. Falls back to
-    :func:`kkt_solve` otherwise."""
+    active set) give NaNs at once, as :func:`lstsq_solve` would after its SVD. Falls back to
+    :func:`lstsq_solve` otherwise."""
     N = K.shape[0]
     m = N - nf
     Nm = np.zeros((nf, nf))
@@ -191,7 +198,7 @@ def determined_solve(K, rhs, nf):
     for a in range(nf):
         scale = max(scale, Nm[a, a])
     if not chol_lower(Nm, nf, 1e-12 * scale)[0]:
-        return kkt_solve(K, rhs, False)
+        return lstsq_solve(K, rhs)
     # x = N^-1 R^T r_c
     v = np.zeros(nf)
     for i in range(m):
@@ -222,7 +229,7 @@ def determined_solve(K, rhs, nf):
             out = np.empty(N)
             out[:] = np.nan
             return out
-        return kkt_solve(K, rhs, False)
+        return lstsq_solve(K, rhs)
     # l = R N^-1 (r_x - Hxx x)
     w = np.empty(nf)
     for a in range(nf):

@@ -38,7 +38,7 @@ def definite_beyond(H, J, rows, thr, hscale, penalty):
     return chol_lower(M, nf, 0.0)[0]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def unique_test(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel, penalty):
     """:func:`mcdm_pin.solvers.least_norm.is_unique` after its first two tests (its
     ``_strongly_active``, the Cholesky of ``J^T J``, the Cholesky of ``H + gamma J^T J - thr I``

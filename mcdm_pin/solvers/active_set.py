@@ -14,7 +14,7 @@ problem to tight tolerances (:class:`mcdm_pin.settings.Settings`, ``active_set_*
 - stationarity on the free variables (by construction, checked).
 
 For a convex problem these conditions are sufficient: a verified point is a global optimum. When a
-check fails, block principal pivoting corrects the guess (compiled: :func:`._kkt.active_set_solve`);
+check fails, block principal pivoting corrects the guess (compiled: :func:`._kkt.active_set_run`);
 when it cannot, the stage has nothing to say and the next stage answers.
 
 Two stages use it: :class:`WarmActiveSet` (the previous instant's active set) and :class:`Polish` (the

@@ -99,31 +99,7 @@ def warm_calls():
     axis = np.array([0.0, 0.0, 1.0])
     cone = ConeData("j", np.ones((3, n)), np.zeros(3), axis, 30.0, perpendicular_basis(axis))
     qp = QPData(np.eye(n), np.zeros(n), 0.0, np.ones((1, n)), np.ones(1), np.zeros(n), np.ones(n), [cone])
-    return [(_fast.ipm_answer, ipm_arguments(qp)), *_crossover_call()]
-
-
-@njit(cache=True, nogil=True)
-def crossover_active_set(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots, max_newton,
-                         step_tol, primal_tol, dual_tol, eom_tol, reg_rel):
-    """:func:`._kkt.active_set_solve` as the crossover of :func:`._ipm.ipm_solve` calls it (the types of
-    :func:`._fast.active_set_answer`'s call, so one specialisation serves both). Compiled as an entry
-    point of its own, so that a parallel compile (:func:`mcdm_pin.jit.compile_plan`) makes it beside
-    the interior-point method, which then loads it from numba's cache; the library does not call it."""
-    return _kkt.active_set_solve(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
-                                 max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel)
-
-
-def _crossover_call() -> list:
-    """:func:`crossover_active_set` with the types the crossover passes (those of
-    :func:`._fast.active_set_answer`'s example, by parameter name); none if a name does not match."""
-    import inspect
-
-    answer, args = _fast.warm_calls()[0]
-    given = dict(zip(inspect.signature(answer.py_func).parameters, args), cdir0=args[14])
-    names = list(inspect.signature(crossover_active_set.py_func).parameters)
-    if not set(names) <= set(given):
-        return []
-    return [(crossover_active_set, tuple(given[k] for k in names))]
+    return [(_fast.ipm_answer, ipm_arguments(qp))]
 
 
 jit.register("mcdm_pin.solvers", warm_calls)

@@ -142,17 +142,17 @@ def _definite_beyond(H, J, thr: float, hscale: float, penalty: float) -> bool:
 
 
 def _compiled_unique(qp, sol: Solution, settings: Settings) -> bool | None:
-    """The rest of :func:`is_unique` compiled (:func:`._fast.unique_test`, the same steps and
-    thresholds); ``None`` while the kernels are not compiled."""
+    """The rest of :func:`is_unique` compiled (:func:`._fast.answer_unique` past its first test, the
+    same steps and thresholds); ``None`` while the kernels are not compiled."""
     if not jit.ready():
         return None
     c_ = np.ascontiguousarray
     c, A, _, lb, ub, G, gc, ax, tn, _ = qp.kernel_arrays()
     cosr = qp.cone_consts()[2] if qp.cones else _NO_1
     zc = sol.z_cone if qp.cones else _NO_3
-    return bool(jit.kernels("solvers._fast").unique_test(
+    return bool(jit.kernels("solvers._fast").answer_unique(
         c_(sol.x, dtype=float), c_(sol.z, dtype=float), c, lb, ub, A, c_(qp.P, dtype=float), G, gc, ax, tn,
-        c_(cosr, dtype=float), c_(zc, dtype=float).reshape(len(gc), 3),
+        c_(cosr, dtype=float), c_(zc, dtype=float).reshape(len(gc), 3), False,
         float(settings.active_set_from_solution), float(settings.unique_rel), float(settings.unique_penalty)))
 
 
