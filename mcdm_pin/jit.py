@@ -102,11 +102,13 @@ POLICIES = ("auto", "compile", "wait", "off")
 STAMP = "mcdm_pin_kernels.stamp"  # the stamp's file name, in the kernels' cache folder
 LOCK = "mcdm_pin_kernels.lock"  # the compile lock's file name, beside the stamp
 WORKERS_ENV = "MCDM_PIN_COMPILE_WORKERS"  # how many processes compile (default: the usable cores)
-COMPILE_COST = {"mcdm_pin.solvers._fast.ipm_answer": 165.9, "mcdm_pin.solvers._fast.active_set_answer": 63.0,
-                "mcdm_pin.model.route_kernels.osim_route_pass": 26.0, "mcdm_pin.model.route_kernels.route_pass": 6.6,
-                "mcdm_pin.model.kernels.cable_terms": 4.5}
-"""CPU seconds of each entry point's compile into an empty cache, measured (docs/speed.md, "First
-run"): :func:`compile_plan` splits the entry points between the processes by them."""
+COMPILE_COST = {"mcdm_pin.solvers._fast.ipm_answer": 109.0, "mcdm_pin.solvers._fast.active_set_answer": 86.0,
+                "mcdm_pin.model.route_kernels.osim_route_pass": 24.6, "mcdm_pin.model.route_kernels.route_pass": 6.8,
+                "mcdm_pin.model.kernels.cable_terms": 4.6, "mcdm_pin.model.kernels.scale_factors": 4.1}
+"""CPU seconds of each entry point's compile in a two-process compile into an empty cache, measured
+(docs/speed.md, "First run"; ``active_set_answer`` includes the active-set solver, which the other
+process's ``ipm_answer`` then loads from the cache): :func:`compile_plan` splits the entry points
+between the processes by them."""
 _CHILD_CODE = "import sys; from mcdm_pin import jit; jit._child_main(sys.argv[1:])"  # a worker's program
 LAST_COMPILE: dict = {}
 """The last compile of this process (:func:`compile_now`): ``entries`` (name, wall s, CPU s, worker;
