@@ -29,6 +29,7 @@ from hypothesis import HealthCheck, given, note, seed, settings
 from hypothesis import strategies as st
 
 from mcdm_pin import InverseDynamics, compute_terms
+from mcdm_pin.problem import Context
 
 from .fd import bounds_lp_feasible, lengths_jacobian
 from .robotgen import GenRobot, robots
@@ -51,6 +52,19 @@ def load(g: GenRobot, folder):
     urdf, sidecar = g.texts()
     note(f"URDF:\n{urdf}\nsidecar:\n{sidecar}")
     return g.load(folder)
+
+
+def _objective_rounding(robot, case, q, qd, qdd, f) -> float:
+    """What rounding leaves of ``1/2 f^T P f + c^T f + r`` at ``f``: the terms' magnitudes times 1e3
+    machine epsilons (with ``r``, the squared wrench of the cables' absence, the sum cancels: at an
+    optimum of zero the value is rounding, 1e-12 of forces ~200 N)."""
+    inv = InverseDynamics.for_case(robot, case)
+    qd, qdd = inv.evaluate.check_motion(qd, qdd)
+    terms = inv.evaluate(robot.check_configuration(q), qd, qdd, checked=True)  # as the solve does
+    qp = inv.problem.assemble(terms, Context(robot, None))
+    f = np.asarray(f, dtype=float)
+    quad = 0.5 * abs(f @ qp.gradient(f) - qp.c @ f)
+    return 1e3 * np.finfo(float).eps * (quad + abs(qp.c @ f) + abs(qp.r))
 
 
 def state(robot, seed, scale=0.6):
@@ -160,8 +174,10 @@ def test_solver_meets_constraints_and_agrees_with_clarabel(g, seed, case):
                 cones = np.array([j.cone_deg if j.cone_deg else np.inf for j in robot.joints])
                 assert np.all(prox.interaction_angle_deg <= cones + CONE_TOL_DEG)
             if ref.status == "optimal" and not by_clarabel:
-                # not worse than Clarabel's (ours is feasible, checked above; lower is closer to optimal)
-                assert prox.objective - ref.objective <= OBJ_RTOL * max(abs(ref.objective), 1e-12)
+                # not worse than Clarabel's (ours is feasible, checked above; lower is closer to optimal),
+                # beyond the objective's own rounding (at an optimum of zero its value is rounding)
+                floor = _objective_rounding(robot, case, q, qd, qdd, ref.f)
+                assert prox.objective - ref.objective <= OBJ_RTOL * abs(ref.objective) + floor
 
 
 def test_proxqp_stall_is_answered_by_the_cascade():
