@@ -56,10 +56,13 @@ def connect(scheduler: str, workers: int | None, timeout_s: float, error=ValueEr
     distributed = optional("dask.distributed", "the Dask scheduler (workspaces, batch trajectories)",
                            "workspace")
     if scheduler == "local":
+        # the local cluster's own log stays quiet below CRITICAL: what it says at ERROR is its shutdown
+        # (a worker whose heartbeat finds the scheduler closed first, after Ctrl-C), while a task's
+        # error reaches this process as the task's exception and a lost worker as KilledWorker
         with workers_ignore_ctrl_c():
             cluster = distributed.LocalCluster(
                 n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                host="127.0.0.1", dashboard_address="127.0.0.1:0", silence_logs=logging.ERROR)
+                host="127.0.0.1", dashboard_address="127.0.0.1:0", silence_logs=logging.CRITICAL)
         return distributed.Client(cluster), cluster
     try:
         client = distributed.Client(scheduler, timeout=f"{timeout_s}s")

@@ -7,8 +7,9 @@ from pathlib import Path
 
 import pytest
 
-# the tests run on the compiled kernels (a clean clone compiles them once, about a minute, before the
-# first solve; the uncompiled path of a first run has its own tests: tests/test_uncompiled.py)
+# the tests run on the compiled kernels (a clean clone compiles them once, before the first solve: the
+# first pytest-xdist worker to need them compiles, the others wait on the compile's lock; the uncompiled
+# path of a first run has its own tests: tests/test_uncompiled.py)
 os.environ.setdefault("MCDM_PIN_JIT", "wait")
 
 REPO = Path(__file__).resolve().parents[1]
