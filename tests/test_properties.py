@@ -266,3 +266,24 @@ def test_one_dof_robot(tmp_path):
     terms = compute_terms(robot, [0.1])
     assert terms.L.shape == (3, 1)
     assert InverseDynamics.for_case(robot, 1).solve([0.1]).status == "optimal"
+
+
+def test_a_rounding_zero_in_the_equations_does_not_scale_the_answer_away():
+    """The generated robot whose equation of motion holds -4.3e-19 for a cable through the joint's
+    axis (tests/regressions.py): the scaling counts it as zero, and the default chain answers with
+    Clarabel's optimum and forces."""
+    from mcdm_pin.scaling import equilibrate
+
+    from .regressions import NOISE_COLUMN, NOISE_COLUMN_SEED
+
+    with tempfile.TemporaryDirectory() as d:
+        robot = NOISE_COLUMN.load(d)
+        q, qd, qdd, _ = state(robot, NOISE_COLUMN_SEED)
+        ours = InverseDynamics.for_case(robot, 2).solve(q, qd, qdd)
+        ref = InverseDynamics.for_case(robot, 2, solver="clarabel").solve(q, qd, qdd)
+    assert ours.status == ref.status == "optimal"
+    assert ours.objective == pytest.approx(ref.objective, rel=OBJ_RTOL)
+    assert np.abs(ours.f - ref.f).max() <= 1e-6 * np.abs(ref.f).max()
+    # the rounding of a zero beside O(0.06) entries leaves its column's factor alone
+    _, dcol = equilibrate(np.array([[-4.3e-19, 6.3e-2, -5.2e-2]]))
+    assert dcol[0] == 1.0 and np.all(dcol[1:] > 1.0)
