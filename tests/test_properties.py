@@ -176,7 +176,8 @@ def test_solver_meets_constraints_and_agrees_with_clarabel(g, seed, case):
             if ref.status == "optimal" and not by_clarabel:
                 # not worse than Clarabel's (ours is feasible, checked above; lower is closer to optimal),
                 # beyond the objective's own rounding (at an optimum of zero its value is rounding)
-                floor = _objective_rounding(robot, case, q, qd, qdd, ref.f)
+                floor = (_objective_rounding(robot, case, q, qd, qdd, ref.f)
+                         + _objective_rounding(robot, case, q, qd, qdd, prox.f))
                 assert prox.objective - ref.objective <= OBJ_RTOL * abs(ref.objective) + floor
 
 
@@ -287,3 +288,21 @@ def test_a_rounding_zero_in_the_equations_does_not_scale_the_answer_away():
     # the rounding of a zero beside O(0.06) entries leaves its column's factor alone
     _, dcol = equilibrate(np.array([[-4.3e-19, 6.3e-2, -5.2e-2]]))
     assert dcol[0] == 1.0 and np.all(dcol[1:] > 1.0)
+
+
+def test_a_negligible_weight_does_not_pin_the_least_norm_face():
+    """The generated robot whose moment weight is 3e-277 beside force weights of 1, at an optimum
+    of zero (tests/regressions.py): the default chain, Clarabel and ProxQP return the same least-norm
+    forces (the least |f| of the three answers they gave before, 623, 637 and 73 N)."""
+    from .regressions import TINY_WEIGHT, TINY_WEIGHT_SEED
+
+    with tempfile.TemporaryDirectory() as d:
+        robot = TINY_WEIGHT.load(d)
+        q, qd, qdd, _ = state(robot, TINY_WEIGHT_SEED)
+        answers = [InverseDynamics.for_case(robot, 2, solver=s).solve(q, qd, qdd)
+                   for s in ("default", "clarabel", "proxqp")]
+    assert all(a.status == "optimal" for a in answers)
+    ref = answers[0].f
+    for a in answers[1:]:
+        assert np.abs(a.f - ref).max() <= 1e-6 * np.abs(ref).max(), (a.stage, a.f, ref)
+    assert np.linalg.norm(ref) <= 73.0
