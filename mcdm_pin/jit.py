@@ -487,7 +487,7 @@ def compile_now(quiet: bool = False, workers: int | None = None) -> float:
         workers = (workers or compile_workers()) if folder is not None else 1  # workers share the cache
         if not quiet:
             print(f"mcdm-pin: compiling the numba kernels (once per install, in {workers} process"
-                  f"{'es' if workers > 1 else ''}; about 100 s on two quiet cores)...", file=sys.stderr,
+                  f"{'es' if workers > 1 else ''}; about two minutes on two quiet cores)...", file=sys.stderr,
                   flush=True)
         for d in _dispatchers():
             d.recompile()  # flushes the kernel's cache (and recompiles what this process loaded from it)
