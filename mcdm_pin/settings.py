@@ -12,8 +12,10 @@ uses unless told otherwise; :meth:`Settings.replace` makes a changed copy.
 Two kinds of tolerance, kept apart on purpose:
 
 - **Acceptance** (``eom_rel``, ``bound_abs``, ``cone_deg``, ``kkt_*``): what an answer must meet before
-  it is reported ``optimal``. Checked on the *original* (unscaled) problem by
-  :func:`mcdm_pin.solvers.check.kkt_problems` and the runner, whatever back-end produced the answer.
+  it is reported ``optimal``, whatever back-end produced it. The chain's last stage
+  (:func:`mcdm_pin.solvers.check.kkt_problems`: every KKT condition) checks it on the problem the
+  back-ends solve, scaled to magnitudes of order one (:mod:`mcdm_pin.scaling`); the runner checks
+  the equation of motion, the bounds and the cones again on the *original* problem.
 - **Inner** (``ipm_*``, ``proxqp_*``, ``clarabel_*``, ``active_set_*``): where each back-end stops. They
   are tighter than acceptance so that an answer that converged passes the check.
 

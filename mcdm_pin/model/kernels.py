@@ -179,7 +179,8 @@ def noise_floor(A):
     a zero (a cable's moment arm about an axis its line meets, -4e-19 beside arms of 0.06 m), and the
     scaling treats it as zero. Equilibrated as a column of its own, that entry made the column's
     factor 2e18 and the variable's curvature 1e30 in the scaled problem, whose interior-point answer
-    was 18 % above the optimum (tests/test_scaling.py)."""
+    was 18 % above the optimum
+    (tests/test_properties.py::test_a_rounding_zero_in_the_equations_does_not_scale_the_answer_away)."""
     amax = 0.0
     for i in range(A.shape[0]):
         for j in range(A.shape[1]):

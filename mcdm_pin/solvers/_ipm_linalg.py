@@ -2,6 +2,10 @@ r"""Small dense kernels of the compiled interior-point method (:mod:`._ipm`, :mo
 :mod:`._ipm_newton`), also used by the active-set kernels: vectorised dot products and updates, the
 Cholesky factor that drops dependent equations' pivots (:func:`chol_inplace`) and its solves, the
 products with a block of rows, and 3 x 3 inverses.
+
+Kernels call them with typed integers (``np.int64(0)``) and contiguous arrays, not literals or
+slices: numba compiles a kernel once per argument type, and a literal ``0`` or an ``A``-ordered
+slice is a type of its own (docs/speed.md, "Third pass").
 """
 from __future__ import annotations
 

@@ -13,9 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 from .. import jit
-from ..jit import njit
 from ..qp import ConeData, QPData, perpendicular_basis
-from . import _fast, _ipm, _kkt
+from . import _fast, _ipm
 from ..settings import DEFAULT, Settings
 from .active_set import as_tols, compiled_answer, unique_args
 from .base import INACCURATE, INFEASIBLE, OPTIMAL, Solution, Stage, failure
