@@ -83,18 +83,19 @@ def main(argv=None) -> int:
             ipm_mod.ipm_arguments = original
         its, whole, loop = [], [], []
         for args in captured:
-            it = int(_fast.ipm_answer(*args)[6])
+            it = int(_fast.ipm_answer(*args).iterations)
             its.append(it)
             whole.append(_per_call(_fast.ipm_answer, args, a.calls))
-            only = list(args)
-            only[16], only[18] = it, 0.0  # max_iter, crossover_gap: the iterations alone
-            loop.append(_per_call(_fast.ipm_answer, tuple(only), a.calls))
+            kqp, cones, limits = args  # the iterations alone: no crossover, as many iterations
+            only = (kqp, cones, limits._replace(max_iter=it, crossover_gap=0.0))
+            loop.append(_per_call(_fast.ipm_answer, only, a.calls))
         its, whole, loop = np.array(its), np.array(whole), np.array(loop)
         print(f"| {case} | {np.median(its):.0f} | {np.median(whole):.1f} | {np.median(loop / its):.1f} | "
               f"{np.median(whole - loop):.1f} |")
         for g in a.objective_scale:  # P (and its diagonal and factor), c and r times g
-            mean = np.mean([_fast.ipm_answer(args[0] * g, args[1] * g, args[2] * np.sqrt(g), args[3] * g,
-                                             args[4] * g, *args[5:])[6] for args in captured])
+            mean = np.mean([_fast.ipm_answer(kqp._replace(H=kqp.H * g, d0=kqp.d0 * g, F=kqp.F * np.sqrt(g),
+                                                          c=kqp.c * g, r=kqp.r * g), cones, limits).iterations
+                            for kqp, cones, limits in captured])
             print(f"|   objective x{g:g} | {mean:.2f} (mean) | | | |")
     rng = np.random.default_rng(0)
     for n in (49, 76):

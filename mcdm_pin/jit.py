@@ -159,14 +159,16 @@ def kernels(module: str):
 @functools.lru_cache(maxsize=None)
 def kernel_sources() -> tuple[Path, ...]:
     """The package's source files that define numba kernels (those that import numba's ``njit``, or
-    ``extending`` for functions compiled inline into kernels). No kernel reads a module constant of
+    ``extending`` for functions compiled inline into kernels) or the structures they take and return
+    (a module with ``KERNEL_STRUCTURES``). No kernel reads a module constant of
     another file when compiled: the settings (:class:`~mcdm_pin.settings.Settings`) reach them as
     arguments, so a changed setting needs no recompile."""
     root = Path(__file__).resolve().parent
     # njit kernels, and register_jitable functions compiled inline into them (numba.extending)
-    # (or that decorate with them, imported from another kernel module: wrapping_osim_ellipsoid.py)
+    # (or that decorate with them, imported from another kernel module: wrapping_osim_ellipsoid.py),
+    # and the named structures the kernels take and return (KERNEL_STRUCTURES: solvers/_structs.py)
     pattern = re.compile(r"^(from (numba(\.\w+)?|\.+jit) import .*\b(njit|extending|register_jitable)\b"
-                         r"|@(njit|register_jitable|extending\.register_jitable)\b)", re.M)
+                         r"|@(njit|register_jitable|extending\.register_jitable)\b|KERNEL_STRUCTURES = )", re.M)
     found = {p for p in root.rglob("*.py") if pattern.search(p.read_text(encoding="utf-8"))}
     return tuple(sorted(found))
 

@@ -86,6 +86,19 @@ class Settings:
     curvature (its diagonal entry of the Hessian; :func:`mcdm_pin.solvers._kkt.tikhonov`)."""
     active_set_step: float = 1e-10
     """Newton steps on the cone surfaces: stop when the step is below this, relative."""
+    active_set_stationary: float = 1e-8
+    """Active-set verification: a free variable's entry of the Lagrangian's gradient (its stationarity
+    residual) within this of the gradient's scale (``max(|H f|_inf, |c|_inf, |A^T y|_inf)``)."""
+    active_set_surface: float = 1e-10
+    """Active-set verification: a held cone's force on its surface,
+    ``| |F_perp| - tan(rho) a.F | <= tol |F|``; off it, the Newton steps on the surfaces have not settled and
+    the point is not accepted."""
+    active_set_cone: float = 1e-12
+    """Active-set verification: a cone not held is broken (it joins the active set) when
+    ``|F_perp| > tan(rho) a.F (1 + tol)``."""
+    active_set_keep: float = 1e-12
+    """The next instant's guess of the bounds from an answer: a variable whose bound's multiplier is
+    below this of the largest multiplier is guessed free."""
     active_set_from_solution: float = 1e-8
     """A variable within this (relative) of a bound counts as at the bound when an active set is read
     off another back-end's answer."""
@@ -120,6 +133,23 @@ class Settings:
     ipm_start_box_weight: float = 0.2
     """Interior-point method: the weight of the bounds in the start's least-squares problem when there
     is no cone (CVXOPT's start weighs them 1; :mod:`mcdm_pin.solvers._ipm`, "The start")."""
+    ipm_crossover_attempts: int = 8
+    """Interior-point method: at most this many crossover attempts before the iteration limit (each
+    costs up to ``ipm_crossover_pivots`` pivots)."""
+    ipm_pivot_drop: float = 1e-14
+    """Interior-point method: a pivot of the Newton system's Cholesky factor below this, relative to its
+    diagonal entry's scale, drops that equation as dependent (:mod:`mcdm_pin.solvers._ipm_newton`)."""
+    ipm_refine_gap: float = 1e-5
+    """Interior-point method: from this relative duality gap on (and after a dropped equation) each
+    Newton solve gets a step of iterative refinement."""
+    ipm_step_fraction: float = 0.99
+    """Interior-point method: the fraction of the step to the boundary of the bounds and cones taken."""
+    ipm_min_step: float = 1e-14
+    """Interior-point method: a step length below this ends the method (a numerical breakdown: "the
+    step vanished")."""
+    ipm_certificate: float = 1e-6
+    """Interior-point method: an infeasibility certificate ``(y, z)`` counts only when
+    ``-(b^T y + h^T z)`` exceeds this times the multipliers' scaled size (not a rounding of zero)."""
 
     # ---------------------------------------------------------------------------------- ProxQP
     proxqp_eps_abs: float = 1e-11
@@ -175,8 +205,8 @@ class Settings:
 
 def _check(name: str, default, value) -> None:
     """``value`` of the field ``name`` is of its default's kind: a positive int for the limits (zero
-    allowed for ``ipm_correctors``), a positive finite float for the tolerances (``same_cut_cos`` at
-    most 1), a float >= 0 or ``None`` for the budget."""
+    allowed for ``ipm_correctors``), a positive finite float for the tolerances (``same_cut_cos`` and
+    ``ipm_step_fraction`` at most 1), a float >= 0 or ``None`` for the budget."""
     if name == "budget_s" and (value is None or (isinstance(value, (int, float)) and not isinstance(value, bool)
                                                  and value == 0)):
         return  # (a zero budget: no answering stage after the first starts)
@@ -186,12 +216,13 @@ def _check(name: str, default, value) -> None:
             raise SolverError(f"setting {name!r} must be an integer >= {least}, got {value!r}")
         return
     ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0
-    if not ok or (name == "same_cut_cos" and value > 1.0):
-        what = "a float in (0, 1]" if name == "same_cut_cos" else "a positive finite number"
+    if not ok or (name in _AT_MOST_ONE and value > 1.0):
+        what = "a float in (0, 1]" if name in _AT_MOST_ONE else "a positive finite number"
         what = "a number >= 0 or None" if name == "budget_s" else what
         raise SolverError(f"setting {name!r} must be {what}, got {value!r}")
 
 
+_AT_MOST_ONE = ("same_cut_cos", "ipm_step_fraction")  # fractions: in (0, 1]
 DEFAULT = Settings()
 """The library's settings (every field at its default)."""
 

@@ -72,3 +72,42 @@ def test_the_runner_checks_and_budgets_with_its_settings(two_link):
     assert res.status == "inaccurate" and "equation-of-motion residual" in res.message
     stalled = InverseDynamics.for_case(two_link, 1, settings=Settings(budget_s=0.0), diagnose=False)
     assert stalled.solver.inner.budget_s == 0.0 and stalled.solve(*state).status == "budget"
+
+
+def test_the_compiled_solvers_read_their_thresholds_from_the_settings():
+    """Every limit and tolerance of the compiled solvers is a field of Settings (kernel_limits copies
+    each one, so a changed value reaches the kernels without a recompile), and a changed one changes
+    what they do: a shorter step fraction costs the interior-point method iterations for the same
+    answer, a minimum step above any step ends it as a breakdown, and a bound is guessed held for the
+    next instant only when its multiplier is above active_set_keep of the largest."""
+    from mcdm_pin.solvers._structs import Limits
+    from mcdm_pin.solvers.active_set import kernel_limits
+    from mcdm_pin import jit
+    from mcdm_pin.solvers._ipm import NUMERICAL
+    from mcdm_pin.solvers.ipm import ipm_arguments, ipm_solve
+
+    fields = {f.name: f.default for f in dataclasses.fields(Settings)}
+    changed = {name: (value + 1 if isinstance(value, int) else value / 2) for name, value in fields.items()
+               if isinstance(value, (int, float)) and name.startswith(("active_set_", "unique_", "ipm_"))}
+    s = DEFAULT.replace(**changed)
+    got = kernel_limits(s, 7)
+    assert got.max_pivots == 7 and len(got) == len(Limits._fields)
+    values = set(changed.values())
+    assert all(v in values for name, v in got._asdict().items() if name != "max_pivots"), got
+    assert {v for name, v in changed.items() if name not in ("warm_max_pivots", "polish_max_pivots",
+                                                                "ipm_crossover_pivots")} == set(got[1:])
+
+    # minimise 1/2 |x|^2 + c^T x over x1 + x2 + x3 = 1, 0 <= x <= 1: x3 at its lower bound
+    qp = QPData(np.eye(3), np.array([-1.0, -2.0, 3.0]), 0.0, np.ones((1, 3)), np.ones(1), np.zeros(3), np.ones(3),
+                [])
+    base = ipm_solve(qp)
+    slow = ipm_solve(qp, DEFAULT.replace(ipm_step_fraction=0.3, ipm_crossover_gap=1e-12))
+    fast = ipm_solve(qp, DEFAULT.replace(ipm_crossover_gap=1e-12))
+    assert base.status == slow.status == fast.status == "optimal"
+    assert slow.iterations > fast.iterations
+    np.testing.assert_allclose(slow.x, base.x, atol=1e-8)
+    # (without the crossover, which would answer from where the iterations stopped)
+    kqp, cones, limits = ipm_arguments(qp, DEFAULT.replace(ipm_min_step=0.999, ipm_step_fraction=0.5))
+    assert jit.kernels("solvers._fast").ipm_answer(kqp, cones, limits._replace(crossover_gap=0.0)).code == NUMERICAL
+    assert list(base.active.state) == [0, 0, 1]
+    assert list(ipm_solve(qp, DEFAULT.replace(active_set_keep=1.0)).active.state) == [0, 0, 0]

@@ -208,13 +208,12 @@ def _reference_try(qp, guess, max_pivots):
     cdir = basis0.copy()
     for k in np.flatnonzero(cact):
         cdir[k] = guess.cones[names[k]][0]
-    c_ = np.ascontiguousarray
-    code, x, mus, grad, state, cact, dirs, nxt, y, _, solves = _kkt.active_set_run(
-        c_(qp.P), qp.c, c_(qp.A), qp.b, qp.lb, qp.ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, 10,
-        *AS.as_tols(DEFAULT))
-    if code != _kkt.FOUND:
+    run = _kkt.active_set_run(AS.kernel_qp(qp), AS.kernel_cones(qp), state, cact, cdir,
+                              AS.kernel_limits(DEFAULT, max_pivots))
+    if run.code != _kkt.FOUND:
         return None
-    return AS.active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt, iterations=int(solves))
+    return AS.active_solution(qp, run.f, run.y, run.grad, run.state, run.cact, run.mus, run.dirs, run.next_state,
+                              iterations=int(run.solves))
 
 
 def test_warm_answer_is_the_numpy_ones(instants):
@@ -339,12 +338,10 @@ def test_ipm_answer_is_the_numpy_ones(instants):
     crossed = cones_held = 0
     for qp, _, _, _ in instants:
         got = ipm_solve(qp)
-        args = ipm_arguments(qp)
-        H, d0, F, c, _, A, b, lb, ub, G, gc, ax, tn, basis0 = args[:14]
+        kqp, cones, limits = ipm_arguments(qp)
         T, t = qp.cone_rows()
         c_ = np.ascontiguousarray
-        code, x, y, z, zc, it, state, cact, mus, dirs = _ipm.ipm_solve(
-            H, d0, F, c, A, b, lb, ub, c_(T), c_(t), *args[16:19], G, gc, ax, tn, basis0, *args[19:25])
+        code, x, y, z, zc, it, state, cact, mus, dirs = _ipm.ipm_solve(kqp, c_(T), c_(t), cones, limits)
         assert got.iterations == it
         if code != _ipm.CROSSOVER:
             assert got.active is None
@@ -373,7 +370,7 @@ def test_folded_cones_give_the_expanded_systems_directions(instants):
     force groups (:func:`mcdm_pin.solvers._ipm_newton._fold_factor`: a 48 x 48 system instead of
     72 x 72) equal those of the expanded system, to 1e-9 relative, for scalings from far off the
     cones (W^2 of order one) to a cone held at a gap of 1e-10 (W^2 of order 1e-10 in one direction)."""
-    from mcdm_pin.solvers import _fast, _ipm, _ipm_direction
+    from mcdm_pin.solvers import _fast, _ipm_direction
     from mcdm_pin.solvers import _ipm_newton as la
     from mcdm_pin.solvers._ipm_structure import structure
     from mcdm_pin.solvers.ipm import ipm_arguments
@@ -383,10 +380,10 @@ def test_folded_cones_give_the_expanded_systems_directions(instants):
     for qp, _, _, _ in instants:
         if len(qp.cones) != 8:
             continue
-        args = ipm_arguments(qp)
-        _, d0, F, _, _, A, _, _, _, G, gc, ax, _, _, cosr, basis = args[:16]
-        T, t = _fast.cone_rows(G, gc, ax, cosr, basis)
-        B, rf, M0inv, Ct, cg, fold = structure(F, T, A, args[23])
+        kqp, cones, limits = ipm_arguments(qp)
+        d0, F, A = kqp.d0, kqp.F, kqp.A
+        T, t = _fast.cone_rows(cones.G, cones.gc, cones.ax, cones.cosr, cones.basis)
+        B, rf, M0inv, Ct, cg, fold = structure(F, T, A, limits.rank_tol)
         assert fold[0].shape[0] == 8  # every cone folded into its joint's group
         none = (np.empty((0, 3, 3)), np.empty(0, dtype=np.int64), np.empty((0, 3, 3)), np.empty((0, 3, 3)))
         n, K, neq = len(d0), 8, A.shape[0]

@@ -24,6 +24,7 @@ from ._ipm_linalg import dot
 from ._ipm import CROSSOVER, INFEASIBLE_CERT, ipm_solve
 from ._kkt import FOUND, active_set_run, next_guess
 from ._kkt_eq import cone_force
+from ._structs import QP, Answer, Cones, Limits
 from ._unique import unique_test
 
 
@@ -113,57 +114,58 @@ def instant_outputs(u, RT, R_socket, axes, f):
 
 
 @njit(cache=True, nogil=True)
-def active_set_answer(H, g, r, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, dirs0, cosr, basis,
-                      max_pivots, max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel, strict, near,
-                      unique_rel, penalty):
-    """:func:`._kkt.active_set_run` from the guess ``(state0, cact0, dirs0)`` (``dirs0``: the held
-    cones' surface directions; the others start from ``basis0``), then, at a verified point, what
+def active_set_answer(qp, cones, state0, cact0, dirs0, limits):
+    """:func:`._kkt.active_set_run` on ``qp`` (a :class:`._structs.QP`) with ``cones``
+    (:class:`._structs.Cones`) within ``limits`` (:class:`._structs.Limits`) from the guess
+    ``(state0, cact0, dirs0)`` (``dirs0``: the held cones' surface directions; the others start from
+    ``cones.basis0``), then, at a verified point, what
     :func:`mcdm_pin.solvers.active_set.active_solution` makes of it: the bounds' multipliers ``z``
-    (base convention), the cone duals ``z_cone`` (:func:`mcdm_pin.solvers.active_set.cone_duals`,
-    ``cosr`` the half-angles' cosines, ``basis`` (K, 2, 3) the planes normal to the axes), the
-    objective ``1/2 f^T H f + g^T f + r`` and the cones held with a positive multiplier.
+    (base convention), the cone duals ``z_cone`` (:func:`mcdm_pin.solvers.active_set.cone_duals`), the
+    objective ``1/2 f^T H f + c^T f + r`` and the cones held with a positive multiplier.
 
-    And whether the optimum is provably unique (:func:`answer_unique`: ``strict``, the objective
-    is strictly convex; ``near``, ``unique_rel``, ``penalty``: :func:`unique_test`'s thresholds), so that the
-    least-norm stage need not ask again.
+    And whether the optimum is provably unique (:func:`answer_unique`), so that the least-norm stage
+    need not ask again.
 
-    Returns ``(code, f, y, z, z_cone, objective, held, mus, dirs, next_state, solves, unique)``
-    (``mus``: the cones' multipliers; ``unique`` 1 proven unique, 0 not proven); only ``code`` and
-    ``solves`` mean anything unless ``code`` is :data:`._kkt.FOUND`."""
-    nc = G.shape[0]
-    cdir = basis0.copy()
+    Returns an :class:`._structs.Answer` (``iterations``: the KKT systems solved); only ``code`` and
+    ``iterations`` mean anything unless ``code`` is :data:`._kkt.FOUND`."""
+    nc = cones.G.shape[0]
+    cdir = cones.basis0.copy()
     for k in range(nc):
         if cact0[k]:
             for a in range(3):
                 cdir[k, a] = dirs0[k, a]
-    code, f, mus, grad, state, cact, dirs, nxt, y, _, solves = active_set_run(
-        H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir, max_pivots, max_newton, step_tol,
-        primal_tol, dual_tol, eom_tol, reg_rel)
-    if code != FOUND:
-        n = f.shape[0]
-        return code, f, y, np.zeros(n), np.zeros((nc, 3)), np.nan, np.zeros(nc, dtype=np.bool_), mus, dirs, nxt, \
-            solves, 0
-    z, zc, obj, held = answer_duals(H, g, r, f, grad, state, cact, mus, dirs, cosr, basis)
-    unique = answer_unique(f, z, g, lb, ub, A, H, G, gc, ax, tn, cosr, zc, strict, near, unique_rel, penalty)
-    return code, f, y, z, zc, obj, held, mus, dirs, nxt, solves, unique
+    run = active_set_run(qp, cones, state0, cact0, cdir, limits)
+    if run.code != FOUND:
+        n = run.f.shape[0]
+        return Answer(run.code, run.f, run.y, np.zeros(n), np.zeros((nc, 3)), np.nan, run.solves,
+                      np.zeros(nc, dtype=np.bool_), run.mus, run.dirs, run.next_state, 0)
+    z, zc, obj, held = answer_duals(qp, cones, run.f, run.grad, run.state, run.cact, run.mus, run.dirs)
+    unique = answer_unique(run.f, z, zc, qp, cones, limits)
+    return Answer(run.code, run.f, run.y, z, zc, obj, run.solves, held, run.mus, run.dirs, run.next_state, unique)
 
 
 @njit(cache=True, nogil=True)
-def answer_unique(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, strict, near, unique_rel, penalty):
-    """:func:`mcdm_pin.solvers.least_norm.is_unique` of an answer with its duals: 1 when ``strict``
-    (its first test: a strictly convex objective), else :func:`unique_test`."""
-    if strict:
+def answer_unique(x, z, zc, qp, cones, limits):
+    """:func:`mcdm_pin.solvers.least_norm.is_unique` of an answer ``x`` of ``qp`` with its duals ``z``,
+    ``zc``: 1 when ``qp.strict`` (its first test: a strictly convex objective), else
+    :func:`unique_test` (``limits``: its thresholds ``near``, ``unique_rel``, ``penalty``)."""
+    if qp.strict:
         return 1
-    return unique_test(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel, penalty)
+    return unique_test(x, z, qp.c, qp.lb, qp.ub, qp.A, qp.H, cones.G, cones.gc, cones.ax, cones.tn, cones.cosr, zc,
+                       limits.near, limits.unique_rel, limits.penalty)
 
 
 @njit(cache=True, nogil=True)
-def answer_duals(H, g, r, f, grad, state, cact, mus, dirs, cosr, basis):
-    """A verified active-set point's duals and objective (what
-    :func:`mcdm_pin.solvers.active_set.active_solution` computes in numpy): the bounds' multipliers
-    ``z`` (base convention), the cone duals ``z_cone`` (:func:`mcdm_pin.solvers.active_set.cone_duals`,
-    ``cosr`` the half-angles' cosines, ``basis`` (K, 2, 3) the planes normal to the axes), the
-    objective ``1/2 f^T H f + g^T f + r`` and the cones held with a positive multiplier."""
+def answer_duals(qp, cones, f, grad, state, cact, mus, dirs):
+    """A verified active-set point's (``f`` on ``qp`` and ``cones``, at the active set ``state``,
+    ``cact`` with the bounds' multipliers ``grad`` (> 0 at a lower bound), the cones' ``mus`` and
+    surface directions ``dirs``) duals and objective (what :func:`mcdm_pin.solvers.active_set.active_solution`
+    computes in numpy): the bounds' multipliers ``z`` (base convention), the cone duals ``z_cone``
+    (:func:`mcdm_pin.solvers.active_set.cone_duals`, from the half-angles' cosines ``cosr`` and the
+    planes ``basis`` normal to the axes), the objective ``1/2 f^T H f + c^T f + r`` and the cones
+    held with a positive multiplier. Returns ``(z, z_cone, objective, held)``."""
+    H, g, r = qp.H, qp.c, qp.r
+    cosr, basis = cones.cosr, cones.basis
     n = f.shape[0]
     nc = mus.shape[0]
     z = np.zeros(n)
@@ -213,12 +215,12 @@ def cone_rows(G, g, ax, cosr, basis):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, G, g, ax, tn, basis0, cosr, basis, max_iter, eps, crossover_gap,
-               max_pivots, max_newton, as_tols, ncorr, rank_tol, box_weight, strict, near, unique_rel, penalty):
-    """:func:`._ipm.ipm_solve` on a problem's stacked arrays (its cone rows made here:
-    :func:`cone_rows`) and, after a crossover, the answer's duals and objective (:func:`answer_duals`)
-    and the next instant's guess of the bounds (multipliers below 1e-12 of the largest free their
-    variable), in one call.
+def ipm_answer(qp, cones, limits):
+    """:func:`._ipm.ipm_solve` on ``qp`` (a :class:`._structs.QP`) with ``cones``
+    (:class:`._structs.Cones`; the cone rows made here: :func:`cone_rows`) within ``limits``
+    (:class:`._structs.Limits`) and, after a crossover, the answer's duals and objective
+    (:func:`answer_duals`) and the next instant's guess of the bounds (multipliers below
+    ``limits.keep_rel`` of the largest free their variable), in one call.
 
     Variables with ``lb == ub`` (a muscle whose force range has collapsed to its passive force) are
     substituted out first (:func:`without_fixed`): a box without interior leaves an interior-point
@@ -226,32 +228,27 @@ def ipm_answer(H, d0, Fm, c, r, A, b, lb, ub, G, g, ax, tn, basis0, cosr, basis,
     made 54 of 101 cold instants end in a numerical breakdown or at a crossover that failed). The
     reduced problem is solved and its answer extended (:func:`with_fixed`).
 
-    Returns ``(code, x, y, z, z_cone, objective, iterations, held, mus, dirs, next_state, unique)``:
-    after a crossover as :func:`active_set_answer`'s; otherwise ``z, z_cone`` the method's own (or
-    the certificate), the rest empty and ``unique`` 0."""
-    T, t = cone_rows(G, g, ax, cosr, basis)
-    fixed, free = fixed_split(lb, ub)
+    Returns an :class:`._structs.Answer`: after a crossover as :func:`active_set_answer`'s;
+    otherwise ``z, z_cone`` the method's own (or the certificate), the rest empty and ``unique`` 0."""
+    T, t = cone_rows(cones.G, cones.gc, cones.ax, cones.cosr, cones.basis)
+    fixed, free = fixed_split(qp.lb, qp.ub)
     reduce = fixed.shape[0] > 0 and free.shape[0] > 0
     if reduce:
-        Hr, d0r, Fr, cr, rr, Ar, br, Tr, tr, Gr, gr = without_fixed(H, d0, Fm, c, r, A, b, lb, T, t, G, g, fixed,
-                                                                    free)
-        lbr, ubr = lb[free], ub[free]
+        qpr, Tr, tr, cr = without_fixed(qp, T, t, cones, fixed, free)
     else:
-        Hr, d0r, Fr, cr, rr, Ar, br, Tr, tr, Gr, gr, lbr, ubr = H, d0, Fm, c, r, A, b, T, t, G, g, lb, ub
-    code, x, y, z, zc, it, state, cact, mus, dirs = ipm_solve(
-        Hr, d0r, Fr, cr, Ar, br, lbr, ubr, Tr, tr, max_iter, eps, crossover_gap, Gr, gr, ax, tn, basis0, max_pivots,
-        max_newton, as_tols, ncorr, rank_tol, box_weight)
+        qpr, Tr, tr, cr = qp, T, t, cones
+    run = ipm_solve(qpr, Tr, tr, cr, limits)
+    x, z, zc, state = run.x, run.z, run.z_cone, run.state
     obj, held, nxt, unique = np.nan, np.zeros(0, dtype=np.bool_), state, 0
-    if code == CROSSOVER:
+    if run.code == CROSSOVER:
         grad = -z
-        nxt = next_guess(state, grad)
-        z, zc, obj, held = answer_duals(Hr, cr, rr, x, grad, state, cact, mus, dirs, cosr, basis)
-        unique = answer_unique(x, z, cr, lbr, ubr, Ar, Hr, Gr, gr, ax, tn, cosr, zc, strict, near, unique_rel,
-                               penalty)
-    if not reduce:
-        return code, x, y, z, zc, obj, it, held, mus, dirs, nxt, unique
-    xf, zf, objf, nxtf = with_fixed(code, x, y, z, zc, nxt, H, c, r, A, lb, T, fixed, free)
-    return code, xf, y, zf, zc, objf if code == CROSSOVER else obj, it, held, mus, dirs, nxtf, unique
+        nxt = next_guess(state, grad, limits.keep_rel)
+        z, zc, obj, held = answer_duals(qpr, cr, x, grad, state, run.cact, run.mus, run.dirs)
+        unique = answer_unique(x, z, zc, qpr, cr, limits)
+    if reduce:
+        x, z, objf, nxt = with_fixed(run.code, x, run.y, z, zc, nxt, qp, T, fixed, free, limits.keep_rel)
+        obj = objf if run.code == CROSSOVER else obj
+    return Answer(run.code, x, run.y, z, zc, obj, run.iterations, held, run.mus, run.dirs, nxt, unique)
 
 
 @njit(cache=True, nogil=True)
@@ -276,7 +273,7 @@ def fixed_split(lb, ub):
 
 
 @njit(cache=True, nogil=True)
-def without_fixed(H, d0, Fm, c, r, A, b, lb, T, t, G, g, fixed, free):
+def without_fixed(qp, T, t, cones, fixed, free):
     r"""The problem over the ``free`` variables with the ``fixed`` ones at their value ``x_F = lb_F``:
     with ``x = (x_R, x_F)``,
 
@@ -285,7 +282,10 @@ def without_fixed(H, d0, Fm, c, r, A, b, lb, T, t, G, g, fixed, free):
 
     ``A_R x_R = b - A_F x_F``, the cone rows ``T_R x_R + (t + T_F x_F)`` and forces
     ``G_R x_R + (g + G_F x_F)``; ``P = diag(d0) + Fm^T Fm`` keeps its form (``d0_R``, ``Fm_R``).
-    Returns ``(H_RR, d0_R, Fm_R, c', r', A_R, b', T_R, t', G_R, g')``."""
+    Returns ``(qp', T_R, t', cones')``: ``qp'`` the reduced :class:`._structs.QP` (``H_RR, d0_R,
+    Fm_R, c', r', A_R, b'`` and the free variables' bounds), ``cones'`` the cones with ``G_R, g'``."""
+    H, d0, Fm, c, r, A, b, lb = qp.H, qp.d0, qp.F, qp.c, qp.r, qp.A, qp.b, qp.lb
+    G, g = cones.G, cones.gc
     nr, nf = free.shape[0], fixed.shape[0]
     xF = np.empty(nf)
     for a in range(nf):
@@ -332,19 +332,21 @@ def without_fixed(H, d0, Fm, c, r, A, b, lb, T, t, G, g, fixed, free):
             for q in range(nf):
                 tr[k, e] += T[k, e, fixed[q]] * xF[q]
                 gr[k, e] += G[k, e, fixed[q]] * xF[q]
-    return Hr, d0r, Fr, cr, rr, Ar, br, Tr, tr, Gr, gr
+    qpr = QP(Hr, d0r, Fr, cr, rr, Ar, br, lb[free], qp.ub[free], qp.strict)
+    return qpr, Tr, tr, Cones(Gr, gr, cones.ax, cones.tn, cones.basis0, cones.cosr, cones.basis)
 
 
 @njit(cache=True, nogil=True)
-def with_fixed(code, x, y, z, zc, nxt, H, c, r, A, lb, T, fixed, free):
+def with_fixed(code, x, y, z, zc, nxt, qp, T, fixed, free, keep_rel):
     """The reduced problem's answer (:func:`without_fixed`; ``code`` its :func:`._ipm.ipm_solve` code)
     on every variable: ``x_F = lb_F``; the fixed variables' bound multipliers from stationarity
     (:mod:`.base`'s convention, ``z_F = -(H x + c + A^T y - sum_k T_k^T z^cone_k)_F``, without
     ``H x + c`` for an infeasibility certificate: a fixed variable is at both bounds, so its
     multiplier may have either sign); after a crossover the objective on the whole
     problem and the next guess, a fixed variable held at the bound its multiplier points to
-    (unless that multiplier is below 1e-12 of the largest, :func:`._kkt.next_guess`'s rule).
+    (unless that multiplier is below ``keep_rel`` of the largest, :func:`._kkt.next_guess`'s rule).
     Returns ``(x, z, objective, next_state)``."""
+    H, c, r, A, lb = qp.H, qp.c, qp.r, qp.A, qp.lb
     n = lb.shape[0]
     nr, nf = free.shape[0], fixed.shape[0]
     xf = np.empty(n)
@@ -377,7 +379,7 @@ def with_fixed(code, x, y, z, zc, nxt, H, c, r, A, lb, T, fixed, free):
         nxtf[free[a]] = nxt[a]
     for q in range(nf):
         j = fixed[q]
-        if abs(zf[j]) > 1e-12 * zmax:
+        if abs(zf[j]) > keep_rel * zmax:
             nxtf[j] = 2 if zf[j] > 0.0 else 1
     return xf, zf, obj, nxtf
 
@@ -405,12 +407,12 @@ def warm_calls():
     :mod:`mcdm_pin.jit` by :mod:`.active_set`)."""
     z = np.zeros
     n = 2
-    tols = (1e-12, 1e-9, 1e-9, 1e-9, 1e-12)
-    calls = [(active_set_answer, (z((n, n)), z(n), 0.0, z((1, n)), z(1), z(n), z(n), z(n, dtype=np.int8),
-                                  z((1, 3, n)), z((1, 3)), z((1, 3)), z(1), z((1, 3)), z(1, dtype=np.bool_),
-                                  z((1, 3)), z(1), z((1, 2, 3)), 2, 2, *tols, False, 1e-8, 1e-9, 1e3))]
-    return calls + [(answer_unique, (z(n), z(n), z(n), z(n), z(n), z((1, n)), z((n, n)), z((1, 3, n)), z((1, 3)),
-                             z((1, 3)), z(1), z(1), z((1, 3)), False, 1e-8, 1e-9, 1e3)),
+    qp = QP(z((n, n)), z(0), z((0, n)), z(n), 0.0, z((1, n)), z(1), z(n), z(n), False)
+    cones = Cones(z((1, 3, n)), z((1, 3)), z((1, 3)), z(1), z((1, 3)), z(1), z((1, 2, 3)))
+    limits = Limits(2, 2, 1e-10, 1e-12, 1e-9, 1e-11, 1e-12, 1e-8, 1e-10, 1e-12, 1e-12, 1e-8, 1e-9, 1e3, 60, 1e-10,
+                    1e-3, 1, 1e-9, 0.2, 8, 1e-14, 1e-5, 0.99, 1e-14, 1e-6)
+    calls = [(active_set_answer, (qp, cones, z(n, dtype=np.int8), z(1, dtype=np.bool_), z((1, 3)), limits))]
+    return calls + [(answer_unique, (z(n), z(n), z((1, 3)), qp, cones, limits)),
             (answer_check, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1))),
             (answer_check_outputs, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1),
                                     z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)))),

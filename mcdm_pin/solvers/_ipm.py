@@ -62,6 +62,7 @@ from . import _ipm_newton as newton
 from ._ipm_direction import barrier, cone_scalings, direction, newton_step
 from ._ipm_structure import structure
 from . import _kkt
+from ._structs import ActiveSetRun, IPMRun
 
 # return codes
 SOLVED, CROSSOVER, INFEASIBLE_CERT, MAX_ITER, NUMERICAL = 0, 1, 2, 3, 4
@@ -134,14 +135,15 @@ def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T,
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor, fw, ws, box_weight):
+def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor, fw, ws, box_weight, drop_rel):
     """CVXOPT's initial point: ``x, y`` of the Newton system with the identity scaling (the least
     squares point of the slacks on the equations, with the objective; without cones the bounds
     weigh ``box_weight``, module docstring), ``s = h - G x``, ``z = -s`` (``-w s``),
     each shifted into its cone's interior when it is not (:func:`_shift_into_cones`). Starting from
     the middle of the box costs nothing in iterations: every step is long (on the neck 11-13
     iterations to the crossover, where a start at the least-squares forces took 25-45 short ones).
-    ``fw``, ``ws``: the factor's and the solves' work arrays (:func:`ipm_solve`)."""
+    ``fw``, ``ws``: the factor's and the solves' work arrays (:func:`ipm_solve`); ``drop_rel``: the
+    factor's pivot drop (``ipm_pivot_drop``)."""
     n, nu, nl, K = c.shape[0], iu.shape[0], il.shape[0], T.shape[0]
     wb = box_weight if K == 0 else 1.0  # the bounds' weight (module docstring)
     one_u, one_l = np.ones(nu), np.ones(nl)
@@ -153,7 +155,7 @@ def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, fl
     ru, rl = np.empty(nu), np.empty(nl)
     barrier(d0, iu, il, one_u, wb * one_u, one_l, wb * one_l, floor, dbar, dinv, ru, rl)
     Kb, Km, KFF, G1, gw = fw
-    dropped = newton.factor(B, rf, M0inv, Ct, cg, fold, Vc, dinv, 1e-14, gw, Kb, Km, KFF, G1)
+    dropped = newton.factor(B, rf, M0inv, Ct, cg, fold, Vc, dinv, drop_rel, gw, Kb, Km, KFF, G1)
     # refined only when the factor is not that of the exact system: a dropped equation, or a variable
     # whose D fell below the floor (without bounds or weight)
     refine = 1 if dropped else 0
@@ -184,8 +186,9 @@ def _gap(su, zu, sl, zl, sc, zc):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _certificate(x, y, zu, zl, zc, A, b, lb, ub, T, t, iu, il, eps, bscale, hscale):
-    """Whether ``(y, z)`` certifies primal infeasibility: ``A^T y + G^T z = 0``, ``b^T y + h^T z < 0``."""
+def _certificate(x, y, zu, zl, zc, A, b, lb, ub, T, t, iu, il, eps, bscale, hscale, certificate_rel):
+    """Whether ``(y, z)`` certifies primal infeasibility: ``A^T y + G^T z = 0`` (to ``eps``),
+    ``b^T y + h^T z < 0`` by more than ``certificate_rel`` of the multipliers' scaled size."""
     hz = _dot(b, y)
     for q in range(iu.shape[0]):
         hz += ub[iu[q]] * zu[q]
@@ -208,7 +211,7 @@ def _certificate(x, y, zu, zl, zc, A, b, lb, ub, T, t, iu, il, eps, bscale, hsca
         ysz = max(ysz, abs(zu[q]) * hscale)
     for q in range(il.shape[0]):
         ysz = max(ysz, abs(zl[q]) * hscale)
-    return _inf_norm(g) * hscale <= eps * -hz and -hz > 1e-6 * ysz
+    return _inf_norm(g) * hscale <= eps * -hz and -hz > certificate_rel * ysz
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -260,56 +263,59 @@ def _primal_res(ry, rzu, rzl, rzc, bscale, hscale):
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _crossover(x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots, max_newton,
-               as_tols, last_state, last_cact):
+def _crossover(x, su, zu, sl, zl, sc, zc, iu, il, qp, cones, limits, last_state, last_cact):
     """The active set the iterate points at, verified by the compiled active-set solver when it
-    differs from the last one tried: ``(tried, code, x, mus, grad, state, cact, dirs, y)``."""
-    state, cact, cdir = _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, G, gc, ax, basis0)
+    differs from the last one tried: ``(tried, run)``, ``run`` the solver's
+    :class:`._structs.ActiveSetRun` (code -1 when not tried)."""
+    state, cact, cdir = _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, cones.G, cones.gc, cones.ax,
+                                         cones.basis0)
     if not _new_guess(state, cact, last_state, last_cact):
-        return (0, -1, x, np.zeros(0), np.zeros(0), state, cact, np.zeros((0, 3)), np.zeros(0))
-    code, f, mus, grad, st, ca, dirs, _, yy, _, _ = _kkt.active_set_run(
-        H, c, A, b, lb, ub, state, G, gc, ax, tn, basis0, cact, cdir, max_pivots, max_newton,
-        as_tols[0], as_tols[1], as_tols[2], as_tols[3], as_tols[4])
-    return (1, code, f, mus, grad, st, ca, dirs, yy)
+        return 0, ActiveSetRun(-1, x, np.zeros(0), np.zeros(0), state, cact, np.zeros((0, 3)), state, np.zeros(0),
+                               0, 0)
+    return 1, _kkt.active_set_run(qp, cones, state, cact, cdir, limits)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G, gc, ax, tn, basis0,
-              max_pivots, max_newton, as_tols, ncorr, rank_tol, box_weight):
+def ipm_solve(qp, T, t, cones, limits):
     """The interior-point method with crossover (module docstring).
 
     Args:
-        H (n, n): ``P`` (symmetric positive semidefinite; the crossover's active-set solver uses it);
-            d0 (n,), Fm (r, n): the same ``P = diag(d0) + Fm^T Fm`` (the Newton systems use it).
-        c (n,): linear term. A (k, n), b (k,): equalities. lb, ub (n,): bounds (may be infinite).
+        qp: a :class:`._structs.QP`: ``H`` (n, n) is ``P`` (symmetric positive semidefinite; the
+            crossover's active-set solver uses it), ``d0`` (n,), ``F`` (r, n) the same
+            ``P = diag(d0) + F^T F`` (the Newton systems use it); the linear term ``c``, the
+            equalities ``A x = b``, the bounds ``lb``, ``ub`` (may be infinite).
         T (K, 3, n), t (K, 3): cone rows ``s = T x + t`` in the second-order cone.
-        max_iter, eps: iteration limit; relative residual and gap tolerance.
-        crossover_gap: try the active set once the relative gap is below this (0: never).
-        G, gc, ax, tn, basis0: the cones in the active-set solver's form (``F = gc + G x``, axis,
-            tan, a normal) for the crossover.
-        max_pivots, max_newton, ncorr: pivots, cone Newton steps per crossover; correctors per iteration.
-        as_tols (5,): the active-set solver's step, primal, dual, equation-of-motion and
-            regularisation tolerances.
-        rank_tol: relative residual below which a row of ``[Fm; T]`` counts as dependent.
-        box_weight: the bounds' weight in the start without cones (module docstring, "The start").
+        cones: the same cones in the active-set solver's form (:class:`._structs.Cones`) for the
+            crossover.
+        limits: a :class:`._structs.Limits`: ``max_iter``, ``eps`` (iteration limit; relative
+            residual and gap tolerance), ``crossover_gap`` (try the active set once the relative gap
+            is below this; 0: never), ``max_pivots``, ``max_newton`` and the active-set tolerances
+            (each crossover's), ``ncorr`` (correctors per iteration), ``rank_tol`` (relative residual
+            below which a row of ``[F; T]`` counts as dependent), ``box_weight`` (the bounds' weight
+            in the start without cones: module docstring, "The start"), and ``crossover_attempts``,
+            ``pivot_drop``, ``refine_gap``, ``step_fraction``, ``min_step``, ``certificate_rel`` (each
+            the :class:`~mcdm_pin.settings.Settings` field ``ipm_*`` of that name says).
 
-    Returns ``(code, x, y, zbox, zc, iterations, state, cact, mus, dirs)``: ``code`` one of SOLVED,
+    Returns an :class:`._structs.IPMRun` ``(code, x, y, z, z_cone, iterations, state, cact, mus, dirs)``:
+    ``code`` one of SOLVED,
     CROSSOVER, INFEASIBLE_CERT (then ``y, zbox, zc`` are the certificate), MAX_ITER, NUMERICAL;
-    ``zbox`` (n,) the bounds' multipliers (> 0 at an upper bound), ``zc`` (K, 3) the cones' duals;
+    ``z`` (n,) the bounds' multipliers (> 0 at an upper bound), ``z_cone`` (K, 3) the cones' duals;
     after a crossover ``state, cact, mus, dirs`` the verified active set (else empty).
     """
+    d0, Fm, c, A, b, lb, ub = qp.d0, qp.F, qp.c, qp.A, qp.b, qp.lb, qp.ub
+    max_iter, eps, crossover_gap = limits.max_iter, limits.eps, limits.crossover_gap
     n, K = c.shape[0], T.shape[0]
     iu, il = _bounded(lb, ub)
     deg = iu.shape[0] + il.shape[0] + K
     bscale, hscale, cscale = _scales(b, lb, ub, t, c, iu, il)
-    floor = _diagonal_floor(H)
-    B, rf, M0inv, Ct, cg, fold = structure(Fm, T, A, rank_tol)
+    floor = _diagonal_floor(qp.H)
+    B, rf, M0inv, Ct, cg, fold = structure(Fm, T, A, limits.rank_tol)
     fw, ws, res, bar, rb, D, Wc = _work_arrays(n, A.shape[0], iu.shape[0], il.shape[0], K, B, rf, Ct, fold, Fm)
     rx, ry, rzu, rzl, rzc = res[1], res[2], res[3], res[4], res[5]
     dbar, dinv, ru, rl = bar
     Wm, Winv, Wc2, lamc = Wc
     x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor,
-                                          fw, ws, box_weight)
+                                          fw, ws, limits.box_weight, limits.pivot_drop)
     attempts, end, it = 0, MAX_ITER, 0
     last_state, last_cact = np.full(n, -1, dtype=np.int8), np.zeros(K, dtype=np.bool_)  # the last guess tried
     for it in range(max_iter):
@@ -317,43 +323,40 @@ def ipm_solve(H, d0, Fm, c, A, b, lb, ub, T, t, max_iter, eps, crossover_gap, G,
                                             deg, bscale, hscale, cscale, eps)
         done = pres <= eps and dres <= eps and gap_rel <= eps
         if done or (crossover_gap > 0.0 and gap_rel <= crossover_gap and pres <= 1e3 * crossover_gap
-                    and attempts < 8):
+                    and attempts < limits.crossover_attempts):
             # the active set the iterate points at, verified by the active-set solver
             if crossover_gap > 0.0:
-                tried, code, f, mus, grad, st, ca, dirs, yy = _crossover(
-                    x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots,
-                    max_newton, as_tols, last_state, last_cact)
+                tried, run = _crossover(x, su, zu, sl, zl, sc, zc, iu, il, qp, cones, limits, last_state, last_cact)
                 attempts += tried
-                if code == _kkt.FOUND:
-                    return (CROSSOVER, f, yy, -grad, zc, it, st, ca, mus, dirs)
+                if run.code == _kkt.FOUND:
+                    return IPMRun(CROSSOVER, run.f, run.y, -run.grad, zc, it, run.state, run.cact, run.mus, run.dirs)
             if done:
-                return (SOLVED, x, y, _zbox(zu, zl, iu, il, n), zc, it, np.zeros(0, dtype=np.int8),
-                        np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
-        if _certificate(x, y, zu, zl, zc, A, b, lb, ub, T, t, iu, il, eps, bscale, hscale):
-            return (INFEASIBLE_CERT, x, y, _zbox(zu, zl, iu, il, n), zc, it, np.zeros(0, dtype=np.int8),
-                    np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
+                return IPMRun(SOLVED, x, y, _zbox(zu, zl, iu, il, n), zc, it, np.zeros(0, dtype=np.int8),
+                              np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
+        if _certificate(x, y, zu, zl, zc, A, b, lb, ub, T, t, iu, il, eps, bscale, hscale, limits.certificate_rel):
+            return IPMRun(INFEASIBLE_CERT, x, y, _zbox(zu, zl, iu, il, n), zc, it, np.zeros(0, dtype=np.int8),
+                          np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
         # ---- scaling and the factor of the Newton system
         cone_scalings(sc, zc, Wm, Winv, Wc2, lamc)
         barrier(d0, iu, il, su, zu, sl, zl, floor, dbar, dinv, ru, rl)
-        dropped = newton.factor(B, rf, M0inv, Ct, cg, fold, Wc2, dinv, 1e-14, fw[4], fw[0], fw[1], fw[2], fw[3])
-        refine = 1 if dropped or gap_rel < 1e-5 else 0
+        dropped = newton.factor(B, rf, M0inv, Ct, cg, fold, Wc2, dinv, limits.pivot_drop, fw[4], fw[0], fw[1], fw[2],
+                                fw[3])
+        refine = 1 if dropped or gap_rel < limits.refine_gap else 0
         j, a = direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, fold, fw[1], dinv, dbar,
-                         Fm, T, A, Wc2, Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D)
-        a = min(1.0, 0.99 * a)
-        if not (a > 1e-14) or not np.isfinite(a):
+                         Fm, T, A, Wc2, Wm, Winv, lamc, iu, il, ru, rl, refine, limits.ncorr, ws, rb, D)
+        a = min(1.0, limits.step_fraction * a)
+        if not (a > limits.min_step) or not np.isfinite(a):
             end = NUMERICAL
             break
         end = MAX_ITER
         _take_step(a, j, D, x, y, su, zu, sl, zl, sc, zc)
     # no convergence: one last crossover from where the iterations stopped
     if crossover_gap > 0.0:
-        tried, code, f, mus, grad, st, ca, dirs, yy = _crossover(
-            x, su, zu, sl, zl, sc, zc, iu, il, H, c, A, b, lb, ub, G, gc, ax, tn, basis0, max_pivots, max_newton,
-            as_tols, last_state, last_cact)
-        if code == _kkt.FOUND:
-            return (CROSSOVER, f, yy, -grad, zc, it + 1, st, ca, mus, dirs)
-    return (end, x, y, _zbox(zu, zl, iu, il, n), zc, it + 1, np.zeros(0, dtype=np.int8),
-            np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
+        tried, run = _crossover(x, su, zu, sl, zl, sc, zc, iu, il, qp, cones, limits, last_state, last_cact)
+        if run.code == _kkt.FOUND:
+            return IPMRun(CROSSOVER, run.f, run.y, -run.grad, zc, it + 1, run.state, run.cact, run.mus, run.dirs)
+    return IPMRun(end, x, y, _zbox(zu, zl, iu, il, n), zc, it + 1, np.zeros(0, dtype=np.int8),
+                  np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

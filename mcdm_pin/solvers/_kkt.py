@@ -18,6 +18,7 @@ from ..jit import njit
 from ._kkt_eq import DROP, NO_CONVERGENCE, OK, SINGULAR, VANISHED, eq_solve
 from ._kkt_linalg import lu_apply_t
 from ._kkt_verify import KKT_EOM, KKT_OPTIMAL, KKT_PIVOT, KKT_STATIONARY, KKT_SURFACE, verify
+from ._structs import ActiveSetRun
 
 # active_set_run codes (besides OPTIMAL = 0 and the eq_solve / verify failures, shifted)
 FOUND, CYCLE, PIVOT_LIMIT = 0, 10, 11
@@ -29,13 +30,13 @@ REASONS = {SINGULAR: "singular KKT system", NO_CONVERGENCE: "Newton steps on the
 
 
 @njit(cache=True, nogil=True)
-def next_guess(state, grad):
+def next_guess(state, grad, keep_rel):
     """The next instant's guess of the bounds from a verified answer's: a variable whose multiplier
-    (``grad``, > 0 at a lower bound) is below 1e-12 of the largest is guessed free."""
+    (``grad``, > 0 at a lower bound) is below ``keep_rel`` of the largest is guessed free."""
     gmx = 0.0
     for i in range(grad.shape[0]):
         gmx = max(gmx, abs(grad[i]))
-    thr = 1e-12 * max(gmx, 1e-300)
+    thr = keep_rel * max(gmx, 1e-300)
     nxt = state.copy()
     for i in range(state.shape[0]):
         if (state[i] == 1 and not grad[i] > thr) or (state[i] == 2 and not grad[i] < -thr):
@@ -75,32 +76,32 @@ def tikhonov(H, g, ub, reg_rel):
 
 
 @njit(cache=True, nogil=True)
-def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdir0, max_pivots,
-                   max_newton, step_tol, primal_tol, dual_tol, eom_tol, reg_rel):
-    """Block principal pivoting from the guess ``(state0, cact0, cdir0)`` until a verified KKT point
-    (see :func:`mcdm_pin.solvers.active_set.try_active_set`).
+def active_set_run(qp, cones, state0, cact0, cdir0, limits):
+    """Block principal pivoting on ``qp`` (a :class:`._structs.QP`; its ``H``, ``c``, equations and
+    bounds) with ``cones`` (:class:`._structs.Cones`) from the guess ``(state0, cact0, cdir0)`` until a
+    verified KKT point (see :func:`mcdm_pin.solvers.active_set.try_active_set`), within ``limits``
+    (:class:`._structs.Limits`: ``max_pivots``, ``max_newton``, the ``*_tol`` and ``reg_rel``, the
+    Tikhonov terms of :func:`._kkt_eq.eq_solve` relative to each variable's curvature: :func:`tikhonov`).
 
     Every violated condition is exchanged at once (a block pivot) while the number of violations
     falls (Judice and Pires allow a few steps without progress; here none: on the neck that wandered
     off and cycled); then, or when a block pivot leaves a singular system (too many cables fixed for
     the equation of motion), only the worst violation changes (Judice and Pires' safeguard).
-    ``reg_rel``: the Tikhonov terms of :func:`._kkt_eq.eq_solve` relative to each variable's
-    curvature (:func:`tikhonov`).
 
-    Returns ``(code, f, mus, grad, state, cact, dirs, next_state, y, sets, solves)``: ``code``
-    :data:`FOUND` or a key of :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers,
+    Returns an :class:`._structs.ActiveSetRun` ``(code, f, mus, grad, state, cact, dirs, next_state, y,
+    sets, solves)``: ``code`` :data:`FOUND` or a key of :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers,
     ``grad`` the bounds' multipliers (> 0 at a lower bound), ``y`` the equations' multipliers,
     ``(state, cact, dirs)`` the optimum's active set and ``next_state`` the guess for the next
-    instant (the bounds whose multiplier is not negligible, 1e-12 of the largest); ``sets`` the active
+    instant (the bounds whose multiplier is not negligible: ``limits.keep_rel``); ``sets`` the active
     sets tried (pivots + 1), ``solves`` the linear KKT systems solved for them (one per active set
     without cones, one per Newton step with them).
     """
-    n = H.shape[0]
-    reg = tikhonov(H, g, ub, reg_rel)
-    neq, nc = A.shape[0], G.shape[0]
+    H, g, A, b, lb, ub = qp.H, qp.c, qp.A, qp.b, qp.lb, qp.ub
+    G, gc, ax, tn, basis0 = cones.G, cones.gc, cones.ax, cones.tn, cones.basis0
+    n, neq, nc, max_pivots = H.shape[0], A.shape[0], G.shape[0], limits.max_pivots
+    reg = tikhonov(H, g, ub, limits.reg_rel)
     state = _held_at_finite(state0, lb, ub)
-    cact = cact0.copy()
-    cdir = cdir0.copy()
+    cact, cdir = cact0.copy(), cdir0.copy()
     hist_s, hist_c = np.zeros((max_pivots, n), dtype=np.int8), np.zeros((max_pivots, nc), dtype=np.bool_)
     f, y, mus, grad = np.zeros(n), np.zeros(neq), np.zeros(nc), np.zeros(n)
     # the last verified-but-not-optimal point, to step back to when a block pivot fails
@@ -113,11 +114,12 @@ def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdi
     solves = 0
     for it in range(max_pivots):
         if _seen(hist_s, hist_c, it, state, cact):
-            return CYCLE, f, mus, grad, state, cact, cdir, state, y, it, solves
+            return ActiveSetRun(CYCLE, f, mus, grad, state, cact, cdir, state, y, it, solves)
         hist_s[it] = state
         hist_c[it] = cact
         code, f, y, mus, dirs, ns, LU, perm, lu_ok = eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn,
-                                                              cact, cdir, max_newton, step_tol, reg)
+                                                              cact, cdir, limits.max_newton, limits.step_tol,
+                                                              reg)
         solves += ns
         if code == DROP:  # a cone pulls the force inwards: it is not active
             _drop_pulling(cact, mus)
@@ -131,16 +133,17 @@ def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdi
             blocks_ok = False  # from now on one change at a time (finite for strictly convex QPs)
             continue
         if code != OK and code != NO_CONVERGENCE:
-            return code, f, mus, grad, state, cact, cdir, state, y, it + 1, solves
+            return ActiveSetRun(code, f, mus, grad, state, cact, cdir, state, y, it + 1, solves)
         # Newton steps that did not settle still say which cables and cones to exchange; the point
         # itself is accepted only if it passes the full KKT check like any other
         (vcode, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind,
          worst_idx) = verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus,
-                             primal_tol, dual_tol, eom_tol)
+                             limits)
         if vcode == KKT_OPTIMAL:
-            return FOUND, f, mus, grad, state, cact, dirs, next_guess(state, grad), y, it + 1, solves
+            return ActiveSetRun(FOUND, f, mus, grad, state, cact, dirs, next_guess(state, grad, limits.keep_rel), y,
+                                it + 1, solves)
         if vcode != KKT_PIVOT:
-            return 20 + vcode, f, mus, grad, state, cact, cdir, state, y, it + 1, solves
+            return ActiveSetRun(20 + vcode, f, mus, grad, state, cact, cdir, state, y, it + 1, solves)
         have_prev = True
         _remember(prev_state, prev_cact, prev_grad, prev_dirs, prev_cone_dir, prev_in, prev_out, state, cact, grad,
                   dirs, cone_dir, cone_in, cone_out)
@@ -152,7 +155,7 @@ def active_set_run(H, g, A, b, lb, ub, state0, G, gc, ax, tn, basis0, cact0, cdi
         state, cact, last_was_block = _pivot(block, A, G, gc, ax, tn, state, cact, dirs, grad, release, to_lower,
                                              to_upper, cone_in, cone_out, worst_kind, worst_idx, LU, perm, lu_ok)
         cdir = _next_dirs(cone_in, cone_dir, dirs, nc)
-    return PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state, y, max_pivots, solves
+    return ActiveSetRun(PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state, y, max_pivots, solves)
 
 
 @njit(cache=True, nogil=True)

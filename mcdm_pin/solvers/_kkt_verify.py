@@ -15,10 +15,10 @@ KKT_OPTIMAL, KKT_PIVOT, KKT_EOM, KKT_STATIONARY, KKT_SURFACE = 0, 1, -1, -3, -4
 
 
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
-def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, primal_tol, dual_tol,
-           eom_tol):
+def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, limits):
     """KKT conditions of the full problem at ``f`` (multipliers ``y`` of ``A f = b``, ``mus`` of the
-    active cones).
+    active cones), to the tolerances of ``limits`` (a :class:`._structs.Limits`: ``primal_tol``,
+    ``dual_tol``, ``eom_tol``, ``stationary_tol``, ``surface_tol``, ``cone_tol``).
 
     Returns ``(code, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind,
     worst_idx)``; ``code`` is :data:`KKT_OPTIMAL`, :data:`KKT_PIVOT` (the flags say what to change;
@@ -31,16 +31,17 @@ def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, pr
     cone_out = np.zeros(nc, dtype=np.bool_)
     cone_dir = np.zeros((nc, 3))
     grad = np.zeros(n)
-    to_lower, to_upper = _bound_violations(f, lb, ub, state, primal_tol)
-    if not _eom_met(A, b, f, eom_tol):
+    to_lower, to_upper = _bound_violations(f, lb, ub, state, limits.primal_tol)
+    if not _eom_met(A, b, f, limits.eom_tol):
         return KKT_EOM, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, -1, -1
     grad, gscale = _lagrangian_gradient(H, g, A, f, y)
-    off_surface = _cone_conditions(G, gc, ax, tn, basis0, cact, mus, f, grad, cone_in, cone_out, cone_dir)
+    off_surface = _cone_conditions(G, gc, ax, tn, basis0, cact, mus, f, grad, cone_in, cone_out, cone_dir,
+                                   limits.surface_tol, limits.cone_tol)
     stationary = True
     for i in range(n):
-        if state[i] == 0 and abs(grad[i]) > 1e-8 * gscale:
+        if state[i] == 0 and abs(grad[i]) > limits.stationary_tol * gscale:
             stationary = False
-    any_change, worst_kind, worst_idx = _worst_violation(state, f, lb, ub, grad, gscale, dual_tol, to_lower,
+    any_change, worst_kind, worst_idx = _worst_violation(state, f, lb, ub, grad, gscale, limits.dual_tol, to_lower,
                                                          to_upper, release)
     for k in range(nc):
         if cone_in[k] or cone_out[k]:
@@ -120,11 +121,12 @@ def _lagrangian_gradient(H, g, A, f, y):
 
 
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
-def _cone_conditions(G, gc, ax, tn, basis0, cact, mus, f, grad, cone_in, cone_out, cone_dir):
+def _cone_conditions(G, gc, ax, tn, basis0, cact, mus, f, grad, cone_in, cone_out, cone_dir, surface_tol, cone_tol):
     """The cones' KKT conditions at ``f``: a held cone (``cact``) lets go (``cone_out``) on the wrong
     nappe or with a negative multiplier, and adds ``mu d|F_perp|/df - mu tan a.G`` to ``grad``; a
     free cone whose force leaves it comes in (``cone_in``, with its surface direction in
-    ``cone_dir``). Returns whether a held cone's force is off its surface (Newton did not settle)."""
+    ``cone_dir``; broken: ``|F_perp| > tan(rho) a.F (1 + cone_tol)``). Returns whether a held cone's
+    force is off its surface by more than ``surface_tol |F|`` (Newton did not settle)."""
     n = f.shape[0]
     nc = G.shape[0]
     off_surface = False
@@ -135,7 +137,7 @@ def _cone_conditions(G, gc, ax, tn, basis0, cact, mus, f, grad, cone_in, cone_ou
             if al <= 0.0:  # held on the wrong nappe (F pulls the ball out): let the cone go
                 cone_out[k] = True
                 continue
-            if not abs(perp - tn[k] * al) <= 1e-10 * np.sqrt(F0 * F0 + F1 * F1 + F2 * F2):
+            if not abs(perp - tn[k] * al) <= surface_tol * np.sqrt(F0 * F0 + F1 * F1 + F2 * F2):
                 off_surface = True  # Newton did not settle: exchanges still apply, no acceptance
             if mus[k] < 0.0:
                 cone_out[k] = True
@@ -147,7 +149,7 @@ def _cone_conditions(G, gc, ax, tn, basis0, cact, mus, f, grad, cone_in, cone_ou
             mu = mus[k]
             for i in range(n):
                 grad[i] += mu * (w0 * G[k, 0, i] + w1 * G[k, 1, i] + w2 * G[k, 2, i])
-        elif perp > tn[k] * al * (1 + 1e-12) or al < 0.0:
+        elif perp > tn[k] * al * (1 + cone_tol) or al < 0.0:
             cone_in[k] = True
             if perp > 0.0:
                 cone_dir[k, 0], cone_dir[k, 1], cone_dir[k, 2] = p0 / perp, p1 / perp, p2 / perp

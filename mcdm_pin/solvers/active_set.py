@@ -33,14 +33,45 @@ from ..qp import QPData
 from ..settings import DEFAULT, Settings
 from . import _fast
 from . import _kkt as K
+from ._structs import QP, Cones, Limits
 from .base import OPTIMAL, Solution, Stage
 
 
-def as_tols(settings: Settings) -> np.ndarray:
-    """The compiled active-set solver's tolerances, in its order: step, primal, dual, equation of
-    motion, regularisation (:class:`~mcdm_pin.settings.Settings`' ``active_set_*``)."""
+def kernel_qp(qp: QPData, factor: tuple | None = None) -> QP:
+    """``qp`` as the compiled solvers take it (:class:`._structs.QP`: C-ordered float arrays, made
+    once per problem by :meth:`QPData.kernel_arrays`, and Python scalars, so that one compiled
+    specialisation serves every call). ``factor``: ``(d0, F)`` with ``P = diag(d0) + F^T F`` for the
+    interior-point method (:func:`.ipm.p_structure`); empty where only the active-set solver runs.
+    ``strict`` when ``P = diag(d) + F^T F`` with ``d > 0`` (:func:`.least_norm.is_unique`'s first test)."""
+    c_ = np.ascontiguousarray
+    c, A, b, lb, ub = qp.kernel_arrays()[:5]
+    d0, F = (_EMPTY_F, np.zeros((0, qp.n))) if factor is None else (c_(factor[0], dtype=float),
+                                                                       c_(factor[1], dtype=float))
+    strict = qp.P_diag is not None and qp.P_diag.size > 0 and float(qp.P_diag.min()) > 0.0
+    return QP(c_(qp.P, dtype=float), d0, F, c, float(qp.r), A, b, lb, ub, bool(strict))
+
+
+def kernel_cones(qp: QPData) -> Cones:
+    """``qp``'s cones as the compiled solvers take them (:class:`._structs.Cones`, from
+    :meth:`QPData.kernel_arrays` and :meth:`QPData.cone_consts`, both made once per problem)."""
+    G, gc, ax, tn, basis0 = qp.kernel_arrays()[5:]
+    _, _, cosr, basis = qp.cone_consts()
+    return Cones(G, gc, ax, tn, basis0, cosr, basis)
+
+
+def kernel_limits(settings: Settings, max_pivots: int) -> Limits:
+    """The compiled solvers' limits and tolerances (:class:`._structs.Limits`) from ``settings``, with
+    the active-set solver's pivot limit ``max_pivots`` (the warm start's, the polish's or each
+    crossover's)."""
     s = settings
-    return np.array([s.active_set_step, s.active_set_primal, s.active_set_dual, s.active_set_eom, s.active_set_reg])
+    return Limits(int(max_pivots), int(s.active_set_max_newton), float(s.active_set_step), float(s.active_set_primal),
+                  float(s.active_set_dual), float(s.active_set_eom), float(s.active_set_reg),
+                  float(s.active_set_stationary), float(s.active_set_surface), float(s.active_set_cone),
+                  float(s.active_set_keep), float(s.active_set_from_solution), float(s.unique_rel),
+                  float(s.unique_penalty), int(s.ipm_max_iter), float(s.ipm_eps), float(s.ipm_crossover_gap),
+                  int(s.ipm_correctors), float(s.ipm_rank_tol), float(s.ipm_start_box_weight),
+                  int(s.ipm_crossover_attempts), float(s.ipm_pivot_drop), float(s.ipm_refine_gap),
+                  float(s.ipm_step_fraction), float(s.ipm_min_step), float(s.ipm_certificate))
 
 
 @dataclass
@@ -143,45 +174,31 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, stage: st
     ``settings``). One compiled call
     (:func:`._fast.active_set_answer`: the kernel and the answer's duals, what
     :func:`active_solution` computes in numpy)."""
-    c, A, b, lb, ub, G, gc, ax, tn, basis0 = qp.kernel_arrays()
-    _, _, cosr, basis = qp.cone_consts()
     state = guess.cable_state(qp.n)  # (the kernel frees variables guessed at an infinite bound)
     cact, cdir = guess.cone_guess(qp)
-    # C-ordered float arrays and Python scalars: one compiled specialisation serves every call
     c_ = np.ascontiguousarray
-    answer = jit.kernels("solvers._fast").active_set_answer
-    code, x, y, z, zc, objective, held, mus, dirs, nxt_state, solves, unique = answer(
-        c_(qp.P, dtype=float), c, qp.r, A, b, lb, ub, c_(state, dtype=np.int8), G, gc, ax, tn, basis0,
-        c_(cact, dtype=np.bool_), c_(cdir, dtype=float), cosr, basis, int(max_pivots),
-        int(settings.active_set_max_newton), *as_tols(settings), *unique_args(qp, settings))
-    if code != K.FOUND:
-        _miss(K.REASONS[code])
+    out = jit.kernels("solvers._fast").active_set_answer(
+        kernel_qp(qp), kernel_cones(qp), c_(state, dtype=np.int8), c_(cact, dtype=np.bool_), c_(cdir, dtype=float),
+        kernel_limits(settings, max_pivots))
+    if out.code != K.FOUND:
+        _miss(K.REASONS[out.code])
         return None
-    return compiled_answer(qp, x, y, z, zc, objective, held, mus, dirs, nxt_state, unique, iterations=int(solves),
-                           stage=stage)
+    return compiled_answer(qp, out, stage=stage)
 
 
-def compiled_answer(qp: QPData, x, y, z, zc, objective, held, mus, dirs, nxt_state, unique, **fields) -> Solution:
-    """A verified point from a compiled answering call (:func:`._fast.active_set_answer`,
-    :func:`._fast.ipm_answer` after its crossover) as a :class:`~.base.Solution`: the cones held
-    with a positive multiplier and the bounds' guess become the next instant's :class:`ActiveSet`;
-    ``unique`` the compiled uniqueness test's 1/0 (``True`` / not proven: ``None``); ``fields``: more
-    of the solution's fields (``iterations``, ``stage``)."""
+def compiled_answer(qp: QPData, out, **fields) -> Solution:
+    """A verified point from a compiled answering call (``out``, the :class:`._structs.Answer` of
+    :func:`._fast.active_set_answer` or of :func:`._fast.ipm_answer` after its crossover) as a
+    :class:`~.base.Solution`: the cones held with a positive multiplier and the bounds' guess become
+    the next instant's :class:`ActiveSet`; the compiled uniqueness test's 1/0 ``unique=True`` / not
+    proven (``None``); ``iterations`` the answer's; ``fields``: more of the solution's fields
+    (``stage``)."""
     names = qp.cone_consts()[0]
-    nxt_cones = {names[k]: (dirs[k], float(mus[k])) for k in np.flatnonzero(held)} if held.any() else {}
-    return Solution(x, OPTIMAL, float(objective), y=y, z=z, z_cone=zc,
-                    active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt_state, (names, held, dirs)),
-                    verified=True, unique=True if unique else None, **fields)
-
-
-def unique_args(qp: QPData, settings: Settings = DEFAULT) -> tuple:
-    """The compiled answers' arguments of the uniqueness test (:func:`._fast.answer_unique`):
-    ``(strict, near, unique_rel, penalty)`` (the last three from ``settings``), ``strict`` when ``P = diag(d) + F^T F`` with ``d > 0``
-    (:func:`.least_norm.is_unique`'s first test). An answer proven unique carries ``unique=True``
-    and the least-norm stage passes it on; one not proven is asked again there (``None``)."""
-    strict = qp.P_diag is not None and qp.P_diag.size > 0 and float(qp.P_diag.min()) > 0.0
-    return (bool(strict), float(settings.active_set_from_solution), float(settings.unique_rel),
-            float(settings.unique_penalty))
+    held, dirs = out.held, out.dirs
+    nxt_cones = {names[k]: (dirs[k], float(out.mus[k])) for k in np.flatnonzero(held)} if held.any() else {}
+    return Solution(out.x, OPTIMAL, float(out.objective), y=out.y, z=out.z, z_cone=out.z_cone,
+                    active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, out.next_state, (names, held, dirs)),
+                    verified=True, unique=True if out.unique else None, iterations=int(out.iterations), **fields)
 
 
 def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state, **fields) -> Solution:
@@ -197,6 +214,7 @@ def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state, **fields)
 
 
 _EMPTY = np.zeros(0, dtype=int)
+_EMPTY_F = np.zeros(0)
 MISSES: dict[str, int] = {}  # why guesses were rejected (counts, for profiling)
 
 

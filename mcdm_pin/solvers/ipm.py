@@ -16,7 +16,7 @@ from .. import jit
 from ..qp import ConeData, QPData, perpendicular_basis
 from . import _fast, _ipm
 from ..settings import DEFAULT, Settings
-from .active_set import as_tols, compiled_answer, unique_args
+from .active_set import compiled_answer, kernel_cones, kernel_limits, kernel_qp
 from .base import INACCURATE, INFEASIBLE, OPTIMAL, Solution, Stage, failure
 
 REASONS = {_ipm.MAX_ITER: "iteration limit", _ipm.NUMERICAL: "numerical breakdown (the step vanished)"}
@@ -38,18 +38,11 @@ def p_structure(qp) -> tuple[np.ndarray, np.ndarray]:
 
 
 def ipm_arguments(qp, settings: Settings = DEFAULT) -> tuple:
-    """The arguments of :func:`._fast.ipm_answer` for ``qp`` (C-ordered float arrays and Python
-    scalars: one compiled specialisation serves every call), the limits and tolerances ``settings``'
-    (``ipm_*``, ``active_set_*``, ``unique_*``)."""
-    s = settings
-    c_ = np.ascontiguousarray
-    c, A, b, lb, ub, G, gc, ax, tn, basis0 = qp.kernel_arrays()  # made once per problem
-    _, _, cosr, basis = qp.cone_consts()
-    d0, F = p_structure(qp)
-    return (c_(qp.P, dtype=float), c_(d0, dtype=float), c_(F, dtype=float), c, float(qp.r), A, b, lb, ub, G, gc, ax,
-            tn, basis0, cosr, basis, int(s.ipm_max_iter), float(s.ipm_eps), float(s.ipm_crossover_gap),
-            int(s.ipm_crossover_pivots), int(s.active_set_max_newton), as_tols(s), int(s.ipm_correctors),
-            float(s.ipm_rank_tol), float(s.ipm_start_box_weight), *unique_args(qp, s))
+    """The arguments of :func:`._fast.ipm_answer` for ``qp``: its :class:`._structs.QP` with ``P``'s
+    structure (:func:`p_structure`), its :class:`._structs.Cones` and the limits and tolerances of
+    ``settings`` (``ipm_*``, ``active_set_*``, ``unique_*``; each crossover's pivot limit
+    ``ipm_crossover_pivots``)."""
+    return (kernel_qp(qp, p_structure(qp)), kernel_cones(qp), kernel_limits(settings, settings.ipm_crossover_pivots))
 
 
 def ipm_solve(qp, settings: Settings = DEFAULT) -> Solution:
@@ -57,20 +50,18 @@ def ipm_solve(qp, settings: Settings = DEFAULT) -> Solution:
     compiled call (:func:`._fast.ipm_answer`) makes the cone rows, solves, and after a crossover
     computes the answer's duals, the next guess (:func:`.active_set.active_solution` in numpy) and
     whether the optimum is provably unique (:func:`.least_norm.is_unique`)."""
-    code, x, y, z, zc, obj, it, held, mus, dirs, nxt, unique = jit.kernels("solvers._fast").ipm_answer(
-        *ipm_arguments(qp, settings))
-    n = qp.n
-    if code == _ipm.CROSSOVER:
-        return compiled_answer(qp, x, y, z, zc, obj, held, mus, dirs, nxt, unique, iterations=int(it), stage="ipm")
-    if code == _ipm.SOLVED:
-        return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z, z_cone=zc, iterations=int(it), stage="ipm",
-                        verified=False)
-    if code == _ipm.INFEASIBLE_CERT:
+    out = jit.kernels("solvers._fast").ipm_answer(*ipm_arguments(qp, settings))
+    n, it = qp.n, int(out.iterations)
+    if out.code == _ipm.CROSSOVER:
+        return compiled_answer(qp, out, stage="ipm")
+    if out.code == _ipm.SOLVED:
+        return Solution(out.x, OPTIMAL, qp.objective(out.x), y=out.y, z=out.z, z_cone=out.z_cone, iterations=it,
+                        stage="ipm", verified=False)
+    if out.code == _ipm.INFEASIBLE_CERT:
         what = "the bounds and the cones" if qp.cones else "the bounds"
         return failure(n, INFEASIBLE, f"no point meets the equation of motion and {what} (an "
-                                      f"infeasibility certificate of the interior-point method)", int(it),
-                       stage="ipm")
-    return failure(n, INACCURATE, f"interior-point method: {REASONS.get(code, code)}", int(it), stage="ipm")
+                                      f"infeasibility certificate of the interior-point method)", it, stage="ipm")
+    return failure(n, INACCURATE, f"interior-point method: {REASONS.get(out.code, out.code)}", it, stage="ipm")
 
 
 class IPMStage(Stage):

@@ -46,7 +46,7 @@ import numpy as np
 
 from .. import jit
 from ..settings import DEFAULT, Settings
-from .active_set import ActiveSet
+from .active_set import ActiveSet, kernel_cones, kernel_limits, kernel_qp
 from .base import OPTIMAL, Solution, Stage
 from .check import project_to_bounds
 
@@ -147,17 +147,14 @@ def _compiled_unique(qp, sol: Solution, settings: Settings) -> bool | None:
     if not jit.ready():
         return None
     c_ = np.ascontiguousarray
-    c, A, _, lb, ub, G, gc, ax, tn, _ = qp.kernel_arrays()
-    cosr = qp.cone_consts()[2] if qp.cones else _NO_1
     zc = sol.z_cone if qp.cones else _NO_3
+    # (``strict`` False: is_unique's first test has been made)
     return bool(jit.kernels("solvers._fast").answer_unique(
-        c_(sol.x, dtype=float), c_(sol.z, dtype=float), c, lb, ub, A, c_(qp.P, dtype=float), G, gc, ax, tn,
-        c_(cosr, dtype=float), c_(zc, dtype=float).reshape(len(gc), 3), False,
-        float(settings.active_set_from_solution), float(settings.unique_rel), float(settings.unique_penalty)))
+        c_(sol.x, dtype=float), c_(sol.z, dtype=float), c_(zc, dtype=float).reshape(len(qp.cones), 3),
+        kernel_qp(qp)._replace(strict=False), kernel_cones(qp), kernel_limits(settings, settings.polish_max_pivots)))
 
 
 _NO_3 = np.zeros((0, 3))
-_NO_1 = np.zeros(0)
 
 
 def optimal_face_rows(qp, sol: Solution | None = None, settings: Settings = DEFAULT) -> np.ndarray:
