@@ -62,7 +62,7 @@ from . import _ipm_newton as newton
 from ._ipm_direction import barrier, cone_scalings, direction, newton_step
 from ._ipm_structure import structure
 from . import _kkt
-from ._structs import ActiveSetRun, IPMRun
+from ._structs import ActiveSetRun, IPMRun, NewtonSystem, Scaling, Slacks
 
 # return codes
 SOLVED, CROSSOVER, INFEASIBLE_CERT, MAX_ITER, NUMERICAL = 0, 1, 2, 3, 4
@@ -169,8 +169,9 @@ def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, fl
     for q in range(nl):
         hl[q] = -lb[il[q]]
     x, y, zu, zl, zc = np.empty(n), np.empty(A.shape[0]), np.empty(nu), np.empty(nl), np.empty((K, 3))
-    newton_step(-c, b, hu, hl, t.copy(), B, rf, Ct, cg, fold, Km, dinv, dbar, Fm, T, A, Vc, iu, il, ru, rl, refine, ws,
-                x, y, zu, zl, zc)
+    # the identity scaling (``W = W^-1 = W^2 = I``; lambda unused by a Newton step)
+    newton_step((-c, b, hu, hl, t.copy()), NewtonSystem(B, rf, Ct, cg, fold, Km, Fm, T, A),
+                Scaling(dinv, dbar, ru, rl, Vc, Vc, Vc, np.zeros((K, 3))), iu, il, refine, ws, (x, y, zu, zl, zc))
     su, sl, sc = -zu / wb, -zl / wb, -zc
     _shift_into_cones(su, sl, sc)
     _shift_into_cones(zu, zl, zc)
@@ -311,11 +312,11 @@ def ipm_solve(qp, T, t, cones, limits):
     floor = _diagonal_floor(qp.H)
     B, rf, M0inv, Ct, cg, fold = structure(Fm, T, A, limits.rank_tol)
     fw, ws, res, bar, rb, D, Wc = _work_arrays(n, A.shape[0], iu.shape[0], il.shape[0], K, B, rf, Ct, fold, Fm)
-    rx, ry, rzu, rzl, rzc = res[1], res[2], res[3], res[4], res[5]
-    dbar, dinv, ru, rl = bar
-    Wm, Winv, Wc2, lamc = Wc
+    resid = (res[1], res[2], res[3], res[4], res[5])  # (rx, ry, rzu, rzl, rzc)
     x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor,
                                           fw, ws, limits.box_weight, limits.pivot_drop)
+    system, slacks = NewtonSystem(B, rf, Ct, cg, fold, fw[1], Fm, T, A), Slacks(su, zu, sl, zl, sc, zc)
+    scaling = Scaling(bar[1], bar[0], bar[2], bar[3], Wc[2], Wc[0], Wc[1], Wc[3])  # (_work_arrays' order)
     attempts, end, it = 0, MAX_ITER, 0
     last_state, last_cact = np.full(n, -1, dtype=np.int8), np.zeros(K, dtype=np.bool_)  # the last guess tried
     for it in range(max_iter):
@@ -337,13 +338,12 @@ def ipm_solve(qp, T, t, cones, limits):
             return IPMRun(INFEASIBLE_CERT, x, y, _zbox(zu, zl, iu, il, n), zc, it, np.zeros(0, dtype=np.int8),
                           np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
         # ---- scaling and the factor of the Newton system
-        cone_scalings(sc, zc, Wm, Winv, Wc2, lamc)
-        barrier(d0, iu, il, su, zu, sl, zl, floor, dbar, dinv, ru, rl)
-        dropped = newton.factor(B, rf, M0inv, Ct, cg, fold, Wc2, dinv, limits.pivot_drop, fw[4], fw[0], fw[1], fw[2],
-                                fw[3])
+        cone_scalings(sc, zc, scaling.Wm, scaling.Winv, scaling.W2, scaling.lamc)
+        barrier(d0, iu, il, su, zu, sl, zl, floor, scaling.dbar, scaling.dinv, scaling.ru, scaling.rl)
+        dropped = newton.factor(B, rf, M0inv, Ct, cg, fold, scaling.W2, scaling.dinv, limits.pivot_drop, fw[4], fw[0],
+                                fw[1], fw[2], fw[3])
         refine = 1 if dropped or gap_rel < limits.refine_gap else 0
-        j, a = direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, fold, fw[1], dinv, dbar,
-                         Fm, T, A, Wc2, Wm, Winv, lamc, iu, il, ru, rl, refine, limits.ncorr, ws, rb, D)
+        j, a = direction(resid, slacks, mu, system, scaling, iu, il, refine, limits.ncorr, ws, rb, D)
         a = min(1.0, limits.step_fraction * a)
         if not (a > limits.min_step) or not np.isfinite(a):
             end = NUMERICAL

@@ -118,13 +118,17 @@ def barrier(d0, iu, il, su, zu, sl, zl, floor, dbar, dinv, ru, rl):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def newton_step(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws,
-                dx, dy, dzu, dzl, dzc):
-    """The scaled Newton system's ``(dx, dy, dzu, dzl, dzc)`` (in place) for the right-hand sides
-    ``P dx + A^T dy + G^T dz = bx, A dx = by, G dx - W^2 dz = bz``: the bounds' ``dz`` eliminated
-    (``dz = (z/s) (G dx - bz)``, ``ru, rl`` the bounds' ``z/s``), the cones' kept
-    (:func:`._ipm_newton.solve`: no ``W^-2`` is ever formed, whose entries grow like ``1/mu`` on an
-    active cone). ``ws = (r1, u, rhs, wq)``: work arrays."""
+def newton_step(rhs_in, system, scaling, iu, il, refine, ws, out):
+    """The scaled Newton system's ``out = (dx, dy, dzu, dzl, dzc)`` (in place) for the right-hand sides
+    ``rhs_in = (bx, by, bzu, bzl, bzc)`` of ``P dx + A^T dy + G^T dz = bx, A dx = by,
+    G dx - W^2 dz = bz``: the bounds' ``dz`` eliminated (``dz = (z/s) (G dx - bz)``, ``z/s`` from
+    ``scaling``, a :class:`._structs.Scaling`), the cones' kept (:func:`._ipm_newton.solve` on
+    ``system``, a :class:`._structs.NewtonSystem`: no ``W^-2`` is ever formed, whose entries grow like
+    ``1/mu`` on an active cone). ``ws = (r1, u, rhs, wq)``: work arrays."""
+    bx, by, bzu, bzl, bzc = rhs_in
+    dx, dy, dzu, dzl, dzc = out
+    B, rf, Ct, cg, fold, LK, Fm, T, A = system
+    dinv, dbar, ru, rl, W2 = scaling.dinv, scaling.dbar, scaling.ru, scaling.rl, scaling.W2
     r1, u, rhs, wq = ws
     for i in range(bx.shape[0]):
         r1[i] = bx[i]
@@ -195,12 +199,18 @@ def _cone_corrector(lamc, Winv, Wm, dsc, dzc, rzc, smu, bzc):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2,
-              Wm, Winv, lamc, iu, il, ru, rl, refine, ncorr, ws, rb, D):
+def direction(res, slacks, mu, system, scaling, iu, il, refine, ncorr, ws, rb, D):
     """Mehrotra's predictor-corrector direction with Gondzio's centrality correctors on the bounds
-    (at most ``ncorr``, each kept only when it lengthens the step). ``rb = (bx, by, bzu, bzl, rsu,
-    rsl)`` and ``bzc``: right-hand-side work arrays; ``D = (DX, DY, DZU, DZL, DZC, DSU, DSL, DSC)``
-    two slots of directions. Returns the slot of the direction and its largest step."""
+    (at most ``ncorr``, each kept only when it lengthens the step) at the iterate whose residuals are
+    ``res = (rx, ry, rzu, rzl, rzc)`` and slacks ``slacks`` (:class:`._structs.Slacks`), with the
+    Newton ``system`` and ``scaling`` (:class:`._structs.NewtonSystem`, :class:`._structs.Scaling`).
+    ``rb = (bx, by, bzu, bzl, rsu, rsl, bzc)``: right-hand-side work arrays;
+    ``D = (DX, DY, DZU, DZL, DZC, DSU, DSL, DSC)`` two slots of directions. Returns the slot of the
+    direction and its largest step."""
+    rx, ry, rzu, rzl, rzc = res
+    su, zu, sl, zl, sc, zc = slacks
+    T = system.T
+    Wm, Winv, lamc = scaling.Wm, scaling.Winv, scaling.lamc
     K = T.shape[0]
     nu, nl = su.shape[0], sl.shape[0]
     gap = mu * (nu + nl + K)
@@ -219,8 +229,8 @@ def direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, 
         for e in range(3):
             bzc[k, e] = -rzc[k, e] + sc[k, e]
     dx, dy, dzu, dzl, dzc, dsu, dsl, dsc = DX[0], DY[0], DZU[0], DZL[0], DZC[0], DSU[0], DSL[0], DSC[0]
-    newton_step(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine, ws,
-                dx, dy, dzu, dzl, dzc)
+    rhs_in = (bx, by, bzu, bzl, bzc)
+    newton_step(rhs_in, system, scaling, iu, il, refine, ws, (dx, dy, dzu, dzl, dzc))
     _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc)
     a_p = min(1.0, _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc))
     gap_aff = _gap_at(su, dsu, zu, dzu, a_p) + _gap_at(sl, dsl, zl, dzl, a_p)
@@ -247,8 +257,7 @@ def direction(rx, ry, rzu, rzl, rzc, su, zu, sl, zl, sc, zc, mu, B, rf, Ct, cg, 
             bzl[q] = -rzl[q] - rsl[q] / zl[q]
         dx, dy, dzu, dzl, dzc = DX[cur], DY[cur], DZU[cur], DZL[cur], DZC[cur]
         dsu, dsl, dsc = DSU[cur], DSL[cur], DSC[cur]
-        newton_step(bx, by, bzu, bzl, bzc, B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, A, W2, iu, il, ru, rl, refine,
-                    ws, dx, dy, dzu, dzl, dzc)
+        newton_step(rhs_in, system, scaling, iu, il, refine, ws, (dx, dy, dzu, dzl, dzc))
         _slack_step(dx, rzu, rzl, rzc, iu, il, T, dsu, dsl, dsc)
         a = _step(su, dsu, sl, dsl, sc, dsc, zu, dzu, zl, dzl, zc, dzc)
         if not np.isfinite(_dot(dx, dx) + _dot(dy, dy)):

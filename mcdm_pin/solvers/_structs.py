@@ -62,5 +62,21 @@ ActiveSetRun.__doc__ = """What :func:`mcdm_pin.solvers._kkt.active_set_run` retu
 IPMRun = namedtuple("IPMRun", ["code", "x", "y", "z", "z_cone", "iterations", "state", "cact", "mus", "dirs"])
 IPMRun.__doc__ = """What :func:`mcdm_pin.solvers._ipm.ipm_solve` returns (its docstring)."""
 
-KERNEL_STRUCTURES = (QP, Cones, Limits, Answer, ActiveSetRun, IPMRun)
+NewtonSystem = namedtuple("NewtonSystem", ["B", "rf", "Ct", "cg", "fold", "LK", "F", "T", "A"])
+NewtonSystem.__doc__ = """The interior-point method's reduced Newton system (:mod:`._ipm_newton`): its
+structure (:func:`._ipm_structure.structure`: ``B``, ``rf``, ``Ct``, ``cg``, ``fold``), its Cholesky
+factor ``LK`` (made in place each iteration) and the objective's factor ``F``, cone rows ``T`` and
+equations ``A`` that refinement multiplies by."""
+
+Scaling = namedtuple("Scaling", ["dinv", "dbar", "ru", "rl", "W2", "Wm", "Winv", "lamc"])
+Scaling.__doc__ = """The interior-point method's scaling at an iterate (arrays updated in place each
+iteration): the barrier's diagonal ``dbar`` (``D = d0 + z/s`` on the bounds) and its floored
+inverse ``dinv``, the bounds' ``z/s`` (``ru`` upper, ``rl`` lower), and each cone's Nesterov-Todd
+``W^2``, ``W``, ``W^-1`` and ``lambda = W z`` (K, 3, 3) x 3 and (K, 3)."""
+
+Slacks = namedtuple("Slacks", ["su", "zu", "sl", "zl", "sc", "zc"])
+Slacks.__doc__ = """The interior-point method's slacks and their duals (updated in place): the upper
+bounds' ``su, zu``, the lower bounds' ``sl, zl`` and the cones' ``sc, zc`` (K, 3)."""
+
+KERNEL_STRUCTURES = (QP, Cones, Limits, Answer, ActiveSetRun, IPMRun, NewtonSystem, Scaling, Slacks)
 """The structures above (the marker :func:`mcdm_pin.jit.kernel_sources` looks for)."""
