@@ -104,9 +104,14 @@ def _inf_norm(v):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, Px, rx, ry, rzu, rzl, rzc, fx):
-    """The dual residual ``rx = P x + c + A^T y + G^T z``, the equations' ``ry = A x - b``, the slacks'
-    ``rz = G x + s - h`` (in place; ``Px`` (n,), ``fx`` (r,) work); returns the objective."""
+def _residuals(qp, T, t, x, y, slacks, iu, il, res):
+    """At ``(x, y, slacks)`` of ``qp`` (cone rows ``T``, ``t``): the dual residual
+    ``rx = P x + c + A^T y + G^T z``, the equations' ``ry = A x - b``, the slacks' ``rz = G x + s - h``
+    (in place in ``res = (Px, rx, ry, rzu, rzl, rzc, fx)``; ``Px`` (n,), ``fx`` (r,) work); returns
+    the objective."""
+    d0, Fm, c, A, b, lb, ub = qp.d0, qp.F, qp.c, qp.A, qp.b, qp.lb, qp.ub
+    su, zu, sl, zl, sc, zc = slacks
+    Px, rx, ry, rzu, rzl, rzc, fx = res
     K = T.shape[0]
     n = x.shape[0]
     T2 = T.reshape((3 * K, n))
@@ -135,15 +140,18 @@ def _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T,
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor, fw, ws, box_weight, drop_rel):
+def _start(qp, T, t, iu, il, system, M0inv, floor, fw, ws, box_weight, drop_rel):
     """CVXOPT's initial point: ``x, y`` of the Newton system with the identity scaling (the least
     squares point of the slacks on the equations, with the objective; without cones the bounds
     weigh ``box_weight``, module docstring), ``s = h - G x``, ``z = -s`` (``-w s``),
     each shifted into its cone's interior when it is not (:func:`_shift_into_cones`). Starting from
     the middle of the box costs nothing in iterations: every step is long (on the neck 11-13
     iterations to the crossover, where a start at the least-squares forces took 25-45 short ones).
-    ``fw``, ``ws``: the factor's and the solves' work arrays (:func:`ipm_solve`); ``drop_rel``: the
-    factor's pivot drop (``ipm_pivot_drop``)."""
+    ``system``: the Newton system (:class:`._structs.NewtonSystem`, with ``M0inv`` the inverse its
+    factor needs); ``fw``, ``ws``: the factor's and the solves' work arrays (:func:`ipm_solve`);
+    ``drop_rel``: the factor's pivot drop (``ipm_pivot_drop``)."""
+    d0, c, b, lb, ub = qp.d0, qp.c, qp.b, qp.lb, qp.ub
+    B, rf, Ct, cg, fold = system.B, system.rf, system.Ct, system.cg, system.fold
     n, nu, nl, K = c.shape[0], iu.shape[0], il.shape[0], T.shape[0]
     wb = box_weight if K == 0 else 1.0  # the bounds' weight (module docstring)
     one_u, one_l = np.ones(nu), np.ones(nl)
@@ -168,10 +176,10 @@ def _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, fl
     hl = np.empty(nl)
     for q in range(nl):
         hl[q] = -lb[il[q]]
-    x, y, zu, zl, zc = np.empty(n), np.empty(A.shape[0]), np.empty(nu), np.empty(nl), np.empty((K, 3))
+    x, y, zu, zl, zc = np.empty(n), np.empty(b.shape[0]), np.empty(nu), np.empty(nl), np.empty((K, 3))
     # the identity scaling (``W = W^-1 = W^2 = I``; lambda unused by a Newton step)
-    newton_step((-c, b, hu, hl, t.copy()), NewtonSystem(B, rf, Ct, cg, fold, Km, Fm, T, A),
-                Scaling(dinv, dbar, ru, rl, Vc, Vc, Vc, np.zeros((K, 3))), iu, il, refine, ws, (x, y, zu, zl, zc))
+    newton_step((-c, b, hu, hl, t.copy()), system, Scaling(dinv, dbar, ru, rl, Vc, Vc, Vc, np.zeros((K, 3))), iu, il,
+                refine, ws, (x, y, zu, zl, zc))
     su, sl, sc = -zu / wb, -zl / wb, -zc
     _shift_into_cones(su, sl, sc)
     _shift_into_cones(zu, zl, zc)
@@ -187,9 +195,13 @@ def _gap(su, zu, sl, zl, sc, zc):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _certificate(x, y, zu, zl, zc, A, b, lb, ub, T, t, iu, il, eps, bscale, hscale, certificate_rel):
-    """Whether ``(y, z)`` certifies primal infeasibility: ``A^T y + G^T z = 0`` (to ``eps``),
-    ``b^T y + h^T z < 0`` by more than ``certificate_rel`` of the multipliers' scaled size."""
+def _certificate(qp, T, t, y, slacks, iu, il, eps, scales, certificate_rel):
+    """Whether ``(y, z)`` (``z`` of ``slacks``) certifies that ``qp`` with the cone rows ``T``, ``t``
+    is primal infeasible: ``A^T y + G^T z = 0`` (to ``eps``), ``b^T y + h^T z < 0`` by more than
+    ``certificate_rel`` of the multipliers' size (``scales``: :func:`_scales`)."""
+    A, b, lb, ub = qp.A, qp.b, qp.lb, qp.ub
+    zu, zl, zc = slacks.zu, slacks.zl, slacks.zc
+    bscale, hscale = scales[0], scales[1]
     hz = _dot(b, y)
     for q in range(iu.shape[0]):
         hz += ub[iu[q]] * zu[q]
@@ -264,12 +276,11 @@ def _primal_res(ry, rzu, rzl, rzc, bscale, hscale):
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _crossover(x, su, zu, sl, zl, sc, zc, iu, il, qp, cones, limits, last_state, last_cact):
+def _crossover(x, slacks, iu, il, qp, cones, limits, last_state, last_cact):
     """The active set the iterate points at, verified by the compiled active-set solver when it
     differs from the last one tried: ``(tried, run)``, ``run`` the solver's
     :class:`._structs.ActiveSetRun` (code -1 when not tried)."""
-    state, cact, cdir = _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, cones.G, cones.gc, cones.ax,
-                                         cones.basis0)
+    state, cact, cdir = _read_active_set(x, slacks, iu, il, cones)
     if not _new_guess(state, cact, last_state, last_cact):
         return 0, ActiveSetRun(-1, x, np.zeros(0), np.zeros(0), state, cact, np.zeros((0, 3)), state, np.zeros(0),
                                0, 0)
@@ -308,33 +319,33 @@ def ipm_solve(qp, T, t, cones, limits):
     n, K = c.shape[0], T.shape[0]
     iu, il = _bounded(lb, ub)
     deg = iu.shape[0] + il.shape[0] + K
-    bscale, hscale, cscale = _scales(b, lb, ub, t, c, iu, il)
+    scales = _scales(b, lb, ub, t, c, iu, il)
     floor = _diagonal_floor(qp.H)
     B, rf, M0inv, Ct, cg, fold = structure(Fm, T, A, limits.rank_tol)
     fw, ws, res, bar, rb, D, Wc = _work_arrays(n, A.shape[0], iu.shape[0], il.shape[0], K, B, rf, Ct, fold, Fm)
     resid = (res[1], res[2], res[3], res[4], res[5])  # (rx, ry, rzu, rzl, rzc)
-    x, y, su, zu, sl, zl, sc, zc = _start(d0, Fm, c, A, b, lb, ub, T, t, iu, il, B, rf, M0inv, Ct, cg, fold, floor,
-                                          fw, ws, limits.box_weight, limits.pivot_drop)
-    system, slacks = NewtonSystem(B, rf, Ct, cg, fold, fw[1], Fm, T, A), Slacks(su, zu, sl, zl, sc, zc)
+    system = NewtonSystem(B, rf, Ct, cg, fold, fw[1], Fm, T, A)
+    x, y, su, zu, sl, zl, sc, zc = _start(qp, T, t, iu, il, system, M0inv, floor, fw, ws, limits.box_weight,
+                                          limits.pivot_drop)
+    slacks = Slacks(su, zu, sl, zl, sc, zc)
     scaling = Scaling(bar[1], bar[0], bar[2], bar[3], Wc[2], Wc[0], Wc[1], Wc[3])  # (_work_arrays' order)
     attempts, end, it = 0, MAX_ITER, 0
     last_state, last_cact = np.full(n, -1, dtype=np.int8), np.zeros(K, dtype=np.bool_)  # the last guess tried
     for it in range(max_iter):
-        mu, gap_rel, pres, dres = _measures(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, res,
-                                            deg, bscale, hscale, cscale, eps)
+        mu, gap_rel, pres, dres = _measures(qp, T, t, x, y, slacks, iu, il, res, deg, scales, eps)
         done = pres <= eps and dres <= eps and gap_rel <= eps
         if done or (crossover_gap > 0.0 and gap_rel <= crossover_gap and pres <= 1e3 * crossover_gap
                     and attempts < limits.crossover_attempts):
             # the active set the iterate points at, verified by the active-set solver
             if crossover_gap > 0.0:
-                tried, run = _crossover(x, su, zu, sl, zl, sc, zc, iu, il, qp, cones, limits, last_state, last_cact)
+                tried, run = _crossover(x, slacks, iu, il, qp, cones, limits, last_state, last_cact)
                 attempts += tried
                 if run.code == _kkt.FOUND:
                     return IPMRun(CROSSOVER, run.f, run.y, -run.grad, zc, it, run.state, run.cact, run.mus, run.dirs)
             if done:
                 return IPMRun(SOLVED, x, y, _zbox(zu, zl, iu, il, n), zc, it, np.zeros(0, dtype=np.int8),
                               np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
-        if _certificate(x, y, zu, zl, zc, A, b, lb, ub, T, t, iu, il, eps, bscale, hscale, limits.certificate_rel):
+        if _certificate(qp, T, t, y, slacks, iu, il, eps, scales, limits.certificate_rel):
             return IPMRun(INFEASIBLE_CERT, x, y, _zbox(zu, zl, iu, il, n), zc, it, np.zeros(0, dtype=np.int8),
                           np.zeros(0, dtype=np.bool_), np.zeros(0), np.zeros((0, 3)))
         # ---- scaling and the factor of the Newton system
@@ -349,10 +360,10 @@ def ipm_solve(qp, T, t, cones, limits):
             end = NUMERICAL
             break
         end = MAX_ITER
-        _take_step(a, j, D, x, y, su, zu, sl, zl, sc, zc)
+        _take_step(a, j, D, x, y, slacks)
     # no convergence: one last crossover from where the iterations stopped
     if crossover_gap > 0.0:
-        tried, run = _crossover(x, su, zu, sl, zl, sc, zc, iu, il, qp, cones, limits, last_state, last_cact)
+        tried, run = _crossover(x, slacks, iu, il, qp, cones, limits, last_state, last_cact)
         if run.code == _kkt.FOUND:
             return IPMRun(CROSSOVER, run.f, run.y, -run.grad, zc, it + 1, run.state, run.cact, run.mus, run.dirs)
     return IPMRun(end, x, y, _zbox(zu, zl, iu, il, n), zc, it + 1, np.zeros(0, dtype=np.int8),
@@ -393,18 +404,16 @@ def _work_arrays(n, neq, nu, nl, K, B, rf, Ct, fold, Fm):
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _measures(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, res, deg, bscale, hscale, cscale,
-              eps):
+def _measures(qp, T, t, x, y, slacks, iu, il, res, deg, scales, eps):
     """The iterate's residuals (into ``res``, :func:`_work_arrays`) and how far it is from optimal:
     ``(mu, gap_rel, pres, dres)``, the mean complementarity, the relative gap and the primal and
-    dual relative residuals."""
-    Px, rx, ry, rzu, rzl, rzc, fx = res
-    pobj = _residuals(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, t, Px, rx, ry, rzu,
-                      rzl, rzc, fx)
-    gap = _gap(su, zu, sl, zl, sc, zc)
+    dual relative residuals (``scales``: :func:`_scales`)."""
+    _, rx, ry, rzu, rzl, rzc, _ = res
+    pobj = _residuals(qp, T, t, x, y, slacks, iu, il, res)
+    gap = _gap(slacks.su, slacks.zu, slacks.sl, slacks.zl, slacks.sc, slacks.zc)
     mu = gap / max(deg, 1)
-    pres = _primal_res(ry, rzu, rzl, rzc, bscale, hscale)
-    dres = _inf_norm(rx) / cscale
+    pres = _primal_res(ry, rzu, rzl, rzc, scales[0], scales[1])
+    dres = _inf_norm(rx) / scales[2]
     # relative to the objective; an objective below eps counts as zero (then the gap must reach
     # eps^2). (An absolute floor of 1e-3 (1e-13 / eps) stopped a scaled problem whose optimum is
     # 3.5e-11 at a gap of 1e-13, 1e-3 above its optimum, after its crossover attempts had been
@@ -416,9 +425,10 @@ def _measures(x, y, zu, zl, zc, su, sl, sc, d0, Fm, c, A, b, iu, il, lb, ub, T, 
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _take_step(a, j, D, x, y, su, zu, sl, zl, sc, zc):
-    """The iterate moved (in place) by ``a`` times the direction in slot ``j`` of ``D``
-    (:func:`._ipm_direction.direction`)."""
+def _take_step(a, j, D, x, y, slacks):
+    """The iterate ``(x, y, slacks)`` moved (in place) by ``a`` times the direction in slot ``j`` of
+    ``D`` (:func:`._ipm_direction.direction`)."""
+    su, zu, sl, zl, sc, zc = slacks
     DX, DY, DZU, DZL, DZC, DSU, DSL, DSC = D
     dx, dy, dzu, dzl, dzc, dsu, dsl, dsc = DX[j], DY[j], DZU[j], DZL[j], DZC[j], DSU[j], DSL[j], DSC[j]
     for i in range(x.shape[0]):
@@ -438,10 +448,12 @@ def _take_step(a, j, D, x, y, su, zu, sl, zl, sc, zc):
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _read_active_set(x, su, zu, sl, zl, sc, zc, iu, il, G, gc, ax, basis0):
-    """The active set an interior iterate points at (Tapia's indicators): a bound whose slack is
-    below its multiplier, a cone whose slack is nearer the cone's boundary than its multiplier is
-    to zero; a cone's surface direction from its force at ``x``."""
+def _read_active_set(x, slacks, iu, il, cones):
+    """The active set an interior iterate ``(x, slacks)`` points at (Tapia's indicators): a bound
+    whose slack is below its multiplier, a cone whose slack is nearer the cone's boundary than its
+    multiplier is to zero; a cone's surface direction from its force at ``x``."""
+    su, zu, sl, zl, sc, zc = slacks
+    G, gc, ax, basis0 = cones.G, cones.gc, cones.ax, cones.basis0
     n = x.shape[0]
     K = sc.shape[0]
     state = np.zeros(n, dtype=np.int8)
