@@ -373,6 +373,7 @@ def test_folded_cones_give_the_expanded_systems_directions(instants):
     from mcdm_pin.solvers import _fast, _ipm_direction
     from mcdm_pin.solvers import _ipm_newton as la
     from mcdm_pin.solvers._ipm_structure import structure
+    from mcdm_pin.solvers._structs import NewtonSystem
     from mcdm_pin.solvers.ipm import ipm_arguments
 
     rng = np.random.default_rng(7)
@@ -403,8 +404,8 @@ def test_folded_cones_give_the_expanded_systems_directions(instants):
                 la.factor(B, rf, M0inv, Ct, cg, fd, W2, dinv, 1e-14, np.empty((2, B.shape[1])), Kb, Km,
                           np.empty((rf, rf)), np.empty((3 * K, rf)))
                 dx, dy, dzc = np.empty(n), np.empty(neq), np.empty((K, 3))
-                la.solve(B, rf, Ct, cg, fd, Km, dinv, r1, r3, r2, np.empty(n), np.empty(p), np.empty(rf), dx, dy,
-                         dzc)
+                la.solve(NewtonSystem(B, rf, Ct, cg, fd, Km, F, T, A), dinv, r1, r3, r2, np.empty(n), np.empty(p),
+                         np.empty(rf), dx, dy, dzc)
                 out.append((dx, dy, dzc))
             for got, want in zip(out[0], out[1]):
                 np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())

@@ -151,8 +151,7 @@ def answer_unique(x, z, zc, qp, cones, limits):
     :func:`unique_test` (``limits``: its thresholds ``near``, ``unique_rel``, ``penalty``)."""
     if qp.strict:
         return 1
-    return unique_test(x, z, qp.c, qp.lb, qp.ub, qp.A, qp.H, cones.G, cones.gc, cones.ax, cones.tn, cones.cosr, zc,
-                       limits.near, limits.unique_rel, limits.penalty)
+    return unique_test(x, z, zc, qp, cones, limits)
 
 
 @njit(cache=True, nogil=True)

@@ -127,8 +127,7 @@ def newton_step(rhs_in, system, scaling, iu, il, refine, ws, out):
     ``1/mu`` on an active cone). ``ws = (r1, u, rhs, wq)``: work arrays."""
     bx, by, bzu, bzl, bzc = rhs_in
     dx, dy, dzu, dzl, dzc = out
-    B, rf, Ct, cg, fold, LK, Fm, T, A = system
-    dinv, dbar, ru, rl, W2 = scaling.dinv, scaling.dbar, scaling.ru, scaling.rl, scaling.W2
+    ru, rl = scaling.ru, scaling.rl
     r1, u, rhs, wq = ws
     for i in range(bx.shape[0]):
         r1[i] = bx[i]
@@ -136,9 +135,9 @@ def newton_step(rhs_in, system, scaling, iu, il, refine, ws, out):
         r1[iu[q]] += ru[q] * bzu[q]
     for q in range(il.shape[0]):
         r1[il[q]] -= rl[q] * bzl[q]
-    newton.solve(B, rf, Ct, cg, fold, LK, dinv, r1, bzc, by, u, rhs, wq, dx, dy, dzc)
+    newton.solve(system, scaling.dinv, r1, bzc, by, u, rhs, wq, dx, dy, dzc)
     if refine:
-        newton.refine(B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, W2, A, r1, bzc, by, dx, dy, dzc, refine, u, rhs, wq)
+        newton.refine(system, scaling, r1, bzc, by, dx, dy, dzc, refine, u, rhs, wq)
     for q in range(iu.shape[0]):
         dzu[q] = ru[q] * (dx[iu[q]] - bzu[q])
     for q in range(il.shape[0]):

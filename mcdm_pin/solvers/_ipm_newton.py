@@ -370,10 +370,11 @@ def _fold_solve(B, rf, cg, fold, LK, dinv, r1, r3, r2, u, rhs, dx, dy, dzc):
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def solve(B, rf, Ct, cg, fold, LK, dinv, r1, r3, r2, u, rhs, wq, dx, dy, dzc):
+def solve(system, dinv, r1, r3, r2, u, rhs, wq, dx, dy, dzc):
     """``(dx, dy, dzc)`` (written in place) of ``(D + F^T F) dx + A^T dy - T^T dzc = r1``,
-    ``A dx = r2``, ``-T dx - W^2 dzc = r3`` (``r3`` (K, 3)) from :func:`factor`'s factor; ``u`` (n,),
-    ``rhs`` (p,), ``wq`` (rf,): work arrays."""
+    ``A dx = r2``, ``-T dx - W^2 dzc = r3`` (``r3`` (K, 3)) from :func:`factor`'s factor (``system``:
+    a :class:`._structs.NewtonSystem`); ``u`` (n,), ``rhs`` (p,), ``wq`` (rf,): work arrays."""
+    B, rf, Ct, cg, fold, LK = system.B, system.rf, system.Ct, system.cg, system.fold, system.LK
     if fold[0].shape[0]:
         _fold_solve(B, rf, cg, fold, LK, dinv, r1, r3, r2, u, rhs, dx, dy, dzc)
         return
@@ -442,10 +443,13 @@ def apply_P(x, d0, Fm, out, fx):
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def refine(B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, W2, A, r1, r3, r2, dx, dy, dzc, steps, u, rhs, wq):
+def refine(system, scaling, r1, r3, r2, dx, dy, dzc, steps, u, rhs, wq):
     """``steps`` rounds of iterative refinement of ``(dx, dy, dzc)`` against the exact operators of
-    :func:`solve`'s system (``dbar``: ``d0`` plus the barrier diagonal, without the floor; ``u``,
-    ``rhs``, ``wq``: :func:`solve`'s work arrays)."""
+    :func:`solve`'s ``system`` (``scaling``: a :class:`._structs.Scaling`, whose ``dbar`` is ``d0``
+    plus the barrier diagonal, without the floor; ``u``, ``rhs``, ``wq``: :func:`solve`'s work
+    arrays)."""
+    Fm, T, A = system.F, system.T, system.A
+    dinv, dbar, W2 = scaling.dinv, scaling.dbar, scaling.W2
     K = T.shape[0]
     Pdx = np.empty(dx.shape[0])
     fx = np.empty(Fm.shape[0])
@@ -467,7 +471,7 @@ def refine(B, rf, Ct, cg, fold, LK, dinv, dbar, Fm, T, W2, A, r1, r3, r2, dx, dy
         e2 = r2.copy()
         for a in range(A.shape[0]):
             e2[a] -= dot(A[a], dx)
-        solve(B, rf, Ct, cg, fold, LK, dinv, e1, e3, e2, u, rhs, wq, cx, cy, cz)
+        solve(system, dinv, e1, e3, e2, u, rhs, wq, cx, cy, cz)
         axpy(1.0, cx, dx)
         axpy(1.0, cy, dy)
         for k in range(K):

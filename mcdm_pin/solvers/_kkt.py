@@ -96,8 +96,8 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits):
     sets tried (pivots + 1), ``solves`` the linear KKT systems solved for them (one per active set
     without cones, one per Newton step with them).
     """
-    H, g, A, b, lb, ub = qp.H, qp.c, qp.A, qp.b, qp.lb, qp.ub
-    G, gc, ax, tn, basis0 = cones.G, cones.gc, cones.ax, cones.tn, cones.basis0
+    H, g, A, lb, ub = qp.H, qp.c, qp.A, qp.lb, qp.ub
+    G, gc, ax, tn = cones.G, cones.gc, cones.ax, cones.tn
     n, neq, nc, max_pivots = H.shape[0], A.shape[0], G.shape[0], limits.max_pivots
     reg = tikhonov(H, g, ub, limits.reg_rel)
     state = _held_at_finite(state0, lb, ub)
@@ -117,9 +117,7 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits):
             return ActiveSetRun(CYCLE, f, mus, grad, state, cact, cdir, state, y, it, solves)
         hist_s[it] = state
         hist_c[it] = cact
-        code, f, y, mus, dirs, ns, LU, perm, lu_ok = eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn,
-                                                              cact, cdir, limits.max_newton, limits.step_tol,
-                                                              reg)
+        code, f, y, mus, dirs, ns, LU, perm, lu_ok = eq_solve(qp, cones, state, cact, cdir, limits, reg)
         solves += ns
         if code == DROP:  # a cone pulls the force inwards: it is not active
             _drop_pulling(cact, mus)
@@ -137,8 +135,7 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits):
         # Newton steps that did not settle still say which cables and cones to exchange; the point
         # itself is accepted only if it passes the full KKT check like any other
         (vcode, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind,
-         worst_idx) = verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus,
-                             limits)
+         worst_idx) = verify(qp, cones, state, f, y, cact, mus, limits)
         if vcode == KKT_OPTIMAL:
             return ActiveSetRun(FOUND, f, mus, grad, state, cact, dirs, next_guess(state, grad, limits.keep_rel), y,
                                 it + 1, solves)

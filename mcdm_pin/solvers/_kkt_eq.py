@@ -43,10 +43,11 @@ def _on_surfaces(f, G, gc, ax, tn, act, tol):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, step_tol, reg):
-    """Minimise ``1/2 f^T H f + g^T f`` with ``A f = b``, the cables of ``state`` fixed at their
-    bounds and the cones of ``cact`` held on their surface (Newton steps with the cones' curvature
-    weighted by their multipliers).
+def eq_solve(qp, cones, state, cact, cdir, limits, reg):
+    """Minimise ``1/2 f^T H f + c^T f`` (``qp``, a :class:`._structs.QP`) with ``A f = b``, the
+    cables of ``state`` fixed at their bounds and the cones of ``cact`` (of ``cones``, a
+    :class:`._structs.Cones`) held on their surface (at most ``limits.max_newton`` Newton steps down
+    to ``limits.step_tol``, with the cones' curvature weighted by their multipliers).
 
     ``reg`` (n,) > 0 is added to the free cables' diagonal (a Tikhonov term ``1/2 sum reg_i f_i^2``):
     with a positive semidefinite objective whose optimum is a flat ridge (case 2 with ``beta = 0``)
@@ -61,8 +62,10 @@ def eq_solve(H, g, A, b, lb, ub, state, G, gc, ax, tn, cact, cdir, max_newton, s
     ``(LU, perm)`` the factors of the last solve's rows on the free cables (:func:`._kkt_linalg.vertex_solve_lu`;
     ``lu_ok`` false otherwise).
     """
-    neq = A.shape[0]
-    nc = G.shape[0]
+    H, g, A, b, lb, ub = qp.H, qp.c, qp.A, qp.b, qp.lb, qp.ub
+    G, gc, ax, tn = cones.G, cones.gc, cones.ax, cones.tn
+    max_newton, step_tol = limits.max_newton, limits.step_tol
+    neq, nc = A.shape[0], G.shape[0]
     f, free = _fixed_point(state, lb, ub)
     act = _held(cact)
     nf, na = free.shape[0], act.shape[0]

@@ -15,15 +15,18 @@ KKT_OPTIMAL, KKT_PIVOT, KKT_EOM, KKT_STATIONARY, KKT_SURFACE = 0, 1, -1, -3, -4
 
 
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
-def verify(H, g, A, b, lb, ub, state, f, y, G, gc, ax, tn, basis0, cact, mus, limits):
-    """KKT conditions of the full problem at ``f`` (multipliers ``y`` of ``A f = b``, ``mus`` of the
-    active cones), to the tolerances of ``limits`` (a :class:`._structs.Limits`: ``primal_tol``,
+def verify(qp, cones, state, f, y, cact, mus, limits):
+    """KKT conditions of the full problem (``qp`` and ``cones``: :class:`._structs.QP`,
+    :class:`._structs.Cones`) at ``f`` (multipliers ``y`` of ``A f = b``, ``mus`` of the active
+    cones), to the tolerances of ``limits`` (a :class:`._structs.Limits`: ``primal_tol``,
     ``dual_tol``, ``eom_tol``, ``stationary_tol``, ``surface_tol``, ``cone_tol``).
 
     Returns ``(code, to_lower, to_upper, release, cone_in, cone_dir, cone_out, grad, worst_kind,
     worst_idx)``; ``code`` is :data:`KKT_OPTIMAL`, :data:`KKT_PIVOT` (the flags say what to change;
     ``worst_kind`` 1 lower, 2 upper, 0 release, -1 none) or a negative reason.
     """
+    H, g, A, b, lb, ub = qp.H, qp.c, qp.A, qp.b, qp.lb, qp.ub
+    G, gc, ax, tn, basis0 = cones.G, cones.gc, cones.ax, cones.tn, cones.basis0
     n = f.shape[0]
     nc = G.shape[0]
     release = np.zeros(n, dtype=np.bool_)

@@ -39,11 +39,16 @@ def definite_beyond(H, J, rows, thr, hscale, penalty):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def unique_test(x, z, c, lb, ub, A, P, G, gc, ax, tn, cosr, zc, near, unique_rel, penalty):
-    """:func:`mcdm_pin.solvers.least_norm.is_unique` after its first two tests (its
+def unique_test(x, z, zc, qp, cones, limits):
+    """:func:`mcdm_pin.solvers.least_norm.is_unique` of ``x`` (duals ``z``, ``zc``) on ``qp`` and
+    ``cones`` (:class:`._structs.QP`, :class:`._structs.Cones`) after its first two tests (its
     ``_strongly_active``, the Cholesky of ``J^T J``, the Cholesky of ``H + gamma J^T J - thr I``
     (:func:`definite_beyond`), then the null space of ``J`` by an SVD and the reduced Hessian's
-    smallest eigenvalue): 1 unique, 0 not proven unique."""
+    smallest eigenvalue), with the thresholds ``limits.near``, ``unique_rel``, ``penalty``: 1 unique,
+    0 not proven unique."""
+    c, lb, ub, A, P = qp.c, qp.lb, qp.ub, qp.A, qp.H
+    G, gc, ax, tn, cosr = cones.G, cones.gc, cones.ax, cones.tn, cones.cosr
+    near, unique_rel, penalty = limits.near, limits.unique_rel, limits.penalty
     gscale = _gradient_scale(x, c, P)
     thr = unique_rel * gscale
     free, nf = _not_strongly_active(x, z, lb, ub, near, thr)
