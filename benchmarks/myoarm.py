@@ -215,10 +215,10 @@ def time_parts(robot, traj, repeat: int) -> dict:
         last["J"] = np.ascontiguousarray(data.J.reshape(6, -1).T)
 
     def routes(s):
-        last["route"] = ev._routes(last["oM"])[:-1]
+        last["route"] = ev._routes(last["oM"])[0]
 
     def cable_terms(s):
-        last["terms"] = ev._kernel(last["oM"], last["J"], *last["route"], *ev._kernel_args)
+        last["terms"] = ev._kernel(last["oM"], last["J"], last["route"], ev._kernel_args)
 
     def rnea(s):
         pin.rnea(model, data, *s)

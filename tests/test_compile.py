@@ -31,11 +31,11 @@ def test_stamp_covers_modules_that_decorate_with_imported_decorators():
     """A module whose functions are compiled inline into kernels through a decorator it imports from
     another kernel module (``@register_jitable`` from wrapping_osim.py) is a kernel source too, as is
     one that imports ``njit`` from the package's jit.py (_ipm.py); one that only registers kernels
-    defined elsewhere (ipm.py) is not: editing it needs no recompile. The module of the structures the
-    kernels take and return (_structs.py, ``KERNEL_STRUCTURES``) is one: numba's cache would not see
-    a changed field."""
+    defined elsewhere (ipm.py) is not: editing it needs no recompile. The modules of the structures the
+    kernels take and return (_structs.py, kernel_structs.py: ``KERNEL_STRUCTURES``) are too: numba's
+    cache would not see a changed field."""
     names = {p.name for p in jit.kernel_sources()}
-    assert {"wrapping_osim_ellipsoid.py", "wrapping_osim.py", "_ipm.py", "_structs.py"} <= names
+    assert {"wrapping_osim_ellipsoid.py", "wrapping_osim.py", "_ipm.py", "_structs.py", "kernel_structs.py"} <= names
     assert "ipm.py" not in names
 
 

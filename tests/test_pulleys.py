@@ -355,6 +355,7 @@ def test_compiled_route_pass_equals_the_uncompiled_one(platform):
         with pytest.MonkeyPatch.context() as mp:
             mp.setattr(jit, "_COMPILED", False)
             b_paths._pass = jit.kernels("model.route_kernels").route_pass
-        for x, y in zip(a_paths(oM), b_paths(oM)):
+        (ra, la), (rb, lb) = a_paths(oM), b_paths(oM)
+        for x, y in zip((*ra, la), (*rb, lb)):
             assert np.abs(np.asarray(x, float) - np.asarray(y, float)).max(initial=0.0) <= 1e-14 * max(
                 1.0, float(np.abs(y).max(initial=0.0)))

@@ -62,8 +62,8 @@ def test_compiled_route_pass_equals_the_uncompiled_one(arm):
     engaged = np.zeros(len(robot.cables.wraps), dtype=int)
     for q, _, _ in states:
         oM = _placements(ev, q)
-        a, b = fast(oM), slow(oM)
-        for x, y in zip(a, b):
+        (ra, la), (rb, lb) = fast(oM), slow(oM)
+        for x, y in zip((*ra, la), (*rb, lb)):
             scale = max(1.0, float(np.abs(y).max(initial=0.0)))
             assert np.abs(np.asarray(x, dtype=float) - np.asarray(y, dtype=float)).max(initial=0.0) <= 1e-14 * scale
         assert np.array_equal(fast.engaged, slow.engaged)

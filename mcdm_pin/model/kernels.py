@@ -16,32 +16,25 @@ from __future__ import annotations
 
 import numpy as np
 from ..jit import njit
+from .kernel_structs import CableTerms, KeyMaps, Route
 
 
 @njit(cache=True, nogil=True)
-def cable_terms(oM, Jt, point_local, point_key, seg_a, seg_b, seg_cable, seg_active, seg_scale,
-                v_ptr, v_idx, a_ptr, a_idx, child_key, parent_key, R_sp, n_cables, n_joints):
+def cable_terms(oM, Jt, route, maps):
     """Cable geometry, ``L`` and the cables' part of the interaction wrenches in one pass.
 
     Args:
         oM: (K, 4, 4) world placements (homogeneous) of the key bodies.
         Jt: (nv, 6) the world Jacobian, transposed: row v is column v's spatial velocity at the
             world origin (Pinocchio's column-major ``data.J`` transposed: a C-ordered view).
-        point_local, point_key: (P, 3) route points in their body's frame, (P,) their body.
-        seg_a, seg_b, seg_cable, seg_active: segments (start point, end point, cable, spans bodies).
-        seg_scale: (S,) each segment's share of its cable's length and force: 1 for a plain route,
-            ``1/divisor`` on a pulley's branch, 0 for a slot of a configuration-dependent route that
-            is not part of the path at this instant (it then adds neither length nor wrench).
-        v_ptr, v_idx: CSR over key bodies: the velocity columns that move body k.
-        a_ptr, a_idx: CSR over key bodies: the physical joints whose subtree holds body k.
-        child_key, parent_key: (Jn,) key bodies of each physical joint's child and parent frames.
-        R_sp: (Jn, 3, 3) each socket frame's rotation in its parent's frame.
+        route: the routes at this instant (:class:`~mcdm_pin.model.kernel_structs.Route`; a segment
+            whose ``seg_scale`` is 0 adds neither length nor wrench).
+        maps: what the key bodies move and carry (:class:`~mcdm_pin.model.kernel_structs.KeyMaps`).
 
-    Returns ``(X, seg_len, lengths, L, RT, R_socket, bad)``: world points (P, 3), segment lengths,
-    cable lengths (m,), ``L`` (m, nv), ``RT`` (Jn, 6, m) in each child frame at the joint point, the
-    rotations child frame -> socket frame (Jn, 3, 3), and the index of a zero-length spanning segment
-    (-1 when none; -2 when ``L`` is not finite).
+    Returns a :class:`~mcdm_pin.model.kernel_structs.CableTerms`.
     """
+    point_local, point_key, seg_a, seg_b, seg_cable, seg_active, seg_scale = route
+    v_ptr, v_idx, a_ptr, a_idx, child_key, parent_key, R_sp, n_cables, n_joints = maps
     oR = oM[:, :3, :3]
     op = oM[:, :3, 3]
     nv = Jt.shape[0]
@@ -55,7 +48,7 @@ def cable_terms(oM, Jt, point_local, point_key, seg_a, seg_b, seg_cable, seg_act
             for v in range(nv):
                 if not np.isfinite(L[c, v]):
                     bad = -2
-    return X, seg_len, lengths, L, RT, R_socket, bad
+    return CableTerms(X, seg_len, lengths, L, RT, R_socket, bad)
 
 
 @njit(cache=True, nogil=True)
@@ -559,10 +552,11 @@ def warm_calls():
             (interaction_quadratic, (z((1, 6, 2)), z((1, 6)), z(1, dtype=i64), z(1))),
             (cone_batch, (z((1, 6, 2)), z((1, 6)), z((1, 3, 3)), z((1, 3)), z(1, dtype=i64), np.ones(1, dtype=np.bool_))),
             (needs_scaling, (z((1, 2)), z(1), z(2), z(2), z(2), z((1, 2)), z(2), z((1, 3, 2)), z((1, 3)), 1e3)),
-            (cable_terms, (np.tile(np.eye(4), (1, 1, 1)), z((1, 6)), z((2, 3)), z(2, dtype=i64),
-                           np.array([0], dtype=i64), np.array([1], dtype=i64), np.array([0], dtype=i64),
-                           np.array([False]), np.ones(1), z(2, dtype=i64), z(0, dtype=i64), z(2, dtype=i64),
-                           z(0, dtype=i64), z(0, dtype=i64), z(0, dtype=i64), z((0, 3, 3)), 1, 0))]
+            (cable_terms, (np.tile(np.eye(4), (1, 1, 1)), z((1, 6)),
+                           Route(z((2, 3)), z(2, dtype=i64), np.array([0], dtype=i64), np.array([1], dtype=i64),
+                                 np.array([0], dtype=i64), np.array([False]), np.ones(1)),
+                           KeyMaps(z(2, dtype=i64), z(0, dtype=i64), z(2, dtype=i64), z(0, dtype=i64),
+                                   z(0, dtype=i64), z(0, dtype=i64), z((0, 3, 3)), 1, 0)))]
 
 
 def warm_up() -> None:

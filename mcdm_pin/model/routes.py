@@ -35,6 +35,7 @@ import importlib
 import numpy as np
 
 from ..exceptions import StateError
+from .kernel_structs import Route
 
 
 class RoutePaths:
@@ -45,8 +46,8 @@ class RoutePaths:
         key_of_joint: (njoints,) the position of each Pinocchio joint among the placements the
             evaluator reads (-1: not read).
 
-    Call with the world placements ``oM`` (K, 4, 4) of those joints; returns ``(point_local,
-    point_key, seg_a, seg_b, seg_cable, seg_active, seg_scale, arc_length)``, the last (m,) the arc
+    Call with the world placements ``oM`` (K, 4, 4) of those joints; returns ``(route, arc_length)``:
+    the routes at this instant (a :class:`~mcdm_pin.model.kernel_structs.Route`) and, (m,), the arc
     lengths (branch-scaled) to add to each cable's length. The arrays are owned by this object and
     rewritten at every call; ``engaged`` (W,) says which wraps engaged. Routes that follow OpenSim's
     rules (:mod:`mcdm_pin.model.route_osim`) need the configuration ``q`` too, and then ``L_extra``
@@ -118,8 +119,8 @@ class RoutePaths:
                             t.knots, t.wrap_int, t.wrap_float, self.point_local, self.point_key, self.seg_a,
                             self.seg_b, self.seg_active, self.seg_scale, self.arc_length, self.L_extra,
                             t.wrap_len, t.pt_dP, self.lever)
-        return (self.point_local, self.point_key, self.seg_a, self.seg_b, self.seg_cable, self.seg_active,
-                self.seg_scale, self.arc_length)
+        return Route(self.point_local, self.point_key, self.seg_a, self.seg_b, self.seg_cable, self.seg_active,
+                     self.seg_scale), self.arc_length
 
 
 def _tables(rk, cables, key, base_key, wkey, slot_t0):

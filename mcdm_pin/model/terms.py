@@ -49,6 +49,7 @@ from .cables import CableSet
 from .charts import check_configuration
 from .geometry import CableMaps, cable_geometry
 from .joints import PhysicalJoint, massless_members, resolve_joints
+from .kernel_structs import KeyMaps, Route
 from .muscles import tension_state
 from .placements import stacked_view
 from .routes import RoutePaths, add_levers
@@ -290,12 +291,12 @@ class TermsEvaluator:
         self.compiled = True
         self._v_csr = csr([np.flatnonzero(self._sub_v[:, k]).tolist() for k in range(K)], K)
         self._a_csr = csr([np.flatnonzero(self._sub_phys[:, k]).tolist() for k in range(K)], K)
-        self._route_args = (
+        self._route_args = Route(
             np.ascontiguousarray(cables.point_local, dtype=float),
             self._point_key.astype(np.int64), cables.seg_a.astype(np.int64),
             cables.seg_b.astype(np.int64), cables.seg_cable.astype(np.int64),
             cables.seg_active.astype(np.bool_), np.ascontiguousarray(cables.seg_scale, dtype=float))
-        self._kernel_args = (
+        self._kernel_args = KeyMaps(
             *self._v_csr, *self._a_csr,
             self._child_key.astype(np.int64), self._parent_key.astype(np.int64),
             np.ascontiguousarray(self._R_sp, dtype=float), int(cables.m), len(self.joints))
@@ -359,11 +360,11 @@ class TermsEvaluator:
             if self._routes is None:
                 route, arc = self._route_args, None
             else:
-                *route, arc = self._routes(oMi, q)
-            X, _, lengths, L, RT, R_socket, bad = self._kernel(oMi, np.ascontiguousarray(J.T), *route,
-                                                               *self._kernel_args)
+                route, arc = self._routes(oMi, q)
+            X, _, lengths, L, RT, R_socket, bad = self._kernel(oMi, np.ascontiguousarray(J.T), route,
+                                                               self._kernel_args)
             if bad >= 0:
-                raise StateError(f"cable {cables.cables[route[4][bad]].name!r}: a segment has zero "
+                raise StateError(f"cable {cables.cables[route.seg_cable[bad]].name!r}: a segment has zero "
                                  f"length at this configuration, so its direction is undefined")
             if arc is not None:
                 lengths += arc

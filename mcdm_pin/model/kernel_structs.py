@@ -1,0 +1,38 @@
+"""The named structures the model layer's compiled kernels take and return.
+
+numba compiles a ``collections.namedtuple`` into a struct whose fields a kernel reads by name; on
+the uncompiled path the same classes are plain Python tuples (as in
+:mod:`mcdm_pin.solvers._structs`, the solvers' own). Every field's type is fixed by what the
+library passes: one compiled specialisation serves every call.
+
+:data:`KERNEL_STRUCTURES` marks this module as a kernel source for :mod:`mcdm_pin.jit`: numba's
+cache keys a kernel by its own file only, so an edit here must invalidate the compiled kernels too.
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+Route = namedtuple("Route", ["point_local", "point_key", "seg_a", "seg_b", "seg_cable", "seg_active", "seg_scale"])
+Route.__doc__ = """The cables' routes at an instant: the route points ``point_local`` (P, 3) in the
+frame of their key body ``point_key`` (P,); the segments from point ``seg_a`` to point ``seg_b``
+of cable ``seg_cable``, whether each spans two bodies (``seg_active``) and its share of its cable's
+length and force (``seg_scale``: 1 for a plain route, ``1/divisor`` on a pulley's branch, 0 for a
+slot of a configuration-dependent route that is not part of the path at this instant)."""
+
+KeyMaps = namedtuple("KeyMaps", ["v_ptr", "v_idx", "a_ptr", "a_idx", "child_key", "parent_key", "R_sp",
+                                 "n_cables", "n_joints"])
+KeyMaps.__doc__ = """What the key bodies move and carry, fixed per robot: the velocity columns
+that move key body k (CSR ``v_ptr``, ``v_idx``), the physical joints whose subtree holds it (CSR
+``a_ptr``, ``a_idx``), each physical joint's child and parent key bodies (``child_key``,
+``parent_key``, (Jn,)), each socket frame's rotation in its parent's frame (``R_sp``,
+(Jn, 3, 3)), and the numbers of cables and physical joints."""
+
+CableTerms = namedtuple("CableTerms", ["X", "seg_len", "lengths", "L", "RT", "R_socket", "bad"])
+CableTerms.__doc__ = """What :func:`mcdm_pin.model.kernels.cable_terms` returns: the route points in
+the world (P, 3), the segments' lengths, the cables' lengths (m,), ``L`` (m, nv), ``RT`` (Jn, 6, m)
+in each child frame at the joint point, the rotations child frame -> socket frame (Jn, 3, 3), and
+the index of a zero-length spanning segment ``bad`` (-1 when none; -2 when ``L`` is not finite)."""
+
+KERNEL_STRUCTURES = (Route, KeyMaps, CableTerms)
+"""The structures above (the marker :func:`mcdm_pin.jit.kernel_sources` looks for)."""
