@@ -34,5 +34,14 @@ the world (P, 3), the segments' lengths, the cables' lengths (m,), ``L`` (m, nv)
 in each child frame at the joint point, the rotations child frame -> socket frame (Jn, 3, 3), and
 the index of a zero-length spanning segment ``bad`` (-1 when none; -2 when ``L`` is not finite)."""
 
-KERNEL_STRUCTURES = (Route, KeyMaps, CableTerms)
+OsimPaths = namedtuple("OsimPaths", ["route_int", "pt_kind", "pt_q", "pt_v", "pt_fun", "pt_float", "fun_ptr",
+                                     "knots", "wrap_int", "wrap_float", "wrap_len", "pt_dP"])
+OsimPaths.__doc__ = """The tables of the routes that follow OpenSim's rules
+(:class:`mcdm_pin.model.route_osim.OsimTables` builds them once per cable set; their columns are
+:mod:`mcdm_pin.model.route_osim`'s): one row per route (``route_int``); per route point its kind,
+coordinate, velocity column, spline functions and floats (``pt_*``); the splines' knots
+(``fun_ptr``, ``knots``); one row per wrap (``wrap_int``, ``wrap_float``); and the work arrays
+``wrap_len`` (each wrap's arc) and ``pt_dP`` (each moving point's velocity per coordinate)."""
+
+KERNEL_STRUCTURES = (Route, KeyMaps, CableTerms, OsimPaths)
 """The structures above (the marker :func:`mcdm_pin.jit.kernel_sources` looks for)."""

@@ -52,6 +52,7 @@ import numpy as np
 from ..jit import njit
 
 from .pulleys import REASON_OK, REASON_SCREW, rotating_exit, screw_entry
+from .kernel_structs import OsimPaths, Route
 from .route_osim import osim_routes
 from .wrapping import from_frame, register_jitable, to_frame, wrap_in_frame
 
@@ -176,14 +177,10 @@ def route_pass(oM, wrap_int, wrap_float, pulley_int, pulley_float, point_local, 
 
 
 @njit(cache=True, nogil=True)
-def osim_route_pass(oM, q, route_int, pt_kind, pt_q, pt_v, pt_fun, pt_float, fun_ptr, knots, wrap_int,
-                    wrap_float, point_local, point_key, seg_a, seg_b, seg_active, seg_scale, arc_length,
-                    L_extra, wrap_len, pt_dP, lever):
+def osim_route_pass(oM, q, paths, route, arc_length, L_extra, lever):
     """The routes that follow OpenSim's rules, after :func:`route_pass` at the same instant:
-    :func:`mcdm_pin.model.route_osim.osim_routes` (its tables: ``route_osim.OsimTables``)."""
-    osim_routes(oM, q, route_int, pt_kind, pt_q, pt_v, pt_fun, pt_float, fun_ptr, knots, wrap_int, wrap_float,
-                point_local, point_key, seg_a, seg_b, seg_active, seg_scale, arc_length, L_extra, wrap_len,
-                pt_dP, lever)
+    :func:`mcdm_pin.model.route_osim.osim_routes` (its tables ``paths``: ``route_osim.OsimTables``)."""
+    osim_routes(oM, q, paths, route, arc_length, L_extra, lever)
 
 
 @njit(cache=True, nogil=True)
@@ -241,11 +238,13 @@ def warm_calls():
     from . import route_osim as ro
 
     route = np.array([[0, 0, 2, 0, 0, 0, 1, 2]], dtype=i64)  # one OpenSim route of two fixed points
-    osim_args = (oM, np.zeros(1), route, np.zeros(2, dtype=i64), np.zeros(2, dtype=i64), np.zeros(2, dtype=i64),
-                 np.zeros((2, 3), dtype=i64), np.zeros((2, ro.N_PFLOAT)), np.zeros(1, dtype=i64), np.zeros((0, 5)),
-                 np.zeros((0, ro.N_OINT), dtype=i64), np.zeros((0, ro.N_OFLOAT)), np.array([[0.0, 0, 0], [1, 0, 0]]),
-                 np.zeros(2, dtype=i64), np.array([0], dtype=i64), np.array([1], dtype=i64), np.array([False]),
-                 np.ones(1), np.zeros(1), np.zeros((1, 1)), np.zeros(0), np.zeros((2, 3)), np.zeros((2, 3)))
+    paths = OsimPaths(route, np.zeros(2, dtype=i64), np.zeros(2, dtype=i64), np.zeros(2, dtype=i64),
+                      np.zeros((2, 3), dtype=i64), np.zeros((2, ro.N_PFLOAT)), np.zeros(1, dtype=i64),
+                      np.zeros((0, 5)), np.zeros((0, ro.N_OINT), dtype=i64), np.zeros((0, ro.N_OFLOAT)), np.zeros(0),
+                      np.zeros((2, 3)))
+    points = Route(np.array([[0.0, 0, 0], [1, 0, 0]]), np.zeros(2, dtype=i64), np.array([0], dtype=i64),
+                   np.array([1], dtype=i64), np.array([0], dtype=i64), np.array([False]), np.ones(1))
+    osim_args = (oM, np.zeros(1), paths, points, np.zeros(1), np.zeros((1, 1)), np.zeros((2, 3)))
     qi = np.zeros((1, NQ_INT), dtype=i64)
     qi[0, Q_SCREW] = 1
     qf = np.zeros((1, NQ_FLOAT))

@@ -58,6 +58,7 @@ from ..jit import extending
 
 from .wrapping_osim import INSIDE_RADIUS, MANDATORY_WRAP, NO_WRAP, WRAPPED, osim_cylinder, osim_sphere
 from .wrapping_osim_ellipsoid import osim_ellipsoid
+from .kernel_structs import OsimPaths
 
 register_jitable = extending.register_jitable
 
@@ -341,13 +342,15 @@ def _write_segments(oM, point_key, point_local, path, owner, plen, r, wrap_int, 
 
 
 @register_jitable
-def osim_routes(oM, q, route_int, pt_kind, pt_q, pt_v, pt_fun, pt_float, fun_ptr, knots, wrap_int,
-                wrap_float, point_local, point_key, seg_a, seg_b, seg_active, seg_scale, arc_length,
-                L_extra, wrap_len, pt_dP, lever):
-    """Every OpenSim route at configuration ``q`` (steps 1-4 of the module docstring), in place.
+def osim_routes(oM, q, paths, route, arc_length, L_extra, lever):
+    """Every OpenSim route at configuration ``q`` (steps 1-4 of the module docstring), in place:
+    ``paths`` the tables (:class:`~mcdm_pin.model.kernel_structs.OsimPaths`), ``route`` the route
+    pass's points and segments (:class:`~mcdm_pin.model.kernel_structs.Route`) rewritten.
     ``L_extra`` (m, nv) is zeroed first; ``arc_length`` is added to (the MuJoCo wraps' pass zeroes
     it); ``lever`` (P, 3): for a tangent point whose cached position (``point_local``) differs from
     where its wrap last put it, that difference (its body's frame), else 0."""
+    route_int, pt_kind, pt_q, pt_v, pt_fun, pt_float, fun_ptr, knots, wrap_int, wrap_float, wrap_len, pt_dP = paths
+    point_local, point_key, seg_a, seg_b, _, seg_active, seg_scale = route
     L_extra[:, :] = 0.0
     for ri in range(route_int.shape[0]):
         r = route_int[ri]
@@ -458,4 +461,7 @@ class OsimTables:
         self.knots = np.array(knots, dtype=float).reshape(-1, 5)
         self.wrap_len = np.zeros(len(wint))
         self.n_wraps = len(wint)
+        self.arrays = OsimPaths(self.route_int, self.pt_kind, self.pt_q, self.pt_v, self.pt_fun, self.pt_float,
+                                self.fun_ptr, self.knots, self.wrap_int, self.wrap_float, self.wrap_len, self.pt_dP)
+        """The tables as the route kernel takes them."""
 

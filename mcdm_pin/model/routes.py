@@ -81,6 +81,8 @@ class RoutePaths:
         self._wrap_int, self._wrap_float = _tables(rk, cables, key, base_key, wkey, slot_t0)
         self._pulley_int, self._pulley_float = _pulley_tables(rk, cables, key)
         self._osim = self._osim_layout(cables, key) if cables.osim_cables else None
+        self.route = Route(self.point_local, self.point_key, self.seg_a, self.seg_b, self.seg_cable, self.seg_active,
+                           self.seg_scale)  # (the arrays the passes rewrite in place)
 
     def _osim_layout(self, cables, key):
         """Two tangent slots and one segment slot per OpenSim wrap after the MuJoCo wraps' slots, and
@@ -114,13 +116,8 @@ class RoutePaths:
             raise StateError(f"cable {self.cables.names[rp.cable]!r}: rotating pulley{name}: {REASONS[int(reason)]} "
                              f"at this configuration")
         if self._osim is not None:  # OpenSim's routes read the configuration too
-            t = self._osim
-            self._osim_pass(oM, q, t.route_int, t.pt_kind, t.pt_q, t.pt_v, t.pt_fun, t.pt_float, t.fun_ptr,
-                            t.knots, t.wrap_int, t.wrap_float, self.point_local, self.point_key, self.seg_a,
-                            self.seg_b, self.seg_active, self.seg_scale, self.arc_length, self.L_extra,
-                            t.wrap_len, t.pt_dP, self.lever)
-        return Route(self.point_local, self.point_key, self.seg_a, self.seg_b, self.seg_cable, self.seg_active,
-                     self.seg_scale), self.arc_length
+            self._osim_pass(oM, q, self._osim.arrays, self.route, self.arc_length, self.L_extra, self.lever)
+        return self.route, self.arc_length
 
 
 def _tables(rk, cables, key, base_key, wkey, slot_t0):
