@@ -14,9 +14,13 @@ Read from the source with :mod:`ast` (nothing is imported or run):
   module level or inside functions), i.e. one that closes a circle once every import counts.
 - **files over 600 lines** and **functions over 80 lines** (``def`` line to last line, docstring
   included; methods and nested functions by their dotted names);
+- **kernels with more than 15 arguments**: functions decorated with numba's ``njit`` or
+  ``register_jitable`` (compiled kernels and what is compiled inline into them) whose positional
+  parameters number more than ``--max-args`` (a kernel takes named structures, not two dozen arrays);
 - **lines in ``solvers/``**: per file and in all, beside the package's total.
 
-    python tools/house_metrics.py [--package mcdm_pin] [--max-file 600] [--max-function 80] [--json FILE]
+    python tools/house_metrics.py [--package mcdm_pin] [--max-file 600] [--max-function 80] [--max-args 15]
+                                  [--json FILE]
 """
 
 from __future__ import annotations
@@ -207,7 +211,20 @@ def long_functions(path: Path, limit: int) -> list[tuple[str, int, int]]:
     return out
 
 
-def measure(package: Path, max_file: int, max_function: int) -> dict:
+def wide_kernels(path: Path, limit: int) -> tuple[int, list[tuple[str, int, int]]]:
+    """How many kernels ``path`` defines, and (name, line, parameters) of those with more than
+    ``limit`` positional parameters."""
+    kernels, wide = 0, []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.FunctionDef) and any(
+                "njit" in ast.unparse(d) or "register_jitable" in ast.unparse(d) for d in node.decorator_list):
+            kernels += 1
+            if len(node.args.args) > limit:
+                wide.append((node.name, node.lineno, len(node.args.args)))
+    return kernels, wide
+
+
+def measure(package: Path, max_file: int, max_function: int, max_args: int = 15) -> dict:
     mods = modules(package)
     graph, full, inner = import_graph(mods)
     comps = circles(graph)
@@ -215,7 +232,11 @@ def measure(package: Path, max_file: int, max_function: int) -> dict:
     lines = {p: len(p.read_text().splitlines()) for p in mods.values()}
     rel = lambda p: str(p.relative_to(package.parent))  # noqa: E731
     solvers = {rel(p): n for p, n in lines.items() if "solvers" in p.relative_to(package).parts}
+    kern = {rel(p): wide_kernels(p, max_args) for p in mods.values()}
     return dict(
+        kernels=sum(k for k, _ in kern.values()), max_args=max_args,
+        wide_kernels=sorted(((p, name, line, n) for p, (_, w) in kern.items() for name, line, n in w),
+                            key=lambda x: -x[3]),
         package=str(package), modules=len(mods), lines_total=sum(lines.values()),
         import_edges=sum(len(v) for v in graph.values()), function_level_imports=len(inner),
         dodging_imports=dodging(full, inner),
@@ -246,6 +267,8 @@ def report(m: dict) -> str:
     out += [f"  {n:5d}  {p}" for p, n in m["long_files"]]
     out.append(f"functions over {m['max_function']} lines: {len(m['long_functions'])}")
     out += [f"  {n:5d}  {p}:{line} {name}" for p, name, line, n in m["long_functions"]]
+    out.append(f"kernels with more than {m['max_args']} arguments: {len(m['wide_kernels'])} of {m['kernels']}")
+    out += [f"  {n:5d}  {p}:{line} {name}" for p, name, line, n in m["wide_kernels"]]
     out.append(f"lines in solvers/: {m['solvers_lines']} of {m['lines_total']}")
     out += [f"  {n:5d}  {p}" for p, n in m["solvers_files"].items()]
     return "\n".join(out)
@@ -256,9 +279,10 @@ def main(argv=None) -> int:
     p.add_argument("--package", default=str(REPO / "mcdm_pin"), help="the package folder (default mcdm_pin)")
     p.add_argument("--max-file", type=int, default=600, help="longest allowed file, lines (default 600)")
     p.add_argument("--max-function", type=int, default=80, help="longest allowed function, lines (default 80)")
+    p.add_argument("--max-args", type=int, default=15, help="most positional arguments of a kernel (default 15)")
     p.add_argument("--json", help="write the measurements as JSON")
     args = p.parse_args(argv)
-    m = measure(Path(args.package).resolve(), args.max_file, args.max_function)
+    m = measure(Path(args.package).resolve(), args.max_file, args.max_function, args.max_args)
     print(report(m))
     if args.json:
         Path(args.json).write_text(json.dumps(m, indent=2))

@@ -303,10 +303,12 @@ def _apply_wraps(oM, point_key, point_local, path, owner, plen, r, wrap_int, wra
 
 
 @register_jitable
-def _write_segments(oM, point_key, point_local, path, owner, plen, r, wrap_int, wrap_len, seg_a, seg_b,
-                    seg_active, seg_scale, arc_length, pt_kind, pt_v, pt_dP, L_extra):
-    """Steps 3 and 4 for route row ``r``: the straight pieces into the cable's segment slots, the arcs
-    into its arc length, the moving points' own terms into ``L_extra``."""
+def _write_segments(oM, paths, route, path, owner, plen, r, arc_length, L_extra):
+    """Steps 3 and 4 for route row ``r`` (of ``paths``, an
+    :class:`~mcdm_pin.model.kernel_structs.OsimPaths`): the straight pieces into the cable's segment
+    slots of ``route``, the arcs into its arc length, the moving points' own terms into ``L_extra``."""
+    point_local, point_key, seg_a, seg_b, _, seg_active, seg_scale = route
+    wrap_int, wrap_len, pt_kind, pt_v, pt_dP = paths.wrap_int, paths.wrap_len, paths.pt_kind, paths.pt_v, paths.pt_dP
     c, s0, n, w0, nw, e0 = r[R_CABLE], r[R_S0], r[R_N], r[R_W0], r[R_NW], r[R_E0]
     n_slots = n - 1 + nw
     k = 0
@@ -381,8 +383,7 @@ def osim_routes(oM, q, paths, route, arc_length, L_extra, lever):
                     for i in range(3):
                         lever[path[j], i] = point_local[path[j], i] - cache[k, i]
                         point_local[path[j], i] = cache[k, i]
-        _write_segments(oM, point_key, point_local, path, owner, plen, r, wrap_int, wrap_len, seg_a, seg_b,
-                        seg_active, seg_scale, arc_length, pt_kind, pt_v, pt_dP, L_extra)
+        _write_segments(oM, paths, route, path, owner, plen, r, arc_length, L_extra)
 
 
 _QUADRANT = {"all": (0, 0), "+x": (0, 1), "-x": (0, -1), "+y": (1, 1), "-y": (1, -1), "+z": (2, 1), "-z": (2, -1)}

@@ -97,7 +97,7 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits):
     without cones, one per Newton step with them).
     """
     H, g, A, lb, ub = qp.H, qp.c, qp.A, qp.lb, qp.ub
-    G, gc, ax, tn = cones.G, cones.gc, cones.ax, cones.tn
+    G = cones.G
     n, neq, nc, max_pivots = H.shape[0], A.shape[0], G.shape[0], limits.max_pivots
     reg = tikhonov(H, g, ub, limits.reg_rel)
     state = _held_at_finite(state0, lb, ub)
@@ -149,8 +149,9 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits):
         # a block pivot only while the number of violations keeps falling
         block = blocks_ok and ninf < best_ninf
         best_ninf = min(best_ninf, ninf)
-        state, cact, last_was_block = _pivot(block, A, G, gc, ax, tn, state, cact, dirs, grad, release, to_lower,
-                                             to_upper, cone_in, cone_out, worst_kind, worst_idx, LU, perm, lu_ok)
+        state, cact, last_was_block = _pivot(block, qp, cones, state, cact, dirs, grad,
+                                             (release, to_lower, to_upper, cone_in, cone_out), worst_kind, worst_idx,
+                                             LU, perm, lu_ok)
         cdir = _next_dirs(cone_in, cone_dir, dirs, nc)
     return ActiveSetRun(PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state, y, max_pivots, solves)
 
@@ -188,17 +189,18 @@ def _drop_pulling(cact, mus):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _pivot(block, A, G, gc, ax, tn, state, cact, dirs, grad, release, to_lower, to_upper, cone_in, cone_out,
-           worst_kind, worst_idx, LU, perm, lu_ok):
+def _pivot(block, qp, cones, state, cact, dirs, grad, changes, worst_kind, worst_idx, LU, perm, lu_ok):
     """The next active set: every violation exchanged at once when ``block`` and it leaves enough
-    cables free (:func:`_block_pivot`), else only the worst (:func:`_one_change`). ``(state, cact,
-    was_block)``."""
+    cables free (:func:`_block_pivot`), else only the worst (:func:`_one_change`); ``changes``:
+    :func:`._kkt_verify.verify`'s ``(release, to_lower, to_upper, cone_in, cone_out)``. ``(state,
+    cact, was_block)``."""
+    release, to_lower, to_upper, cone_in, cone_out = changes
     fits, new_state, new_cact = _block_pivot(state, cact, release, to_lower, to_upper, cone_in, cone_out,
-                                             A.shape[0])
+                                             qp.A.shape[0])
     if block and fits:
         return new_state, new_cact, True
-    state, cact = _one_change(A, G, gc, ax, tn, cact, dirs, state, grad, worst_kind, worst_idx, cone_in, cone_out,
-                              LU, perm, lu_ok)
+    state, cact = _one_change(qp, cones, cact, dirs, state, grad, worst_kind, worst_idx, cone_in, cone_out, LU, perm,
+                              lu_ok)
     return state, cact, False
 
 
@@ -275,11 +277,11 @@ def _block_pivot(state, cact, release, to_lower, to_upper, cone_in, cone_out, ne
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _one_change(A, G, gc, ax, tn, cact, dirs, state, grad, worst_kind, worst_idx, cone_in, cone_out, LU, perm,
-                lu_ok):
+def _one_change(qp, cones, cact, dirs, state, grad, worst_kind, worst_idx, cone_in, cone_out, LU, perm, lu_ok):
     """Only the worst violation changes: ``(state, cact)`` after it. At a vertex (as many free cables
     as equations and held cones) a cable reaching a bound swaps with the fixed cable the ratio test
     picks (:func:`_ratio_test`); otherwise, or when none is eligible, :func:`_single_pivot`."""
+    A, G, gc, ax, tn = qp.A, cones.G, cones.gc, cones.ax, cones.tn
     n = state.shape[0]
     neq = A.shape[0]
     nc = G.shape[0]
