@@ -215,12 +215,12 @@ def _remove_wrap(path, owner, plen, w):
 
 
 @register_jitable
-def _wrap_one(oM, point_key, point_local, path, owner, plen, w0, w, wrap_int, wrap_float, p0, active,
-              single, slot, t0, cache):
+def _wrap_one(oM, route, paths, path, owner, plen, w0, w, p0, active, single, slot, t0, cache):
     """One wrap's turn in a round (step 2): ``(code, plen, stop, length)``; on success its tangent points are
     in ``point_local[slot]``, ``point_local[slot + 1]`` (wrap body frame) and inserted in the path;
     ``stop``: no active point in its span (OpenSim then ends the wrapping)."""
-    wi, wf = wrap_int[w0 + w], wrap_float[w0 + w]
+    point_local, point_key, wrap_int = route.point_local, route.point_key, paths.wrap_int
+    wi, wf = wrap_int[w0 + w], paths.wrap_float[w0 + w]
     plen = _remove_wrap(path, owner, plen, w)
     jf = wi[O_START]
     while jf <= wi[O_END] and not active[jf]:
@@ -276,9 +276,10 @@ def _wrap_one(oM, point_key, point_local, path, owner, plen, w0, w, wrap_int, wr
 
 
 @register_jitable
-def _apply_wraps(oM, point_key, point_local, path, owner, plen, r, wrap_int, wrap_float, active, wrap_len,
-                 cache):
-    """Step 2 for route row ``r`` (``GeometryPath::applyWrapObjects``): the new path length."""
+def _apply_wraps(oM, route, paths, path, owner, plen, r, active, cache):
+    """Step 2 for route row ``r`` (``GeometryPath::applyWrapObjects``) on ``route`` with the tables
+    ``paths`` (:mod:`~mcdm_pin.model.kernel_structs`): the new path length."""
+    point_local, point_key, wrap_int, wrap_len = route.point_local, route.point_key, paths.wrap_int, paths.wrap_len
     p0, w0, nw, t0 = r[R_P0], r[R_W0], r[R_NW], r[R_T0]
     order = np.arange(nw)
     result = np.zeros(nw, dtype=np.int64)
@@ -286,8 +287,8 @@ def _apply_wraps(oM, point_key, point_local, path, owner, plen, r, wrap_int, wra
     for kk in range(1 if nw < 2 else MAX_ROUNDS):
         for i in range(nw):
             w = order[i]
-            code, plen, stop, wl = _wrap_one(oM, point_key, point_local, path, owner, plen, w0, w, wrap_int,
-                                         wrap_float, p0, active, nw == 1, t0 + 2 * w, t0, cache)
+            code, plen, stop, wl = _wrap_one(oM, route, paths, path, owner, plen, w0, w, p0, active, nw == 1,
+                                             t0 + 2 * w, t0, cache)
             if stop:
                 return plen
             result[i] = code
@@ -369,8 +370,7 @@ def osim_routes(oM, q, paths, route, arc_length, L_extra, lever):
         if nw > 0:
             t0 = r[R_T0]
             cache = np.zeros((2 * nw, 4))
-            plen = _apply_wraps(oM, point_key, point_local, path, owner, plen, r, wrap_int, wrap_float,
-                                active, wrap_len, cache)
+            plen = _apply_wraps(oM, route, paths, path, owner, plen, r, active, cache)
             # computePath's last length: every node's ground position read (and cached); the path's
             # tangent points are then where OpenSim's lengths and forces see them
             _path_length(oM, point_key, point_local, path, owner, plen, wrap_int, r[R_W0], wrap_len, t0, cache)
