@@ -322,13 +322,12 @@ def ipm_solve(qp, T, t, cones, limits):
     scales = _scales(b, lb, ub, t, c, iu, il)
     floor = _diagonal_floor(qp.H)
     B, rf, M0inv, Ct, cg, fold = structure(Fm, T, A, limits.rank_tol)
-    fw, ws, res, bar, rb, D, Wc = _work_arrays(n, A.shape[0], iu.shape[0], il.shape[0], K, B, rf, Ct, fold, Fm)
+    fw, ws, res, scaling, rb, D = _work_arrays(n, A.shape[0], iu.shape[0], il.shape[0], K, B, rf, Ct, fold, Fm)
     resid = (res[1], res[2], res[3], res[4], res[5])  # (rx, ry, rzu, rzl, rzc)
     system = NewtonSystem(B, rf, Ct, cg, fold, fw[1], Fm, T, A)
     x, y, su, zu, sl, zl, sc, zc = _start(qp, T, t, iu, il, system, M0inv, floor, fw, ws, limits.box_weight,
                                           limits.pivot_drop)
     slacks = Slacks(su, zu, sl, zl, sc, zc)
-    scaling = Scaling(bar[1], bar[0], bar[2], bar[3], Wc[2], Wc[0], Wc[1], Wc[3])  # (_work_arrays' order)
     attempts, end, it = 0, MAX_ITER, 0
     last_state, last_cact = np.full(n, -1, dtype=np.int8), np.zeros(K, dtype=np.bool_)  # the last guess tried
     for it in range(max_iter):
@@ -383,11 +382,11 @@ def _diagonal_floor(H):
 @njit(cache=True, nogil=True, error_model="numpy")
 def _work_arrays(n, neq, nu, nl, K, B, rf, Ct, fold, Fm):
     """Every work array of the iterations, made once (a small array costs ~0.1-0.3 us to make):
-    ``(fw, ws, res, bar, rb, D, Wc)`` with the Newton system's factor work ``fw = (Kb, Km, KFF, G1,
+    ``(fw, ws, res, scaling, rb, D)`` with the Newton system's factor work ``fw = (Kb, Km, KFF, G1,
     work)`` and solve work ``ws = (r1, u, rhs, wq)``, the residuals ``res = (Px, rx, ry, rzu, rzl,
-    rzc, fx)``, the barrier's ``bar = (dbar, dinv, ru, rl)``, the right-hand sides ``rb``, two slots
-    of directions ``D = (DX, DY, DZU, DZL, DZC, DSU, DSL, DSC)`` and the cones' scalings ``Wc = (W,
-    W^-1, W^2, lambda)``."""
+    rzc, fx)``, the barrier's and the cones' :class:`._structs.Scaling` (the cones' ``W``, ``W^-1``,
+    ``W^2``, ``lambda`` zero), the right-hand sides ``rb`` and two slots of directions
+    ``D = (DX, DY, DZU, DZL, DZC, DSU, DSL, DSC)``."""
     folded = fold[0].shape[0] > 0  # the cones folded into their groups: no rows of their own
     p = rf + neq if folded else rf + 3 * K + neq
     Km = np.empty((p, p))
@@ -395,12 +394,12 @@ def _work_arrays(n, neq, nu, nl, K, B, rf, Ct, fold, Fm):
     fw = (Kb, Km, np.empty((rf, rf)), np.empty((Ct.shape[0], rf)), np.empty((2, B.shape[1])))
     ws = (np.empty(n), np.empty(n), np.empty(p), np.empty(rf))
     res = (np.empty(n), np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty((K, 3)), np.empty(Fm.shape[0]))
-    bar = (np.empty(n), np.empty(n), np.empty(nu), np.empty(nl))
     rb = (np.empty(n), np.empty(neq), np.empty(nu), np.empty(nl), np.empty(nu), np.empty(nl), np.empty((K, 3)))
     D = (np.empty((2, n)), np.empty((2, neq)), np.empty((2, nu)), np.empty((2, nl)), np.empty((2, K, 3)),
          np.empty((2, nu)), np.empty((2, nl)), np.empty((2, K, 3)))
-    Wc = (np.zeros((K, 3, 3)), np.zeros((K, 3, 3)), np.zeros((K, 3, 3)), np.zeros((K, 3)))
-    return fw, ws, res, bar, rb, D, Wc
+    scaling = Scaling(np.empty(n), np.empty(n), np.empty(nu), np.empty(nl), np.zeros((K, 3, 3)), np.zeros((K, 3, 3)),
+                      np.zeros((K, 3, 3)), np.zeros((K, 3)))
+    return fw, ws, res, scaling, rb, D
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
