@@ -119,7 +119,10 @@ class Settings:
     ipm_crossover_gap: float = 1e-3
     """Interior-point method: from this relative duality gap on, the active set read off the iterate is
     tried (verified KKT point) before more iterations: a wrong guess costs at most
-    ``ipm_crossover_pivots`` pivots, and a right one saves iterations (docs/speed.md)."""
+    ``ipm_crossover_pivots`` pivots, and a right one saves iterations. A pivot solves the whole KKT
+    system, so its cost grows with the cube of the problem's size while an iteration's grows more
+    slowly: for hundreds of cables a smaller gap (1e-6) answers cold instants faster, for tens the
+    default does (docs/speed.md, "Cold instants: the first stage")."""
     ipm_max_iter: int = 60
     """Interior-point method: iteration limit."""
     ipm_correctors: int = 1
