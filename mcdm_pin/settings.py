@@ -119,10 +119,11 @@ class Settings:
     ipm_crossover_gap: float = 1e-3
     """Interior-point method: from this relative duality gap on, the active set read off the iterate is
     tried (verified KKT point) before more iterations: a wrong guess costs at most
-    ``ipm_crossover_pivots`` pivots, and a right one saves iterations. A pivot solves the whole KKT
-    system, so its cost grows with the cube of the problem's size while an iteration's grows more
-    slowly: for hundreds of cables a smaller gap (1e-6) answers cold instants faster, for tens the
-    default does (docs/speed.md, "Cold instants: the first stage")."""
+    ``ipm_crossover_pivots`` pivots, and a right one saves iterations. After the first attempt, an
+    active set is tried only once it reads the same at two successive iterations. A pivot solves the
+    active set's whole KKT system, so its cost grows with the cube of the problem's size while an
+    iteration's grows more slowly: for hundreds of cables a smaller gap (1e-6) answers cold instants
+    faster, for tens the default does (docs/speed.md, "The first stage of a cold instant")."""
     ipm_max_iter: int = 60
     """Interior-point method: iteration limit."""
     ipm_correctors: int = 1
@@ -138,7 +139,8 @@ class Settings:
     is no cone (CVXOPT's start weighs them 1; :mod:`mcdm_pin.solvers._ipm`, "The start")."""
     ipm_crossover_attempts: int = 8
     """Interior-point method: at most this many crossover attempts before the iteration limit (each
-    costs up to ``ipm_crossover_pivots`` pivots)."""
+    costs up to ``ipm_crossover_pivots`` pivots; after the first, only an active set that reads the same
+    at two successive iterations is tried)."""
     ipm_pivot_drop: float = 1e-14
     """Interior-point method: a pivot of the Newton system's Cholesky factor below this, relative to its
     diagonal entry's scale, drops that equation as dependent (:mod:`mcdm_pin.solvers._ipm_newton`)."""

@@ -44,7 +44,12 @@ iterate (bounds whose slack is below their multiplier, cones whose slack is near
 boundary than its multiplier is to zero: Tapia's indicators) is handed to the compiled active-set
 solver (:func:`._kkt.active_set_run`), whose point is accepted only if it passes the full KKT check.
 That turns an interior point accurate to ~1e-6 into the exact optimum (to rounding) a few
-iterations early.
+iterations early. After the first attempt, an active set is tried only once it reads the same at two
+successive iterations (or when the iterations have converged): each attempt solves the active set's
+whole KKT system, whose cost grows with the cube of the problem's size, and while the indicators
+still change from one iteration to the next the attempt fails (at 96 DoF and 288 cables, one attempt
+per iteration from a gap of 1e-3 took 4-6 times as long as the iterations themselves: docs/speed.md,
+"The first stage of a cold instant").
 
 **Infeasibility.** A primal infeasibility certificate (``y``, ``z`` in the dual cone with
 ``A^T y + G^T z = 0`` and ``b^T y + h^T z < 0``, relative residual below ``eps``) ends the run with
@@ -276,12 +281,16 @@ def _primal_res(ry, rzu, rzl, rzc, bscale, hscale):
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")
-def _crossover(x, slacks, iu, il, qp, cones, limits, last_state, last_cact):
+def _crossover(x, slacks, iu, il, qp, cones, limits, memo, anyway):
     """The active set the iterate points at, verified by the compiled active-set solver when it
-    differs from the last one tried: ``(tried, run)``, ``run`` the solver's
-    :class:`._structs.ActiveSetRun` (code -1 when not tried)."""
+    differs from the last one tried and either reads the same as at the last reading or ``anyway``
+    (the first attempt, or converged iterations): ``(tried, run)``, ``run`` the solver's
+    :class:`._structs.ActiveSetRun` (code -1 when not tried). ``memo`` (:func:`_guess_memo`) holds
+    the last guess tried and the last one read, both updated here."""
+    last_state, last_cact, seen_state, seen_cact = memo
     state, cact, cdir = _read_active_set(x, slacks, iu, il, cones)
-    if not _new_guess(state, cact, last_state, last_cact):
+    stable = not _new_guess(state, cact, seen_state, seen_cact)
+    if not (stable or anyway) or not _new_guess(state, cact, last_state, last_cact):
         return 0, ActiveSetRun(-1, x, np.zeros(0), np.zeros(0), state, cact, np.zeros((0, 3)), state, np.zeros(0),
                                0, 0)
     return 1, _kkt.active_set_run(qp, cones, state, cact, cdir, limits)
@@ -329,7 +338,7 @@ def ipm_solve(qp, T, t, cones, limits):
                                           limits.pivot_drop)
     slacks = Slacks(su, zu, sl, zl, sc, zc)
     attempts, end, it = 0, MAX_ITER, 0
-    last_state, last_cact = np.full(n, -1, dtype=np.int8), np.zeros(K, dtype=np.bool_)  # the last guess tried
+    memo = _guess_memo(n, K)
     for it in range(max_iter):
         mu, gap_rel, pres, dres = _measures(qp, T, t, x, y, slacks, iu, il, res, deg, scales, eps)
         done = pres <= eps and dres <= eps and gap_rel <= eps
@@ -337,7 +346,7 @@ def ipm_solve(qp, T, t, cones, limits):
                     and attempts < limits.crossover_attempts):
             # the active set the iterate points at, verified by the active-set solver
             if crossover_gap > 0.0:
-                tried, run = _crossover(x, slacks, iu, il, qp, cones, limits, last_state, last_cact)
+                tried, run = _crossover(x, slacks, iu, il, qp, cones, limits, memo, done or attempts == 0)
                 attempts += tried
                 if run.code == _kkt.FOUND:
                     return IPMRun(CROSSOVER, run.f, run.y, -run.grad, zc, it, run.state, run.cact, run.mus, run.dirs)
@@ -362,7 +371,7 @@ def ipm_solve(qp, T, t, cones, limits):
         _take_step(a, j, D, x, y, slacks)
     # no convergence: one last crossover from where the iterations stopped
     if crossover_gap > 0.0:
-        tried, run = _crossover(x, slacks, iu, il, qp, cones, limits, last_state, last_cact)
+        tried, run = _crossover(x, slacks, iu, il, qp, cones, limits, memo, True)
         if run.code == _kkt.FOUND:
             return IPMRun(CROSSOVER, run.f, run.y, -run.grad, zc, it + 1, run.state, run.cact, run.mus, run.dirs)
     return IPMRun(end, x, y, _zbox(zu, zl, iu, il, n), zc, it + 1, np.zeros(0, dtype=np.int8),
@@ -478,6 +487,14 @@ def _read_active_set(x, slacks, iu, il, cones):
         else:
             cdir[k] = basis0[k]
     return state, cact, cdir
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _guess_memo(n, K):
+    """The crossover's memory for ``n`` variables and ``K`` cones: ``(state, cact)`` of the last guess
+    tried, then of the last one read (none yet: states -1)."""
+    return (np.full(n, -1, dtype=np.int8), np.zeros(K, dtype=np.bool_), np.full(n, -1, dtype=np.int8),
+            np.zeros(K, dtype=np.bool_))
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
