@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 from ..jit import njit
 
-from ._kkt_linalg import determined_solve, kkt_solve, matvec, vertex_solve_lu
+from ._kkt_linalg import determined_solve, kkt_solve, matvec, schur_solve, vertex_solve_lu
 
 # eq_solve codes
 OK, SINGULAR, NO_CONVERGENCE, DROP, VANISHED = 0, 1, 2, 3, 5
@@ -247,10 +247,15 @@ def _cone_rows(G, gc, ax, tn, state, f, f_cur, have_cur, free, neq, act, mus, di
 def _solve_rows(K, rhs, nf, neq, na, square):
     """The KKT system's solution ``(sol, LU, perm, lu_ok)``: at a vertex (as many free cables as
     equations and held cones) through the rows alone (:func:`._kkt_linalg.vertex_solve_lu`, whose
-    factors come back), else by LU when square and by :func:`._kkt_linalg.determined_solve` when
-    not (then ``lu_ok`` is false)."""
+    factors come back), else, when square, through the rows' Schur complement where the free
+    cables' block is diagonal (:func:`._kkt_linalg.schur_solve`) and by LU where it is not, and by
+    :func:`._kkt_linalg.determined_solve` when not square (then ``lu_ok`` is false)."""
     if nf == neq + na:
         return vertex_solve_lu(K, rhs, nf, square)
+    if square:
+        sol, ok = schur_solve(K, rhs, nf)
+        if ok:
+            return sol, np.empty((0, 0)), np.empty(0, dtype=np.int64), False
     sol = kkt_solve(K, rhs, square) if square else determined_solve(K, rhs, nf)
     return sol, np.empty((0, 0)), np.empty(0, dtype=np.int64), False
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from ..jit import njit
 
-from ._ipm_linalg import dot
+from ._ipm_linalg import chol_inplace, chol_solve_inplace, dot
 
 
 @njit(cache=True, nogil=True)
@@ -36,6 +36,89 @@ def kkt_solve(K, rhs, square):
         if ok:
             return sol
     return lstsq_solve(K, rhs)
+
+
+@njit(cache=True, nogil=True)
+def schur_solve(K, rhs, nf):
+    """``K x = rhs`` for ``K = [[D, C^T], [C, 0]]`` whose block ``D`` of the ``nf`` free variables is
+    diagonal (a separable objective such as ``f^T f`` or the activations', without a held cone's
+    curvature): the rows' multipliers from the Schur complement ``S = C D^-1 C^T`` by Cholesky, then
+    ``x_F = D^-1 (r_1 - C^T lam)``, and one step of iterative refinement on the whole system. For
+    ``m`` rows that is ``m^2 nf / 2 + m^3 / 6`` multiply-adds where an LU of the whole system takes
+    ``(nf + m)^3 / 3``: at 96 DoF and 288 cables about 20 times fewer.
+
+    A dependent row (a pivot of ``S`` at or below ``1e-12`` of its diagonal entry) has its multiplier
+    set to zero; the system is then consistent only if the residual of every row is at rounding
+    level (below ``1e-10`` of the right-hand side's largest entry, at least 1: the test of
+    :func:`lstsq_solve`), and otherwise ``x`` is NaN (a singular, inconsistent system).
+
+    Returns ``(x, ok)``; ``ok`` false (the caller then solves the whole system by LU) when ``D`` has
+    an entry off its diagonal or a diagonal entry not above ``1e-8`` of the largest."""
+    N = K.shape[0]
+    m = N - nf
+    x = np.empty(N)
+    dmax = 0.0
+    for i in range(nf):
+        for j in range(nf):
+            if j != i and K[i, j] != 0.0:
+                return x, False
+        dmax = max(dmax, K[i, i])
+    if not dmax > 0.0:
+        return x, False
+    dinv = np.empty(nf)
+    for i in range(nf):
+        if not K[i, i] > 1e-8 * dmax:
+            return x, False
+        dinv[i] = 1.0 / K[i, i]
+    C = np.empty((m, nf))
+    W = np.empty((m, nf))  # C D^-1
+    for r in range(m):
+        for p in range(nf):
+            C[r, p] = K[nf + r, p]
+            W[r, p] = K[nf + r, p] * dinv[p]
+    L = np.zeros((m, m))
+    for r in range(m):
+        for q in range(r + 1):
+            L[r, q] = dot(W[r], C[q])
+    chol_inplace(L, 1e-12, np.int64(0))
+    for j in range(m):  # (chol_solve_inplace takes the pivots' inverses)
+        L[j, j] = 1.0 / L[j, j]
+    _schur_apply(C, W, dinv, L, rhs, nf, x)
+    res = rhs.copy()
+    for i in range(N):
+        res[i] -= dot(K[i], x)
+    dx = np.empty(N)
+    _schur_apply(C, W, dinv, L, res, nf, dx)
+    scale = 1.0
+    for i in range(N):
+        x[i] += dx[i]
+        scale = max(scale, abs(rhs[i]))
+    for i in range(N):
+        if not abs(dot(K[i], x) - rhs[i]) <= 1e-10 * scale:
+            x[:] = np.nan
+            break
+    return x, True
+
+
+@njit(cache=True, nogil=True)
+def _schur_apply(C, W, dinv, L, rhs, nf, out):
+    """:func:`schur_solve`'s solution for the right-hand side ``rhs`` into ``out`` (``L`` the
+    complement's Cholesky factor with its pivots' inverses on the diagonal, ``W = C D^-1``)."""
+    m = C.shape[0]
+    lam = np.empty(m)
+    for r in range(m):
+        t = -rhs[nf + r]
+        for p in range(nf):
+            t += W[r, p] * rhs[p]
+        lam[r] = t
+    chol_solve_inplace(L, lam)
+    for p in range(nf):
+        t = rhs[p]
+        for r in range(m):
+            t -= C[r, p] * lam[r]
+        out[p] = dinv[p] * t
+    for r in range(m):
+        out[nf + r] = lam[r]
 
 
 @njit(cache=True, nogil=True)
