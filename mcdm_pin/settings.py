@@ -108,6 +108,13 @@ class Settings:
     few ms: at the turning point of the neck's ``roll`` (cases 2 and 3) the active set needs 33 pivots
     (~0.7 ms), and with a limit of 30 that instant costs the pivots *and* the cold solve (~4 ms, the
     trajectory's 99th percentile). 50 pivots keep a warm start that fails under ~1 ms of pivoting."""
+    warm_min_pivots: int = 4
+    """After a warm start fails, the next instant's pivot limit is half the last one, down to this (at
+    most ``warm_max_pivots``); an answer from the warm start restores ``warm_max_pivots``. A guess that
+    failed tends to fail again where the instants lie far apart, and a pivot's KKT solve grows with the
+    cube of the problem's size: at 96 DoF and 288 cables, 11 instants over a second, every warm start
+    failed after its 50 pivots and took longer than the cold solve that followed (docs/speed.md, "The
+    first stage of a cold instant")."""
     polish_max_pivots: int = 30
     """The polish's pivot limit from another stage's active set."""
     active_set_max_newton: int = 10

@@ -411,3 +411,22 @@ def test_folded_cones_give_the_expanded_systems_directions(instants):
                 np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
         folded += 1
     assert folded >= 10, folded
+
+
+def test_a_warm_start_that_fails_halves_the_next_instants_pivot_limit(monkeypatch):
+    """WarmActiveSet: after a failure the next limit is half the last, down to warm_min_pivots; an
+    answer, or a reset, restores warm_max_pivots (the answer itself is the chain's either way)."""
+    from mcdm_pin.solvers import active_set
+
+    limits, answers = [], []
+    monkeypatch.setattr(jit, "ready", lambda: True)
+    monkeypatch.setattr(active_set, "try_active_set",
+                        lambda qp, guess, max_pivots, stage, settings: limits.append(max_pivots) or answers.pop(0))
+    stage = active_set.WarmActiveSet(DEFAULT.replace(warm_max_pivots=50, warm_min_pivots=4))
+    stage.guess = object()
+    answers += [None] * 5 + ["found", None]
+    for _ in range(7):
+        stage.run(None, None, None)
+    assert limits == [50, 25, 12, 6, 4, 4, 50]
+    stage.reset()
+    assert stage.max_pivots == 50

@@ -89,7 +89,7 @@ PICTURES = (
         "mcdm-pin plot out/arm_case3.zarr --out docs/img --prefix workspace_two_link_ --format png",
     )),
     Picture("scaling", "docs/speed.md", (
-        "python benchmarks/scaling.py --plot docs/img/scaling.png --markdown docs/scaling.md",
+        "python benchmarks/scaling.py --peers all --warm-and-cold --plot docs/img/scaling.png --markdown docs/scaling.md",
     )),
     Picture("glenohumeral_abduction", "docs/glenohumeral.md", (
         "python tools/glenohumeral_study.py",

@@ -226,7 +226,8 @@ class WarmActiveSet(Stage):
     """Answering stage: the previous answer's active set (see the module docstring).
 
     Args:
-        settings: the pivot limit per instant (``warm_max_pivots``) and the tolerances.
+        settings: the pivot limit per instant (``warm_max_pivots``, halved after each failure down to
+            ``warm_min_pivots``, restored by a success) and the tolerances.
     """
 
     name = "warm_active_set"
@@ -234,11 +235,16 @@ class WarmActiveSet(Stage):
     def __init__(self, settings: Settings = DEFAULT):
         self.settings = settings
         self.guess: ActiveSet | None = None
+        self.max_pivots = settings.warm_max_pivots  # this instant's limit
 
     def run(self, qp, sol, deadline):
         if self.guess is None or not jit.ready():
             return None
-        return try_active_set(qp, self.guess, self.settings.warm_max_pivots, stage=self.name, settings=self.settings)
+        s = self.settings
+        out = try_active_set(qp, self.guess, self.max_pivots, stage=self.name, settings=s)
+        least = min(s.warm_min_pivots, s.warm_max_pivots)
+        self.max_pivots = s.warm_max_pivots if out is not None else max(least, self.max_pivots // 2)
+        return out
 
     def learn(self, qp, sol):
         self.guess = sol.active if sol.active is not None else ActiveSet.from_duals(
@@ -249,6 +255,7 @@ class WarmActiveSet(Stage):
 
     def reset(self):
         self.guess = None
+        self.max_pivots = self.settings.warm_max_pivots
 
 
 class Polish(Stage):
