@@ -6,7 +6,8 @@ on the neck and on the scaling study's chains (6 to 96 DoF).
 
 Every instant is solved alone (``reset()`` then ``solve``), in order, ``--repeat`` times; cells are the
 median wall time of ``solve`` per instant (ms) and the mean of the answers' ``iterations`` (interior-
-point iterations plus linear KKT solves). Rows:
+point iterations plus linear KKT solves), with the 99th percentile of the wall times beside the median.
+Rows:
 
 - ``ipm gap G``: the default chain with ``Settings(ipm_crossover_gap=G)`` (the default is the first);
 - ``daqp first``: DAQP (``daqp.solve``, cold, ``eps_prox`` 0) before the default chain's stages, for
@@ -33,6 +34,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import DEFAULT_CASPR, machine_line, one_blas_thread
+from myoarm import top_processes
 
 GAPS = (1e-3, 1e-5, 1e-6, 1e-7)
 
@@ -97,7 +99,7 @@ def chain_with(first, settings):
 
 
 def cold(ident, traj, repeat: int):
-    """(median ms, mean iterations, objectives of the first run, instants without an answer)."""
+    """(median ms, p99 ms, mean iterations, objectives of the first run, instants without an answer)."""
     ts, its, objs, bad = [], [], [], 0
     for rep in range(repeat):
         for k in range(len(traj.t)):
@@ -109,11 +111,11 @@ def cold(ident, traj, repeat: int):
             bad += (not r.found) and rep == 0
             if rep == 0:
                 objs.append(r.objective)
-    return np.median(ts) * 1e3, float(np.mean(its)), np.array(objs), bad
+    return np.median(ts) * 1e3, np.quantile(ts, 0.99) * 1e3, float(np.mean(its)), np.array(objs), bad
 
 
 def rows(robot, traj, kw: dict, case: int, repeat: int):
-    """``(label, ms, iterations, objective difference, no answer)`` per row for one robot and case."""
+    """``(label, ms, p99 ms, iterations, objective difference, no answer)`` per row for one robot and case."""
     from mcdm_pin import InverseDynamics
     from mcdm_pin.settings import DEFAULT
 
@@ -126,10 +128,10 @@ def rows(robot, traj, kw: dict, case: int, repeat: int):
     for label, solver, settings in variants:
         ident = InverseDynamics.for_case(robot, case, solver=solver, settings=settings, **kw)
         cold(ident, traj, 1)  # untimed: first calls
-        ms, it, obj, bad = cold(ident, traj, repeat)
+        ms, p99, it, obj, bad = cold(ident, traj, repeat)
         ref = obj if ref is None else ref
         diff = float(np.nanmax(np.abs(obj - ref) / np.maximum(np.abs(ref), 1.0)))
-        out.append((label, ms, it, diff, bad))
+        out.append((label, ms, p99, it, diff, bad))
     return out
 
 
@@ -157,14 +159,16 @@ def main(argv=None) -> int:
     t0 = time.time()
     print(machine_line())
     print(f"1-min load at the start {os.getloadavg()[0]:.2f}; cold instants, {args.repeat} run(s) each; "
-          "cells: median ms per instant, mean iterations, max relative objective difference to the first row")
-    print("| robot | case | first stage | ms | iterations | objective diff | no answer |")
-    print("|---|---|---|---|---|---|---|")
+          "cells: median and p99 ms per instant, mean iterations, max relative objective difference to the first row")
+    print("| robot | case | first stage | ms | p99 ms | iterations | objective diff | no answer |")
+    print("|---|---|---|---|---|---|---|---|")
     for name, robot, traj, kw in robots(args.sizes, not args.no_neck):
         for case in args.cases:
-            for label, ms, it, diff, bad in rows(robot, traj, kw[case], case, args.repeat):
-                print(f"| {name} | {case} | {label} | {ms:.3f} | {it:.2f} | {diff:.1e} | {bad} |", flush=True)
-    print(f"\n({time.time() - t0:.0f} s; 1-min load at the end {os.getloadavg()[0]:.2f})")
+            for label, ms, p99, it, diff, bad in rows(robot, traj, kw[case], case, args.repeat):
+                print(f"| {name} | {case} | {label} | {ms:.3f} | {p99:.3f} | {it:.2f} | {diff:.1e} | {bad} |",
+                      flush=True)
+    print(f"\n({time.time() - t0:.0f} s; 1-min load at the end {os.getloadavg()[0]:.2f}; busiest processes at the "
+          f"end: {top_processes()})")
     return 0
 
 
