@@ -2,6 +2,7 @@
 dispatch of flat arguments against named structures.
 
     python benchmarks/kernel_calls.py [ROBOT.yaml] [TRAJECTORY] [--cases 1 3] [--instants 30] [--batches 7]
+    python benchmarks/kernel_calls.py --chain 32 --cases 1 2 3 --instants 11   # 96 DoF, 288 cables
 
 1. The problems of ``--instants`` cold instants (shuffled, each after ``InverseDynamics.reset()``)
    are captured as the arguments of ``_fast.ipm_answer``. Each is timed as the least of ``--batches``
@@ -13,7 +14,8 @@ dispatch of flat arguments against named structures.
    and each half alone. Least of 5 runs of 20,000 calls, wall time per call.
 
 Default robot: the CASPR neck with the paper's weights and 15 deg cones
-(``_common.neck_case_options``), trajectory ``roll``. One BLAS thread; the 1-minute load average
+(``_common.neck_case_options``), trajectory ``roll``; ``--chain N``: ``benchmarks/scaling.py``'s
+chain of ``N`` links (``3 N`` DoF, ``9 N`` cables) along its ``sweep``. One BLAS thread; the 1-minute load average
 is printed first and last (the machine is shared).
 """
 
@@ -46,18 +48,32 @@ def _least(fn, args, batches: int, clock) -> float:
     return best * 1e6
 
 
-def ipm_calls(robot_path: str, trajectory: str, cases, instants: int, batches: int) -> None:
-    from mcdm_pin import InverseDynamics, Robot, jit
+def load(robot_path: str, trajectory: str, chain: int | None):
+    """``(robot, trajectory, {case: for_case options})``: a robot file, or scaling.py's chain."""
+    from _common import neck_case_options
+
+    from mcdm_pin import Robot
+    from mcdm_pin.trajectory import load_trajectory
+
+    if chain:
+        import tempfile
+
+        import scaling
+
+        robot, tr = scaling.build(Path(tempfile.mkdtemp()), chain, 9 * chain, 11)
+        return robot, tr, {c: {} for c in (1, 2, 3)}
+    robot = Robot.load(robot_path)
+    opts = neck_case_options(robot.joint_names) if "neck" in robot_path else {c: {} for c in (1, 2, 3)}
+    return robot, load_trajectory(robot, trajectory), opts
+
+
+def ipm_calls(robot, tr, opts, cases, instants: int, batches: int) -> None:
+    from mcdm_pin import InverseDynamics, jit
     from mcdm_pin.settings import DEFAULT
     from mcdm_pin.solvers import _fast
     from mcdm_pin.solvers import ipm as ipm_mod
-    from mcdm_pin.trajectory import load_trajectory
-    from _common import neck_case_options
 
     jit.prepare(policy="wait")
-    robot = Robot.load(robot_path)
-    tr = load_trajectory(robot, trajectory)
-    opts = neck_case_options(robot.joint_names) if "neck" in robot_path else {c: {} for c in (1, 2, 3)}
     print("| case | problems | thread CPU p50 / p99, us | wall p50 / p99, us |")
     print("|---|---|---|---|")
     for case in cases:
@@ -130,12 +146,13 @@ def main(argv=None) -> int:
     ap.add_argument("--cases", type=int, nargs="+", default=[1, 3])
     ap.add_argument("--instants", type=int, default=30)
     ap.add_argument("--batches", type=int, default=7)
+    ap.add_argument("--chain", type=int, help="links of benchmarks/scaling.py's chain instead of ROBOT")
     a = ap.parse_args(argv)
     from _common import one_blas_thread
 
     one_blas_thread()
     print(f"1-minute load average {os.getloadavg()[0]:.2f}")
-    ipm_calls(a.robot, a.trajectory, a.cases, a.instants, a.batches)
+    ipm_calls(*load(a.robot, a.trajectory, a.chain), a.cases, a.instants, a.batches)
     dispatch()
     print(f"1-minute load average {os.getloadavg()[0]:.2f}")
     return 0
