@@ -499,7 +499,8 @@ def _guess_memo(n, K):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _new_guess(state, cact, last_state, last_cact):
-    """Whether ``(state, cact)`` differs from the last guess tried (then it becomes the last)."""
+    """Whether ``(state, cact)`` differs from ``(last_state, last_cact)`` (the last guess tried, or the
+    last one read: then updated to it)."""
     same = True
     for i in range(state.shape[0]):
         if state[i] != last_state[i]:

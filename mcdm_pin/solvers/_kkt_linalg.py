@@ -49,8 +49,8 @@ def schur_solve(K, rhs, nf):
 
     A dependent row (a pivot of ``S`` at or below ``1e-12`` of its diagonal entry) has its multiplier
     set to zero; the system is then consistent only if the residual of every row is at rounding
-    level (below ``1e-10`` of the right-hand side's largest entry, at least 1: the test of
-    :func:`lstsq_solve`), and otherwise ``x`` is NaN (a singular, inconsistent system).
+    level (:func:`_nan_unless_consistent`, the test :func:`lstsq_solve` makes too), and otherwise
+    ``x`` is NaN (a singular, inconsistent system).
 
     Returns ``(x, ok)``; ``ok`` false (the caller then solves the whole system by LU) when ``D`` has
     an entry off its diagonal or a diagonal entry not above ``1e-8`` of the largest."""
@@ -89,14 +89,9 @@ def schur_solve(K, rhs, nf):
         res[i] -= dot(K[i], x)
     dx = np.empty(N)
     _schur_apply(C, W, dinv, L, res, nf, dx)
-    scale = 1.0
     for i in range(N):
         x[i] += dx[i]
-        scale = max(scale, abs(rhs[i]))
-    for i in range(N):
-        if not abs(dot(K[i], x) - rhs[i]) <= 1e-10 * scale:
-            x[:] = np.nan
-            break
+    _nan_unless_consistent(K, x, rhs)
     return x, True
 
 
@@ -126,6 +121,15 @@ def lstsq_solve(K, rhs):
     """``K x = rhs`` by least squares; NaNs unless the residual is at rounding level (a singular,
     inconsistent system)."""
     sol = np.linalg.lstsq(K, rhs)[0]
+    _nan_unless_consistent(K, sol, rhs)
+    return sol
+
+
+@njit(cache=True, nogil=True)
+def _nan_unless_consistent(K, sol, rhs):
+    """``sol`` set to NaN (in place) unless every residual of ``K sol = rhs`` is at rounding level:
+    below ``1e-10`` of the right-hand side's largest entry, at least 1 (a singular, inconsistent
+    system otherwise)."""
     scale = 1.0
     for i in range(rhs.shape[0]):
         scale = max(scale, abs(rhs[i]))
@@ -134,7 +138,6 @@ def lstsq_solve(K, rhs):
         if not abs(r[i]) <= 1e-10 * scale:
             sol[:] = np.nan
             break
-    return sol
 
 
 @njit(cache=True, nogil=True)
