@@ -84,3 +84,49 @@ def neck_case_options(joint_names) -> dict:
     15 deg cones on every joint (case 3)."""
     base = dict(alpha={j: 0.125 for j in joint_names}, beta={j: 0.0 for j in joint_names})
     return {1: {}, 2: dict(base), 3: dict(base, cones={j: 15.0 for j in joint_names})}
+
+
+def load_robot(robot_path: str, trajectory: str, chain: int | None = None):
+    """``(robot, trajectory, {case: for_case options})``: a robot file along ``trajectory`` (the
+    neck with the paper's settings, :func:`neck_case_options`), or ``benchmarks/scaling.py``'s chain
+    of ``chain`` links (``9 chain`` cables) along its ``sweep``."""
+    from mcdm_pin import Robot
+    from mcdm_pin.trajectory import load_trajectory
+
+    if chain:
+        import tempfile
+
+        import scaling
+
+        robot, tr = scaling.build(Path(tempfile.mkdtemp()), chain, 9 * chain, 11)
+        return robot, tr, {c: {} for c in (1, 2, 3)}
+    robot = Robot.load(robot_path)
+    opts = neck_case_options(robot.joint_names) if "neck" in robot_path else {c: {} for c in (1, 2, 3)}
+    return robot, load_trajectory(robot, trajectory), opts
+
+
+def captured_ipm_arguments(ident, traj, instants: int) -> list:
+    """The arguments of ``_fast.ipm_answer`` at ``instants`` cold instants of ``traj`` (shuffled with
+    seed 0, each after ``ident.reset()``), captured from ``solvers.ipm.ipm_arguments``."""
+    import random
+
+    from mcdm_pin.settings import DEFAULT
+    from mcdm_pin.solvers import ipm as ipm_mod
+
+    captured, original = [], ipm_mod.ipm_arguments
+
+    def capture(qp, settings=DEFAULT):
+        args = original(qp, settings)
+        captured.append(args)
+        return args
+
+    ipm_mod.ipm_arguments = capture
+    try:
+        order = list(range(len(traj.t)))
+        random.Random(0).shuffle(order)
+        for k in order[:instants]:
+            ident.reset()
+            ident.solve(traj.q[k], traj.qd[k], traj.qdd[k])
+    finally:
+        ipm_mod.ipm_arguments = original
+    return captured

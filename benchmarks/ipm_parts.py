@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import random
 import sys
 import time
 from pathlib import Path
@@ -48,39 +47,19 @@ def main(argv=None) -> int:
     ap.add_argument("--objective-scale", type=float, nargs="*", default=[])
     a = ap.parse_args(argv)
 
-    from mcdm_pin import InverseDynamics, Robot, jit
+    from _common import captured_ipm_arguments, load_robot
+
+    from mcdm_pin import InverseDynamics, jit
     from mcdm_pin.solvers import _fast, _kkt_linalg
-    from mcdm_pin.solvers import ipm as ipm_mod
-    from mcdm_pin.settings import DEFAULT
-    from mcdm_pin.trajectory import load_trajectory
-    from _common import neck_case_options
 
     jit.prepare(policy="wait")
     print(f"1-minute load average {os.getloadavg()[0]:.2f}")
-    robot = Robot.load(a.robot)
-    tr = load_trajectory(robot, a.trajectory)
-    opts = neck_case_options(robot.joint_names) if "neck" in a.robot else {c: {} for c in (1, 2, 3)}
+    robot, tr, opts = load_robot(a.robot, a.trajectory)
     print("| case | iterations p50 | whole call, us | per iteration, us | crossover and answer, us |")
     print("|---|---|---|---|---|")
     for case in a.cases:
         ident = InverseDynamics.for_case(robot, case, **opts[case])
-        captured = []
-        original = ipm_mod.ipm_arguments
-
-        def capture(qp, settings=DEFAULT):
-            args = original(qp, settings)
-            captured.append(args)
-            return args
-
-        ipm_mod.ipm_arguments = capture
-        try:
-            order = list(range(len(tr.t)))
-            random.Random(0).shuffle(order)
-            for k in order[:a.instants]:
-                ident.reset()
-                ident.solve(tr.q[k], tr.qd[k], tr.qdd[k])
-        finally:
-            ipm_mod.ipm_arguments = original
+        captured = captured_ipm_arguments(ident, tr, a.instants)
         its, whole, loop = [], [], []
         for args in captured:
             it = int(_fast.ipm_answer(*args).iterations)

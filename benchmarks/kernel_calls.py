@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import random
 import sys
 import time
 import timeit
@@ -48,52 +47,18 @@ def _least(fn, args, batches: int, clock) -> float:
     return best * 1e6
 
 
-def load(robot_path: str, trajectory: str, chain: int | None):
-    """``(robot, trajectory, {case: for_case options})``: a robot file, or scaling.py's chain."""
-    from _common import neck_case_options
-
-    from mcdm_pin import Robot
-    from mcdm_pin.trajectory import load_trajectory
-
-    if chain:
-        import tempfile
-
-        import scaling
-
-        robot, tr = scaling.build(Path(tempfile.mkdtemp()), chain, 9 * chain, 11)
-        return robot, tr, {c: {} for c in (1, 2, 3)}
-    robot = Robot.load(robot_path)
-    opts = neck_case_options(robot.joint_names) if "neck" in robot_path else {c: {} for c in (1, 2, 3)}
-    return robot, load_trajectory(robot, trajectory), opts
-
-
 def ipm_calls(robot, tr, opts, cases, instants: int, batches: int) -> None:
+    from _common import captured_ipm_arguments
+
     from mcdm_pin import InverseDynamics, jit
-    from mcdm_pin.settings import DEFAULT
     from mcdm_pin.solvers import _fast
-    from mcdm_pin.solvers import ipm as ipm_mod
 
     jit.prepare(policy="wait")
     print("| case | problems | thread CPU p50 / p99, us | wall p50 / p99, us |")
     print("|---|---|---|---|")
     for case in cases:
         ident = InverseDynamics.for_case(robot, case, **opts[case])
-        captured, original = [], ipm_mod.ipm_arguments
-
-        def capture(qp, settings=DEFAULT):
-            args = original(qp, settings)
-            captured.append(args)
-            return args
-
-        ipm_mod.ipm_arguments = capture
-        try:
-            order = list(range(len(tr.t)))
-            random.Random(0).shuffle(order)
-            for k in order[:instants]:
-                ident.reset()
-                ident.solve(tr.q[k], tr.qd[k], tr.qdd[k])
-        finally:
-            ipm_mod.ipm_arguments = original
+        captured = captured_ipm_arguments(ident, tr, instants)
         cpu = np.array([_least(_fast.ipm_answer, a, batches, time.thread_time) for a in captured])
         wall = np.array([_least(_fast.ipm_answer, a, batches, time.perf_counter) for a in captured])
         print(f"| {case} | {len(captured)} | {np.median(cpu):.1f} / {np.percentile(cpu, 99):.1f} | "
@@ -148,11 +113,11 @@ def main(argv=None) -> int:
     ap.add_argument("--batches", type=int, default=7)
     ap.add_argument("--chain", type=int, help="links of benchmarks/scaling.py's chain instead of ROBOT")
     a = ap.parse_args(argv)
-    from _common import one_blas_thread
+    from _common import load_robot, one_blas_thread
 
     one_blas_thread()
     print(f"1-minute load average {os.getloadavg()[0]:.2f}")
-    ipm_calls(*load(a.robot, a.trajectory, a.chain), a.cases, a.instants, a.batches)
+    ipm_calls(*load_robot(a.robot, a.trajectory, a.chain), a.cases, a.instants, a.batches)
     dispatch()
     print(f"1-minute load average {os.getloadavg()[0]:.2f}")
     return 0
