@@ -123,12 +123,19 @@ def _group_ends(pgid: int, within_s: float) -> bool:
     return False
 
 
+def _ctrl_c_at_default():
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_ctrl_c_on_a_dask_workspace_is_one_line_that_says_what_was_kept(tmp_path):
     out = tmp_path / "arm.zarr"
     args = [sys.executable, "-m", "mcdm_pin", "workspace", str(TWO_LINK), "--random", "3000",
             "--chunk", "30", "--scheduler", "local", "--workers", "2", "--out", str(out), "-q"]
+    # the run starts as from a terminal, with Ctrl-C at its default disposition: a test process that
+    # was itself started in the background of a non-interactive shell (as a CI runner may start it)
+    # ignores SIGINT, its children inherit that, and Python then installs no KeyboardInterrupt handler
     proc = subprocess.Popen(args, cwd=tmp_path, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, start_new_session=True)
+                            text=True, start_new_session=True, preexec_fn=_ctrl_c_at_default)
     try:
         deadline = time.monotonic() + 120
         while time.monotonic() < deadline and proc.poll() is None:
