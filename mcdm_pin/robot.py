@@ -176,7 +176,7 @@ class Robot:
     def from_sidecar(cls, sidecar: Sidecar) -> "Robot":
         sc = sidecar
         if sc.mjcf_path is not None or sc.osim_path is not None:
-            return _from_mjcf_sidecar(sc)
+            return _from_model_file_sidecar(sc)
         if sc.urdf_path is None:
             urdf_path = resolve_package_uri(sc.urdf, sc.path)
         else:
@@ -301,7 +301,7 @@ class Robot:
 
 
 # ------------------------------------------------------------------------------------ sidecar helpers
-def _from_mjcf_sidecar(sc: Sidecar) -> Robot:
+def _from_model_file_sidecar(sc: Sidecar) -> Robot:
     """The MJCF (or OpenSim) file's robot with the sidecar's joint settings, reserves and trajectories:
     the file is read (MuJoCo compiles an MJCF) once and the robot is built once, from its parts
     (:func:`~mcdm_pin.mjcf.load.mjcf_parts`, :func:`~mcdm_pin.osim.load.osim_parts`) with the sidecar's

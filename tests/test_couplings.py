@@ -35,3 +35,37 @@ def test_basis_equals_finite_differences_of_the_coupled_map():
         assert np.abs(N - fd).max() < 1e-8 * max(1.0, np.abs(fd).max())
         assert not N[3].any() and not N[4].any()  # a fixed coordinate and the one coupled to it
         assert np.count_nonzero(N[6]) == 1 and N[6, 0] != 0.0
+
+
+class _Cubic:
+    """A coupling given by a function (as OpenSim's are): ``(f, f', f'')``."""
+
+    def value(self, x):
+        return 0.2 * x ** 3 - x, 0.6 * x ** 2 - 1.0, 1.2 * x
+
+
+def test_check_accepts_what_fill_makes_and_names_the_first_coordinate_that_breaks_a_coupling():
+    """``check`` (one compiled pass, each coupling at the given values of its source) accepts every
+    state ``fill`` makes, chains, fixed coordinates and a function included, and refuses a dependent
+    moved by 1e-6 in ``q``, ``v`` or ``a`` (or made NaN), naming it and the coupling."""
+    import pytest
+
+    from mcdm_pin.exceptions import StateError
+
+    items = list(_couplings().items) + [Coupling(5, 0, (0.0,) * 5, "f", function=_Cubic())]
+    cs = Couplings(np.arange(8), items, [f"x{i}" for i in range(8)])
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        q, v, a = cs.fill(*rng.uniform(-1.0, 1.0, (3, 8)))
+        cs.check(q, v, a)
+        cs.check(q)
+        cs.check(q, v)
+        for what, x in (("q", q), ("v", v), ("a", a)):
+            for dep, coupling in ((6, "e"), (2, "b"), (4, "d"), (5, "f")):
+                for bad in (1e-6, np.nan):
+                    y = x.copy()
+                    y[dep] = y[dep] + bad
+                    args = dict(q=q, v=v, a=a) | {what: y}
+                    with pytest.raises(StateError, match=rf"^{what}: coordinate 'x{dep}' is .* but coupling "
+                                                          rf"'{coupling}' makes it"):
+                        cs.check(**args)

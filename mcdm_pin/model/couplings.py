@@ -35,6 +35,7 @@ import numpy as np
 
 from ..exceptions import ModelError, StateError
 
+_EMPTY = np.zeros(0)
 DEPENDENT_TOL = 1e-9  # a given dependent coordinate must match its polynomial to this (rad or m)
 
 
@@ -99,6 +100,7 @@ class Couplings:
         self.independent = np.array([i for i in range(nv) if i not in dep], dtype=int)
         self.independent_names = tuple(self.names[i] for i in self.independent)
         self._chain = None  # basis()'s index arrays, made on first use
+        self._local = None  # check()'s, likewise
         self._independent64 = self.independent.astype(np.int64)
 
     @property
@@ -146,20 +148,30 @@ class Couplings:
         return q, v, a
 
     def check(self, q, v=None, a=None, tol: float = DEPENDENT_TOL) -> None:
-        """Raise :class:`StateError` unless the dependent entries of ``(q, v, a)`` follow the couplings."""
-        qf, vf, af = self.fill(q, v, a)
-        for given, filled, what, idx in ((q, qf, "q", self.q_index[self.dependent]), (v, vf, "v", self.dependent),
-                                         (a, af, "a", self.dependent)):
-            if given is None:
-                continue
-            err = np.abs(np.asarray(given, dtype=float)[idx] - filled[idx])
-            scale = 1.0 + np.abs(filled[idx])
-            if np.any(err > tol * scale):
-                k = int(np.argmax(err / scale))
-                c = self.items[k]
-                raise StateError(f"{what}: coordinate {self.names[c.dependent]!r} is {given[idx[k]]!r} but "
-                                 f"coupling {c.name!r} makes it {filled[idx[k]]!r} (give only the "
-                                 f"independent coordinates, or values that follow the couplings)")
+        """Raise :class:`StateError` unless the dependent entries of ``(q, v, a)`` follow the couplings:
+        each dependent within ``tol (1 + |value|)`` of its coupling evaluated at the given values of
+        what it depends on (one compiled pass, :func:`mcdm_pin.model.kernels.coupling_violation`;
+        :meth:`fill` evaluates them along their chains). The error names the first broken coupling
+        in order, a source before what depends on it."""
+        if self._local is None:
+            self._local = _local(self)
+        from .. import jit
+
+        dep_q, src_q, dep_v, src_v, coef, no_functions, functions = self._local
+        q = np.asarray(q, dtype=float)
+        vv = _EMPTY if v is None else np.asarray(v, dtype=float)
+        aa = _EMPTY if v is None or a is None else np.asarray(a, dtype=float)
+        fvals = no_functions if not functions else np.full((len(self.items), 3), np.nan)
+        for k, f in functions:  # OpenSim's functions: evaluated here, the polynomials in the kernel
+            fvals[k] = f(q[src_q[k]] if src_q[k] >= 0 else 0.0)
+        k, what, value = jit.kernels("model.kernels").coupling_violation(
+            q, vv, aa, dep_q, src_q, dep_v, src_v, coef, fvals, float(tol))
+        if k >= 0:
+            c = self.items[k]
+            name, given = ("q", "v", "a")[what], (q, vv, aa)[what][dep_q[k] if what == 0 else c.dependent]
+            raise StateError(f"{name}: coordinate {self.names[c.dependent]!r} is {given!r} but "
+                             f"coupling {c.name!r} makes it {value!r} (give only the "
+                             f"independent coordinates, or values that follow the couplings)")
 
     def basis(self, q) -> np.ndarray:
         """``N`` (nv, n): ``dq/dz`` at ``q`` (module docstring).
@@ -208,6 +220,21 @@ def _chain(cs: Couplings):
     src = np.array(src, dtype=i64)
     return (src, cs.q_index[src].astype(i64), np.array(rows, dtype=i64), np.array(cols, dtype=i64),
             np.array(coef, dtype=float).reshape(len(rows), 5), tuple(functions))
+
+
+def _local(cs: Couplings):
+    """:meth:`Couplings.check`'s arrays, in the couplings' order: each dependent's ``q`` entry, its
+    source's ``q`` entry (-1 for a fixed coordinate), the dependents' and their sources' ``v`` indices
+    (likewise), the polynomials (k, 5; zeros for a function), a (k, 3) NaN array (no function values:
+    read only) and the ``(k, value)`` of the couplings given by a function."""
+    i64 = np.int64
+    ind = np.array([c.independent for c in cs.items], dtype=i64)
+    coef = np.array([[0.0] * 5 if c.function is not None else [float(t) for t in c.coef] for c in cs.items],
+                    dtype=float).reshape(len(cs.items), 5)
+    functions = tuple((k, c.value) for k, c in enumerate(cs.items) if c.function is not None)
+    src_q = np.where(ind >= 0, cs.q_index[np.maximum(ind, 0)], -1).astype(i64)
+    return (cs.q_index[cs.dependent].astype(i64), src_q, cs.dependent.astype(i64), ind, coef,
+            np.full((len(cs.items), 3), np.nan), functions)
 
 
 def _ordered(items, names):

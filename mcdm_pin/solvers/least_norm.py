@@ -79,7 +79,9 @@ def _strongly_active(qp, sol: Solution, settings: Settings, curvature: bool = Tr
         # on the surface with this direction for every optimum: the surface row and the
         # perpendicular direction normal to it
         rows.append((k, (nhat - cone.tan * cone.axis) @ cone.G))
-        rows.append((k, np.cross(cone.axis, nhat) @ cone.G))
+        e, h = cone.axis, nhat  # e x h, by hand: np.cross costs ~8x as much on 3-vectors
+        rows.append((k, np.array([e[1] * h[2] - e[2] * h[1], e[2] * h[0] - e[0] * h[2],
+                                  e[0] * h[1] - e[1] * h[0]]) @ cone.G))
         if curvature:
             Pp = np.eye(3) - np.outer(cone.axis, cone.axis) - np.outer(nhat, nhat)
             curv += mu * cone.G.T @ Pp @ cone.G / perp
