@@ -221,7 +221,7 @@ def time_parts(robot, traj, repeat: int) -> dict:
         last["terms"] = ev._kernel(last["oM"], last["J"], last["route"], ev._kernel_args)
 
     def rnea(s):
-        pin.rnea(model, data, *s)
+        last["tau"] = pin.rnea(model, data, *s)
 
     def passive(s):
         if ev.passive is not None:
@@ -232,12 +232,12 @@ def time_parts(robot, traj, repeat: int) -> dict:
 
     def couplings(s):
         if ev.couplings is not None:
-            last["terms"][3] @ ev.couplings.basis(s[0])
+            ev.couplings.project(s[0], last["terms"][3], last["tau"])
 
     parts = (("kinematics + Jacobians + placements", kinematics), ("routes (compiled wrap pass)", routes),
              ("cable_terms kernel (lengths, L, wrench maps)", cable_terms), ("rnea", rnea),
              ("joint springs and dampers (mjcf joint_passive)", passive), ("muscle bounds", muscles),
-             ("couplings basis and L N", couplings))
+             ("couplings: N, L N and N^T tau", couplings))
     out = {name: [] for name, _ in parts}
     for rep in range(repeat * 5 + 1):
         for s in states:

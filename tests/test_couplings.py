@@ -69,3 +69,18 @@ def test_check_accepts_what_fill_makes_and_names_the_first_coordinate_that_break
                     with pytest.raises(StateError, match=rf"^{what}: coordinate 'x{dep}' is .* but coupling "
                                                           rf"'{coupling}' makes it"):
                         cs.check(**args)
+
+
+def test_project_equals_the_dense_products_with_the_basis():
+    """``project`` (one compiled pass: ``N`` has one entry at most per row) gives ``basis``'s ``N``, and
+    ``L N``, ``N^T tau`` equal to the dense products to rounding."""
+    items = list(_couplings().items) + [Coupling(5, 0, (0.0,) * 5, "f", function=_Cubic())]
+    cs = Couplings(np.arange(8), items, [f"x{i}" for i in range(8)])
+    rng = np.random.default_rng(3)
+    for _ in range(10):
+        q = cs.fill(rng.uniform(-1.0, 1.0, 8))[0]
+        L, tau = rng.normal(size=(11, 8)), rng.normal(size=8)
+        N, LN, Nt = cs.project(q, L, tau)
+        assert np.array_equal(N, cs.basis(q))
+        np.testing.assert_allclose(LN, L @ N, rtol=1e-14, atol=1e-14)
+        np.testing.assert_allclose(Nt, N.T @ tau, rtol=1e-14, atol=1e-14)

@@ -118,7 +118,8 @@ class MjcfSource:
     def __init__(self, maps, couplings):
         self.maps, self.couplings = maps, couplings
         has = bool(np.any(maps.jnt_stiffness) or np.any(maps.dof_damping))
-        self.passive = maps.joint_passive if has else None
+        # (the terms evaluator calls it with a checked state)
+        self.passive = maps.joint_passive_checked if has else None
 
     def configuration(self, values: dict) -> np.ndarray:
         """Pinocchio's ``q`` from ``{MuJoCo joint name: qpos value(s)}``: joints not given keep

@@ -199,14 +199,9 @@ class MjcfModel:
         ``-dof_damping * qvel`` (MuJoCo axes, then mapped like a velocity). Tendon springs and
         dampers, fluid forces and gravity compensation are not joint forces and are not included.
         """
-        if self._hinges_and_slides:  # every coordinate is a hinge or slide: index arrays, no maps
-            q = self._vector(q, self.model.nq, "q")
-            v = self._vector(v, self.model.nv, "v")
-            iq, iv, damping, stiff = self._passive_tables
-            out = -damping * v
-            k, jq, jv, rest = stiff
-            out[jv] -= k * (q[jq] - rest)
-            return out
+        if self._hinges_and_slides:
+            return self.joint_passive_checked(self._vector(q, self.model.nq, "q"),
+                                              self._vector(v, self.model.nv, "v"))
         qpos = self.to_mj_qpos(q)
         qvel = self.to_mj_qvel(v, q)
         qfrc = -self.dof_damping * qvel
@@ -214,6 +209,16 @@ class MjcfModel:
             a, d = self.jnt_qposadr[j], self.jnt_dofadr[j]
             qfrc[d] -= self.jnt_stiffness[j] * (qpos[a] - self.qpos_spring[a])
         return self.to_pin_v(qfrc, qpos)
+
+    def joint_passive_checked(self, q, v) -> np.ndarray:
+        """:meth:`joint_passive` of a state already checked (float arrays of sizes nq and nv, finite:
+        the terms evaluator's); where every coordinate is a hinge or slide, index arrays and no maps."""
+        if not self._hinges_and_slides:
+            return self.joint_passive(q, v)
+        _, _, damping, (k, jq, jv, rest) = self._passive_tables
+        out = -damping * v
+        out[jv] -= k * (q[jq] - rest)
+        return out
 
     @functools.cached_property
     def _hinges_and_slides(self) -> bool:

@@ -181,18 +181,34 @@ class Couplings:
         a fixed coordinate). So the rows are products of scalars along each chain of couplings,
         taken in order: one compiled pass (:func:`mcdm_pin.model.kernels.coupling_basis`, compiled
         or not: mcdm_pin/jit.py)."""
-        if self._chain is None:
-            self._chain = _chain(self)
+        src, rows, cols, slope = self._slopes(q)
         from .. import jit
 
+        return jit.kernels("model.kernels").coupling_basis(slope, src, rows, cols, self._independent64,
+                                                           int(self.nv))
+
+    def project(self, q, L, tau):
+        """``(N, L N, N^T tau)`` at ``q`` (:meth:`basis`; ``L`` (m, nv), ``tau`` (nv,)): the terms'
+        projection onto the independent coordinates in one compiled pass
+        (:func:`mcdm_pin.model.kernels.coupled_terms`: ``N`` has one entry at most per row)."""
+        src, rows, cols, slope = self._slopes(q)
+        from .. import jit
+
+        return jit.kernels("model.kernels").coupled_terms(slope, src, rows, cols, self._independent64,
+                                                          np.ascontiguousarray(L, dtype=float),
+                                                          np.ascontiguousarray(tau, dtype=float))
+
+    def _slopes(self, q):
+        """``(sources, rows, columns, slopes p'(x))`` of :func:`_chain`'s couplings at ``q``."""
+        if self._chain is None:
+            self._chain = _chain(self)
         src, src_q, rows, cols, coef, functions = self._chain
         x = np.asarray(q, dtype=float)[src_q]
         # each coupling's slope p'(x): the polynomials' at once, the functions' (OpenSim's) one by one
         slope = coef[:, 1] + x * (2 * coef[:, 2] + x * (3 * coef[:, 3] + x * 4 * coef[:, 4]))
         for k, f in functions:
             slope[k] = f(x[k])[1]
-        return jit.kernels("model.kernels").coupling_basis(slope, src, rows, cols, self._independent64,
-                                                           int(self.nv))
+        return src, rows, cols, slope
 
 
 def _chain(cs: Couplings):

@@ -424,6 +424,30 @@ def coupling_basis(slope, src_v, dep_rows, dep_cols, independent, nv):
 
 
 @njit(cache=True, nogil=True)
+def coupled_terms(slope, src_v, dep_rows, dep_cols, independent, L, tau):
+    """:func:`coupling_basis`'s ``N`` with ``L N`` and ``N^T tau`` (``L`` (m, nv), ``tau`` (nv,)): ``N``
+    has one entry at most per row, so each product is a sum over the rows of ``L^T`` (``tau``) that
+    land in a column, in the order of the couplings, instead of a dense product."""
+    nv = tau.shape[0]
+    N = coupling_basis(slope, src_v, dep_rows, dep_cols, independent, nv)
+    m, n = L.shape[0], independent.shape[0]
+    LN = np.empty((m, n))
+    Nt = np.empty(n)
+    for a in range(n):
+        r = independent[a]
+        Nt[a] = tau[r]
+        for i in range(m):
+            LN[i, a] = L[i, r]
+    for k in range(dep_rows.shape[0]):
+        r, a = dep_rows[k], dep_cols[k]
+        w = N[r, a]
+        Nt[a] += w * tau[r]
+        for i in range(m):
+            LN[i, a] += w * L[i, r]
+    return N, LN, Nt
+
+
+@njit(cache=True, nogil=True)
 def coupling_violation(q, v, a, dep_q, src_q, dep_v, src_v, coef, fvals, tol):
     """:meth:`mcdm_pin.model.couplings.Couplings.check`: the first violation of the couplings by the
     given ``q``, ``v``, ``a`` (``v``, ``a`` empty: not checked), each dependent against its coupling
@@ -584,6 +608,8 @@ def warm_calls():
     i64 = np.int64
     return [(spread, (z((1, 2)), z(1))), (ruiz, (z((1, 2)), 10)),
             (coupling_basis, (z(1), z(1, dtype=i64), z(1, dtype=i64), z(1, dtype=i64), z(1, dtype=i64), 2)),
+            (coupled_terms, (z(1), z(1, dtype=i64), z(1, dtype=i64), z(1, dtype=i64), z(1, dtype=i64),
+                             z((1, 2)), z(2))),
             (coupling_violation, (z(2), z(2), z(2), z(1, dtype=i64), z(1, dtype=i64), z(1, dtype=i64),
                                   z(1, dtype=i64), z((1, 5)), z((1, 3)), 1e-9)),
             (scale_factors, (z((1, 2)), z(1), z(2), z(2), z(2), z((0, 0)), z(2), z((1, 2)), True, z((1, 3, 2)),

@@ -395,10 +395,9 @@ class TermsEvaluator:
         basis, L_full, loop = None, L, {}
         if self.loops is not None:
             basis, u, RT, loop = self._loop_terms(q, tau, L, u, RT)
-        elif self.couplings is not None:
-            basis = self.couplings.basis(q)
-        if basis is not None:
             L, tau = L @ basis, basis.T @ tau
+        elif self.couplings is not None:
+            basis, L, tau = self.couplings.project(q, L, tau)
         return Terms(q=q.copy(), qd=qd.copy(), qdd=qdd.copy(), tau=tau, lengths=lengths, L=L, u=u,
                      RT=RT, R_socket=R_socket, socket_axes=self._axes, points=X, _evaluator=self,
                      finite=bad != -2 and bool(np.isfinite(tau.sum())), f_min=f_min, f_max=f_max,
