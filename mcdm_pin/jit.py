@@ -96,7 +96,8 @@ except ImportError:
     extending = types.SimpleNamespace(register_jitable=lambda f=None, **options: f if f is not None
                                       else (lambda g: g))
 
-MODULES = ("mcdm_pin.model.kernels", "mcdm_pin.model.route_kernels", "mcdm_pin.model.muscle_kernels",
+MODULES = ("mcdm_pin.model.kernels", "mcdm_pin.model.coupling_kernels", "mcdm_pin.model.route_kernels",
+           "mcdm_pin.model.muscle_kernels",
            "mcdm_pin.model.bezier_kernels", "mcdm_pin.solvers.ipm")  # modules that register kernels
 POLICIES = ("auto", "compile", "wait", "off")
 STAMP = "mcdm_pin_kernels.stamp"  # the stamp's file name, in the kernels' cache folder

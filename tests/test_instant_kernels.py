@@ -1,6 +1,6 @@
 """Per-instant kernels of the musculoskeletal path: the muscle curves (mcdm_pin/model/muscle_kernels.py),
 Ruiz equilibration (mcdm_pin.model.kernels.ruiz) and the couplings' basis
-(mcdm_pin.model.kernels.coupling_basis): compiled and uncompiled give the same bits, and both equal
+(mcdm_pin.model.coupling_kernels.coupling_basis): compiled and uncompiled give the same bits, and both equal
 independent formulations written here (MuJoCo's curves, as ``mcdm_pin/model/muscles.py``'s
 docstring gives them; Ruiz's sweeps as ``mcdm_pin/scaling.py``'s; the basis by finite differences
 of the couplings' fill). The muscle forces themselves are checked against MuJoCo's
@@ -189,5 +189,5 @@ def test_the_kernels_are_registered_and_stamp_the_cache():
     names = jit.entry_points()
     assert {"mcdm_pin.model.muscle_kernels.tension_range", "mcdm_pin.model.muscle_kernels.curves",
             "mcdm_pin.model.kernels.ruiz", "mcdm_pin.model.kernels.scale_factors",
-            "mcdm_pin.model.kernels.coupling_basis"} <= set(names)
+            "mcdm_pin.model.coupling_kernels.coupling_basis"} <= set(names)
     assert "muscle_kernels.py" in {p.name for p in jit.kernel_sources()}

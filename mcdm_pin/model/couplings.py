@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import jit
 from ..exceptions import ModelError, StateError
 
 _EMPTY = np.zeros(0)
@@ -150,13 +151,11 @@ class Couplings:
     def check(self, q, v=None, a=None, tol: float = DEPENDENT_TOL) -> None:
         """Raise :class:`StateError` unless the dependent entries of ``(q, v, a)`` follow the couplings:
         each dependent within ``tol (1 + |value|)`` of its coupling evaluated at the given values of
-        what it depends on (one compiled pass, :func:`mcdm_pin.model.kernels.coupling_violation`;
+        what it depends on (one compiled pass, :func:`mcdm_pin.model.coupling_kernels.coupling_violation`;
         :meth:`fill` evaluates them along their chains). The error names the first broken coupling
         in order, a source before what depends on it."""
         if self._local is None:
             self._local = _local(self)
-        from .. import jit
-
         dep_q, src_q, dep_v, src_v, coef, no_functions, functions = self._local
         q = np.asarray(q, dtype=float)
         vv = _EMPTY if v is None else np.asarray(v, dtype=float)
@@ -164,7 +163,7 @@ class Couplings:
         fvals = no_functions if not functions else np.full((len(self.items), 3), np.nan)
         for k, f in functions:  # OpenSim's functions: evaluated here, the polynomials in the kernel
             fvals[k] = f(q[src_q[k]] if src_q[k] >= 0 else 0.0)
-        k, what, value = jit.kernels("model.kernels").coupling_violation(
+        k, what, value = jit.kernels("model.coupling_kernels").coupling_violation(
             q, vv, aa, dep_q, src_q, dep_v, src_v, coef, fvals, float(tol))
         if k >= 0:
             c = self.items[k]
@@ -179,22 +178,18 @@ class Couplings:
         Every row has one entry at most: an independent coordinate's 1 in its own column; a
         dependent's ``p'(x)`` times its independent coordinate's entry, in that one's column (none for
         a fixed coordinate). So the rows are products of scalars along each chain of couplings,
-        taken in order: one compiled pass (:func:`mcdm_pin.model.kernels.coupling_basis`, compiled
+        taken in order: one compiled pass (:func:`mcdm_pin.model.coupling_kernels.coupling_basis`, compiled
         or not: mcdm_pin/jit.py)."""
         src, rows, cols, slope = self._slopes(q)
-        from .. import jit
-
-        return jit.kernels("model.kernels").coupling_basis(slope, src, rows, cols, self._independent64,
+        return jit.kernels("model.coupling_kernels").coupling_basis(slope, src, rows, cols, self._independent64,
                                                            int(self.nv))
 
     def project(self, q, L, tau):
         """``(N, L N, N^T tau)`` at ``q`` (:meth:`basis`; ``L`` (m, nv), ``tau`` (nv,)): the terms'
         projection onto the independent coordinates in one compiled pass
-        (:func:`mcdm_pin.model.kernels.coupled_terms`: ``N`` has one entry at most per row)."""
+        (:func:`mcdm_pin.model.coupling_kernels.coupled_terms`: ``N`` has one entry at most per row)."""
         src, rows, cols, slope = self._slopes(q)
-        from .. import jit
-
-        return jit.kernels("model.kernels").coupled_terms(slope, src, rows, cols, self._independent64,
+        return jit.kernels("model.coupling_kernels").coupled_terms(slope, src, rows, cols, self._independent64,
                                                           np.ascontiguousarray(L, dtype=float),
                                                           np.ascontiguousarray(tau, dtype=float))
 
