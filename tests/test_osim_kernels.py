@@ -69,3 +69,28 @@ def test_bezier_curves_equal_a_bisection_and_their_lines(shoulder):
         inside = ~(below | above)
         ref = [_bisection(c, xi) for xi in x[inside]]
         np.testing.assert_allclose(y[inside], ref, rtol=1e-10, atol=1e-12)
+
+
+def test_millard_range_equals_the_fiber_and_the_curves_in_numpy(shoulder):
+    """``bezier_kernels.millard_range`` (the shoulder's 33 Millard muscles in one call) against
+    ``OpenSimMuscles.fiber`` and the stacked curves evaluated apart, with the range's formulas in
+    numpy, at lengths from slack to clamped and speeds of both signs."""
+    from mcdm_pin.model.muscles_osim import _evaluate
+
+    muscles = shoulder[0].cables.muscles
+    assert muscles._only_millard
+    rng = np.random.default_rng(11)
+    m = muscles.size
+    for scale in (0.3, 0.8, 1.0, 1.3, 2.0):  # fiber near its minimum (clamped) .. stretched
+        ell = muscles.ls + scale * muscles.lo * rng.uniform(0.5, 1.5, m)
+        ell_dot = rng.normal(0.0, 0.5, m)
+        state = muscles.force_range(ell, ell_dot)
+        l, v, cos_a, clamped = muscles.fiber(ell, ell_dot)
+        fl, fv, fp = _evaluate(muscles._all, np.concatenate([l, v, l])).reshape(3, -1)
+        live = ~clamped
+        passive = np.where(live, muscles.f0 * (fp + muscles.damping * v) * cos_a, 0.0)
+        gain = np.where(live, muscles.f0 * fl * fv * cos_a, 0.0)
+        f_min = np.maximum(passive + gain * muscles.a_min, 0.0)
+        f_max = np.maximum(passive + gain * muscles.a_max, 0.0)
+        for ours, ref in ((state.passive, passive), (state.gain, gain), (state.f_min, f_min), (state.f_max, f_max)):
+            np.testing.assert_allclose(ours, ref, rtol=1e-13, atol=1e-12)

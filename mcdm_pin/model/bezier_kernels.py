@@ -1,5 +1,6 @@
 r"""OpenSim's quintic Bézier curves (``SmoothSegmentedFunction``, :mod:`mcdm_pin.model.muscles_osim`)
-evaluated in one compiled call: every muscle's curve at its own abscissa.
+evaluated in one compiled call: every muscle's curve at its own abscissa; and, for a set of Millard
+muscles, the fiber, the curves and the tension range in one call (:func:`millard_range`).
 
 A curve is ``k`` quintic Bézier segments with control points ``px``, ``py`` (k, 6) on
 ``[x0, x1]``, and lines of slopes ``dydx0``, ``dydx1`` through ``(x0, y0)``, ``(x1, y1)`` beyond. At
@@ -67,6 +68,60 @@ def bezier_values(px, py, ends, grid, x):
     return out
 
 
+# rows of millard_range's constants table (each (m,)): OpenSimMuscles' per-muscle numbers
+(K_LS, K_H, K_PEN_MIN, K_FLOOR_ALONG, K_MIN_FIBER, K_PENNATE, K_MAX_PENNATION, K_SIN_MAX, K_SLACK_BELOW, K_LO,
+ K_SPEED_SCALE, K_F0, K_DAMPING, K_A_MIN, K_A_MAX) = range(15)
+N_MILLARD_ROWS = 15
+
+
+@njit(cache=True, nogil=True)
+def millard_range(ell, ell_dot, k, px, py, ends, grid):
+    """:meth:`mcdm_pin.model.muscles_osim.OpenSimMuscles.force_range` of muscles that are all
+    Millard's, in one pass: the fiber (rigid tendon, the pennation model's floor and clamps, as
+    ``OpenSimMuscles.fiber``), the three curves (:func:`bezier_values` on the stacked tables, at
+    ``(l, v, l)``) and the tension range. ``ell``, ``ell_dot`` (m,) muscle-tendon lengths and speeds,
+    ``k`` (:data:`N_MILLARD_ROWS`, m) the constants. Returns (4, m): passive, gain, f_min, f_max."""
+    m = ell.shape[0]
+    x = np.empty(3 * m)
+    cos_a = np.empty(m)
+    live = np.empty(m, dtype=np.bool_)
+    for i in range(m):
+        along = ell[i] - k[K_LS, i]
+        h = k[K_H, i]
+        lf = np.sqrt(along * along + h * h)
+        pen_min, min_fiber, max_pen = k[K_PEN_MIN, i], k[K_MIN_FIBER, i], k[K_MAX_PENNATION, i]
+        lf_m = max(lf if along >= k[K_FLOOR_ALONG, i] else pen_min, min_fiber)
+        sin_m = h / lf_m
+        pennate = k[K_PENNATE, i] != 0.0
+        phi = np.arcsin(min(sin_m, 1.0)) if pennate and lf_m > pen_min else max_pen
+        if sin_m >= k[K_SIN_MAX, i]:
+            phi = max_pen
+        if not pennate:
+            phi = 0.0
+        cos_m = np.cos(phi)
+        dl_m = 0.0 if ell[i] - lf_m * cos_m < k[K_SLACK_BELOW, i] else ell_dot[i] * cos_m
+        clamped = (lf_m <= min_fiber and dl_m <= 0) or lf_m < min_fiber
+        if clamped:
+            dl_m = 0.0
+        x[i] = lf_m / k[K_LO, i]
+        x[m + i] = dl_m / k[K_SPEED_SCALE, i]
+        x[2 * m + i] = x[i]
+        cos_a[i] = cos_m
+        live[i] = not clamped
+    curves = bezier_values(px, py, ends, grid, x)
+    out = np.empty((4, m))
+    for i in range(m):
+        fl, fv, fp, v = curves[i], curves[m + i], curves[2 * m + i], x[m + i]
+        f0 = k[K_F0, i]
+        passive = f0 * (fp + k[K_DAMPING, i] * v) * cos_a[i] if live[i] else 0.0
+        gain = f0 * fl * fv * cos_a[i] if live[i] else 0.0
+        lo, hi = passive + gain * k[K_A_MIN, i], passive + gain * k[K_A_MAX, i]
+        out[0, i], out[1, i] = passive, gain
+        out[2, i] = lo if (lo != lo or lo > 0.0) else 0.0  # OpenSim saturates the rigid fiber at 0
+        out[3, i] = hi if (hi != hi or hi > 0.0) else 0.0
+    return out
+
+
 @register_jitable
 def _value_and_slope(u, P):
     """The quintic Bézier of control points ``P`` (6,) and its slope in ``u``."""
@@ -88,7 +143,9 @@ def warm_calls():
     P = np.linspace(0.0, 1.0, 6).reshape(1, 1, 6)
     ends = np.array([[0.0, 1.0, 0.0, 1.0, 1.0, 1.0]])
     grid = np.linspace(0.0, 1.0, 5).reshape(1, 1, 5)
-    return [(bezier_values, (P, P.copy(), ends, grid, np.array([0.5])))]
+    P3, ends3, grid3 = np.tile(P, (3, 1, 1)), np.tile(ends, (3, 1)), np.tile(grid, (3, 1, 1))
+    return [(bezier_values, (P, P.copy(), ends, grid, np.array([0.5]))),
+            (millard_range, (np.ones(1), np.ones(1), np.ones((N_MILLARD_ROWS, 1)), P3, P3.copy(), ends3, grid3))]
 
 
 def _register() -> None:

@@ -329,8 +329,13 @@ class OpenSimMuscles:
         self._slack_below = self.ls - SIGNIFICANT
         self._pennated = self.millard | self.thelen
         self._speed_scale = self.lo * self.vmax
-        # Millard's muscles alone: fiber() and force_range() need no kinds' masks, gathers or scatters
+        # Millard's muscles alone: fiber() needs no kinds' masks, gathers or scatters, and
+        # force_range() is one compiled call on these constants (bezier_kernels.millard_range's rows)
         self._only_millard = bool(self.size and self.millard.all())
+        self._millard_table = np.ascontiguousarray(np.array(
+            [self.ls, self.h, self._pen_min, self._floor_along, self.min_fiber, self._pennate.astype(float),
+             self.max_pennation, self._sin_max, self._slack_below, self.lo, self._speed_scale, self.f0,
+             self.damping, self.a_min, self.a_max], dtype=float)) if self._only_millard else None
 
     @property
     def size(self) -> int:
@@ -340,11 +345,7 @@ class OpenSimMuscles:
         """``(l, v, cos_alpha, clamped)`` (m,) each: normalised fiber length and velocity, the cosine of
         the pennation and Millard's or Thelen's clamp (no force) at muscle-tendon lengths and speeds
         (m,)."""
-        ell = np.asarray(tendon_lengths, dtype=float)
-        ell_dot = np.asarray(tendon_velocities, dtype=float)
-        if ell.shape != (self.size,) or ell_dot.shape != (self.size,):
-            raise StateError(f"muscles: expected lengths and speeds of shape ({self.size},), got {ell.shape} "
-                             f"and {ell_dot.shape}")
+        ell, ell_dot = self._checked(tendon_lengths, tendon_velocities)
         along = ell - self.ls
         lf = np.sqrt(along * along + self.h * self.h)
         # Millard: the pennation model's floor, the fiber clamp, the pennation angle's limits
@@ -370,18 +371,31 @@ class OpenSimMuscles:
         clamped = np.where(self.thelen, lf_m <= pen_min, self.millard & clamped)
         return lf / self.lo, dl / self._speed_scale, cos_a, clamped
 
+    def _checked(self, tendon_lengths, tendon_velocities):
+        """The muscle-tendon lengths and speeds as float arrays of shape (m,), or StateError."""
+        ell = np.asarray(tendon_lengths, dtype=float)
+        ell_dot = np.asarray(tendon_velocities, dtype=float)
+        if ell.shape != (self.size,) or ell_dot.shape != (self.size,):
+            raise StateError(f"muscles: expected lengths and speeds of shape ({self.size},), got {ell.shape} "
+                             f"and {ell_dot.shape}")
+        return ell, ell_dot
+
     def force_range(self, tendon_lengths, tendon_velocities):
         """The tension range (:class:`~mcdm_pin.model.muscles.MuscleState`) at one instant."""
         from .muscles import MuscleState
 
+        if self._only_millard:  # every muscle Millard's: fiber, curves and range in one compiled call
+            ell, ell_dot = self._checked(tendon_lengths, tendon_velocities)
+            from .. import jit
+
+            passive, gain, f_min, f_max = jit.kernels("model.bezier_kernels").millard_range(
+                ell, ell_dot, self._millard_table, *self._all)
+            return MuscleState(passive, gain, f_min, f_max, self.a_min, self.a_max)
         l, v, cos_a, clamped = self.fiber(tendon_lengths, tendon_velocities)
         mi, di = self._mi, self._di
-        if self._only_millard:  # every muscle Millard's, in order: no gather, no scatter
-            fl, fv, fp = _evaluate(self._all, np.concatenate([l, v, l])).reshape(3, -1)
-        else:
-            fl, fv, fp = np.zeros(self.size), np.zeros(self.size), np.zeros(self.size)
-            if mi.size:
-                fl[mi], fv[mi], fp[mi] = _evaluate(self._all, np.concatenate([l[mi], v[mi], l[mi]])).reshape(3, -1)
+        fl, fv, fp = np.zeros(self.size), np.zeros(self.size), np.zeros(self.size)
+        if mi.size:
+            fl[mi], fv[mi], fp[mi] = _evaluate(self._all, np.concatenate([l[mi], v[mi], l[mi]])).reshape(3, -1)
         if di.size:
             width, e0, use_passive = self._dg
             x = (l[di] - 1.0) / width + 1.0
