@@ -73,8 +73,9 @@ def test_bezier_curves_equal_a_bisection_and_their_lines(shoulder):
 
 def test_millard_range_equals_the_fiber_and_the_curves_in_numpy(shoulder):
     """``bezier_kernels.millard_range`` (the shoulder's 33 Millard muscles in one call) against
-    ``OpenSimMuscles.fiber`` and the stacked curves evaluated apart, with the range's formulas in
-    numpy, at lengths from slack to clamped and speeds of both signs."""
+    ``OpenSimMuscles.fiber`` (the same compiled pennation model, ``bezier_kernels.pennation``, which
+    ``tests/test_osim_paths.py`` checks against OpenSim) and the stacked curves evaluated apart, with
+    the range's formulas in numpy, at lengths from slack to clamped and speeds of both signs."""
     from mcdm_pin.model.muscles_osim import _evaluate
 
     muscles = shoulder[0].cables.muscles

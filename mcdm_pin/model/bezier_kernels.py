@@ -68,41 +68,66 @@ def bezier_values(px, py, ends, grid, x):
     return out
 
 
-# rows of millard_range's constants table (each (m,)): OpenSimMuscles' per-muscle numbers
+# rows of the muscles' constants table of pennation and millard_range (each (m,)): OpenSimMuscles'
+# per-muscle numbers
 (K_LS, K_H, K_PEN_MIN, K_FLOOR_ALONG, K_MIN_FIBER, K_PENNATE, K_MAX_PENNATION, K_SIN_MAX, K_SLACK_BELOW, K_LO,
  K_SPEED_SCALE, K_F0, K_DAMPING, K_A_MIN, K_A_MAX) = range(15)
 N_MILLARD_ROWS = 15
 
 
+@register_jitable
+def _pennation_one(ell, ell_dot, k, i):
+    """Muscle ``i``'s fiber at muscle-tendon length ``ell`` and speed ``ell_dot`` (rigid tendon):
+    ``(lf, lf_m, cos_m, dl_m, clamped)``, the fiber length along the pennation model without its
+    floor, Millard's fiber length (the pennation model's floor, at least the minimum fiber), its
+    pennation's cosine (the angle's limits), its fiber speed (0 when slack or clamped) and Millard's
+    clamp (no force). ``k`` the constants table (rows ``K_*``)."""
+    along = ell - k[K_LS, i]
+    h = k[K_H, i]
+    lf = np.sqrt(along * along + h * h)
+    pen_min, min_fiber, max_pen = k[K_PEN_MIN, i], k[K_MIN_FIBER, i], k[K_MAX_PENNATION, i]
+    lf_m = max(lf if along >= k[K_FLOOR_ALONG, i] else pen_min, min_fiber)
+    sin_m = h / lf_m
+    pennate = k[K_PENNATE, i] != 0.0
+    phi = np.arcsin(min(sin_m, 1.0)) if pennate and lf_m > pen_min else max_pen
+    if sin_m >= k[K_SIN_MAX, i]:
+        phi = max_pen
+    if not pennate:
+        phi = 0.0
+    cos_m = np.cos(phi)
+    dl_m = 0.0 if ell - lf_m * cos_m < k[K_SLACK_BELOW, i] else ell_dot * cos_m
+    clamped = (lf_m <= min_fiber and dl_m <= 0) or lf_m < min_fiber
+    if clamped:
+        dl_m = 0.0
+    return lf, lf_m, cos_m, dl_m, clamped
+
+
+@njit(cache=True, nogil=True)
+def pennation(ell, ell_dot, k):
+    """(5, m) :func:`_pennation_one` of every muscle: ``lf``, ``lf_m``, ``cos_m``, ``dl_m`` and
+    ``clamped`` (1.0 or 0.0), for :meth:`mcdm_pin.model.muscles_osim.OpenSimMuscles.fiber`."""
+    m = ell.shape[0]
+    out = np.empty((5, m))
+    for i in range(m):
+        lf, lf_m, cos_m, dl_m, clamped = _pennation_one(ell[i], ell_dot[i], k, i)
+        out[0, i], out[1, i], out[2, i], out[3, i] = lf, lf_m, cos_m, dl_m
+        out[4, i] = 1.0 if clamped else 0.0
+    return out
+
+
 @njit(cache=True, nogil=True)
 def millard_range(ell, ell_dot, k, px, py, ends, grid):
     """:meth:`mcdm_pin.model.muscles_osim.OpenSimMuscles.force_range` of muscles that are all
-    Millard's, in one pass: the fiber (rigid tendon, the pennation model's floor and clamps, as
-    ``OpenSimMuscles.fiber``), the three curves (:func:`bezier_values` on the stacked tables, at
-    ``(l, v, l)``) and the tension range. ``ell``, ``ell_dot`` (m,) muscle-tendon lengths and speeds,
-    ``k`` (:data:`N_MILLARD_ROWS`, m) the constants. Returns (4, m): passive, gain, f_min, f_max."""
+    Millard's, in one pass: the fiber (:func:`_pennation_one`), the three curves
+    (:func:`bezier_values` on the stacked tables, at ``(l, v, l)``) and the tension range. ``ell``,
+    ``ell_dot`` (m,) muscle-tendon lengths and speeds, ``k`` (:data:`N_MILLARD_ROWS`, m) the
+    constants. Returns (4, m): passive, gain, f_min, f_max."""
     m = ell.shape[0]
     x = np.empty(3 * m)
     cos_a = np.empty(m)
     live = np.empty(m, dtype=np.bool_)
     for i in range(m):
-        along = ell[i] - k[K_LS, i]
-        h = k[K_H, i]
-        lf = np.sqrt(along * along + h * h)
-        pen_min, min_fiber, max_pen = k[K_PEN_MIN, i], k[K_MIN_FIBER, i], k[K_MAX_PENNATION, i]
-        lf_m = max(lf if along >= k[K_FLOOR_ALONG, i] else pen_min, min_fiber)
-        sin_m = h / lf_m
-        pennate = k[K_PENNATE, i] != 0.0
-        phi = np.arcsin(min(sin_m, 1.0)) if pennate and lf_m > pen_min else max_pen
-        if sin_m >= k[K_SIN_MAX, i]:
-            phi = max_pen
-        if not pennate:
-            phi = 0.0
-        cos_m = np.cos(phi)
-        dl_m = 0.0 if ell[i] - lf_m * cos_m < k[K_SLACK_BELOW, i] else ell_dot[i] * cos_m
-        clamped = (lf_m <= min_fiber and dl_m <= 0) or lf_m < min_fiber
-        if clamped:
-            dl_m = 0.0
+        _, lf_m, cos_m, dl_m, clamped = _pennation_one(ell[i], ell_dot[i], k, i)
         x[i] = lf_m / k[K_LO, i]
         x[m + i] = dl_m / k[K_SPEED_SCALE, i]
         x[2 * m + i] = x[i]
@@ -145,7 +170,8 @@ def warm_calls():
     grid = np.linspace(0.0, 1.0, 5).reshape(1, 1, 5)
     P3, ends3, grid3 = np.tile(P, (3, 1, 1)), np.tile(ends, (3, 1)), np.tile(grid, (3, 1, 1))
     return [(bezier_values, (P, P.copy(), ends, grid, np.array([0.5]))),
-            (millard_range, (np.ones(1), np.ones(1), np.ones((N_MILLARD_ROWS, 1)), P3, P3.copy(), ends3, grid3))]
+            (millard_range, (np.ones(1), np.ones(1), np.ones((N_MILLARD_ROWS, 1)), P3, P3.copy(), ends3, grid3)),
+            (pennation, (np.ones(1), np.ones(1), np.ones((N_MILLARD_ROWS, 1))))]
 
 
 def _register() -> None:

@@ -64,6 +64,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import jit
 from ..exceptions import ModelError, StateError
 
 SIGNIFICANT = 1.0 / 2 ** 46  # SimTK::SignificantReal (eps^(7/8)) for doubles: about 1.9e-14
@@ -284,8 +285,6 @@ def _evaluate(tables, x) -> np.ndarray:
     """A stacked curve (its :func:`_tables`) at one abscissa per row ``x``: one compiled call
     (:mod:`mcdm_pin.model.bezier_kernels`: Newton's method on the Bézier parameter from the tables'
     interpolation, OpenSim's linear extensions beyond the ends)."""
-    from .. import jit
-
     return jit.kernels("model.bezier_kernels").bezier_values(*tables, np.ascontiguousarray(x, dtype=float))
 
 
@@ -330,12 +329,13 @@ class OpenSimMuscles:
         self._pennated = self.millard | self.thelen
         self._speed_scale = self.lo * self.vmax
         # Millard's muscles alone: fiber() needs no kinds' masks, gathers or scatters, and
-        # force_range() is one compiled call on these constants (bezier_kernels.millard_range's rows)
+        # force_range() is one compiled call (bezier_kernels.millard_range)
         self._only_millard = bool(self.size and self.millard.all())
-        self._millard_table = np.ascontiguousarray(np.array(
+        # the constants of the compiled fiber and range (bezier_kernels' K_* rows)
+        self._muscle_table = np.ascontiguousarray(np.array(
             [self.ls, self.h, self._pen_min, self._floor_along, self.min_fiber, self._pennate.astype(float),
              self.max_pennation, self._sin_max, self._slack_below, self.lo, self._speed_scale, self.f0,
-             self.damping, self.a_min, self.a_max], dtype=float)) if self._only_millard else None
+             self.damping, self.a_min, self.a_max], dtype=float).reshape(15, self.size))
 
     @property
     def size(self) -> int:
@@ -346,29 +346,20 @@ class OpenSimMuscles:
         the pennation and Millard's or Thelen's clamp (no force) at muscle-tendon lengths and speeds
         (m,)."""
         ell, ell_dot = self._checked(tendon_lengths, tendon_velocities)
-        along = ell - self.ls
-        lf = np.sqrt(along * along + self.h * self.h)
-        # Millard: the pennation model's floor, the fiber clamp, the pennation angle's limits
-        pen_min = self._pen_min
-        lf_m = np.maximum(np.where(along >= self._floor_along, lf, pen_min), self.min_fiber)
-        sin_m = self.h / lf_m
-        phi = np.where(self._pennate & (lf_m > pen_min), np.arcsin(np.minimum(sin_m, 1.0)), self.max_pennation)
-        phi = np.where(sin_m >= self._sin_max, self.max_pennation, phi)
-        phi = np.where(self._pennate, phi, 0.0)
-        cos_m = np.cos(phi)
-        slack = ell - lf_m * cos_m < self._slack_below
-        dl_m = np.where(slack, 0.0, ell_dot * cos_m)
-        clamped = ((lf_m <= self.min_fiber) & (dl_m <= 0)) | (lf_m < self.min_fiber)
-        dl_m = np.where(clamped, 0.0, dl_m)
+        # Millard: the pennation model's floor, the fiber clamp, the pennation angle's limits (one
+        # compiled pass, bezier_kernels.pennation: the same code as millard_range's)
+        lf, lf_m, cos_m, dl_m, clamped = jit.kernels("model.bezier_kernels").pennation(ell, ell_dot,
+                                                                                       self._muscle_table)
+        clamped = clamped != 0.0
         if self._only_millard:
             return lf_m / self.lo, dl_m / self._speed_scale, cos_m, clamped
-        cos_d = along / lf
+        cos_d = (ell - self.ls) / lf
         # Thelen: the same pennation model, no slack rule; no force at or below the minimum length
         pennated = self._pennated
         lf = np.where(pennated, lf_m, lf)
         cos_a = np.where(pennated, cos_m, cos_d)
         dl = np.where(self.millard, dl_m, ell_dot * cos_a)
-        clamped = np.where(self.thelen, lf_m <= pen_min, self.millard & clamped)
+        clamped = np.where(self.thelen, lf_m <= self._pen_min, self.millard & clamped)
         return lf / self.lo, dl / self._speed_scale, cos_a, clamped
 
     def _checked(self, tendon_lengths, tendon_velocities):
@@ -386,10 +377,8 @@ class OpenSimMuscles:
 
         if self._only_millard:  # every muscle Millard's: fiber, curves and range in one compiled call
             ell, ell_dot = self._checked(tendon_lengths, tendon_velocities)
-            from .. import jit
-
             passive, gain, f_min, f_max = jit.kernels("model.bezier_kernels").millard_range(
-                ell, ell_dot, self._millard_table, *self._all)
+                ell, ell_dot, self._muscle_table, *self._all)
             return MuscleState(passive, gain, f_min, f_max, self.a_min, self.a_max)
         l, v, cos_a, clamped = self.fiber(tendon_lengths, tendon_velocities)
         mi, di = self._mi, self._di
