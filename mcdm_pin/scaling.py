@@ -181,28 +181,21 @@ def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool =
 def apply_scaling(qp: QPData, s: Scaling) -> QPData:
     """The scaled copy of ``qp`` (module docstring). Its cones' stacked arrays are scaled as a whole
     and its cones' constants (names, angles, bases) carried over, not stacked again from the cones."""
-    d, r, obj = s.d, s.r, s.obj
-    # the factors are powers of two, so every product with them is exact and their order is free:
-    # the matrices are scaled in place, one pass per factor
-    A = np.multiply(qp.A, d[None, :])
-    A *= r[:, None]
-    P_diag = None if qp.P_diag is None else d * qp.P_diag * d / obj
-    P_factor = None
-    if qp.P_factor is not None:
-        P_factor = np.multiply(qp.P_factor, d[None, :])
-        P_factor /= np.sqrt(obj)
-    P = None
-    if P_factor is None or qp._P is not None:
-        P = np.multiply(qp.P, d[:, None])
-        P *= d / obj
-    G0, g0, axis, tan, basis0 = qp.cone_arrays()
-    G = np.multiply(G0, d[None, None, :])
-    G *= s.cone[:, None, None]
-    g = s.cone[:, None] * g0
-    cones = [ConeData(c.joint, G[k], g[k], c.axis, c.angle_deg, c.basis) for k, c in enumerate(qp.cones)]
-    norm_w = d * d if qp.norm_weight is None else qp.norm_weight * d * d
-    return QPData(P, d * qp.c / obj, qp.r / obj, A, r * qp.b, qp.lb / d, qp.ub / d, cones, P_diag=P_diag,
-                  P_factor=P_factor, norm_weight=norm_w, cone_arrays=(G, g, axis, tan, basis0),
+    c_ = np.ascontiguousarray
+    n = qp.n
+    c, A, b, lb, ub, G0, g0 = qp.kernel_arrays()[:7]
+    structured = qp.P_factor is not None
+    P = c_(qp.P, dtype=float) if not structured or qp._P is not None else _NO_P
+    P_diag = _NO_F if qp.P_diag is None else c_(qp.P_diag, dtype=float)
+    P_factor = c_(qp.P_factor, dtype=float).reshape(-1, n) if structured else _NO_P
+    nw = _NO_F if qp.norm_weight is None else c_(qp.norm_weight, dtype=float)
+    out = jit.kernels("model.scale_kernels").scale_qp(c, A, b, lb, ub, P, P_diag, P_factor, G0, g0, nw,
+                                                       s.d, s.r, float(s.obj), s.cone)
+    _, _, axis, tan, basis0 = qp.cone_arrays()
+    cones = [ConeData(cn.joint, out.G[k], out.g[k], cn.axis, cn.angle_deg, cn.basis) for k, cn in enumerate(qp.cones)]
+    return QPData(out.P if P.shape[0] else None, out.c, qp.r / s.obj, out.A, out.b, out.lb, out.ub, cones,
+                  P_diag=out.P_diag if qp.P_diag is not None else None, P_factor=out.P_factor if structured else None,
+                  norm_weight=out.norm_weight, cone_arrays=(out.G, out.g, axis, tan, basis0),
                   cone_consts=qp.cone_consts())
 
 

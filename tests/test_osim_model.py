@@ -421,6 +421,12 @@ def test_loop_instant_equals_its_separate_maps():
     q = loops.project(src.configuration({}) + rng.uniform(-0.2, 0.2, model.nq))
     tau0, L, S = rng.normal(size=model.nv), rng.normal(size=(4, model.nv)), rng.normal(size=(model.nv, 2))
     basis, lam0, Lam, Lam_act, W = loops.instant(q, tau0, L, S)
+    G, d = loops.jacobian(q), model.createData()  # G from data.J (one kernel) equals Pinocchio's frame Jacobians
+    pin.computeJointJacobians(model, d, q)
+    pin.updateFramePlacements(model, d)
+    ref_G = np.vstack([pin.getFrameJacobian(model, d, b, pin.LOCAL_WORLD_ALIGNED)[:3]
+                       - pin.getFrameJacobian(model, d, a, pin.LOCAL_WORLD_ALIGNED)[:3] for _, a, b in loops.loops])
+    assert np.allclose(G, ref_G, rtol=0, atol=1e-15)
     ref_basis = loops.basis(q)
     assert np.abs(loops.jacobian(q) @ basis).max() < 1e-12
     assert np.allclose(basis @ basis.T, ref_basis @ ref_basis.T, rtol=0, atol=1e-12)  # same subspace

@@ -71,6 +71,41 @@ def test_scaling_decision_is_the_numpy_ones(instants):
                     np.testing.assert_array_equal(a, b)
 
 
+def test_scaled_copy_is_the_factors_products_to_the_bit(instants):
+    """apply_scaling (one kernel) gives numpy's products of the factors exactly, structured Hessian or
+    dense, with or without least-norm weights, with and without cones."""
+    seen_cones = set()
+    for qp, _, _, _ in instants:
+        for p in (qp, qp.replace(P=qp.P), qp.replace(A=qp.A * 1e5, b=qp.b * 1e5)):
+            s = SC.scaling_factors(p, force=True)
+            d, r, obj = s.d, s.r, s.obj
+            out = SC.apply_scaling(p, s)
+            np.testing.assert_array_equal(out.A, p.A * d[None, :] * r[:, None])
+            np.testing.assert_array_equal(out.b, r * p.b)
+            np.testing.assert_array_equal(out.c, d * p.c / obj)
+            np.testing.assert_array_equal(out.lb, p.lb / d)
+            np.testing.assert_array_equal(out.ub, p.ub / d)
+            assert out.r == p.r / obj
+            np.testing.assert_array_equal(out.norm_weight, d * d)
+            if p.P_factor is not None:  # the structure is scaled, and a dense P only where one was formed
+                np.testing.assert_array_equal(out.P_diag, d * p.P_diag * d / obj)
+                np.testing.assert_array_equal(out.P_factor, p.P_factor * d[None, :] / np.sqrt(obj))
+                assert (out._P is None) == (p._P is None)
+            if p._P is not None:
+                np.testing.assert_array_equal(out._P, p.P * d[:, None] * (d / obj))
+            G0, g0 = p.cone_arrays()[:2]
+            G, g = out.cone_arrays()[:2]
+            np.testing.assert_array_equal(G, G0 * d[None, None, :] * s.cone[:, None, None])
+            np.testing.assert_array_equal(g, s.cone[:, None] * g0)
+            for k, cone in enumerate(out.cones):
+                np.testing.assert_array_equal(cone.G, G[k])
+                assert cone.joint == p.cones[k].joint and cone.angle_deg == p.cones[k].angle_deg
+            seen_cones.add(len(p.cones))
+            weighted = SC.apply_scaling(p.replace(norm_weight=np.full(p.n, 3.0)), s)
+            np.testing.assert_array_equal(weighted.norm_weight, 3.0 * d * d)
+    assert 0 in seen_cones and max(seen_cones) >= 8  # the arm's cases 1-2, the neck's eight cones
+
+
 def test_uniqueness_decision_is_the_numpy_ones(instants):
     seen = set()
     for qp, _, sol, _ in instants:

@@ -45,3 +45,8 @@ coordinate, velocity column, spline functions and floats (``pt_*``); the splines
 
 KERNEL_STRUCTURES = (Route, KeyMaps, CableTerms, OsimPaths)
 """The structures above (the marker :func:`mcdm_pin.jit.kernel_sources` looks for)."""
+
+ScaledQP = namedtuple("ScaledQP", ["c", "A", "b", "lb", "ub", "P", "P_diag", "P_factor", "G", "g", "norm_weight"])
+ScaledQP.__doc__ = """What :func:`mcdm_pin.model.scale_kernels.scale_qp` returns: a problem's arrays
+scaled by :class:`mcdm_pin.scaling.Scaling`'s factors (``P``, ``P_diag``, ``P_factor`` empty where
+the problem has none)."""

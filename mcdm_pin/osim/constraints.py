@@ -43,13 +43,11 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from .. import jit
 from ..exceptions import ModelError
 from ..model.placements import stacked_view
 
 RANK_TOL = 1e-10  # relative singular-value threshold of G N's rank
-# skew(r) (row-major 3x3) as r[_SKEW_FROM] * _SKEW_SIGN: one gather for every pair's cross-product matrix
-_SKEW_FROM = np.array([0, 2, 1, 2, 0, 0, 1, 0, 0])
-_SKEW_SIGN = np.array([0.0, -1.0, 1.0, 1.0, 0.0, -1.0, -1.0, 1.0, 0.0])
 _VIEWS = ("_oR", "_op", "_fp")  # PointLoops' views of its data: made again, never pickled
 
 
@@ -77,16 +75,22 @@ class PointLoops:
                     pairs.append((j, fid, sign, i))
                     j = int(model.parents[j])
         self._views()
-        self._pair_joint = np.array([p[0] for p in pairs], dtype=int)
-        self._pair_frame = np.array([p[1] for p in pairs], dtype=int)
+        self._pair_joint = np.array([p[0] for p in pairs], dtype=np.int64)
+        self._pair_frame = np.array([p[1] for p in pairs], dtype=np.int64)
         self._pair_sign = np.array([p[2] for p in pairs], dtype=float)
-        # W = E (blocks C): E (njoints, pairs) puts a pair's block on its joint's row, C (pairs, 3, 3k)
-        # on its loop's columns
-        self._pair_rows = np.zeros((model.njoints, len(pairs)))
-        self._pair_cols = np.zeros((len(pairs), 3, self.k))
-        for n, (j, _, _, i) in enumerate(pairs):
-            self._pair_rows[j, n] = 1.0
-            self._pair_cols[n, :, 3 * i:3 * i + 3] = np.eye(3)
+        self._pair_loop = np.array([p[3] for p in pairs], dtype=np.int64)
+        # G's points: frame, sign, loop, and the velocity columns that move each (its joint's support)
+        points = [(fid, sign, i) for i, (_, a, b) in enumerate(self.loops) for fid, sign in ((b, 1.0), (a, -1.0))]
+        self._pt_frame = np.array([p[0] for p in points], dtype=np.int64)
+        self._pt_sign = np.array([p[1] for p in points], dtype=float)
+        self._pt_loop = np.array([p[2] for p in points], dtype=np.int64)
+        self._pt_cols = np.zeros((len(points), model.nv), dtype=np.bool_)
+        for e, (fid, _, _) in enumerate(points):
+            for j in model.supports[int(model.frames[fid].parentJoint)]:
+                if j > 0:
+                    jm = model.joints[j]
+                    self._pt_cols[e, jm.idx_v:jm.idx_v + jm.nv] = True
+        self._no_actuators = np.zeros((model.nv, 0))
         self._eye = np.eye(model.nv)
         self._eye.flags.writeable = False
 
@@ -115,9 +119,8 @@ class PointLoops:
         m, d = self.model, self.data
         pin.computeJointJacobians(m, d, np.asarray(q, dtype=float))
         pin.updateFramePlacements(m, d)
-        rows = [pin.getFrameJacobian(m, d, b, pin.LOCAL_WORLD_ALIGNED)[:3]
-                - pin.getFrameJacobian(m, d, a, pin.LOCAL_WORLD_ALIGNED)[:3] for _, a, b in self.loops]
-        return np.vstack(rows)
+        return jit.kernels("osim.loop_kernels").loop_jacobian(d.J, self._fp, self._pt_frame, self._pt_sign,
+                                                              self._pt_loop, self._pt_cols, self.k)
 
     def bias(self, q, v) -> np.ndarray:
         """(3k,) ``gamma``: the relative classical acceleration of the points at zero ``qdd``."""
@@ -146,12 +149,14 @@ class PointLoops:
         """``(N, N K, (N^T G^T)^+)`` from one SVD ``G N = U diag(s) V^T``: ``K`` the last ``n - 3k``
         columns of ``V`` and ``(N^T G^T)^+ = U diag(1/s) V_{:3k}^T`` (full rank, checked)."""
         N = self._coupling_basis(q)
-        GN = G @ N
-        U, s, Vt = np.linalg.svd(GN)
+        s, K, pinv = jit.kernels("osim.loop_kernels").loop_factor(G @ N, self.k)
+        self._check_rank(s)
+        return N, N @ K, pinv
+
+    def _check_rank(self, s) -> None:
         if s.size and s[-1] <= RANK_TOL * max(1.0, s[0]):
             raise ModelError(f"point constraint(s) {list(self.names)}: G N has rank < {self.k} at this "
                              f"configuration (singular values {s.tolist()})")
-        return N, N @ Vt[self.k:].T, (U / s) @ Vt[:self.k]
 
     def instant(self, q, tau0, L, S=None):
         """Everything the loops add at one instant, from one Jacobian pass and one SVD:
@@ -159,11 +164,11 @@ class PointLoops:
         actuators' ``Lambda_act`` of :meth:`force_map` with ``tau0 = 0`` and ``L = -S^T`` (``None``
         without ``S`` (nv, n_act)), :meth:`wrench_map`)."""
         G = self.jacobian(q)  # (also the joints' and the frames' placements, for the wrench map)
-        N, basis, pinv = self._factor(q, G)
-        lam0 = pinv @ (N.T @ np.asarray(tau0, dtype=float))
-        Lam = pinv @ (N.T @ np.asarray(L, dtype=float).T)
-        Lam_act = None if S is None else pinv @ (N.T @ -np.asarray(S, dtype=float))
-        return basis, lam0, Lam, Lam_act, self._wrench_map()
+        s, basis, lam0, Lam, Lam_act = jit.kernels("osim.loop_kernels").loop_instant(
+            G, self._coupling_basis(q), np.asarray(tau0, dtype=float), np.ascontiguousarray(L, dtype=float),
+            self._no_actuators if S is None else np.ascontiguousarray(S, dtype=float), self.k)
+        self._check_rank(s)
+        return basis, lam0, Lam, None if S is None else Lam_act, self._wrench_map()
 
     def force(self, q, generalized) -> np.ndarray:
         """(3k,) ``lambda`` (N, world) from ``generalized = M qdd + h + L^T f`` (nv): the least-squares
@@ -191,9 +196,10 @@ class PointLoops:
     def force_map(self, q, tau0, L=None):
         """``(lambda_0, Lambda)`` with ``lambda = lambda_0 + Lambda f`` (:meth:`force`): ``tau0 = M qdd + h``
         (nv), ``L`` (m, nv) the cables' ``d lengths / dq`` (``None``: no cables, ``Lambda`` empty)."""
-        N, _, pinv = self._factor(q, self.jacobian(q))
-        lam0 = pinv @ (N.T @ np.asarray(tau0, dtype=float))
-        Lam = np.zeros((self.k, 0)) if L is None else pinv @ (N.T @ np.asarray(L, dtype=float).T)
+        L = np.zeros((0, self.model.nv)) if L is None else np.ascontiguousarray(L, dtype=float)
+        s, _, lam0, Lam, _ = jit.kernels("osim.loop_kernels").loop_instant(
+            self.jacobian(q), self._coupling_basis(q), np.asarray(tau0, dtype=float), L, self._no_actuators, self.k)
+        self._check_rank(s)
         return lam0, Lam
 
     def wrench_map(self, q) -> np.ndarray:
@@ -208,12 +214,9 @@ class PointLoops:
     def _wrench_map(self) -> np.ndarray:
         """:meth:`wrench_map` at the placements in ``self.data`` (joints' and frames'), for every
         (loop point, joint holding it) pair at once."""
-        RT = self._oR[self._pair_joint].transpose(0, 2, 1)  # (n, 3, 3) world -> joint
-        r = self._fp[self._pair_frame] - self._op[self._pair_joint]  # (n, 3)
-        # the moment about the joint of a unit force along e_i at the point, joint axes: R^T skew(r)
-        sk = (r[:, _SKEW_FROM] * _SKEW_SIGN).reshape(-1, 3, 3)
-        blocks = np.concatenate([RT, RT @ sk], axis=1) * -self._pair_sign[:, None, None]  # (n, 6, 3)
-        return (self._pair_rows @ (blocks @ self._pair_cols).reshape(len(r), -1)).reshape(-1, 6, self.k)
+        return jit.kernels("osim.loop_kernels").loop_wrench_map(
+            self._oR, self._op, self._fp, self._pair_joint, self._pair_frame, self._pair_sign, self._pair_loop,
+            self.model.njoints, self.k)
 
     def project(self, q, free=None, iterations: int = 50, tol: float = 1e-13) -> np.ndarray:
         """``q`` moved onto the loops: Gauss-Newton on ``phi`` along the couplings' directions, smallest
