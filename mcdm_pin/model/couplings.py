@@ -35,6 +35,8 @@ import numpy as np
 
 from .. import jit
 from ..exceptions import ModelError, StateError
+from .coupling_kernels import polynomial
+from .kernel_structs import CouplingTable
 
 _EMPTY = np.zeros(0)
 DEPENDENT_TOL = 1e-9  # a given dependent coordinate must match its polynomial to this (rad or m)
@@ -63,10 +65,7 @@ class Coupling:
         """``(p(x), p'(x), p''(x))``."""
         if self.function is not None:
             return tuple(float(t) for t in self.function.value(x))
-        a0, a1, a2, a3, a4 = self.coef
-        return (a0 + x * (a1 + x * (a2 + x * (a3 + x * a4))),
-                a1 + x * (2 * a2 + x * (3 * a3 + x * 4 * a4)),
-                2 * a2 + x * (6 * a3 + x * 12 * a4))
+        return polynomial(*self.coef, x)
 
 
 class Couplings:
@@ -100,8 +99,9 @@ class Couplings:
         dep = set(self.dependent.tolist())
         self.independent = np.array([i for i in range(nv) if i not in dep], dtype=int)
         self.independent_names = tuple(self.names[i] for i in self.independent)
-        self._chain = None  # basis()'s index arrays, made on first use
-        self._local = None  # check()'s, likewise
+        self._table, self._functions = _table(self)
+        self._no_functions = np.full((len(self.items), 3), np.nan)
+        self._no_functions.flags.writeable = False
         self._independent64 = self.independent.astype(np.int64)
 
     @property
@@ -154,20 +154,15 @@ class Couplings:
         what it depends on (one compiled pass, :func:`mcdm_pin.model.coupling_kernels.coupling_violation`;
         :meth:`fill` evaluates them along their chains). The error names the first broken coupling
         in order, a source before what depends on it."""
-        if self._local is None:
-            self._local = _local(self)
-        dep_q, src_q, dep_v, src_v, coef, no_functions, functions = self._local
         q = np.asarray(q, dtype=float)
         vv = _EMPTY if v is None else np.asarray(v, dtype=float)
         aa = _EMPTY if v is None or a is None else np.asarray(a, dtype=float)
-        fvals = no_functions if not functions else np.full((len(self.items), 3), np.nan)
-        for k, f in functions:  # OpenSim's functions: evaluated here, the polynomials in the kernel
-            fvals[k] = f(q[src_q[k]] if src_q[k] >= 0 else 0.0)
         k, what, value = jit.kernels("model.coupling_kernels").coupling_violation(
-            q, vv, aa, dep_q, src_q, dep_v, src_v, coef, fvals, float(tol))
+            q, vv, aa, self._table, self._function_values(q), float(tol))
         if k >= 0:
             c = self.items[k]
-            name, given = ("q", "v", "a")[what], (q, vv, aa)[what][dep_q[k] if what == 0 else c.dependent]
+            name = ("q", "v", "a")[what]
+            given = (q, vv, aa)[what][self._table.dep_q[k] if what == 0 else c.dependent]
             raise StateError(f"{name}: coordinate {self.names[c.dependent]!r} is {given!r} but "
                              f"coupling {c.name!r} makes it {value!r} (give only the "
                              f"independent coordinates, or values that follow the couplings)")
@@ -180,72 +175,49 @@ class Couplings:
         a fixed coordinate). So the rows are products of scalars along each chain of couplings,
         taken in order: one compiled pass (:func:`mcdm_pin.model.coupling_kernels.coupling_basis`, compiled
         or not: mcdm_pin/jit.py)."""
-        src, rows, cols, slope = self._slopes(q)
-        return jit.kernels("model.coupling_kernels").coupling_basis(slope, src, rows, cols, self._independent64,
-                                                           int(self.nv))
+        q = np.asarray(q, dtype=float)
+        return jit.kernels("model.coupling_kernels").coupling_basis(q, self._table, self._function_values(q),
+                                                                    self._independent64, int(self.nv))
 
     def project(self, q, L, tau):
         """``(N, L N, N^T tau)`` at ``q`` (:meth:`basis`; ``L`` (m, nv), ``tau`` (nv,)): the terms'
         projection onto the independent coordinates in one compiled pass
         (:func:`mcdm_pin.model.coupling_kernels.coupled_terms`: ``N`` has one entry at most per row)."""
-        src, rows, cols, slope = self._slopes(q)
-        return jit.kernels("model.coupling_kernels").coupled_terms(slope, src, rows, cols, self._independent64,
-                                                          np.ascontiguousarray(L, dtype=float),
-                                                          np.ascontiguousarray(tau, dtype=float))
+        q = np.asarray(q, dtype=float)
+        return jit.kernels("model.coupling_kernels").coupled_terms(
+            q, self._table, self._function_values(q), self._independent64, np.ascontiguousarray(L, dtype=float),
+            np.ascontiguousarray(tau, dtype=float))
 
-    def _slopes(self, q):
-        """``(sources, rows, columns, slopes p'(x))`` of :func:`_chain`'s couplings at ``q``."""
-        if self._chain is None:
-            self._chain = _chain(self)
-        src, src_q, rows, cols, coef, functions = self._chain
-        x = np.asarray(q, dtype=float)[src_q]
-        # each coupling's slope p'(x): the polynomials' at once, the functions' (OpenSim's) one by one
-        slope = coef[:, 1] + x * (2 * coef[:, 2] + x * (3 * coef[:, 3] + x * 4 * coef[:, 4]))
-        for k, f in functions:
-            slope[k] = f(x[k])[1]
-        return src, rows, cols, slope
+    def _function_values(self, q) -> np.ndarray:
+        """(k, 3) ``(p, p', p'')`` of the couplings given by a function (OpenSim's), evaluated here at
+        their source's value in ``q`` (a fixed coordinate's at 0); NaN rows for the polynomials, which
+        the kernels evaluate."""
+        if not self._functions:
+            return self._no_functions
+        fvals = np.full((len(self.items), 3), np.nan)
+        src_q = self._table.src_q
+        for k, f in self._functions:
+            fvals[k] = f(q[src_q[k]] if src_q[k] >= 0 else 0.0)
+        return fvals
 
 
-def _chain(cs: Couplings):
-    """:meth:`Couplings.basis`'s index arrays, in the couplings' order, for those with an independent
-    coordinate at the root of its chain (not a fixed one): ``(sources, their q entries, rows,
-    columns, coefficients, functions)``: the row each dependent multiplies (whose ``q`` entry is also
-    the coupling's ``x``), that ``q`` entry's index, each dependent's row, the column of the
-    independent coordinate at its chain's root, its polynomial (k, 5; zeros for a function) and the
-    ``(k, value)`` of the couplings given by a function (``value(x) = (p, p', p'')``)."""
-    col = {int(i): k for k, i in enumerate(cs.independent)}
-    rows, cols, src, coef, functions = [], [], [], [], []
-    for c in cs.items:
-        root = col.get(c.independent) if c.independent >= 0 else None
-        if root is None:  # a fixed coordinate, or one coupled to a fixed one: a zero row
-            col[c.dependent] = None
-            continue
-        col[c.dependent] = root
-        rows.append(c.dependent)
-        cols.append(root)
-        src.append(c.independent)
-        coef.append([0.0] * 5 if c.function is not None else [float(a) for a in c.coef])
-        if c.function is not None:
-            functions.append((len(rows) - 1, c.value))
+def _table(cs: Couplings):
+    """``(CouplingTable, functions)``: the couplings in their order as the kernels read them
+    (:class:`~mcdm_pin.model.kernel_structs.CouplingTable`) and the ``(k, value)`` of those given by a
+    function (``value(x) = (p, p', p'')``)."""
     i64 = np.int64
-    src = np.array(src, dtype=i64)
-    return (src, cs.q_index[src].astype(i64), np.array(rows, dtype=i64), np.array(cols, dtype=i64),
-            np.array(coef, dtype=float).reshape(len(rows), 5), tuple(functions))
-
-
-def _local(cs: Couplings):
-    """:meth:`Couplings.check`'s arrays, in the couplings' order: each dependent's ``q`` entry, its
-    source's ``q`` entry (-1 for a fixed coordinate), the dependents' and their sources' ``v`` indices
-    (likewise), the polynomials (k, 5; zeros for a function), a (k, 3) NaN array (no function values:
-    read only) and the ``(k, value)`` of the couplings given by a function."""
-    i64 = np.int64
+    col = {int(i): a for a, i in enumerate(cs.independent)}
+    cols = []
+    for c in cs.items:  # the column of each chain's root; none below a fixed coordinate
+        col[c.dependent] = col.get(c.independent) if c.independent >= 0 else None
+        cols.append(-1 if col[c.dependent] is None else col[c.dependent])
     ind = np.array([c.independent for c in cs.items], dtype=i64)
     coef = np.array([[0.0] * 5 if c.function is not None else [float(t) for t in c.coef] for c in cs.items],
                     dtype=float).reshape(len(cs.items), 5)
-    functions = tuple((k, c.value) for k, c in enumerate(cs.items) if c.function is not None)
-    src_q = np.where(ind >= 0, cs.q_index[np.maximum(ind, 0)], -1).astype(i64)
-    return (cs.q_index[cs.dependent].astype(i64), src_q, cs.dependent.astype(i64), ind, coef,
-            np.full((len(cs.items), 3), np.nan), functions)
+    table = CouplingTable(cs.q_index[cs.dependent].astype(i64),
+                          np.where(ind >= 0, cs.q_index[np.maximum(ind, 0)], -1).astype(i64),
+                          cs.dependent.astype(i64), ind, np.array(cols, dtype=i64), coef)
+    return table, tuple((k, c.value) for k, c in enumerate(cs.items) if c.function is not None)
 
 
 def _ordered(items, names):

@@ -50,3 +50,10 @@ ScaledQP = namedtuple("ScaledQP", ["c", "A", "b", "lb", "ub", "P", "P_diag", "P_
 ScaledQP.__doc__ = """What :func:`mcdm_pin.model.scale_kernels.scale_qp` returns: a problem's arrays
 scaled by :class:`mcdm_pin.scaling.Scaling`'s factors (``P``, ``P_diag``, ``P_factor`` empty where
 the problem has none)."""
+
+CouplingTable = namedtuple("CouplingTable", ["dep_q", "src_q", "dep_v", "src_v", "col", "coef"])
+CouplingTable.__doc__ = """A model's couplings in their order (a source before what depends on it),
+fixed per model (:func:`mcdm_pin.model.couplings._table`): each dependent's ``q`` entry and ``v``
+index, its source's (-1 for a fixed coordinate), the column of ``N`` its row lands in (the
+independent coordinate at its chain's root; -1 where the chain starts at a fixed coordinate) and its
+polynomial ``a_0 .. a_4`` (k, 5; zeros for a coupling given by a function)."""
