@@ -136,13 +136,15 @@ def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool =
     # (the 2-link arm at rest) then gets the same unit whatever the robot's scale: with the lower
     # bound as the unit, links of 1e-6 kg put the bounds at 1 and 1e6 and Clarabel stopped with
     # InsufficientProgress where the unscaled robot solves
+    # A negative lower bound is a limit like an upper bound (an actuator's -U <= tau <= U says how
+    # large it may get, not how large it is): the thoracoscapular model's reserves, U up to 5e6 N m,
+    # as a unit put the muscles' forces at 1e-5 and their optimum beyond the active set's check
     with np.errstate(invalid="ignore", divide="ignore"):
-        lb = np.abs(qp.lb / d)
-        unit = float(lb[np.isfinite(lb)].max(initial=0.0))
-        ub = np.abs(qp.ub / d)
-        ub = ub[np.isfinite(ub) & (ub > 0)]
-        if unit > 0 and len(ub) and float(ub.min()) > unit:
-            unit = float(np.sqrt(unit * float(ub.min())))
+        lb, ub = qp.lb / d, qp.ub / d
+        unit = float(lb[np.isfinite(lb) & (lb > 0)].max(initial=0.0))
+        limits = np.abs(np.concatenate([lb[np.isfinite(lb) & (lb < 0)], ub[np.isfinite(ub) & (ub != 0)]]))
+        if unit > 0 and len(limits) and float(limits.min()) > unit:
+            unit = float(np.sqrt(unit * float(limits.min())))
         if m:
             need = np.abs(qp.b * (1.0 if r is None else r))[rows > 0] / rows[rows > 0]
             unit = max(unit, float(need.max(initial=0.0)))

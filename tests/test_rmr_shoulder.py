@@ -127,3 +127,31 @@ def test_rmr_closed_onto_our_problem_is_never_below_our_optimum(robot, cone):
         assert check["closed_eom_rel"] < 1e-8 and check["closed_bounds"] < 1e-8 and check["closed_cone_deg"] < 1e-6
         assert rmr_exact_objective(close_answer(robot, terms, qp, x)) >= res.objective * (1 - 1e-7)
         assert check["closed_change"] < 0.02  # measured 0.001-0.003 at these frames
+
+
+def test_the_warm_active_set_answers_rmrs_problem_along_the_motion(robot):
+    """RMR's problem with the cone along 40 frames of the committed abduction: every frame optimal
+    and answered by the warm active set after the first (the interior-point method there), at
+    Clarabel's objective. Eight of RMR's reserves weigh 0: the objective does not see them, their
+    Tikhonov term's residual stood above the check of stationarity at every frame, and the chain
+    answered by the interior-point method (2 ms) or, on 17 of 217 frames, by Clarabel after a
+    numerical breakdown, until the active-set solve refined its point
+    (:func:`mcdm_pin.solvers._kkt_eq._refine`)."""
+    from mcdm_pin.osim.motion import read_table
+    from mcdm_pin.osim.rmr import RATE, frame_rows, frame_states
+    from mcdm_pin.trajectory import Trajectory
+
+    files = tuple(EXCERPT / f"Kinematics_{k}.sto" for k in ("q", "u", "dudt"))
+    t = read_table(files[0]).time
+    rows = frame_rows(files)
+    rows = rows[np.isin(np.round(rows / RATE, 9), np.round(t, 9))][:40]
+    q, v, a = frame_states(robot, files, rows)
+    traj = Trajectory(name="abd01", t=rows / RATE, q=q, qd=v, qdd=a)
+    problem = rmr_problem(robot, True)
+    res = InverseDynamics(robot, problem).solve_trajectory(traj, progress=False)
+    assert np.all(res.status == "optimal")
+    assert res.stage[0] == "ipm" and np.all(res.stage[1:] == "warm_active_set"), res.stage
+    ref = InverseDynamics(robot, problem, solver="clarabel")
+    for k in (1, 20, 39):
+        cla = ref.solve(q[k], v[k], a[k])
+        assert abs(res.objective[k] - cla.objective) <= 1e-6 * abs(cla.objective)

@@ -354,6 +354,29 @@ def _outside(v, limit):
 
 
 @njit(cache=True, nogil=True)
+def bound_unit(lb, ub, d):
+    """The variables' unit from their bounds in the units ``d`` (:func:`mcdm_pin.scaling.scaling_factors`,
+    whose comments say why): the largest positive lower bound (a force a cable must carry), raised
+    to the geometric middle with the smallest limit where that is larger. A limit is a nonzero
+    upper bound, or a negative lower bound: an actuator's ``-U <= tau <= U`` says how large it may
+    get, not how large it is (the thoracoscapular model's reserves have ``U`` up to 5e6 N m, and as
+    a unit that put the muscles' forces at 1e-5 and their optimum beyond the active set's check)."""
+    unit = 0.0
+    limit = np.inf
+    for j in range(lb.shape[0]):
+        lo, hi = lb[j] / d[j], ub[j] / d[j]
+        if np.isfinite(lo) and lo > 0.0:
+            unit = max(unit, lo)
+        elif np.isfinite(lo) and lo < 0.0:
+            limit = min(limit, -lo)
+        if np.isfinite(hi) and hi != 0.0:
+            limit = min(limit, abs(hi))
+    if unit > 0.0 and np.isfinite(limit) and limit > unit:
+        unit = np.sqrt(unit * limit)
+    return unit
+
+
+@njit(cache=True, nogil=True)
 def needs_scaling(A, b, lb, ub, P_diag, P_factor, c, G, g, limit):
     """Whether :func:`mcdm_pin.scaling.scaling_factors` would scale this structured problem
     (``P = diag(P_diag) + P_factor^T P_factor``) at all: the same tests in one pass, for the usual
@@ -366,15 +389,7 @@ def needs_scaling(A, b, lb, ub, P_diag, P_factor, c, G, g, limit):
             return True
     if m and spread(A, np.zeros(0)) > limit:
         return True
-    unit = 0.0
-    ub_min = np.inf
-    for i in range(n):
-        if np.isfinite(lb[i]):
-            unit = max(unit, abs(lb[i]))
-        if np.isfinite(ub[i]) and abs(ub[i]) > 0.0:
-            ub_min = min(ub_min, abs(ub[i]))
-    if unit > 0.0 and np.isfinite(ub_min) and ub_min > unit:
-        unit = np.sqrt(unit * ub_min)
+    unit = bound_unit(lb, ub, np.ones(n))
     for r in range(m):
         row = 0.0
         for j in range(n):
@@ -483,17 +498,7 @@ def scale_factors(A, b, lb, ub, c, P, P_diag, P_factor, structured, G, g, f_scal
             rows[i] = max(rows[i], abs(A[i, j]) * d[j])
         rows[i] = rows[i] * r[i]
     # the variables' unit (scaling.py's comments say why)
-    unit = 0.0
-    ub_min = np.inf
-    for j in range(n):
-        x = abs(lb[j] / d[j])
-        if np.isfinite(x):
-            unit = max(unit, x)
-        x = abs(ub[j] / d[j])
-        if np.isfinite(x) and x > 0.0:
-            ub_min = min(ub_min, x)
-    if unit > 0.0 and np.isfinite(ub_min) and ub_min > unit:
-        unit = np.sqrt(unit * ub_min)
+    unit = bound_unit(lb, ub, d)
     for i in range(m):
         if rows[i] > 0.0:
             unit = max(unit, abs(b[i] * r[i]) / rows[i])
@@ -534,6 +539,7 @@ def warm_calls():
             (interaction_quadratic, (z((1, 6, 2)), z((1, 6)), z(1, dtype=i64), z(1))),
             (cone_batch, (z((1, 6, 2)), z((1, 6)), z((1, 3, 3)), z((1, 3)), z(1, dtype=i64), np.ones(1, dtype=np.bool_))),
             (needs_scaling, (z((1, 2)), z(1), z(2), z(2), z(2), z((1, 2)), z(2), z((1, 3, 2)), z((1, 3)), 1e3)),
+            (bound_unit, (z(2), z(2), np.ones(2))),
             (cable_terms, (np.tile(np.eye(4), (1, 1, 1)), z((1, 6)),
                            Route(z((2, 3)), z(2, dtype=i64), np.array([0], dtype=i64), np.array([1], dtype=i64),
                                  np.array([0], dtype=i64), np.array([False]), np.ones(1)),

@@ -84,6 +84,9 @@ def eq_solve(qp, cones, state, cact, cdir, limits, reg):
     have_prev = False
     y = np.zeros(neq)
     iters = max_newton if na > 0 else 1
+    flat = False  # a free cable the objective does not see: its Tikhonov term is not negligible
+    for p in range(nf):
+        flat = flat or H[free[p], free[p]] == 0.0
     converged = False
     solves = 0
     LU = np.empty((0, 0))
@@ -95,11 +98,17 @@ def eq_solve(qp, cones, state, cact, cdir, limits, reg):
         _linear_rows(H, g, A, b, reg, free, Hf, Af, K, rhs)
         if not _cone_rows(G, gc, ax, tn, state, f, f_cur, have_cur, free, neq, act, mus, dirs, K, rhs):
             return VANISHED, f, y, mus, dirs, solves, LU, perm, False
+        K0 = K.copy() if flat else K
         sol, LU, perm, lu_ok = _solve_rows(K, rhs, nf, neq, na, square)
         solves += 1
         for i in range(N):
             if not np.isfinite(sol[i]):
                 return SINGULAR, f, y, mus, dirs, solves, LU, perm, False
+        if flat:
+            _refine(K0, sol, reg, free, nf, neq, na, square)
+            for i in range(N):
+                if not np.isfinite(sol[i]):
+                    return SINGULAR, f, y, mus, dirs, solves, LU, perm, False
         for p in range(nf):
             f[free[p]] = sol[p]
         y = sol[nf:nf + neq].copy()
@@ -258,6 +267,25 @@ def _solve_rows(K, rhs, nf, neq, na, square):
             return sol, np.empty((0, 0)), np.empty(0, dtype=np.int64), False
     sol = kkt_solve(K, rhs, square) if square else determined_solve(K, rhs, nf)
     return sol, np.empty((0, 0)), np.empty(0, dtype=np.int64), False
+
+
+@njit(cache=True, nogil=True)
+def _refine(K, sol, reg, free, nf, neq, na, square):
+    """One step of iterative refinement of ``sol`` toward the KKT system without the Tikhonov terms
+    (``K`` holds them: ``K sol = rhs``, so the system without them leaves the residual ``reg_F
+    sol_F``): ``sol += K^-1 [reg_F sol_F; 0]``, in place. A free cable the objective does not see
+    (``H_ii = 0``: the shoulder's unweighted reserve actuators) has the term ``reg_rel`` times the
+    objective's scale, and its residual ``reg_i f_i`` then stood above the check of stationarity
+    although the equations determine the cable; the step removes it to ``reg^2``. Along a flat
+    ridge of optima (the system without the terms is singular), the solved point is the one nearest
+    the origin in the ``reg`` norm, where this residual is orthogonal to the ridge, so the step
+    leaves it there."""
+    r = np.zeros(K.shape[0])
+    for p in range(nf):
+        r[p] = reg[free[p]] * sol[p]
+    dz = _solve_rows(K, r, nf, neq, na, square)[0]
+    for i in range(sol.shape[0]):
+        sol[i] += dz[i]
 
 
 @njit(cache=True, nogil=True)
