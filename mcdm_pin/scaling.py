@@ -17,8 +17,10 @@ its size; :math:`s_k > 0` per cone: cones are invariant under positive scaling o
 objective divided by its own size (each variable at its unit, or at its largest bound where that is
 smaller), and bounds :math:`l/d \le x \le u/d`, the scaled problem has the
 same solution set mapped by :math:`D`. The variables' unit is the size the equations ask for
-(``|b_i| / max_j |A_ij|``), at least the geometric middle of the bounds, ``sqrt(max f_min * min f_max)``
-(the lower bounds alone when no upper bound is finite), so that scaling every mass and every bound by
+(``|b_i| / max_j |A_ij|``), at least the geometric middle of the bounds, ``sqrt(max f_min * min limit)``
+over the positive lower bounds ``f_min`` and the limits (the nonzero upper bounds, and the negative
+lower bounds: an actuator's ``-U <= tau <= U`` says how large it may get, not how large it is; the
+lower bounds alone when there is no limit), so that scaling every mass and every bound by
 ``k`` gives the same scaled problem whatever ``k`` (``tests/test_reference.py``). Every factor is a power of two (no rounding). A problem whose
 factors all lie within ``SPREAD`` of one is passed through untouched (the usual case: the neck, the
 arms), so well-scaled problems pay nothing.
@@ -131,14 +133,13 @@ def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool =
         r, d = None, 1.0
         rows = absA.max(axis=1, initial=0.0) if m else np.zeros(0)
     # the variables' unit: the size the equations ask for (|b_i| / max_j |A_ij|), at least the
-    # geometric middle of the bounds (the lower bound alone when no upper bound is finite: an upper
-    # bound is a limit, often far above the forces that occur). An instant that asks for no force
-    # (the 2-link arm at rest) then gets the same unit whatever the robot's scale: with the lower
-    # bound as the unit, links of 1e-6 kg put the bounds at 1 and 1e6 and Clarabel stopped with
-    # InsufficientProgress where the unscaled robot solves
-    # A negative lower bound is a limit like an upper bound (an actuator's -U <= tau <= U says how
-    # large it may get, not how large it is): the thoracoscapular model's reserves, U up to 5e6 N m,
-    # as a unit put the muscles' forces at 1e-5 and their optimum beyond the active set's check
+    # geometric middle of the bounds (the positive lower bounds alone when there is no limit: a limit
+    # is often far above the forces that occur). An instant that asks for no force (the 2-link arm at
+    # rest) then gets the same unit whatever the robot's scale: with the lower bound as the unit,
+    # links of 1e-6 kg put the bounds at 1 and 1e6 and Clarabel stopped with InsufficientProgress
+    # where the unscaled robot solves. A negative lower bound is a limit like an upper bound (an
+    # actuator's -U <= tau <= U): the thoracoscapular model's reserves, U up to 5e6 N m, as a unit
+    # put the muscles' forces at 1e-5
     with np.errstate(invalid="ignore", divide="ignore"):
         lb, ub = qp.lb / d, qp.ub / d
         unit = float(lb[np.isfinite(lb) & (lb > 0)].max(initial=0.0))

@@ -360,7 +360,7 @@ def bound_unit(lb, ub, d):
     to the geometric middle with the smallest limit where that is larger. A limit is a nonzero
     upper bound, or a negative lower bound: an actuator's ``-U <= tau <= U`` says how large it may
     get, not how large it is (the thoracoscapular model's reserves have ``U`` up to 5e6 N m, and as
-    a unit that put the muscles' forces at 1e-5 and their optimum beyond the active set's check)."""
+    a unit that put the muscles' forces at 1e-5 and the objective's factor at 2^31)."""
     unit = 0.0
     limit = np.inf
     for j in range(lb.shape[0]):

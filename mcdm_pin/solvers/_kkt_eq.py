@@ -53,8 +53,8 @@ def eq_solve(qp, cones, state, cact, cdir, limits, reg):
     with a positive semidefinite objective whose optimum is a flat ridge (case 2 with ``beta = 0``)
     the system is otherwise singular and its solution arbitrary along the ridge; with it, the point
     of the ridge nearest the origin in that weighted norm. The KKT check of the original problem
-    decides whether the point is accepted (its stationarity residual ``reg_i f_i``: ~1e-12 of the
-    gradient's scale, :func:`._kkt.tikhonov`).
+    decides whether the point is accepted (its residual ``reg_i f_i``: ~1e-12 of the gradient's
+    scale, :func:`._kkt.tikhonov`; refined where a cable has no curvature, :func:`_refine`).
 
     Returns ``(code, f, y, mus, dirs, solves, LU, perm, lu_ok)``: ``mus`` (nc,) the active cones'
     multipliers (0 elsewhere), ``dirs`` (nc, 3) their surface directions at ``f``, ``solves`` the
@@ -84,9 +84,7 @@ def eq_solve(qp, cones, state, cact, cdir, limits, reg):
     have_prev = False
     y = np.zeros(neq)
     iters = max_newton if na > 0 else 1
-    flat = False  # a free cable the objective does not see: its Tikhonov term is not negligible
-    for p in range(nf):
-        flat = flat or H[free[p], free[p]] == 0.0
+    flat = _flat(H, free)
     converged = False
     solves = 0
     LU = np.empty((0, 0))
@@ -98,17 +96,10 @@ def eq_solve(qp, cones, state, cact, cdir, limits, reg):
         _linear_rows(H, g, A, b, reg, free, Hf, Af, K, rhs)
         if not _cone_rows(G, gc, ax, tn, state, f, f_cur, have_cur, free, neq, act, mus, dirs, K, rhs):
             return VANISHED, f, y, mus, dirs, solves, LU, perm, False
-        K0 = K.copy() if flat else K
-        sol, LU, perm, lu_ok = _solve_rows(K, rhs, nf, neq, na, square)
+        sol, LU, perm, lu_ok = _solve_refined(K, rhs, nf, neq, na, square, reg, free, flat)
         solves += 1
-        for i in range(N):
-            if not np.isfinite(sol[i]):
-                return SINGULAR, f, y, mus, dirs, solves, LU, perm, False
-        if flat:
-            _refine(K0, sol, reg, free, nf, neq, na, square)
-            for i in range(N):
-                if not np.isfinite(sol[i]):
-                    return SINGULAR, f, y, mus, dirs, solves, LU, perm, False
+        if not _finite(sol):
+            return SINGULAR, f, y, mus, dirs, solves, LU, perm, False
         for p in range(nf):
             f[free[p]] = sol[p]
         y = sol[nf:nf + neq].copy()
@@ -267,6 +258,34 @@ def _solve_rows(K, rhs, nf, neq, na, square):
             return sol, np.empty((0, 0)), np.empty(0, dtype=np.int64), False
     sol = kkt_solve(K, rhs, square) if square else determined_solve(K, rhs, nf)
     return sol, np.empty((0, 0)), np.empty(0, dtype=np.int64), False
+
+
+@njit(cache=True, nogil=True)
+def _solve_refined(K, rhs, nf, neq, na, square, reg, free, flat):
+    """:func:`_solve_rows`, then, where a free cable has no curvature (``flat``), :func:`_refine`."""
+    K0 = K.copy() if flat else K
+    sol, LU, perm, lu_ok = _solve_rows(K, rhs, nf, neq, na, square)
+    if flat and _finite(sol):
+        _refine(K0, sol, reg, free, nf, neq, na, square)
+    return sol, LU, perm, lu_ok
+
+
+@njit(cache=True, nogil=True)
+def _flat(H, free):
+    """Whether a free cable has no curvature (``H_ii = 0``): the objective does not see it, so its
+    Tikhonov term is not negligible beside its gradient (:func:`_refine`)."""
+    for p in range(free.shape[0]):
+        if H[free[p], free[p]] == 0.0:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def _finite(x):
+    for i in range(x.shape[0]):
+        if not np.isfinite(x[i]):
+            return False
+    return True
 
 
 @njit(cache=True, nogil=True)
