@@ -4,6 +4,7 @@ runtime is exactly what the compile covered (no kernel compiles after ``mcdm-pin
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from mcdm_pin import InverseDynamics, Robot, jit, load_trajectory
@@ -90,9 +91,11 @@ def _signatures():
 
 def test_no_kernel_compiles_at_runtime(monkeypatch, tmp_path):
     """After the compile, solving the bundled robots (cases 1-3, warm and cold instants, the
-    interior-point method, cones, the human arm's muscles, the neck, MyoSuite's elbow: wraps and
-    MuJoCo muscles) adds no specialisation to any
-    kernel: the compile covered every type the library passes."""
+    interior-point method, cones, the human arm's muscles, the neck, MyoSuite's elbow and arm: wraps,
+    MuJoCo muscles and couplings; the thoracoscapular shoulder: OpenSim's paths and its closed loop)
+    adds no specialisation to any kernel: the compile covered every type the library passes (the
+    shoulder's loop once compiled a second ``loop_instant`` at its first solve, for the loop's
+    read-only identity basis)."""
     monkeypatch.chdir(tmp_path)  # MuJoCo writes its log where it runs
     jit.prepare(policy="wait")
     before = _signatures()
@@ -112,6 +115,26 @@ def test_no_kernel_compiles_at_runtime(monkeypatch, tmp_path):
             ident.solve_trajectory(traj, progress=False)
             ident.reset()
             ident.solve(traj.q[1], traj.qd[1], traj.qdd[1])
+    # MyoSuite's arm (couplings, reserves) and the thoracoscapular shoulder (OpenSim's wraps and
+    # muscles, a closed loop without couplings, RMR's problem with its unweighted reserves)
+    arm = Robot.load(REPO / "robots" / "myosuite" / "myoarm.yaml")
+    traj = load_trajectory(arm, "abduction").subsample(10)
+    for case in (1, 3):
+        InverseDynamics.for_case(arm, case).solve_trajectory(traj, progress=False)
+    from mcdm_pin.osim.motion import read_table
+    from mcdm_pin.osim.rmr import RATE, frame_rows, frame_states, rmr_problem, rmr_robot
+    from mcdm_pin.trajectory import Trajectory
+
+    shoulder = rmr_robot("abd01")
+    files = tuple(REPO / "robots" / "opensim" / "motions" / "abd01" / f"Kinematics_{k}.sto"
+                  for k in ("q", "u", "dudt"))
+    t = read_table(files[0]).time
+    rows = frame_rows(files)
+    rows = rows[np.isin(np.round(rows / RATE, 9), np.round(t, 9))][:4]
+    q, v, a = frame_states(shoulder, files, rows)
+    traj = Trajectory(name="abd01", t=rows / RATE, q=q, qd=v, qdd=a)
+    InverseDynamics.for_case(shoulder, 3).solve_trajectory(traj, progress=False)
+    InverseDynamics(shoulder, rmr_problem(shoulder, True)).solve_trajectory(traj, progress=False)
     after = _signatures()
     grown = {k: sorted(v - before.get(k, set())) for k, v in after.items() if v - before.get(k, set())}
     assert not grown, grown

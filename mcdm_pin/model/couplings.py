@@ -100,8 +100,7 @@ class Couplings:
         self.independent = np.array([i for i in range(nv) if i not in dep], dtype=int)
         self.independent_names = tuple(self.names[i] for i in self.independent)
         self._table, self._functions = _table(self)
-        self._no_functions = np.full((len(self.items), 3), np.nan)
-        self._no_functions.flags.writeable = False
+        self._no_functions = np.full((len(self.items), 3), np.nan)  # (the kernels take it writable)
         self._independent64 = self.independent.astype(np.int64)
 
     @property

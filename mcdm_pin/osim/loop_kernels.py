@@ -92,11 +92,15 @@ def warm_calls():
     oR, op = oM[:, :3, :3], oM[:, :3, 3]
     oR.flags.writeable = op.flags.writeable = False
     G = np.eye(3, 4)
+    identity = np.eye(4)  # N without couplings: PointLoops' read-only identity
+    identity.flags.writeable = False
     return [(loop_jacobian, (np.asfortranarray(z((6, 4))), op, z(1, dtype=i64), z(1), z(1, dtype=i64),
                              np.ones((1, 4), dtype=np.bool_), 3)),
             (loop_factor, (G, 3)),
             (loop_instant, (G, np.eye(4), z(4), z((2, 4)), z((4, 0)), 3)),
             (loop_instant, (G, np.eye(4), z(4), z((2, 4)), z((4, 1)), 3)),
+            (loop_instant, (G, identity, z(4), z((2, 4)), z((4, 0)), 3)),
+            (loop_instant, (G, identity, z(4), z((2, 4)), z((4, 1)), 3)),
             (loop_wrench_map, (oR, op, op, z(1, dtype=i64), z(1, dtype=i64), z(1), z(1, dtype=i64), 2, 3))]
 
 
