@@ -136,14 +136,37 @@ def millard_range(ell, ell_dot, k, px, py, ends, grid):
     curves = bezier_values(px, py, ends, grid, x)
     out = np.empty((4, m))
     for i in range(m):
-        fl, fv, fp, v = curves[i], curves[m + i], curves[2 * m + i], x[m + i]
-        f0 = k[K_F0, i]
-        passive = f0 * (fp + k[K_DAMPING, i] * v) * cos_a[i] if live[i] else 0.0
-        gain = f0 * fl * fv * cos_a[i] if live[i] else 0.0
-        lo, hi = passive + gain * k[K_A_MIN, i], passive + gain * k[K_A_MAX, i]
-        out[0, i], out[1, i] = passive, gain
-        out[2, i] = lo if (lo != lo or lo > 0.0) else 0.0  # OpenSim saturates the rigid fiber at 0
-        out[3, i] = hi if (hi != hi or hi > 0.0) else 0.0
+        out[0, i], out[1, i], out[2, i], out[3, i] = _range_one(
+            k, i, curves[i], curves[m + i], curves[2 * m + i], x[m + i], cos_a[i], live[i], True)
+    return out
+
+
+@register_jitable
+def _range_one(k, i, fl, fv, fp, v, cos_a, live, saturate):
+    """Muscle ``i``'s ``(passive, gain, f_min, f_max)`` from its curves ``fl``, ``fv``, ``fp`` at the
+    normalised fiber speed ``v``, its pennation's cosine and whether it is live (not clamped): the
+    passive force with the fiber damping, the active gain, and the tensions at ``a_min`` and ``a_max``
+    (``k`` the constants table); ``saturate``: at least 0 (OpenSim saturates Millard's rigid fiber
+    there)."""
+    f0 = k[K_F0, i]
+    passive = f0 * (fp + k[K_DAMPING, i] * v) * cos_a if live else 0.0
+    gain = f0 * fl * fv * cos_a if live else 0.0
+    lo, hi = passive + gain * k[K_A_MIN, i], passive + gain * k[K_A_MAX, i]
+    if saturate:
+        lo = lo if (np.isnan(lo) or lo > 0.0) else 0.0
+        hi = hi if (np.isnan(hi) or hi > 0.0) else 0.0
+    return passive, gain, lo, hi
+
+
+@njit(cache=True, nogil=True)
+def tension_range(k, fl, fv, fp, v, cos_a, live, saturate):
+    """(4, m): :func:`_range_one` of every muscle (``saturate`` (m,): Millard's), for
+    :meth:`mcdm_pin.model.muscles_osim.OpenSimMuscles.force_range` of a set of several kinds."""
+    m = fl.shape[0]
+    out = np.empty((4, m))
+    for i in range(m):
+        out[0, i], out[1, i], out[2, i], out[3, i] = _range_one(k, i, fl[i], fv[i], fp[i], v[i], cos_a[i],
+                                                                live[i], saturate[i])
     return out
 
 
@@ -171,7 +194,9 @@ def warm_calls():
     P3, ends3, grid3 = np.tile(P, (3, 1, 1)), np.tile(ends, (3, 1)), np.tile(grid, (3, 1, 1))
     return [(bezier_values, (P, P.copy(), ends, grid, np.array([0.5]))),
             (millard_range, (np.ones(1), np.ones(1), np.ones((N_MILLARD_ROWS, 1)), P3, P3.copy(), ends3, grid3)),
-            (pennation, (np.ones(1), np.ones(1), np.ones((N_MILLARD_ROWS, 1))))]
+            (pennation, (np.ones(1), np.ones(1), np.ones((N_MILLARD_ROWS, 1)))),
+            (tension_range, (np.ones((N_MILLARD_ROWS, 1)), np.ones(1), np.ones(1), np.ones(1), np.ones(1), np.ones(1),
+                             np.ones(1, dtype=np.bool_), np.ones(1, dtype=np.bool_)))]
 
 
 def _register() -> None:

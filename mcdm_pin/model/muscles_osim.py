@@ -394,11 +394,10 @@ class OpenSimMuscles:
             fp[di] = np.where(use_passive > 0, (np.exp(_KPE * (l[di] - 1.0) / e0) - offset)
                               / (math.exp(_KPE) - offset), 0.0)
         live = ~clamped
-        passive = np.where(live, self.f0 * (fp + self.damping * v) * cos_a, 0.0)
-        gain = np.where(live, self.f0 * fl * fv * cos_a, 0.0)
-        f_min, f_max = passive + gain * self.a_min, passive + gain * self.a_max
-        f_min = np.where(self.millard, np.maximum(f_min, 0.0), f_min)  # OpenSim saturates the rigid fiber at 0
-        f_max = np.where(self.millard, np.maximum(f_max, 0.0), f_max)
+        # the range from the curves, as for Millard's alone (bezier_kernels._range_one)
+        passive, gain, f_min, f_max = jit.kernels("model.bezier_kernels").tension_range(
+            self._muscle_table, fl, fv, fp, np.ascontiguousarray(v, dtype=float),
+            np.ascontiguousarray(cos_a, dtype=float), live, self.millard)
         ti = self._ti
         if ti.size:  # Thelen: exact ends, the chord between them (module docstring)
             fl_t, fp_t, t_lo, t_hi = self._thelen(l[ti], v[ti], cos_a[ti], live[ti], self.a_min[ti], self.a_max[ti])
