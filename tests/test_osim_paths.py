@@ -205,6 +205,33 @@ def test_ellipsoid_wraps(tmp_path, monkeypatch, quadrant):
     _compare(tmp_path, muscles, wraps, rtol=1e-6)
 
 
+def test_the_fan_in_lanes_is_the_sample_loop_to_the_bit():
+    """The hybrid method's fan (298 nearest points; :func:`_fan_sum` runs their Newton iterations in
+    lock step) equals OpenSim's loop over the samples, each through ``findClosestPoint``, to the bit:
+    segments through and outside the ellipsoid, one with a sample on a coordinate plane (the special
+    case that takes the 2-d ellipse), and a number of samples that does not fill the last lanes."""
+    from mcdm_pin.model import wrapping_osim_ellipsoid as we
+    from mcdm_pin.model.wrapping_osim import _add, _mul, _sub, _unit, _ZERO
+
+    def loop(dims, a, r1, r1r2, prev):
+        vsum = _ZERO
+        for i in range(1, we.NUM_FAN_SAMPLES - 1):
+            sv = _add(r1, _mul(r1r2, i / we.NUM_FAN_SAMPLES))
+            prev = we._closest_on_ellipsoid(dims, a[0], a[1], a[2], sv[0], sv[1], sv[2], -1, prev)
+            vsum = _add(vsum, _unit(_sub(prev, sv)))
+        return vsum
+
+    rng = np.random.default_rng(7)
+    dims = (0.0765, 0.174, 0.075)
+    f = 3.0 / sum(dims)
+    a = tuple(d * f for d in dims)
+    cases = [((-0.8, 0.3, 0.2), (1.6, 0.0, 0.0))]  # the sample i = 150 has u = 0 exactly
+    cases += [(tuple(rng.uniform(-1.5, 1.5, 3)), tuple(rng.uniform(-3.0, 3.0, 3))) for _ in range(20)]
+    assert (we.NUM_FAN_SAMPLES - 2) % we.FAN_LANES != 0  # the last block has unused lanes
+    for r1, r1r2 in cases:
+        assert we._fan_sum(dims, a, r1, r1r2, _ZERO) == loop(dims, a, r1, r1r2, _ZERO)
+
+
 def test_moving_point_term_is_the_derivative(tmp_path, monkeypatch):
     """L of a path with a moving point against central differences of our lengths."""
     monkeypatch.chdir(tmp_path)

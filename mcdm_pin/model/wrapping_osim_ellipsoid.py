@@ -276,6 +276,81 @@ def _ellipsoid_arc(r1, r2, a, vs, vs4, far, factor):
     return total, first, last, n_seg + 1
 
 
+FAN_LANES = 4  # fan samples whose Newton iterations run side by side (:func:`_fan_sum`)
+_RUNNING, _FOUND, _SPECIAL, _UNUSED = 0, 1, 2, 3  # a lane's state in :func:`_fan_sum`
+
+
+@register_jitable
+def _fan_sum(dims, a, r1, r1r2, prev):
+    """The hybrid method's fan: the sum, over the samples ``s_i = r1 + (i / 300) r1r2``
+    (``i = 1 .. 298``), of the unit vectors from ``s_i`` to the ellipsoid's point nearest it, each
+    found by :func:`_closest_on_ellipsoid` (``prev``: the first sample's fallback, then each sample's
+    point the next one's, as OpenSim passes them).
+
+    The samples' Newton iterations are independent, so :data:`FAN_LANES` of them run in lock step: the
+    processor overlaps their chains of dependent multiplications instead of waiting on each in turn.
+    Each lane does exactly the arithmetic of :func:`_closest_on_ellipsoid`'s general case, so the sum
+    is the same to the bit; a sample with a coordinate within ``ROUNDOFF`` of zero (the special
+    cases) goes through that function itself, in order."""
+    A, B, C = a[0], a[1], a[2]
+    a2, b2, c2 = A * A, B * B, C * C
+    big = max(A, B, C)
+    L = FAN_LANES
+    sv = np.empty((3, L))
+    k = np.empty((3, L))  # a^2 u^2, b^2 v^2, c^2 w^2
+    near = np.empty((3, L))
+    t = np.empty(L)
+    state = np.empty(L, np.int64)
+    vsum = _ZERO
+    for i0 in range(1, NUM_FAN_SAMPLES - 1, L):
+        for j in range(L):
+            i = i0 + j
+            if i >= NUM_FAN_SAMPLES - 1:
+                state[j] = _UNUSED
+                continue
+            p = _add(r1, _mul(r1r2, i / NUM_FAN_SAMPLES))
+            u, v, w = p[0], p[1], p[2]
+            sv[0, j], sv[1, j], sv[2, j] = u, v, w
+            if abs(u) <= ROUNDOFF or abs(v) <= ROUNDOFF or abs(w) <= ROUNDOFF:
+                state[j] = _SPECIAL
+                continue
+            state[j] = _RUNNING
+            k[0, j], k[1, j], k[2, j] = a2 * u * u, b2 * v * v, c2 * w * w
+            if (u / A) ** 2 + (v / B) ** 2 + (w / C) ** 2 < 1.0:
+                t[j] = 0.0
+            else:
+                t[j] = big * math.sqrt(u * u + v * v + w * w)
+        for _ in range(64):
+            running = False
+            for j in range(L):
+                if state[j] != _RUNNING:
+                    continue
+                P, Q, R = t[j] + a2, t[j] + b2, t[j] + c2
+                a2u2, b2v2, c2w2 = k[0, j], k[1, j], k[2, j]
+                f = P * P * Q * Q * R * R - a2u2 * Q * Q * R * R - b2v2 * P * P * R * R - c2w2 * P * P * Q * Q
+                if abs(f) < 1e-09:
+                    near[0, j], near[1, j], near[2, j] = a2 * sv[0, j] / P, b2 * sv[1, j] / Q, c2 * sv[2, j] / R
+                    state[j] = _FOUND
+                    continue
+                PQ, PR, QR, PQR = P * Q, P * R, Q * R, P * Q * R
+                fp = 2.0 * (PQR * (QR + PR + PQ) - a2u2 * QR * (Q + R) - b2v2 * PR * (P + R) - c2w2 * PQ * (P + Q))
+                t[j] -= f / fp
+                running = True
+            if not running:
+                break
+        for j in range(L):
+            if state[j] == _UNUSED:
+                break
+            p = (sv[0, j], sv[1, j], sv[2, j])
+            if state[j] == _FOUND:
+                prev = (near[0, j], near[1, j], near[2, j])
+            elif state[j] == _SPECIAL:
+                prev = _closest_on_ellipsoid(dims, A, B, C, p[0], p[1], p[2], -1, prev)
+            # (still running after 64 steps: Newton did not converge, and OpenSim keeps the last point)
+            vsum = _add(vsum, _unit(_sub(prev, p)))
+    return vsum
+
+
 @register_jitable
 def _surface_point(dims, a, p1p2, r1, r2, axis, sign, method):
     """The surface point ``c1`` the tangent plane passes through, and the tangent points' start
@@ -308,13 +383,7 @@ def _surface_point(dims, a, p1p2, r1, r2, axis, sign, method):
             c1 = c1_t[best]
         if method == HYBRID and mub < MU_BLEND_MAX:
             mid = _add(r1, _mul(r1r2, 0.5))
-            vsum = _ZERO
-            prev = c1_t[0]
-            for i in range(1, NUM_FAN_SAMPLES - 1):
-                sv = _add(r1, _mul(r1r2, i / NUM_FAN_SAMPLES))
-                prev = _closest_on_ellipsoid(dims, a[0], a[1], a[2], sv[0], sv[1], sv[2], -1, prev)
-                vsum = _add(vsum, _unit(_sub(prev, sv)))
-            fan_pt = _add(mid, _unit(vsum))
+            fan_pt = _add(mid, _unit(_fan_sum(dims, a, r1, r1r2, c1_t[0])))
             if mub <= MU_BLEND_MIN:
                 c1 = _closest_on_ellipsoid(dims, a[0], a[1], a[2], fan_pt[0], fan_pt[1], fan_pt[2], -1, c1)
                 fan = 1.0
