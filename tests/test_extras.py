@@ -95,5 +95,6 @@ def test_proxqp_warm_started_through_update_answers_as_a_new_workspace(two_link,
 
 def test_proxqp_is_a_first_class_back_end():
     chain = make_solver("proxqp")
-    assert [s.name for s in chain.stages][:2] == ["proxqp", "sqp_polish"]
+    # (flat_objective first: a constant objective's least-norm problem, through the same stages)
+    assert [s.name for s in chain.stages][:3] == ["flat_objective", "proxqp", "sqp_polish"]
     assert chain.stage("proxqp").runner.reuse  # --solver proxqp warm-starts through update

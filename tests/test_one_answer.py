@@ -84,3 +84,28 @@ def test_reset_forgets_warm_starts(case):
     fresh = InverseDynamics.for_case(robot, case).solve(traj.q[k], traj.qd[k], traj.qdd[k])
     assert after.stage == fresh.stage and "warm" not in after.stage
     np.testing.assert_allclose(after.f, fresh.f, rtol=0, atol=1e-9 * np.abs(fresh.f).max())
+
+
+def test_a_constant_objective_is_answered_by_its_least_norm_feasible_point():
+    """SJTUSnake's case 2: every joint is universal, so the sidecar's weights are all zero and the
+    objective is a constant; every feasible point is optimal. The first stage of every chain solves
+    the least-norm feasible problem at once (before it, the warm start cycled at every instant and the
+    least-norm stage solved that problem afterwards: 18 ms an instant). Every back-end gives the same
+    forces, the same as the first stage followed by the least-norm stage, and no larger than case 1's
+    (here the least-norm feasible point is case 1's optimum)."""
+    from mcdm_pin.solvers import least_norm
+
+    robot = Robot.load(REPO / "robots" / "caspr" / "SJTUSnake" / "SJTUSnake.yaml")
+    assert all(j.alpha == 0.0 and j.beta == 0.0 for j in robot.joints)
+    traj = load_trajectory(robot, "traj_test").subsample(9)
+    ref = _same_forces(_runs(robot, traj, 2))
+    assert all(s.startswith("flat_objective>") for s in ref.stage), set(ref.stage)
+    assert not ref.unique.any()  # the least-norm point among optima, not a unique optimum
+    case1 = InverseDynamics.for_case(robot, 1).solve_trajectory(traj, progress=False)
+    np.testing.assert_allclose(ref.f, case1.f, rtol=0, atol=1e-9 * np.abs(case1.f).max())
+    # the chain without the stage: the first stage's point, then the least-norm stage: the same forces
+    ident = InverseDynamics.for_case(robot, 2)
+    ident.solver.inner.stages = [s for s in ident.solver.inner.stages if not isinstance(s, least_norm.FlatObjective)]
+    old = ident.solve_trajectory(traj, progress=False)
+    assert old.found.all() and not any(s.startswith("flat_objective") for s in old.stage)
+    np.testing.assert_allclose(old.f, ref.f, rtol=0, atol=1e-9 * np.abs(ref.f).max())

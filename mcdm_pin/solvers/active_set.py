@@ -272,6 +272,8 @@ class Polish(Stage):
     def run(self, qp, sol, deadline):
         if sol.active is not None:  # an active-set stage's answer is exact already
             return sol
+        if sol.unique is False:  # the least-norm optimum (a constant objective's): another point would not be
+            return sol
         if not jit.ready():  # kernels switched off (a test's numpy reference): bounds-only polish in numpy
             hit = numpy_polish(qp, sol, self.settings)
             return sol if hit is None else hit.but(stage=f"{sol.stage}>{self.name}", iterations=sol.iterations,

@@ -6,6 +6,8 @@ no final answer yet) or *refines* (improves an optimal answer). The default chai
 ==================  =======  ==========================================================================
 stage               kind     what it does
 ==================  =======  ==========================================================================
+``flat_objective``   answer  where the objective is a constant, the least-norm feasible point, by the
+                             least-norm stage's chain (:mod:`.least_norm`)
 ``warm_active_set``  answer  the previous instant's active set, corrected by block pivoting; a
                              verified KKT point or nothing (:mod:`.active_set`)
 ``ipm``              answer  the compiled interior-point method with crossover to the active set
@@ -35,7 +37,7 @@ from .cascade import Cascade
 from .check import Check, Project
 from .clarabel_ import ClarabelStage
 from .ipm import IPMStage
-from .least_norm import LeastNorm
+from .least_norm import FlatObjective, LeastNorm
 from .proxqp_ import ProxQPStage, SQPPolish
 
 
@@ -53,8 +55,8 @@ def chain(name: str, first, settings: Settings, factory, polish: bool = True) ->
         return [f(settings) for f in first] + ([Polish(settings)] if polish else []) + [Project(settings)]
 
     inner = Cascade(stages(), name=f"{name} (least-norm stage)", settings=settings.replace(budget_s=None))
-    return Cascade(stages() + [LeastNorm(inner, settings), Check(settings)], name=name, settings=settings,
-                   factory=factory)
+    return Cascade([FlatObjective(inner, settings)] + stages() + [LeastNorm(inner, settings), Check(settings)],
+                   name=name, settings=settings, factory=factory)
 
 
 def make_solver(name: str = "default", settings: Settings = DEFAULT, **options) -> Cascade:

@@ -18,6 +18,13 @@ row space (rank-revealed by an SVD; for ``P = diag(d) + F^T F`` the rows of ``F`
 ``d_i != 0``), picks the least-norm optimum: a strictly convex problem with one answer, solved by
 the same back-end's chain (``w``: ``QPData.norm_weight``, ones unless the problem was scaled).
 
+**A constant objective.** Where ``P = 0`` and ``c = 0`` (every joint's weights zero: case 2 on a robot
+without ball joints, in CASPR's convention) every feasible point is optimal, and the least-norm
+optimum is the least-norm feasible point. :class:`FlatObjective`, the first stage of every chain,
+solves that problem at once: the first-stage answer would be any point of a flat objective, which
+the active-set solver reaches only by degenerate pivoting (SJTUSnake's case 2: the warm start
+cycled at every instant, 18 ms each), and the least-norm stage would then solve the same problem.
+
 **Skipped when unique.** The first-stage optimum is unique when the Hessian (plus the active cones'
 curvature) is positive definite on the null space of the strongly active constraints (the equations,
 the bounds and cones whose multiplier exceeds ``unique_rel`` of the gradient's scale): the
@@ -227,9 +234,44 @@ def stage2_problem(qp, sol: Solution, settings: Settings = DEFAULT):
         lb, ub = np.where(free, qp.lb, -np.inf), np.where(free, qp.ub, np.inf)
         held = {k for k, _ in cone_rows}
         cones = [c for k, c in enumerate(qp.cones) if k not in held]
-    w = np.ones(n) if qp.norm_weight is None else qp.norm_weight
-    return qp.replace(P=None, P_diag=w.astype(float), P_factor=np.zeros((0, n)), c=np.zeros(n), r=0.0,
-                      A=E, b=E @ sol.x, lb=lb, ub=ub, cones=cones)
+    return least_norm_problem(qp, unit=True, A=E, b=E @ sol.x, lb=lb, ub=ub, cones=cones)
+
+
+def least_norm_problem(qp, unit: bool = False, **changes):
+    """``qp`` with the least-norm objective ``1/2 sum_i w_i x_i^2`` (``w``: ``QPData.norm_weight``) and
+    ``changes`` to its other fields (:meth:`QPData.replace`); ``unit``: ``w`` divided by its largest
+    entry (the same minimiser). A scaled copy of a constant objective carries weights of the order of
+    its unit's inverse (2^22 on CoGiRo's platform), on which the interior-point method ran into its
+    iteration limit at a third of the instants."""
+    n = qp.n
+    w = np.ones(n) if qp.norm_weight is None else qp.norm_weight.astype(float)
+    if unit:
+        w = w / w.max()
+    return qp.replace(P=None, P_diag=w, P_factor=np.zeros((0, n)), c=np.zeros(n), r=0.0, **changes)
+
+
+class FlatObjective(Stage):
+    """Answering stage, first of every chain: where the objective is a constant
+    (:meth:`QPData.constant_objective`), the least-norm feasible point (module docstring), solved by
+    ``inner`` (the least-norm stage's chain). It answers with multipliers zero, which with a constant
+    objective certify any feasible point, and as the least-norm optimum (``unique=False``), which
+    the refining stages keep."""
+
+    name = "flat_objective"
+
+    def __init__(self, inner, settings: Settings = DEFAULT):
+        self.inner = inner
+        self.settings = settings
+
+    def run(self, qp, sol, deadline):
+        if not qp.constant_objective():
+            return None
+        out = self.inner.solve(least_norm_problem(qp, unit=True), deadline=deadline)
+        if out.status != OPTIMAL:
+            return out.but(stage=f"{self.name}>{out.stage}") if out.final else None
+        x = out.x
+        return out.but(objective=qp.objective(x), y=np.zeros(len(qp.b)), z=np.zeros(qp.n),
+                       z_cone=np.zeros((len(qp.cones), 3)), unique=False, stage=f"{self.name}>{out.stage}")
 
 
 class LeastNorm(Stage):
