@@ -177,11 +177,11 @@ class QPData:
     def constant_objective(self) -> bool:
         """Whether the objective is a constant (``P = 0`` and ``c = 0`` exactly, as when every joint's
         weights are zero): every feasible point is then optimal."""
-        if self.c.any():
-            return False
         if self._P is None:
-            return not (self.P_diag.any() or self.P_factor.any())
-        return not self._P.any()
+            flat = not (self.P_diag.any() or self.P_factor.any())
+        else:
+            flat = not self._P.any()
+        return flat and not self.c.any()
 
     def objective(self, x) -> float:
         """``1/2 x^T P x + c^T x + r``."""

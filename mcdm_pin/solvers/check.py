@@ -51,7 +51,7 @@ def kkt_residuals(qp, sol: Solution, settings: Settings = DEFAULT) -> dict:
     Aty = qp.A.T @ sol.y if len(qp.b) else np.zeros(qp.n)
     terms = [np.abs(grad - qp.c).max(initial=0.0), np.abs(qp.c).max(initial=0.0),
              np.abs(Aty).max(initial=0.0), np.abs(sol.z).max(initial=0.0),
-             _hessian_size(qp, x), settings.kkt_grad_floor if _constant(qp) else 1e-300]
+             _hessian_size(qp, x), settings.kkt_grad_floor if qp.constant_objective() else 1e-300]
     g = grad + Aty + sol.z
     comp = 0.0
     if qp.cones:
@@ -78,15 +78,6 @@ def kkt_residuals(qp, sol: Solution, settings: Settings = DEFAULT) -> dict:
     xscale = max(np.abs(x).max(initial=0.0), 1e-12 * bounds.max(initial=0.0), 1e-300)
     out["complementarity"] = float(abs(comp) / (gscale * xscale)) if np.isfinite(comp) else float("inf")
     return out
-
-
-def _constant(qp) -> bool:
-    """Whether the objective is constant (``P = 0`` and ``c = 0``: case 2 with every weight zero)."""
-    if np.any(qp.c):
-        return False
-    if qp.structured:
-        return not (np.any(qp.P_diag) or np.any(qp.P_factor))
-    return not np.any(qp.P)
 
 
 def _hessian_size(qp, x) -> float:
