@@ -185,6 +185,41 @@ def test_answer_check_and_outputs_equal_the_numpy_ones(instants):
         _numpy(ID._check, qp, terms, bad, idp.robot.m, DEFAULT)[0].message != ""
 
 
+def test_kkt_check_is_the_numpy_ones(instants):
+    """The answer check's KKT residuals (the check stage, on every answer no active set verified),
+    compiled and in numpy: dense and structured Hessians, cones held and not, with and without duals,
+    a constant objective (the gradient floor), answers moved off their optimum and a NaN. Values to
+    rounding (the order of the sums differs), the same problems reported."""
+    from mcdm_pin.solvers import check as CK
+    from mcdm_pin.solvers.base import Solution
+
+    rng = np.random.default_rng(3)
+    cases = []
+    for qp, terms, sol, idp in instants:
+        cases += [(qp, sol), (qp, sol.but(y=None, z=None, z_cone=None)),
+                  (qp, sol.but(x=sol.x * (1.0 + 1e-6 * rng.standard_normal(qp.n)))),
+                  (qp, sol.but(z=None if sol.z is None else sol.z + 1e-3 * np.abs(sol.z).max()))]
+        if qp.P_diag is not None:  # the same problem with its Hessian dense
+            cases.append((qp.replace(P=qp.P.copy()), sol))
+    qp = instants[0][0]
+    flat = qp.replace(P=None, P_diag=np.zeros(qp.n), P_factor=np.zeros((0, qp.n)), c=np.zeros(qp.n))
+    x = np.linalg.lstsq(flat.A, flat.b, rcond=None)[0]
+    cases += [(flat, Solution(x, "optimal", y=np.zeros(len(flat.b)), z=np.zeros(flat.n), z_cone=np.zeros((0, 3)))),
+              (qp, instants[0][2].but(x=np.full(qp.n, np.nan)))]
+    assert any(c[0].structured for c in cases) and any(not c[0].structured for c in cases)
+    assert any(c[0].cones for c in cases) and any(c[1].z is None for c in cases)
+    for qp, sol in cases:
+        got, ref = CK.kkt_residuals(qp, sol), _numpy(CK.kkt_residuals, qp, sol)
+        assert got.keys() == ref.keys()
+        for key in ref:
+            if np.isnan(ref[key]):
+                assert np.isnan(got[key]), key
+            else:
+                # (a cone's violation is an angle of ~15 deg less its half-angle: 1e-14 deg of rounding)
+                assert got[key] == pytest.approx(ref[key], rel=1e-9, abs=1e-12 if key == "cone_deg" else 1e-14), key
+        assert CK.kkt_problems(qp, sol) == _numpy(CK.kkt_problems, qp, sol)
+
+
 def test_vertex_solve_is_the_kkt_systems_solution():
     rng = np.random.default_rng(3)
     for nf in (1, 4, 25):

@@ -24,7 +24,7 @@ from ._ipm_linalg import dot
 from ._ipm import CROSSOVER, INFEASIBLE_CERT, ipm_solve
 from ._kkt import FOUND, active_set_run, next_guess
 from ._kkt_eq import cone_force
-from ._structs import QP, Answer, Cones, Limits
+from ._structs import QP, Answer, Cones, KKTMeasures, Limits
 from ._unique import unique_test
 
 
@@ -392,6 +392,110 @@ def answer_check_outputs(L, tau, extra, x, lb, ub, G, g, ax, angle_deg, u, RT, R
     return eom, broken, viol, k, W, Fs, ang
 
 
+@njit(cache=True, nogil=True, error_model="numpy")
+def kkt_measures(qp, cones, angle_deg, T, t, x, y, z, zc, duals, floor):
+    """:func:`mcdm_pin.solvers.check.kkt_residuals` in one pass (:class:`._structs.KKTMeasures`, its
+    numpy reference's formulas): ``qp`` with ``H`` the dense Hessian, or ``d0`` (n,) and ``F`` its
+    structure ``H = diag(d0) + F^T F``; ``cones`` and their half-angles ``angle_deg``; ``T``, ``t``
+    the cones' rows (:meth:`mcdm_pin.qp.QPData.cone_rows`); the point ``x`` and, when ``duals``, its
+    multipliers ``y``, ``z``, ``zc``; ``floor``: the gradient scale's least value."""
+    n, k, K = x.shape[0], qp.b.shape[0], T.shape[0]
+    A = qp.A
+    eom = 0.0
+    if k:
+        rmax, scale = 0.0, 1e-300
+        for i in range(k):
+            acc, mag = 0.0, 0.0
+            for j in range(n):
+                acc += A[i, j] * x[j]
+                mag += abs(A[i, j]) * abs(x[j])
+            rmax = _nanmax(rmax, abs(acc - qp.b[i]))
+            scale = _nanmax(scale, max(abs(qp.b[i]), mag))
+        eom = rmax / scale
+    bound = 0.0
+    for i in range(n):
+        bound = _nanmax(_nanmax(bound, qp.lb[i] - x[i]), x[i] - qp.ub[i])
+    cone_deg = 0.0
+    for c in range(cones.G.shape[0]):
+        _, _, _, al, p0, p1, p2 = cone_force(cones.G, cones.gc, cones.ax, c, x)
+        cone_deg = _nanmax(cone_deg, np.degrees(np.arctan2(np.sqrt(p0 * p0 + p1 * p1 + p2 * p2), al)) - angle_deg[c])
+    if not duals:
+        return KKTMeasures(eom, bound, cone_deg, np.nan, np.nan)
+    # the gradient P x + c, P x's size before cancellation, and stationarity's other terms
+    structured = qp.d0.shape[0] == n
+    Px, size = np.zeros(n), np.zeros(n)
+    if structured:
+        for r in range(qp.F.shape[0]):
+            fx, fa = 0.0, 0.0
+            for j in range(n):
+                fx += qp.F[r, j] * x[j]
+                fa += abs(qp.F[r, j]) * abs(x[j])
+            for i in range(n):
+                Px[i] += qp.F[r, i] * fx
+                size[i] += abs(qp.F[r, i]) * fa
+        for i in range(n):
+            Px[i] += qp.d0[i] * x[i]
+            size[i] += abs(qp.d0[i]) * abs(x[i])
+    else:
+        for i in range(n):
+            for j in range(n):
+                Px[i] += qp.H[i, j] * x[j]
+                size[i] += abs(qp.H[i, j]) * abs(x[j])
+    g = np.empty(n)
+    gscale = floor
+    for i in range(n):
+        aty = 0.0
+        for r in range(k):
+            aty += A[r, i] * y[r]
+        tl = 0.0
+        for c in range(K):
+            tl += T[c, 0, i] * zc[c, 0] + T[c, 1, i] * zc[c, 1] + T[c, 2, i] * zc[c, 2]
+        g[i] = Px[i] + qp.c[i] + aty + z[i] - tl
+        gscale = max(gscale, abs(Px[i]), abs(qp.c[i]), abs(aty), abs(z[i]), size[i], abs(tl))
+    stat = 0.0
+    for i in range(n):
+        stat = _nanmax(stat, abs(g[i]))
+    comp, outside, smax = 0.0, 0.0, 0.0
+    for c in range(K):
+        ls = 0.0
+        for a in range(3):
+            s = t[c, a]
+            for j in range(n):
+                s += T[c, a, j] * x[j]
+            ls += zc[c, a] * s
+            smax = _nanmax(smax, abs(s))
+        comp += abs(ls)
+        outside += max(np.sqrt(zc[c, 1] * zc[c, 1] + zc[c, 2] * zc[c, 2]) - zc[c, 0], 0.0)
+    comp += outside * (1.0 + smax)  # every cone dual in its cone, to rounding
+    xscale, bscale = 1e-300, 0.0
+    for i in range(n):
+        if z[i] > 0:
+            comp += z[i] * (qp.ub[i] - x[i])
+        elif z[i] < 0:
+            comp += -z[i] * (x[i] - qp.lb[i])
+        xscale = _nanmax(xscale, abs(x[i]))
+        for b in (qp.lb[i], qp.ub[i]):
+            if np.isfinite(b):
+                bscale = max(bscale, abs(b))
+    xscale = max(xscale, 1e-12 * bscale)
+    denominator = gscale * xscale  # (0 where every term and variable is 0: then a gap is all there is)
+    if not np.isfinite(comp):
+        complementarity = np.inf
+    elif denominator > 0.0:
+        complementarity = abs(comp) / denominator
+    else:
+        complementarity = 0.0 if comp == 0.0 else np.inf
+    return KKTMeasures(eom, bound, cone_deg, stat / gscale, complementarity)
+
+
+@njit(cache=True, nogil=True)
+def _nanmax(m, v):
+    """``max(m, v)``, NaN once either is (numpy's ``max`` of an array with a NaN)."""
+    if m != m or v != v:
+        return np.nan
+    return v if v > m else m
+
+
 @njit(cache=True, nogil=True)
 def outside_bounds(x, lb, ub):
     """Whether some ``x_i < lb_i`` or ``x_i > ub_i`` (NaN: no)."""
@@ -416,4 +520,5 @@ def warm_calls():
             (answer_check_outputs, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1),
                                     z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)))),
             (outside_bounds, (z(n), z(n), z(n))),
+            (kkt_measures, (qp, cones, z(1), z((1, 3, n)), z((1, 3)), z(n), z(1), z(n), z((1, 3)), True, 1e-300)),
             (instant_outputs, (z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)), z(n)))]

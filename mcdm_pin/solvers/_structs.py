@@ -78,5 +78,10 @@ Slacks = namedtuple("Slacks", ["su", "zu", "sl", "zl", "sc", "zc"])
 Slacks.__doc__ = """The interior-point method's slacks and their duals (updated in place): the upper
 bounds' ``su, zu``, the lower bounds' ``sl, zl`` and the cones' ``sc, zc`` (K, 3)."""
 
-KERNEL_STRUCTURES = (QP, Cones, Limits, Answer, ActiveSetRun, IPMRun, NewtonSystem, Scaling, Slacks)
+KKTMeasures = namedtuple("KKTMeasures", ["eom", "bound", "cone_deg", "stationarity", "complementarity"])
+KKTMeasures.__doc__ = """The answer check's residuals at a point (:func:`mcdm_pin.solvers.check.kkt_residuals`, its
+module docstring): relative equation-of-motion residual, bound violation, cone violation in degrees,
+relative stationarity and complementarity (NaN without duals)."""
+
+KERNEL_STRUCTURES = (QP, Cones, Limits, Answer, ActiveSetRun, IPMRun, NewtonSystem, Scaling, Slacks, KKTMeasures)
 """The structures above (the marker :func:`mcdm_pin.jit.kernel_sources` looks for)."""

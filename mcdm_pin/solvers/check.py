@@ -25,6 +25,7 @@ import numpy as np
 
 from .. import jit
 from ..settings import DEFAULT, Settings
+from ._structs import QP, Cones
 from .base import INACCURATE, OPTIMAL, Solution, Stage, cone_violation_deg
 
 
@@ -39,7 +40,36 @@ def eom_residual(qp, x) -> float:
 
 def kkt_residuals(qp, sol: Solution, settings: Settings = DEFAULT) -> dict:
     """The residuals described in the module docstring (``stationarity`` and ``complementarity`` are
-    NaN when the solution has no duals; ``settings``: the gradient floor ``kkt_grad_floor``)."""
+    NaN when the solution has no duals; ``settings``: the gradient floor ``kkt_grad_floor``). One
+    compiled pass (:func:`._fast.kkt_measures`); :func:`numpy_kkt_residuals` is its reference."""
+    if not jit.ready():
+        return numpy_kkt_residuals(qp, sol, settings)
+    c_ = np.ascontiguousarray
+    c, A, b, lb, ub, G, g, ax, tn, basis0 = qp.kernel_arrays()
+    n, K = qp.n, len(qp.cones)
+    duals = not (sol.y is None or sol.z is None or (qp.cones and sol.z_cone is None))
+    if qp.structured:
+        H, d0, F = _NO_H, c_(qp.P_diag, dtype=float), c_(qp.P_factor, dtype=float).reshape(-1, n)
+    else:
+        H, d0, F = c_(qp.P, dtype=float), _NO_D, _NO_H
+    T, t = qp.cone_rows() if K and duals else (np.zeros((K, 3, n)), np.zeros((K, 3)))
+    cones = Cones(G, g, ax, tn, basis0, _NO_D, _NO_B)
+    floor = settings.kkt_grad_floor if duals and qp.constant_objective() else 1e-300
+    m = jit.kernels("solvers._fast").kkt_measures(
+        QP(H, d0, F, c, float(qp.r), A, b, lb, ub, False), cones, c_(qp.cone_consts()[1], dtype=float),
+        c_(T, dtype=float), c_(t, dtype=float), c_(sol.x, dtype=float),
+        c_(sol.y, dtype=float) if duals else _NO_D, c_(sol.z, dtype=float) if duals else _NO_D,
+        c_(sol.z_cone, dtype=float).reshape(K, 3) if duals and K else np.zeros((K, 3)), duals, floor)
+    return m._asdict()
+
+
+_NO_D = np.zeros(0)
+_NO_H = np.zeros((0, 0))
+_NO_B = np.zeros((0, 2, 3))
+
+
+def numpy_kkt_residuals(qp, sol: Solution, settings: Settings = DEFAULT) -> dict:
+    """:func:`kkt_residuals` in numpy (the compiled pass's reference)."""
     x = sol.x
     out = dict(eom=eom_residual(qp, x),
                bound=float(max((qp.lb - x).max(initial=0.0), (x - qp.ub).max(initial=0.0))),
@@ -76,7 +106,11 @@ def kkt_residuals(qp, sol: Solution, settings: Settings = DEFAULT) -> dict:
     # to the limits let a point 2e-5 N off its bounds pass)
     bounds = np.concatenate([np.abs(qp.lb[np.isfinite(qp.lb)]), np.abs(qp.ub[np.isfinite(qp.ub)])])
     xscale = max(np.abs(x).max(initial=0.0), 1e-12 * bounds.max(initial=0.0), 1e-300)
-    out["complementarity"] = float(abs(comp) / (gscale * xscale)) if np.isfinite(comp) else float("inf")
+    den = gscale * xscale  # (0 where every term and variable is 0: then a gap is all there is)
+    if not np.isfinite(comp):
+        out["complementarity"] = float("inf")
+    else:
+        out["complementarity"] = float(abs(comp) / den) if den > 0.0 else (0.0 if comp == 0.0 else float("inf"))
     return out
 
 
