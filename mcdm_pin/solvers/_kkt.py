@@ -206,11 +206,14 @@ def _pivot(block, qp, cones, state, cact, dirs, grad, changes, worst_kind, worst
 
 @njit(cache=True, nogil=True)
 def _held_at_finite(state0, lb, ub):
-    """``state0`` with the variables it holds at an infinite bound freed: a variable can only be held
-    at a finite bound (the least-norm stage frees some bounds)."""
+    """``state0`` with the variables it holds at an infinite bound freed (a variable can only be held
+    at a finite bound: the least-norm stage frees some bounds) and the fixed ones (``lb == ub``: the
+    least-norm stage pins variables so) held."""
     state = state0.copy()
     for i in range(state.shape[0]):
-        if (state[i] == 1 and not np.isfinite(lb[i])) or (state[i] == 2 and not np.isfinite(ub[i])):
+        if lb[i] == ub[i] and np.isfinite(lb[i]):
+            state[i] = 1
+        elif (state[i] == 1 and not np.isfinite(lb[i])) or (state[i] == 2 and not np.isfinite(ub[i])):
             state[i] = 0
     return state
 

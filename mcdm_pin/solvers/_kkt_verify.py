@@ -164,14 +164,15 @@ def _cone_conditions(G, gc, ax, tn, basis0, cact, mus, f, grad, cone_in, cone_ou
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def _worst_violation(state, f, lb, ub, grad, gscale, dual_tol, to_lower, to_upper, release):
     """The fixed cables whose multiplier has the wrong sign beyond ``dual_tol`` (``release``, set
-    here) and the worst of every violation, bounds included: ``(any_change, worst_kind, worst_idx)``
+    here; a variable with ``lb == ub`` is at both bounds, so its multiplier may have either sign) and
+    the worst of every violation, bounds included: ``(any_change, worst_kind, worst_idx)``
     (``worst_kind`` 1 lower, 2 upper, 0 release, -1 none)."""
     n = f.shape[0]
     any_change = False
     worst_kind, worst_idx, worst = -1, -1, -np.inf
     for i in range(n):
-        if (state[i] == 1 and grad[i] < -dual_tol * gscale) or \
-                (state[i] == 2 and grad[i] > dual_tol * gscale):
+        if lb[i] != ub[i] and ((state[i] == 1 and grad[i] < -dual_tol * gscale) or
+                               (state[i] == 2 and grad[i] > dual_tol * gscale)):
             release[i] = True
             any_change = True
             v = abs(grad[i]) / gscale

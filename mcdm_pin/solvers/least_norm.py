@@ -185,6 +185,17 @@ def optimal_face_rows(qp, sol: Solution | None = None, settings: Settings = DEFA
 def _face_rows(qp, active) -> np.ndarray:
     """:func:`optimal_face_rows` given the answer's strongly active set (``(free, cone rows, _)`` of
     :func:`_strongly_active`; ``None``: no duals)."""
+    S, rest, Vt = _face_parts(qp, active)
+    E = np.zeros((len(S) + len(Vt), qp.n))
+    E[np.arange(len(S)), S] = 1.0
+    E[len(S):, rest] = Vt
+    return E
+
+
+def _face_parts(qp, active):
+    """The optimal face's rows as ``(S, rest, Vt)``: the coordinates ``S`` whose unit rows are among
+    them, the others ``rest``, and an orthonormal basis ``Vt`` (rows over ``rest``) of the other
+    rows' parts there (:func:`optimal_face_rows`)."""
     n = qp.n
     unit = np.zeros(n, dtype=bool)  # variables whose unit row is among the rows
     # the objective's rows whose curvature is above 1e-12 of the largest: one below it changes the
@@ -214,26 +225,30 @@ def _face_rows(qp, active) -> np.ndarray:
         Vt = Vt[sv > 1e-10 * max(sv.max(initial=0.0), 1.0)]
     else:
         Vt = np.zeros((0, len(rest)))
-    E = np.zeros((len(S) + len(Vt), n))
-    E[np.arange(len(S)), S] = 1.0
-    E[len(S):, rest] = Vt
-    return E
+    return S, rest, Vt
 
 
 def stage2_problem(qp, sol: Solution, settings: Settings = DEFAULT):
     """The least-norm problem over the optimal face of ``qp`` through ``sol.x`` (module docstring):
     every row constant on the face is an equation; the strongly active bounds and cones are among
     them (their inequalities are dropped: on the face they hold with equality, and an inequality
-    without interior would stall an interior-point method)."""
+    without interior would stall an interior-point method). A unit row ``e_i`` pins ``x_i`` to
+    ``x*_i``: it becomes the bounds ``lb_i = ub_i = x*_i`` (a fixed variable, which every stage
+    takes out of its linear systems), not an equation: on MyoSuite's arm 55 of the face's 84 rows
+    are unit rows, and 55 of its 85 variables leave the active set's KKT system."""
     n = qp.n
     active = None if sol.z is None else _strongly_active(qp, sol, settings, curvature=False)
-    E = _face_rows(qp, active)
+    S, rest, Vt = _face_parts(qp, active)
     lb, ub, cones = qp.lb, qp.ub, qp.cones
     if active is not None:
         free, cone_rows, _ = active
         lb, ub = np.where(free, qp.lb, -np.inf), np.where(free, qp.ub, np.inf)
         held = {k for k, _ in cone_rows}
         cones = [c for k, c in enumerate(qp.cones) if k not in held]
+    lb, ub = lb.copy(), ub.copy()
+    lb[S] = ub[S] = sol.x[S]
+    E = np.zeros((len(Vt), n))
+    E[:, rest] = Vt
     return least_norm_problem(qp, unit=True, A=E, b=E @ sol.x, lb=lb, ub=ub, cones=cones)
 
 
