@@ -399,54 +399,17 @@ def kkt_measures(qp, cones, angle_deg, T, t, x, y, z, zc, duals, floor):
     structure ``H = diag(d0) + F^T F``; ``cones`` and their half-angles ``angle_deg``; ``T``, ``t``
     the cones' rows (:meth:`mcdm_pin.qp.QPData.cone_rows`); the point ``x`` and, when ``duals``, its
     multipliers ``y``, ``z``, ``zc``; ``floor``: the gradient scale's least value."""
-    n, k, K = x.shape[0], qp.b.shape[0], T.shape[0]
-    A = qp.A
-    eom = 0.0
-    if k:
-        rmax, scale = 0.0, 1e-300
-        for i in range(k):
-            acc, mag = 0.0, 0.0
-            for j in range(n):
-                acc += A[i, j] * x[j]
-                mag += abs(A[i, j]) * abs(x[j])
-            rmax = _nanmax(rmax, abs(acc - qp.b[i]))
-            scale = _nanmax(scale, max(abs(qp.b[i]), mag))
-        eom = rmax / scale
-    bound = 0.0
-    for i in range(n):
-        bound = _nanmax(_nanmax(bound, qp.lb[i] - x[i]), x[i] - qp.ub[i])
-    cone_deg = 0.0
-    for c in range(cones.G.shape[0]):
-        _, _, _, al, p0, p1, p2 = cone_force(cones.G, cones.gc, cones.ax, c, x)
-        cone_deg = _nanmax(cone_deg, np.degrees(np.arctan2(np.sqrt(p0 * p0 + p1 * p1 + p2 * p2), al)) - angle_deg[c])
+    eom, bound, cone_deg = _primal_measures(qp, cones, angle_deg, x)
     if not duals:
         return KKTMeasures(eom, bound, cone_deg, np.nan, np.nan)
-    # the gradient P x + c, P x's size before cancellation, and stationarity's other terms
-    structured = qp.d0.shape[0] == n
-    Px, size = np.zeros(n), np.zeros(n)
-    if structured:
-        for r in range(qp.F.shape[0]):
-            fx, fa = 0.0, 0.0
-            for j in range(n):
-                fx += qp.F[r, j] * x[j]
-                fa += abs(qp.F[r, j]) * abs(x[j])
-            for i in range(n):
-                Px[i] += qp.F[r, i] * fx
-                size[i] += abs(qp.F[r, i]) * fa
-        for i in range(n):
-            Px[i] += qp.d0[i] * x[i]
-            size[i] += abs(qp.d0[i]) * abs(x[i])
-    else:
-        for i in range(n):
-            for j in range(n):
-                Px[i] += qp.H[i, j] * x[j]
-                size[i] += abs(qp.H[i, j]) * abs(x[j])
+    n, k, K = x.shape[0], qp.b.shape[0], T.shape[0]
+    Px, size = _hessian_product(qp, x)
     g = np.empty(n)
     gscale = floor
     for i in range(n):
         aty = 0.0
         for r in range(k):
-            aty += A[r, i] * y[r]
+            aty += qp.A[r, i] * y[r]
         tl = 0.0
         for c in range(K):
             tl += T[c, 0, i] * zc[c, 0] + T[c, 1, i] * zc[c, 1] + T[c, 2, i] * zc[c, 2]
@@ -477,8 +440,7 @@ def kkt_measures(qp, cones, angle_deg, T, t, x, y, z, zc, duals, floor):
         for b in (qp.lb[i], qp.ub[i]):
             if np.isfinite(b):
                 bscale = max(bscale, abs(b))
-    xscale = max(xscale, 1e-12 * bscale)
-    denominator = gscale * xscale  # (0 where every term and variable is 0: then a gap is all there is)
+    denominator = gscale * max(xscale, 1e-12 * bscale)  # (0 where every term and variable is 0)
     if not np.isfinite(comp):
         complementarity = np.inf
     elif denominator > 0.0:
@@ -486,6 +448,57 @@ def kkt_measures(qp, cones, angle_deg, T, t, x, y, z, zc, duals, floor):
     else:
         complementarity = 0.0 if comp == 0.0 else np.inf
     return KKTMeasures(eom, bound, cone_deg, stat / gscale, complementarity)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _primal_measures(qp, cones, angle_deg, x):
+    """:func:`kkt_measures`' primal part: ``(eom, bound, cone_deg)``."""
+    n, k = x.shape[0], qp.b.shape[0]
+    eom = 0.0
+    if k:
+        rmax, scale = 0.0, 1e-300
+        for i in range(k):
+            acc, mag = 0.0, 0.0
+            for j in range(n):
+                acc += qp.A[i, j] * x[j]
+                mag += abs(qp.A[i, j]) * abs(x[j])
+            rmax = _nanmax(rmax, abs(acc - qp.b[i]))
+            scale = _nanmax(scale, max(abs(qp.b[i]), mag))
+        eom = rmax / scale
+    bound = 0.0
+    for i in range(n):
+        bound = _nanmax(_nanmax(bound, qp.lb[i] - x[i]), x[i] - qp.ub[i])
+    cone_deg = 0.0
+    for c in range(cones.G.shape[0]):
+        _, _, _, al, p0, p1, p2 = cone_force(cones.G, cones.gc, cones.ax, c, x)
+        cone_deg = _nanmax(cone_deg, np.degrees(np.arctan2(np.sqrt(p0 * p0 + p1 * p1 + p2 * p2), al)) - angle_deg[c])
+    return eom, bound, cone_deg
+
+
+@njit(cache=True, nogil=True)
+def _hessian_product(qp, x):
+    """``(P x, |P| |x|)`` for :func:`kkt_measures` (``qp.d0`` of size n: ``P = diag(d0) + F^T F``,
+    and ``|P|`` is read as ``diag(|d0|) + |F|^T |F|``; else the dense ``qp.H``)."""
+    n = x.shape[0]
+    Px, size = np.zeros(n), np.zeros(n)
+    if qp.d0.shape[0] == n:
+        for r in range(qp.F.shape[0]):
+            fx, fa = 0.0, 0.0
+            for j in range(n):
+                fx += qp.F[r, j] * x[j]
+                fa += abs(qp.F[r, j]) * abs(x[j])
+            for i in range(n):
+                Px[i] += qp.F[r, i] * fx
+                size[i] += abs(qp.F[r, i]) * fa
+        for i in range(n):
+            Px[i] += qp.d0[i] * x[i]
+            size[i] += abs(qp.d0[i]) * abs(x[i])
+    else:
+        for i in range(n):
+            for j in range(n):
+                Px[i] += qp.H[i, j] * x[j]
+                size[i] += abs(qp.H[i, j]) * abs(x[j])
+    return Px, size
 
 
 @njit(cache=True, nogil=True)
