@@ -28,6 +28,9 @@ CASES = (1, 2, 3)
 WRAP_KINDS = ("sphere", "cylinder")
 # the solver chains by name (mcdm_pin.solvers.chains)
 BACKENDS = ("default", "compiled", "proxqp", "clarabel")
+# the first stage of every chain, where the objective is a constant (mcdm_pin.solvers.least_norm)
+FLAT_OBJECTIVE_STAGE = "flat_objective"
 
 __all__ = ["URDF_JOINT_COUNTS", "SIDECAR_JOINT_TYPES", "JOINT_TYPES", "SPHERICAL_PARAMETRIZATIONS",
-           "PARAMETRIZATIONS", "CONE_TYPES", "CONE_FRAMES", "SPHERICAL_MODES", "CASES", "WRAP_KINDS", "BACKENDS"]
+           "PARAMETRIZATIONS", "CONE_TYPES", "CONE_FRAMES", "SPHERICAL_MODES", "CASES", "WRAP_KINDS", "BACKENDS",
+           "FLAT_OBJECTIVE_STAGE"]

@@ -153,3 +153,23 @@ def test_every_command_has_help(command, capsys):
     with pytest.raises(SystemExit) as exc:
         main([command, "--help"])
     assert exc.value.code == 0 and "usage: mcdm-pin" in capsys.readouterr().out
+
+
+def test_stage_counts_name_the_stage_behind_a_constant_objective():
+    """``mcdm-pin solve``'s last line counts the answering stages; where the objective is a constant
+    (``flat_objective``, every weight zero) it says so and counts the stages that answered the
+    least-norm feasible problem."""
+    from types import SimpleNamespace
+
+    from mcdm_pin.cli.solve import stage_counts
+
+    flat = SimpleNamespace(stage=np.array(["flat_objective>warm_active_set"] * 3 + ["flat_objective>ipm>polish"]),
+                           iterations=np.array([1, 2, 1, 13]))
+    assert stage_counts(flat) == (
+        "the objective is a constant (every weight is zero): the forces are the least-norm feasible ones\n"
+        "answered by warm_active_set at 3 instants (median 1 KKT solves), ipm at 1 (median 13 interior-point "
+        "iterations)")
+    usual = SimpleNamespace(stage=np.array(["warm_active_set", "warm_active_set", "ipm>polish"]),
+                            iterations=np.array([2, 2, 7]))
+    assert stage_counts(usual) == ("answered by warm_active_set at 2 instants (median 2 KKT solves), ipm at 1 "
+                                   "(median 7 interior-point iterations)")

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..settings import DEFAULT, Settings
-from ..vocabulary import CASES, CONE_FRAMES
+from ..vocabulary import CASES, CONE_FRAMES, FLAT_OBJECTIVE_STAGE
 from ._common import UsageError, check_outputs, parse_cones, parse_weights, printable, table
 from ._files import robot_file
 from .view import html_file, solve_html_hook
@@ -178,8 +178,10 @@ ITERATION_UNITS = {"warm_active_set": "KKT solves", "ipm": "interior-point itera
 def stage_counts(result) -> str:
     """Which stage answered how many instants, with the median of what its iterations count:
     ``answered by warm_active_set at 99 instants (median 2 KKT solves), ipm at 2 (median 14
-    interior-point iterations)``."""
-    first = np.array([str(s).split(">")[0] for s in result.stage])
+    interior-point iterations)``. Where the objective is a constant (``flat_objective``), the stage
+    that answered its least-norm feasible problem, after a line that says so."""
+    flat = f"{FLAT_OBJECTIVE_STAGE}>"
+    first = np.array([str(s).removeprefix(flat).split(">")[0] for s in result.stage])
     its = np.asarray(result.iterations)
     asked = first != ""  # (an instant at which the model is undefined, status error, reached no stage)
     first, its = first[asked], its[asked]
@@ -189,4 +191,8 @@ def stage_counts(result) -> str:
         unit = ITERATION_UNITS.get(name, "iterations")
         where = f"{count} instants" if k == 0 else f"{count}"
         parts.append(f"{name} at {where} (median {np.median(its[first == name]):.0f} {unit})")
-    return "answered by " + ", ".join(parts) if parts else "no instant"
+    line = "answered by " + ", ".join(parts) if parts else "no instant"
+    if any(str(s).startswith(flat) for s in result.stage):
+        line = ("the objective is a constant (every weight is zero): the forces are the least-norm feasible "
+                "ones\n" + line)
+    return line

@@ -53,6 +53,7 @@ import numpy as np
 
 from .. import jit
 from ..settings import DEFAULT, Settings
+from ..vocabulary import FLAT_OBJECTIVE_STAGE
 from .active_set import ActiveSet, kernel_cones, kernel_limits, kernel_qp
 from .base import OPTIMAL, Solution, Stage
 from .check import project_to_bounds
@@ -272,7 +273,7 @@ class FlatObjective(Stage):
     objective certify any feasible point, and as the least-norm optimum (``unique=False``), which
     the refining stages keep."""
 
-    name = "flat_objective"
+    name = FLAT_OBJECTIVE_STAGE
 
     def __init__(self, inner, settings: Settings = DEFAULT):
         self.inner = inner
