@@ -19,7 +19,7 @@ row space (rank-revealed by an SVD; for ``P = diag(d) + F^T F`` the rows of ``F`
 the same back-end's chain (``w``: ``QPData.norm_weight``, ones unless the problem was scaled).
 
 **A constant objective.** Where ``P = 0`` and ``c = 0`` (every joint's weights zero: case 2 on a robot
-without ball joints, in CASPR's convention) every feasible point is optimal, and the least-norm
+without ball joints, as the CASPR import weighs them) every feasible point is optimal, and the least-norm
 optimum is the least-norm feasible point. :class:`FlatObjective`, the first stage of every chain,
 solves that problem at once: the first-stage answer would be any point of a flat objective, which
 the active-set solver reaches only by degenerate pivoting (SJTUSnake's case 2: the warm start
