@@ -180,12 +180,6 @@ def optimal_face_rows(qp, sol: Solution | None = None, settings: Settings = DEFA
     least 1). On MyoSuite's arm (85 variables, ~60 of them in ``S``) that SVD is 4x25 instead of 8x85
     in flops' terms: most of the stage's cost."""
     active = None if sol is None or sol.z is None else _strongly_active(qp, sol, settings, curvature=False)
-    return _face_rows(qp, active)
-
-
-def _face_rows(qp, active) -> np.ndarray:
-    """:func:`optimal_face_rows` given the answer's strongly active set (``(free, cone rows, _)`` of
-    :func:`_strongly_active`; ``None``: no duals)."""
     S, rest, Vt = _face_parts(qp, active)
     E = np.zeros((len(S) + len(Vt), qp.n))
     E[np.arange(len(S)), S] = 1.0
@@ -194,9 +188,10 @@ def _face_rows(qp, active) -> np.ndarray:
 
 
 def _face_parts(qp, active):
-    """The optimal face's rows as ``(S, rest, Vt)``: the coordinates ``S`` whose unit rows are among
-    them, the others ``rest``, and an orthonormal basis ``Vt`` (rows over ``rest``) of the other
-    rows' parts there (:func:`optimal_face_rows`)."""
+    """The optimal face's rows as ``(S, rest, Vt)``, given the answer's strongly active set (``(free,
+    cone rows, _)`` of :func:`_strongly_active`; ``None``: no duals): the coordinates ``S`` whose unit
+    rows are among them, the others ``rest``, and an orthonormal basis ``Vt`` (rows over ``rest``) of
+    the other rows' parts there (:func:`optimal_face_rows`)."""
     n = qp.n
     unit = np.zeros(n, dtype=bool)  # variables whose unit row is among the rows
     # the objective's rows whose curvature is above 1e-12 of the largest: one below it changes the
@@ -250,19 +245,17 @@ def stage2_problem(qp, sol: Solution, settings: Settings = DEFAULT):
     lb[S] = ub[S] = sol.x[S]
     E = np.zeros((len(Vt), n))
     E[:, rest] = Vt
-    return least_norm_problem(qp, unit=True, A=E, b=E @ sol.x, lb=lb, ub=ub, cones=cones)
+    return least_norm_problem(qp, A=E, b=E @ sol.x, lb=lb, ub=ub, cones=cones)
 
 
-def least_norm_problem(qp, unit: bool = False, **changes):
-    """``qp`` with the least-norm objective ``1/2 sum_i w_i x_i^2`` (``w``: ``QPData.norm_weight``) and
-    ``changes`` to its other fields (:meth:`QPData.replace`); ``unit``: ``w`` divided by its largest
-    entry (the same minimiser). A scaled copy of a constant objective carries weights of the order of
-    its unit's inverse (2^22 on CoGiRo's platform), on which the interior-point method ran into its
-    iteration limit at a third of the instants."""
+def least_norm_problem(qp, **changes):
+    """``qp`` with the least-norm objective ``1/2 sum_i w_i x_i^2`` and ``changes`` to its other fields
+    (:meth:`QPData.replace`); ``w`` is ``QPData.norm_weight`` divided by its largest entry (the same
+    minimiser). A scaled copy of a constant objective carries weights of the order of its unit's
+    inverse (2^22 on CoGiRo's platform), on which the interior-point method ran into its iteration
+    limit at a third of the instants."""
     n = qp.n
-    w = np.ones(n) if qp.norm_weight is None else qp.norm_weight.astype(float)
-    if unit:
-        w = w / w.max()
+    w = np.ones(n) if qp.norm_weight is None else qp.norm_weight / qp.norm_weight.max()
     return qp.replace(P=None, P_diag=w, P_factor=np.zeros((0, n)), c=np.zeros(n), r=0.0, **changes)
 
 
@@ -282,7 +275,7 @@ class FlatObjective(Stage):
     def run(self, qp, sol, deadline):
         if not qp.constant_objective():
             return None
-        out = self.inner.solve(least_norm_problem(qp, unit=True), deadline=deadline)
+        out = self.inner.solve(least_norm_problem(qp), deadline=deadline)
         if out.status != OPTIMAL:
             return out.but(stage=f"{self.name}>{out.stage}") if out.final else None
         x = out.x
