@@ -205,11 +205,13 @@ def test_ellipsoid_wraps(tmp_path, monkeypatch, quadrant):
     _compare(tmp_path, muscles, wraps, rtol=1e-6)
 
 
-def test_the_fan_in_lanes_is_the_sample_loop_to_the_bit():
+def test_the_fan_in_sweeps_is_the_sample_loop_to_the_bit():
     """The hybrid method's fan (298 nearest points; :func:`_fan_sum` runs their Newton iterations in
-    lock step) equals OpenSim's loop over the samples, each through ``findClosestPoint``, to the bit:
-    segments through and outside the ellipsoid, one with a sample on a coordinate plane (the special
-    case that takes the 2-d ellipse), and a number of samples that does not fill the last lanes."""
+    sweeps over all of them) equals OpenSim's loop over the samples, each through
+    ``findClosestPoint``, to the bit, in Python and compiled as the route kernel compiles it
+    (``error_model="numpy"``: the sweeps become vector instructions): segments through and outside
+    the ellipsoid, and one with a sample on a coordinate plane (the special case that takes the 2-d
+    ellipse)."""
     from mcdm_pin.model import wrapping_osim_ellipsoid as we
     from mcdm_pin.model.wrapping_osim import _add, _mul, _sub, _unit, _ZERO
 
@@ -227,9 +229,12 @@ def test_the_fan_in_lanes_is_the_sample_loop_to_the_bit():
     a = tuple(d * f for d in dims)
     cases = [((-0.8, 0.3, 0.2), (1.6, 0.0, 0.0))]  # the sample i = 150 has u = 0 exactly
     cases += [(tuple(rng.uniform(-1.5, 1.5, 3)), tuple(rng.uniform(-3.0, 3.0, 3))) for _ in range(20)]
-    assert (we.NUM_FAN_SAMPLES - 2) % we.FAN_LANES != 0  # the last block has unused lanes
+    numba = pytest.importorskip("numba")
+    compiled = numba.njit(error_model="numpy")(lambda d, a, r1, r1r2, prev: we._fan_sum(d, a, r1, r1r2, prev))
     for r1, r1r2 in cases:
-        assert we._fan_sum(dims, a, r1, r1r2, _ZERO) == loop(dims, a, r1, r1r2, _ZERO)
+        expected = loop(dims, a, r1, r1r2, _ZERO)
+        assert we._fan_sum(dims, a, r1, r1r2, _ZERO) == expected
+        assert compiled(dims, a, r1, r1r2, _ZERO) == expected
 
 
 def test_moving_point_term_is_the_derivative(tmp_path, monkeypatch):

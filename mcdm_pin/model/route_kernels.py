@@ -176,10 +176,16 @@ def route_pass(oM, wrap_int, wrap_float, pulley_int, pulley_float, point_local, 
     return _pulleys(oM, pulley_int, pulley_float, point_local, arc_length)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def osim_route_pass(oM, q, paths, route, arc_length, L_extra, lever):
     """The routes that follow OpenSim's rules, after :func:`route_pass` at the same instant:
-    :func:`mcdm_pin.model.route_osim.osim_routes` (its tables ``paths``: ``route_osim.OsimTables``)."""
+    :func:`mcdm_pin.model.route_osim.osim_routes` (its tables ``paths``: ``route_osim.OsimTables``).
+
+    numba's ``error_model="numpy"``: a division carries no zero test (C's division, as in OpenSim),
+    so the ellipsoid fan's sweeps (:func:`~mcdm_pin.model.wrapping_osim_ellipsoid._fan_newton`)
+    compile to vector instructions; their quotients are chosen by tests of their own, so they
+    answer as their Python runs do. A zero divisor elsewhere (a degenerate route) gives inf or NaN,
+    which the terms report as not finite, where the Python run raises ``ZeroDivisionError``."""
     osim_routes(oM, q, paths, route, arc_length, L_extra, lever)
 
 

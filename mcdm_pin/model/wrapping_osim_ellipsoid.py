@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from .wrapping_osim import (INSIDE_RADIUS, MANDATORY_WRAP, NO_WRAP, ROUNDOFF, _ZERO, _acos, _add, _cross, _dot,
+from .wrapping_osim import (EPS, INSIDE_RADIUS, MANDATORY_WRAP, NO_WRAP, ROUNDOFF, _ZERO, _acos, _add, _cross, _dot,
                             _dsign, _mul, _norm, _sub, _unit, register_jitable)
 
 ELLIPSOID_TINY = 1e-8  # calcTangentPoint stops at this squared residual
@@ -126,10 +126,13 @@ def _closest_on_ellipsoid(dims, a, b, c, u, v, w, axis, prev):
 
 
 @register_jitable
-def _solve4(M, rhs):
-    """``M^-1 rhs`` for a 4x4 ``M`` (Gauss-Jordan with partial pivoting)."""
-    A = M.copy()
-    x = rhs.copy()
+def _solve4(M, rhs, A, x):
+    """``x = M^-1 rhs`` for a 4x4 ``M`` (Gauss-Jordan with partial pivoting), ``A`` (4, 4) its work
+    array: both given, so the damped steps' loop allocates nothing."""
+    for i in range(4):
+        x[i] = rhs[i]
+        for k in range(4):
+            A[i, k] = M[i, k]
     for col in range(4):
         piv = col
         for r in range(col + 1, 4):
@@ -149,26 +152,26 @@ def _solve4(M, rhs):
                 for k in range(4):
                     A[r, k] -= g * A[col, k]
                 x[r] -= g * x[col]
-    return x
 
 
 @register_jitable
 def _tangent_residual(r1, d1, p1, a, vs, vs4):
     """calcTangentPoint's residuals: in the plane, on the ellipsoid, tangent plane through ``r1`` and
-    ``p1``; and their sum of squares."""
+    ``p1`` (a tuple); and their sum of squares."""
     nr1 = (2.0 * r1[0] / (a[0] * a[0]), 2.0 * r1[1] / (a[1] * a[1]), 2.0 * r1[2] / (a[2] * a[2]))
     e0 = vs[0] * r1[0] + vs[1] * r1[1] + vs[2] * r1[2] + vs4
     e1 = -1.0 + (r1[0] / a[0]) ** 2 + (r1[1] / a[1]) ** 2 + (r1[2] / a[2]) ** 2
     e2 = _dot(nr1, r1) + d1
     e3 = _dot(nr1, p1) + d1
-    return np.array([e0, e1, e2, e3]), e0 * e0 + e1 * e1 + e2 * e2 + e3 * e3
+    return (e0, e1, e2, e3), e0 * e0 + e1 * e1 + e2 * e2 + e3 * e3
 
 
 @register_jitable
 def _tangent_point(pe, r1, p1, a, vs, vs4):
     """WrapEllipsoid::calcTangentPoint (centre at the origin): ``r1`` moved, by OpenSim's damped
     Gauss-Newton steps, until it lies in the plane ``vs . x + vs4 = 0``, on the ellipsoid and on a line
-    from ``p1`` tangent to it (squared residual <= 1e-8, at most 50 rounds)."""
+    from ``p1`` tangent to it (squared residual <= 1e-8, at most 50 rounds). Its arrays are made once
+    per call, not per step."""
     if abs(pe) < 0.0001:
         return p1
     r = np.array([r1[0], r1[1], r1[2]])
@@ -178,6 +181,9 @@ def _tangent_point(pe, r1, p1, a, vs, vs4):
     ssqo = ssq
     alpha = 0.01
     D = np.zeros((4, 4))
+    D2 = np.empty((4, 4))
+    work = np.empty((4, 4))
+    v, diag, vt, x = np.empty(4), np.empty(4), np.empty(4), np.empty(4)
     for _ in range(50):
         if not ssq > ELLIPSOID_TINY:
             break
@@ -191,20 +197,25 @@ def _tangent_point(pe, r1, p1, a, vs, vs4):
         pm = _unit(p1)
         pcos = _dot(pr, pm)
         dd = 1.0 - pcos ** 100 if pcos > 0.1 else 1.0
-        v = np.zeros(4)
-        D2 = np.zeros((4, 4))
+        for i in range(4):
+            v[i] = 0.0
+            vt[i] = 0.0
+            for j in range(4):
+                D2[i, j] = 0.0
         for i in range(4):
             for j in range(4):
                 v[i] -= D[i, j] * ee[j]
                 for k in range(4):
                     D2[i, j] += D[i, k] * D[j, k]
-        diag = np.array([D2[0, 0], D2[1, 1], D2[2, 2], D2[3, 3]])
-        vt = np.zeros(4)
+        for i in range(4):
+            diag[i] = D2[i, i]
         n2 = 0
         while ssq >= ssqo and n2 < 1000:
             for i in range(4):
                 D2[i, i] = diag[i] * (1.0 + alpha)
-            vt = dd * _solve4(D2, v) / 16.0
+            _solve4(D2, v, work, x)
+            for i in range(4):
+                vt[i] = dd * x[i] / 16.0
             r[0] += vt[0]
             r[1] += vt[1]
             r[2] += vt[2]
@@ -276,8 +287,79 @@ def _ellipsoid_arc(r1, r2, a, vs, vs4, far, factor):
     return total, first, last, n_seg + 1
 
 
-FAN_LANES = 4  # fan samples whose Newton iterations run side by side (:func:`_fan_sum`)
-_RUNNING, _FOUND, _SPECIAL, _UNUSED = 0, 1, 2, 3  # a lane's state in :func:`_fan_sum`
+N_FAN = NUM_FAN_SAMPLES - 2  # the fan's samples, i = 1 .. 298
+
+
+@register_jitable
+def _fan_samples(r1, r1r2, a):
+    """The fan's samples ``s_i = r1 + (i / 300) r1r2`` as ``(u, v, w)``, the products ``(a^2 u^2,
+    b^2 v^2, c^2 w^2)``, Newton's start ``t`` (0 inside the ellipsoid, ``max(a, b, c) |s_i|``
+    outside) and ``live``: 1 for a sample in the general case of :func:`_closest_on_ellipsoid`, 0 for
+    one with a coordinate within ``ROUNDOFF`` of zero. One array each (a sweep over separate arrays
+    compiles to vector instructions; rows of one array, which the compiler cannot tell apart, run
+    at half that speed)."""
+    A, B, C = a[0], a[1], a[2]
+    a2, b2, c2 = A * A, B * B, C * C
+    big = max(A, B, C)
+    su, sv, sw = np.empty(N_FAN), np.empty(N_FAN), np.empty(N_FAN)
+    k0, k1, k2, t = np.empty(N_FAN), np.empty(N_FAN), np.empty(N_FAN), np.empty(N_FAN)
+    live = np.empty(N_FAN, np.int64)
+    for j in range(N_FAN):
+        s = (j + 1) / NUM_FAN_SAMPLES
+        u, v, w = r1[0] + r1r2[0] * s, r1[1] + r1r2[1] * s, r1[2] + r1r2[2] * s
+        su[j], sv[j], sw[j] = u, v, w
+        live[j] = 0 if abs(u) <= ROUNDOFF or abs(v) <= ROUNDOFF or abs(w) <= ROUNDOFF else 1
+        k0[j], k1[j], k2[j] = a2 * u * u, b2 * v * v, c2 * w * w
+        inside = (u / A) ** 2 + (v / B) ** 2 + (w / C) ** 2 < 1.0
+        t[j] = 0.0 if inside else big * math.sqrt(u * u + v * v + w * w)
+    return su, sv, sw, k0, k1, k2, t, live
+
+
+@register_jitable
+def _fan_newton(a, k0, k1, k2, t, live):
+    """Newton's iteration of :func:`_closest_on_ellipsoid`'s general case for every live sample, in
+    sweeps over all of them: a sweep is one step of each sample still iterating (the same arithmetic
+    in the same order, so the same roots ``t`` to the bit). A sample leaves ``live`` when
+    ``|f| < 1e-9``; after 64 steps the ones still live did not converge. The sweep has no branch, so
+    the compiler turns it into vector instructions: four samples per instruction instead of one."""
+    a2, b2, c2 = a[0] * a[0], a[1] * a[1], a[2] * a[2]
+    for _ in range(64):
+        n_live = 0
+        for j in range(N_FAN):
+            tj = t[j]
+            P, Q, R = tj + a2, tj + b2, tj + c2
+            a2u2, b2v2, c2w2 = k0[j], k1[j], k2[j]
+            f = P * P * Q * Q * R * R - a2u2 * Q * Q * R * R - b2v2 * P * P * R * R - c2w2 * P * P * Q * Q
+            PQ, PR, QR, PQR = P * Q, P * R, Q * R, P * Q * R
+            fp = 2.0 * (PQR * (QR + PR + PQ) - a2u2 * QR * (Q + R) - b2v2 * PR * (P + R) - c2w2 * PQ * (P + Q))
+            step = live[j] if not abs(f) < 1e-09 else 0  # (a NaN f keeps stepping, as in OpenSim)
+            # (f / 0 in C is inf, and the next step's f NaN: either way the sample does not converge)
+            t[j] = (tj - (f / fp if fp != 0.0 else math.nan)) if step != 0 else tj
+            live[j] = step
+            n_live += step
+        if n_live == 0:
+            return
+
+
+@register_jitable
+def _fan_units(a, su, sv, sw, t):
+    """Each sample's nearest point ``(a^2 u / (t + a^2), ...)`` at its root ``t``, and the unit
+    vector to it from the sample (``_unit``: zeros below ``EPS``): ``(x, y, z, ex, ey, ez)``, one
+    array each (meaningful for the samples that converged)."""
+    a2, b2, c2 = a[0] * a[0], a[1] * a[1], a[2] * a[2]
+    x, y, z = np.empty(N_FAN), np.empty(N_FAN), np.empty(N_FAN)
+    ex, ey, ez = np.empty(N_FAN), np.empty(N_FAN), np.empty(N_FAN)
+    for j in range(N_FAN):
+        tj = t[j]
+        xj, yj, zj = a2 * su[j] / (tj + a2), b2 * sv[j] / (tj + b2), c2 * sw[j] / (tj + c2)
+        x[j], y[j], z[j] = xj, yj, zj
+        dx, dy, dz = xj - su[j], yj - sv[j], zj - sw[j]
+        n = math.sqrt(dx * dx + dy * dy + dz * dz)
+        big = n >= EPS
+        ex[j] = dx / n if big else 0.0
+        ey[j] = dy / n if big else 0.0
+        ez[j] = dz / n if big else 0.0
+    return x, y, z, ex, ey, ez
 
 
 @register_jitable
@@ -287,68 +369,27 @@ def _fan_sum(dims, a, r1, r1r2, prev):
     found by :func:`_closest_on_ellipsoid` (``prev``: the first sample's fallback, then each sample's
     point the next one's, as OpenSim passes them).
 
-    The samples' Newton iterations are independent, so :data:`FAN_LANES` of them run in lock step: the
-    processor overlaps their chains of dependent multiplications instead of waiting on each in turn.
-    Each lane does exactly the arithmetic of :func:`_closest_on_ellipsoid`'s general case, so the sum
-    is the same to the bit; a sample with a coordinate within ``ROUNDOFF`` of zero (the special
-    cases) goes through that function itself, in order."""
-    A, B, C = a[0], a[1], a[2]
-    a2, b2, c2 = A * A, B * B, C * C
-    big = max(A, B, C)
-    L = FAN_LANES
-    sv = np.empty((3, L))
-    k = np.empty((3, L))  # a^2 u^2, b^2 v^2, c^2 w^2
-    near = np.empty((3, L))
-    t = np.empty(L)
-    state = np.empty(L, np.int64)
-    vsum = _ZERO
-    for i0 in range(1, NUM_FAN_SAMPLES - 1, L):
-        for j in range(L):
-            i = i0 + j
-            if i >= NUM_FAN_SAMPLES - 1:
-                state[j] = _UNUSED
-                continue
-            p = _add(r1, _mul(r1r2, i / NUM_FAN_SAMPLES))
-            u, v, w = p[0], p[1], p[2]
-            sv[0, j], sv[1, j], sv[2, j] = u, v, w
-            if abs(u) <= ROUNDOFF or abs(v) <= ROUNDOFF or abs(w) <= ROUNDOFF:
-                state[j] = _SPECIAL
-                continue
-            state[j] = _RUNNING
-            k[0, j], k[1, j], k[2, j] = a2 * u * u, b2 * v * v, c2 * w * w
-            if (u / A) ** 2 + (v / B) ** 2 + (w / C) ** 2 < 1.0:
-                t[j] = 0.0
-            else:
-                t[j] = big * math.sqrt(u * u + v * v + w * w)
-        for _ in range(64):
-            running = False
-            for j in range(L):
-                if state[j] != _RUNNING:
-                    continue
-                P, Q, R = t[j] + a2, t[j] + b2, t[j] + c2
-                a2u2, b2v2, c2w2 = k[0, j], k[1, j], k[2, j]
-                f = P * P * Q * Q * R * R - a2u2 * Q * Q * R * R - b2v2 * P * P * R * R - c2w2 * P * P * Q * Q
-                if abs(f) < 1e-09:
-                    near[0, j], near[1, j], near[2, j] = a2 * sv[0, j] / P, b2 * sv[1, j] / Q, c2 * sv[2, j] / R
-                    state[j] = _FOUND
-                    continue
-                PQ, PR, QR, PQR = P * Q, P * R, Q * R, P * Q * R
-                fp = 2.0 * (PQR * (QR + PR + PQ) - a2u2 * QR * (Q + R) - b2v2 * PR * (P + R) - c2w2 * PQ * (P + Q))
-                t[j] -= f / fp
-                running = True
-            if not running:
-                break
-        for j in range(L):
-            if state[j] == _UNUSED:
-                break
-            p = (sv[0, j], sv[1, j], sv[2, j])
-            if state[j] == _FOUND:
-                prev = (near[0, j], near[1, j], near[2, j])
-            elif state[j] == _SPECIAL:
-                prev = _closest_on_ellipsoid(dims, A, B, C, p[0], p[1], p[2], -1, prev)
-            # (still running after 64 steps: Newton did not converge, and OpenSim keeps the last point)
-            vsum = _add(vsum, _unit(_sub(prev, p)))
-    return vsum
+    The samples' Newton iterations are independent: :func:`_fan_samples`, :func:`_fan_newton` and
+    :func:`_fan_units` run them side by side over arrays. The sum then goes through the samples in
+    order, as OpenSim's loop does: a sample with a coordinate within ``ROUNDOFF`` of zero (the
+    special cases) goes through :func:`_closest_on_ellipsoid` itself, and one whose iteration did not
+    converge keeps the previous sample's point. The sum is OpenSim's loop's to the bit."""
+    su, sv, sw, k0, k1, k2, t, live = _fan_samples(r1, r1r2, a)
+    special = live == 0
+    _fan_newton(a, k0, k1, k2, t, live)
+    x, y, z, ex, ey, ez = _fan_units(a, su, sv, sw, t)
+    s0, s1, s2 = 0.0, 0.0, 0.0
+    for j in range(N_FAN):
+        if special[j] or live[j] != 0:
+            p = (su[j], sv[j], sw[j])
+            if special[j]:
+                prev = _closest_on_ellipsoid(dims, a[0], a[1], a[2], p[0], p[1], p[2], -1, prev)
+            e = _unit(_sub(prev, p))
+            s0, s1, s2 = s0 + e[0], s1 + e[1], s2 + e[2]
+        else:
+            prev = (x[j], y[j], z[j])
+            s0, s1, s2 = s0 + ex[j], s1 + ey[j], s2 + ez[j]
+    return (s0, s1, s2)
 
 
 @register_jitable
