@@ -309,9 +309,12 @@ def _activations(terms, f, cables, bound_abs: float) -> np.ndarray:
     muscles."""
     if terms.muscles is None:
         return np.zeros(0)
+    k = cables.muscle_index
+    if f is not None and cables.all_muscles:  # no gather, no scatter
+        return activation(terms.muscles, f, bound_abs)
     out = np.full(cables.m, np.nan)
     if f is not None:
-        out[cables.muscle_index] = activation(terms.muscles, f[cables.muscle_index], bound_abs)
+        out[k] = activation(terms.muscles, f[k], bound_abs)
     return out
 
 

@@ -394,6 +394,7 @@ class CableSet:
             for p in c.route))
         self.rotating = tuple(rotating)
         self.muscles, self.muscle_index = None, np.zeros(0, dtype=int)
+        self.all_muscles = False  # every cable a muscle, in the muscles' order (muscle_index = 0 .. m-1)
         if muscles is not None:
             self._bind_muscles(muscles, list(muscle_cables))
         self._evaluators: dict = {}
@@ -406,6 +407,7 @@ class CableSet:
                              f"muscle, got {names!r}" + (f" ({unknown} are not cables)" if unknown else ""))
         self.muscles = muscles
         self.muscle_index = np.array([self.names.index(n) for n in names], dtype=int)
+        self.all_muscles = bool(np.array_equal(self.muscle_index, np.arange(len(self.cables))))
 
     @property
     def configuration_dependent(self) -> bool:

@@ -419,6 +419,8 @@ def activation(state: MuscleState, f, bound_abs: float = DEFAULT.bound_abs) -> n
         raise StateError(f"muscles: tensions f must have shape {np.shape(state.gain)}, got {f.shape}")
     gain = np.asarray(state.gain)
     zero = gain == 0
+    if not zero.any():  # (every muscle's tension moves with its activation: the formula alone)
+        return (f - state.passive) / gain
     a = (f - state.passive) / np.where(zero, 1.0, gain)
     at_passive = np.abs(f - state.passive) <= bound_abs
     return np.where(zero, np.where(at_passive, state.a_min, np.nan), a)

@@ -275,7 +275,7 @@ class TermsEvaluator:
         # wrapped routes: their path arrays are rebuilt at every instant and read by the kernel (the
         # numpy reference formulation covers fixed routes only)
         self._routes = RoutePaths(cables, pos) if cables.configuration_dependent else None
-        self._all_muscles = np.array_equal(cables.muscle_index, np.arange(cables.m))
+        self._all_muscles = cables.all_muscles
         if compiled or self._routes is not None:
             self._setup_kernel(len(keys))
         else:
