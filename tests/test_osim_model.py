@@ -414,7 +414,8 @@ def test_loop_force_and_wrench_maps_are_affine_in_the_cable_forces():
 
 def test_loop_instant_equals_its_separate_maps():
     """PointLoops.instant (one Jacobian pass, one SVD) gives basis, force_map (cables and actuators)
-    and wrench_map's numbers; its basis spans the null space of G."""
+    and wrench_map's numbers; its basis spans the null space of G; and PointLoops.terms adds them to
+    an instant's terms as numpy does."""
     om, _, src, _ = osim_skeleton(TSM)
     model, loops = om.model, src.loops
     rng = np.random.default_rng(4)
@@ -434,6 +435,15 @@ def test_loop_instant_equals_its_separate_maps():
     assert np.allclose(lam0, ref0, rtol=1e-12, atol=1e-12) and np.allclose(Lam, ref, rtol=1e-12, atol=1e-12)
     assert np.allclose(Lam_act, loops.force_map(q, np.zeros(model.nv), -S.T)[1], rtol=1e-12, atol=1e-12)
     assert np.array_equal(W, loops.wrench_map(q))
+    # what the maps add to an instant's terms (PointLoops.terms, one compiled call) is the numpy of them
+    child = np.array([j for j in range(1, model.njoints) if W[j].any()] + [1], dtype=np.int64)
+    u, RT = rng.normal(size=(len(child), 6)), rng.normal(size=(len(child), 6, L.shape[0]))
+    out = loops.terms(q, tau0, L, S, u, RT, child)
+    Wc = W[child]
+    for got, want in ((out.basis, basis), (out.u, u + Wc @ lam0), (out.RT, RT + Wc @ Lam),
+                      (out.RT_act, Wc @ Lam_act), (out.actuation, basis.T @ S), (out.L, L @ basis),
+                      (out.tau, basis.T @ tau0)):
+        assert got.shape == want.shape and np.allclose(got, want, rtol=1e-13, atol=1e-13)
 
 
 @pytest.mark.parametrize("path", [ARM26, TSM], ids=["arm26", "tsm"])

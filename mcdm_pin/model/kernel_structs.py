@@ -43,7 +43,22 @@ coordinate, velocity column, spline functions and floats (``pt_*``); the splines
 (``fun_ptr``, ``knots``); one row per wrap (``wrap_int``, ``wrap_float``); and the work arrays
 ``wrap_len`` (each wrap's arc) and ``pt_dP`` (each moving point's velocity per coordinate)."""
 
-KERNEL_STRUCTURES = (Route, KeyMaps, CableTerms, OsimPaths)
+LoopTables = namedtuple("LoopTables", ["pt_frame", "pt_sign", "pt_loop", "pt_cols", "pair_joint", "pair_frame",
+                                       "pair_sign", "pair_loop", "njoints", "k"])
+LoopTables.__doc__ = """A model's closed loops, fixed per model (:class:`mcdm_pin.osim.constraints.PointLoops`):
+the loop points of ``G`` (frame, sign: + at ``p_2``, - at ``p_1``, loop, and the velocity columns
+that move each, ``pt_cols`` (points, nv)), the wrench map's (point, joint whose subtree holds it)
+pairs (joint, frame, sign, loop), the model's number of joints and ``k`` (3 per loop)."""
+
+LoopTerms = namedtuple("LoopTerms", ["s", "basis", "lam0", "Lam", "Lam_act", "W", "u", "RT", "RT_act", "actuation",
+                                     "L", "tau"])
+LoopTerms.__doc__ = """What :func:`mcdm_pin.osim.loop_kernels.loop_terms` returns: ``G N``'s singular values
+``s``, the basis ``N K`` (nv, n), the loop force's maps ``lambda = lam0 + Lam f + Lam_act tau_act``,
+the joint wrenches' map ``W`` (njoints, 6, k), the physical joints' wrenches with the loop force's
+share (``u`` (Jn, 6), ``RT`` (Jn, 6, m), ``RT_act`` (Jn, 6, n_act)), and the equation of motion in
+the basis: ``actuation = (N K)^T S``, ``L N K`` (m, n), ``(N K)^T tau0`` (n,)."""
+
+KERNEL_STRUCTURES = (Route, KeyMaps, CableTerms, OsimPaths, LoopTables, LoopTerms)
 """The structures above (the marker :func:`mcdm_pin.jit.kernel_sources` looks for)."""
 
 ScaledQP = namedtuple("ScaledQP", ["c", "A", "b", "lb", "ub", "P", "P_diag", "P_factor", "G", "g", "norm_weight"])

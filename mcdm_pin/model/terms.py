@@ -394,8 +394,7 @@ class TermsEvaluator:
         f_min, f_max, state = self._tension_bounds(lengths, L, qd)
         basis, L_full, loop = None, L, {}
         if self.loops is not None:
-            basis, u, RT, loop = self._loop_terms(q, tau, L, u, RT)
-            L, tau = L @ basis, basis.T @ tau
+            basis, L, tau, u, RT, loop = self._loop_terms(q, tau, L, u, RT)
         elif self.couplings is not None:
             basis, L, tau = self.couplings.project(q, L, tau)
         return Terms(q=q.copy(), qd=qd.copy(), qdd=qdd.copy(), tau=tau, lengths=lengths, L=L, u=u,
@@ -421,19 +420,16 @@ class TermsEvaluator:
         return oMi
 
     def _loop_terms(self, q, tau, L, u, RT):
-        """``(basis, u, RT, extra)`` with the closed loops (module docstring): the basis ``N K``,
-        the wrenches with the loop force's share, and the Terms fields ``actuation``, ``RT_act``,
-        ``loop_force``."""
-        basis, lam0, Lam, Lam_act, W = self.loops.instant(q, tau, L, self._S)
-        W = W[self._child]  # (J, 6, 3k)
-        u = u + W @ lam0
-        RT = RT + W @ Lam
-        extra = dict(loop_force=(lam0, Lam, None))
+        """``(basis, L, tau, u, RT, extra)`` with the closed loops (module docstring): the basis ``N K``,
+        ``L`` and ``tau`` in it, the wrenches with the loop force's share, and the Terms fields
+        ``actuation``, ``RT_act``, ``loop_force`` (one compiled call:
+        :meth:`~mcdm_pin.osim.constraints.PointLoops.terms`)."""
+        out = self.loops.terms(q, tau, L, self._S, u, RT, self._child_i)
+        extra = dict(loop_force=(out.lam0, out.Lam, None))
         if self._S is not None:
             # G^T lambda = tau0 + L^T f - S tau_act: the actuators' share of lambda
-            extra = dict(actuation=basis.T @ self._S, RT_act=W @ Lam_act,
-                         loop_force=(lam0, Lam, Lam_act))
-        return basis, u, RT, extra
+            extra = dict(actuation=out.actuation, RT_act=out.RT_act, loop_force=(out.lam0, out.Lam, out.Lam_act))
+        return out.basis, out.L, out.tau, out.u, out.RT, extra
 
     def _tension_bounds(self, lengths, L, qd):
         """The cables' bounds at this instant and the muscles' state (``None`` without muscles)."""

@@ -45,6 +45,7 @@ import pinocchio as pin
 
 from .. import jit
 from ..exceptions import ModelError
+from ..model.kernel_structs import LoopTables
 from ..model.placements import stacked_view
 
 RANK_TOL = 1e-10  # relative singular-value threshold of G N's rank
@@ -93,6 +94,9 @@ class PointLoops:
         self._no_actuators = np.zeros((model.nv, 0))
         self._eye = np.eye(model.nv)
         self._eye.flags.writeable = False
+        self._tables = LoopTables(self._pt_frame, self._pt_sign, self._pt_loop, self._pt_cols, self._pair_joint,
+                                  self._pair_frame, self._pair_sign, self._pair_loop, int(model.njoints), self.k)
+        self._no_joints = np.zeros(0, dtype=np.int64)  # (instant: no joint's wrenches asked for)
 
     def _views(self) -> None:
         """The placements read through strided views of ``self.data`` (they follow every update): one
@@ -163,12 +167,24 @@ class PointLoops:
         ``(N K, lambda_0, Lambda, Lambda_act, W)`` (:meth:`basis`, :meth:`force_map` with ``L``, the
         actuators' ``Lambda_act`` of :meth:`force_map` with ``tau0 = 0`` and ``L = -S^T`` (``None``
         without ``S`` (nv, n_act)), :meth:`wrench_map`)."""
-        G = self.jacobian(q)  # (also the joints' and the frames' placements, for the wrench map)
-        s, basis, lam0, Lam, Lam_act = jit.kernels("osim.loop_kernels").loop_instant(
-            G, self._coupling_basis(q), np.asarray(tau0, dtype=float), np.ascontiguousarray(L, dtype=float),
-            self._no_actuators if S is None else np.ascontiguousarray(S, dtype=float), self.k)
-        self._check_rank(s)
-        return basis, lam0, Lam, None if S is None else Lam_act, self._wrench_map()
+        L = np.ascontiguousarray(L, dtype=float)
+        out = self.terms(q, tau0, L, S, np.zeros((0, 6)), np.zeros((0, 6, L.shape[0])), self._no_joints)
+        return out.basis, out.lam0, out.Lam, None if S is None else out.Lam_act, out.W
+
+    def terms(self, q, tau0, L, S, u, RT, child):
+        """:meth:`instant`'s maps and what they add to an instant's terms, in one compiled call
+        (:class:`~mcdm_pin.model.kernel_structs.LoopTerms`): the physical joints' wrenches ``u``
+        (Jn, 6) and ``RT`` (Jn, 6, m) with the loop force's share (``child`` (Jn,): each one's Pinocchio
+        joint), the actuators' ``RT_act``, and the equation of motion in the basis (``L N K``,
+        ``(N K)^T tau0``, ``(N K)^T S``). ``S``: (nv, n_act) or ``None``."""
+        m, d = self.model, self.data
+        pin.computeJointJacobians(m, d, np.asarray(q, dtype=float))
+        pin.updateFramePlacements(m, d)
+        out = jit.kernels("osim.loop_kernels").loop_terms(
+            d.J, self._fp, self._oR, self._op, self._tables, self._coupling_basis(q), np.asarray(tau0, dtype=float),
+            L, self._no_actuators if S is None else np.ascontiguousarray(S, dtype=float), u, RT, child)
+        self._check_rank(out.s)
+        return out
 
     def force(self, q, generalized) -> np.ndarray:
         """(3k,) ``lambda`` (N, world) from ``generalized = M qdd + h + L^T f`` (nv): the least-squares

@@ -1,6 +1,7 @@
 r"""The compiled closed loops (:mod:`mcdm_pin.osim.constraints`): the factorisation of ``G N``, the loop
 force's maps at one instant, and the joint wrenches' map ``W``, each one call instead of a dozen small
-numpy operations.
+numpy operations; and :func:`loop_terms`, all of them and what they add to an instant's terms in one
+call.
 
 Compiled by ``mcdm-pin compile`` with the other kernels and cached on disk (``cache=True``),
 registered with :mod:`mcdm_pin.jit`; until then the same code runs as Python
@@ -12,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..jit import njit
+from ..model.kernel_structs import LoopTables, LoopTerms
 
 
 @njit(cache=True, nogil=True)
@@ -41,7 +43,7 @@ def loop_factor(GN, k):
     the last ``n - k`` columns of ``V`` (an orthonormal basis of ``G N``'s null space) and
     ``pinv = U diag(1/s) V_{:k}^T = (N^T G^T)^+`` (k, n). The caller checks the rank from ``s``."""
     U, s, Vt = np.linalg.svd(GN)
-    pinv = (U / s) @ Vt[:k]
+    pinv = (U / s) @ np.ascontiguousarray(Vt[:k])  # (a row slice is typed 'A': BLAS wants 'C')
     return s, np.ascontiguousarray(Vt[k:].T), pinv
 
 
@@ -82,6 +84,30 @@ def loop_wrench_map(oR, op, fp, pair_joint, pair_frame, pair_sign, pair_loop, nj
     return W
 
 
+@njit(cache=True, nogil=True)
+def loop_terms(J, fp, oR, op, tables, N, tau0, L, S, u, RT, child):
+    """Everything the closed loops add at one instant, in one call (:class:`LoopTerms`): ``G``
+    (:func:`loop_jacobian` from ``J``, ``fp``), the basis and the loop force's maps
+    (:func:`loop_instant` with ``N``, ``tau0`` (nv,), ``L`` (m, nv), ``S`` (nv, n_act)), ``W``
+    (:func:`loop_wrench_map` from ``oR``, ``op``), then for each physical joint (its Pinocchio joint
+    ``child[j]``) its wrenches ``u[j] + W lam0`` and ``RT[j] + W Lam`` and the actuators' share
+    ``W Lam_act``, and the equation of motion in the basis. ``tables``: :class:`LoopTables`."""
+    t = tables
+    G = loop_jacobian(J, fp, t.pt_frame, t.pt_sign, t.pt_loop, t.pt_cols, t.k)
+    s, NK, lam0, Lam, Lam_act = loop_instant(G, N, tau0, L, S, t.k)
+    W = loop_wrench_map(oR, op, fp, t.pair_joint, t.pair_frame, t.pair_sign, t.pair_loop, t.njoints, t.k)
+    nc, m, na = child.shape[0], L.shape[0], S.shape[1]
+    u_out, RT_out, RT_act = np.empty((nc, 6)), np.empty((nc, 6, m)), np.zeros((nc, 6, na))
+    for j in range(nc):
+        w = np.ascontiguousarray(W[child[j]])  # (6, k)
+        u_out[j] = u[j] + w @ lam0
+        RT_out[j] = RT[j] + w @ Lam
+        if na:
+            RT_act[j] = w @ Lam_act
+    actuation = NK.T @ S if na else np.zeros((NK.shape[1], 0))
+    return LoopTerms(s, NK, lam0, Lam, Lam_act, W, u_out, RT_out, RT_act, actuation, L @ NK, NK.T @ tau0)
+
+
 def warm_calls():
     """This module's kernels with example arguments of the types the library passes (the placements
     as the strided views :func:`mcdm_pin.model.placements.stacked_view` makes; registered with
@@ -94,6 +120,8 @@ def warm_calls():
     G = np.eye(3, 4)
     identity = np.eye(4)  # N without couplings: PointLoops' read-only identity
     identity.flags.writeable = False
+    tables = LoopTables(z(1, dtype=i64), z(1), z(1, dtype=i64), np.ones((1, 4), dtype=np.bool_), z(1, dtype=i64),
+                        z(1, dtype=i64), z(1), z(1, dtype=i64), 2, 3)
     return [(loop_jacobian, (np.asfortranarray(z((6, 4))), op, z(1, dtype=i64), z(1), z(1, dtype=i64),
                              np.ones((1, 4), dtype=np.bool_), 3)),
             (loop_factor, (G, 3)),
@@ -101,7 +129,10 @@ def warm_calls():
             (loop_instant, (G, np.eye(4), z(4), z((2, 4)), z((4, 1)), 3)),
             (loop_instant, (G, identity, z(4), z((2, 4)), z((4, 0)), 3)),
             (loop_instant, (G, identity, z(4), z((2, 4)), z((4, 1)), 3)),
-            (loop_wrench_map, (oR, op, op, z(1, dtype=i64), z(1, dtype=i64), z(1), z(1, dtype=i64), 2, 3))]
+            (loop_wrench_map, (oR, op, op, z(1, dtype=i64), z(1, dtype=i64), z(1), z(1, dtype=i64), 2, 3))] + [
+        (loop_terms, (np.asfortranarray(z((6, 4))), op, oR, op, tables, basis, z(4), z((2, 4)), z((4, n_act)),
+                      z((1, 6)), z((1, 6, 2)), np.ones(1, dtype=i64)))
+        for basis in (np.eye(4), identity) for n_act in (0, 1)]
 
 
 def _register() -> None:
