@@ -185,7 +185,8 @@ def osim_route_pass(oM, q, paths, route, arc_length, L_extra, lever):
     so the ellipsoid fan's sweeps (:func:`~mcdm_pin.model.wrapping_osim_ellipsoid._fan_newton`)
     compile to vector instructions; their quotients are chosen by tests of their own, so they
     answer as their Python runs do. A zero divisor elsewhere (a degenerate route) gives inf or NaN,
-    which the terms report as not finite, where the Python run raises ``ZeroDivisionError``."""
+    which the terms report as not finite; the Python run raises ``ZeroDivisionError`` there, which
+    :class:`~mcdm_pin.model.routes.RoutePaths` turns into a :class:`~mcdm_pin.exceptions.StateError`."""
     osim_routes(oM, q, paths, route, arc_length, L_extra, lever)
 
 

@@ -116,7 +116,12 @@ class RoutePaths:
             raise StateError(f"cable {self.cables.names[rp.cable]!r}: rotating pulley{name}: {REASONS[int(reason)]} "
                              f"at this configuration")
         if self._osim is not None:  # OpenSim's routes read the configuration too
-            self._osim_pass(oM, q, self._osim.arrays, self.route, self.arc_length, self.L_extra, self.lever)
+            try:
+                self._osim_pass(oM, q, self._osim.arrays, self.route, self.arc_length, self.L_extra, self.lever)
+            except ZeroDivisionError:  # (uncompiled; compiled, the pass divides as C does and the terms
+                # report the inf or NaN as not finite)
+                raise StateError("an OpenSim path divides by zero at this configuration (a degenerate wrap: "
+                                 "its lengths and moment arms are undefined here)") from None
         return self.route, self.arc_length
 
 
