@@ -275,7 +275,6 @@ class TermsEvaluator:
         # wrapped routes: their path arrays are rebuilt at every instant and read by the kernel (the
         # numpy reference formulation covers fixed routes only)
         self._routes = RoutePaths(cables, pos) if cables.configuration_dependent else None
-        self._all_muscles = cables.all_muscles
         if compiled or self._routes is not None:
             self._setup_kernel(len(keys))
         else:
@@ -437,7 +436,7 @@ class TermsEvaluator:
         if cables.muscles is None:
             return cables.f_min, cables.f_max, None
         k = cables.muscle_index
-        if self._all_muscles:  # every cable a muscle, in order: no gather, no scatter
+        if cables.all_muscles:  # every cable a muscle, in order: no gather, no scatter
             state = tension_state(cables.muscles, lengths, L @ qd)
             return state.f_min, state.f_max, state
         state = tension_state(cables.muscles, lengths[k], L[k] @ qd)

@@ -110,19 +110,34 @@ def _closest_on_ellipsoid(dims, a, b, c, u, v, w, axis, prev):
         return (x, y, w)
     a2, b2, c2 = a * a, b * b, c * c
     a2u2, b2v2, c2w2 = a2 * u * u, b2 * v * v, c2 * w * w
-    if (u / a) ** 2 + (v / b) ** 2 + (w / c) ** 2 < 1.0:
-        t = 0.0
-    else:
-        t = max(a, b, c) * math.sqrt(u * u + v * v + w * w)
+    t = _newton_start(a, b, c, u, v, w)
     for _ in range(64):
-        P, Q, R = t + a2, t + b2, t + c2
-        f = P * P * Q * Q * R * R - a2u2 * Q * Q * R * R - b2v2 * P * P * R * R - c2w2 * P * P * Q * Q
+        P, Q, R, f, fp = _newton_terms(t, a2, b2, c2, a2u2, b2v2, c2w2)
         if abs(f) < 1e-09:
             return (a2 * u / P, b2 * v / Q, c2 * w / R)
-        PQ, PR, QR, PQR = P * Q, P * R, Q * R, P * Q * R
-        fp = 2.0 * (PQR * (QR + PR + PQ) - a2u2 * QR * (Q + R) - b2v2 * PR * (P + R) - c2w2 * PQ * (P + Q))
         t -= f / fp
     return prev
+
+
+@register_jitable
+def _newton_start(a, b, c, u, v, w):
+    """findClosestPoint's start for ``t``: 0 inside the ellipsoid, ``max(a, b, c) |(u, v, w)|``
+    outside."""
+    if (u / a) ** 2 + (v / b) ** 2 + (w / c) ** 2 < 1.0:
+        return 0.0
+    return max(a, b, c) * math.sqrt(u * u + v * v + w * w)
+
+
+@register_jitable
+def _newton_terms(t, a2, b2, c2, a2u2, b2v2, c2w2):
+    """findClosestPoint's Newton step at ``t``: ``(P, Q, R, f, f')`` with ``P = t + a^2``,
+    ``Q = t + b^2``, ``R = t + c^2`` and ``f(t) = P^2 Q^2 R^2 - a^2 u^2 Q^2 R^2 - b^2 v^2 P^2 R^2 -
+    c^2 w^2 P^2 Q^2`` (OpenSim's order of operations, so the same bits)."""
+    P, Q, R = t + a2, t + b2, t + c2
+    f = P * P * Q * Q * R * R - a2u2 * Q * Q * R * R - b2v2 * P * P * R * R - c2w2 * P * P * Q * Q
+    PQ, PR, QR, PQR = P * Q, P * R, Q * R, P * Q * R
+    fp = 2.0 * (PQR * (QR + PR + PQ) - a2u2 * QR * (Q + R) - b2v2 * PR * (P + R) - c2w2 * PQ * (P + Q))
+    return P, Q, R, f, fp
 
 
 @register_jitable
@@ -300,7 +315,6 @@ def _fan_samples(r1, r1r2, a):
     at half that speed)."""
     A, B, C = a[0], a[1], a[2]
     a2, b2, c2 = A * A, B * B, C * C
-    big = max(A, B, C)
     su, sv, sw = np.empty(N_FAN), np.empty(N_FAN), np.empty(N_FAN)
     k0, k1, k2, t = np.empty(N_FAN), np.empty(N_FAN), np.empty(N_FAN), np.empty(N_FAN)
     live = np.empty(N_FAN, np.int64)
@@ -310,8 +324,7 @@ def _fan_samples(r1, r1r2, a):
         su[j], sv[j], sw[j] = u, v, w
         live[j] = 0 if abs(u) <= ROUNDOFF or abs(v) <= ROUNDOFF or abs(w) <= ROUNDOFF else 1
         k0[j], k1[j], k2[j] = a2 * u * u, b2 * v * v, c2 * w * w
-        inside = (u / A) ** 2 + (v / B) ** 2 + (w / C) ** 2 < 1.0
-        t[j] = 0.0 if inside else big * math.sqrt(u * u + v * v + w * w)
+        t[j] = _newton_start(A, B, C, u, v, w)
     return su, sv, sw, k0, k1, k2, t, live
 
 
@@ -327,11 +340,7 @@ def _fan_newton(a, k0, k1, k2, t, live):
         n_live = 0
         for j in range(N_FAN):
             tj = t[j]
-            P, Q, R = tj + a2, tj + b2, tj + c2
-            a2u2, b2v2, c2w2 = k0[j], k1[j], k2[j]
-            f = P * P * Q * Q * R * R - a2u2 * Q * Q * R * R - b2v2 * P * P * R * R - c2w2 * P * P * Q * Q
-            PQ, PR, QR, PQR = P * Q, P * R, Q * R, P * Q * R
-            fp = 2.0 * (PQR * (QR + PR + PQ) - a2u2 * QR * (Q + R) - b2v2 * PR * (P + R) - c2w2 * PQ * (P + Q))
+            _, _, _, f, fp = _newton_terms(tj, a2, b2, c2, k0[j], k1[j], k2[j])
             step = live[j] if not abs(f) < 1e-09 else 0  # (a NaN f keeps stepping, as in OpenSim)
             # (f / 0 in C is inf, and the next step's f NaN: either way the sample does not converge)
             t[j] = (tj - (f / fp if fp != 0.0 else math.nan)) if step != 0 else tj

@@ -118,11 +118,16 @@ class PointLoops:
         pin.framesForwardKinematics(self.model, self.data, np.asarray(q, dtype=float))
         return np.concatenate([self.data.oMf[b].translation - self.data.oMf[a].translation for _, a, b in self.loops])
 
+    def _jacobians(self, q):
+        """``self.data`` with the joints' Jacobians and the joints' and frames' placements at ``q``
+        (what :func:`~mcdm_pin.osim.loop_kernels.loop_jacobian` and the wrench map read)."""
+        pin.computeJointJacobians(self.model, self.data, np.asarray(q, dtype=float))
+        pin.updateFramePlacements(self.model, self.data)
+        return self.data
+
     def jacobian(self, q) -> np.ndarray:
         """(3k, nv) ``G``."""
-        m, d = self.model, self.data
-        pin.computeJointJacobians(m, d, np.asarray(q, dtype=float))
-        pin.updateFramePlacements(m, d)
+        d = self._jacobians(q)
         return jit.kernels("osim.loop_kernels").loop_jacobian(d.J, self._fp, self._pt_frame, self._pt_sign,
                                                               self._pt_loop, self._pt_cols, self.k)
 
@@ -177,9 +182,7 @@ class PointLoops:
         (Jn, 6) and ``RT`` (Jn, 6, m) with the loop force's share (``child`` (Jn,): each one's Pinocchio
         joint), the actuators' ``RT_act``, and the equation of motion in the basis (``L N K``,
         ``(N K)^T tau0``, ``(N K)^T S``). ``S``: (nv, n_act) or ``None``."""
-        m, d = self.model, self.data
-        pin.computeJointJacobians(m, d, np.asarray(q, dtype=float))
-        pin.updateFramePlacements(m, d)
+        d = self._jacobians(q)
         out = jit.kernels("osim.loop_kernels").loop_terms(
             d.J, self._fp, self._oR, self._op, self._tables, self._coupling_basis(q), np.asarray(tau0, dtype=float),
             L, self._no_actuators if S is None else np.ascontiguousarray(S, dtype=float), u, RT, child)
