@@ -177,11 +177,12 @@ class QPData:
     def constant_objective(self) -> bool:
         """Whether the objective is a constant (``P = 0`` and ``c = 0`` exactly, as when every joint's
         weights are zero): every feasible point is then optimal."""
+        cnz = np.count_nonzero  # (a few microseconds less than any() on every instant)
         if self._P is None:
-            flat = not (self.P_diag.any() or self.P_factor.any())
+            flat = not (cnz(self.P_diag) or cnz(self.P_factor))
         else:
-            flat = not self._P.any()
-        return flat and not self.c.any()
+            flat = not cnz(self._P)
+        return flat and not cnz(self.c)
 
     def objective(self, x) -> float:
         """``1/2 x^T P x + c^T x + r``."""

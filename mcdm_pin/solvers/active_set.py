@@ -47,7 +47,8 @@ def kernel_qp(qp: QPData, factor: tuple | None = None) -> QP:
     c, A, b, lb, ub = qp.kernel_arrays()[:5]
     d0, F = (_EMPTY_F, np.zeros((0, qp.n))) if factor is None else (c_(factor[0], dtype=float),
                                                                        c_(factor[1], dtype=float))
-    strict = qp.P_diag is not None and qp.P_diag.size > 0 and float(qp.P_diag.min()) > 0.0
+    # (every entry > 0, NaN not: counted, a few microseconds less than a reduction's min())
+    strict = qp.P_diag is not None and qp.P_diag.size > 0 and not np.count_nonzero(~(qp.P_diag > 0.0))
     return QP(c_(qp.P, dtype=float), d0, F, c, float(qp.r), A, b, lb, ub, bool(strict))
 
 
@@ -191,14 +192,15 @@ def compiled_answer(qp: QPData, out, **fields) -> Solution:
     :func:`._fast.active_set_answer` or of :func:`._fast.ipm_answer` after its crossover) as a
     :class:`~.base.Solution`: the cones held with a positive multiplier and the bounds' guess become
     the next instant's :class:`ActiveSet`; the compiled uniqueness test's 1/0 ``unique=True`` / not
-    proven (``None``); ``iterations`` the answer's; ``fields``: more of the solution's fields
-    (``stage``)."""
+    proven (``None``, with ``unique_tested``: the least-norm stage need not test again);
+    ``iterations`` the answer's; ``fields``: more of the solution's fields (``stage``)."""
     names = qp.cone_consts()[0]
     held, dirs = out.held, out.dirs
-    nxt_cones = {names[k]: (dirs[k], float(out.mus[k])) for k in np.flatnonzero(held)} if held.any() else {}
+    nxt_cones = {names[k]: (dirs[k], float(out.mus[k])) for k in np.flatnonzero(held)} if np.count_nonzero(held) else {}
     return Solution(out.x, OPTIMAL, float(out.objective), y=out.y, z=out.z, z_cone=out.z_cone,
                     active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, out.next_state, (names, held, dirs)),
-                    verified=True, unique=True if out.unique else None, iterations=int(out.iterations), **fields)
+                    verified=True, unique=True if out.unique else None, unique_tested=True,
+                    iterations=int(out.iterations), **fields)
 
 
 def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state, **fields) -> Solution:

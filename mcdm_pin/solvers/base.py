@@ -52,6 +52,9 @@ class Solution:
         message: what cannot be met, for infeasible or failed instants; notes otherwise.
         stage: the stage that produced ``x`` (``first>refiner`` when a refining stage moved it).
         unique: whether the first-stage optimum is provably unique (``None``: not decided).
+        unique_tested: the uniqueness test (:func:`~mcdm_pin.solvers.least_norm.is_unique`) ran on
+            ``x`` already (a compiled answer), so ``unique`` ``None`` means *not proven* and the
+            least-norm stage does not test again.
         active: the optimum's active set, when the stage knows it
             (:class:`~mcdm_pin.solvers.active_set.ActiveSet`).
         verified: the point and its duals passed the compiled active-set solver's KKT check (tighter
@@ -71,6 +74,7 @@ class Solution:
     unique: bool | None = None
     active: object = field(default=None, repr=False)
     verified: bool = False
+    unique_tested: bool = False
 
     @property
     def f(self) -> np.ndarray:
