@@ -50,3 +50,23 @@ def test_face_rows_span_what_one_svd_of_all_rows_spans(seed):
     # the same space: each basis is reproduced by projecting it onto the other
     np.testing.assert_allclose(ref @ E.T @ E, ref, atol=1e-10)
     np.testing.assert_allclose(E @ ref.T @ ref, E, atol=1e-10)
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_face_rows_of_a_dense_objective_span_its_range_and_the_equations(seed):
+    # P without a factor: the objective's rows are its eigenvectors of nonzero eigenvalue (no unit
+    # rows), so the basis spans range(P) + rows(A) + c, whatever the compiled gathering does
+    qp = _weak_factor_problem(seed, cone=False)
+    n = qp.n
+    rng = np.random.default_rng(seed)
+    B = rng.normal(size=(n // 2, n))
+    qp = qp.replace(P=B.T @ B)
+    E = optimal_face_rows(qp, None)
+    N = np.vstack([B, qp.A, qp.c[None, :]])
+    N = N / np.linalg.norm(N, axis=1)[:, None]
+    _, s, Vt = np.linalg.svd(N, full_matrices=False)
+    ref = Vt[s > 1e-10 * s.max()]
+    assert E.shape == ref.shape
+    np.testing.assert_allclose(E @ E.T, np.eye(len(E)), atol=1e-12)
+    np.testing.assert_allclose(ref @ E.T @ E, ref, atol=1e-10)
+    np.testing.assert_allclose(E @ ref.T @ ref, E, atol=1e-10)

@@ -195,3 +195,59 @@ def _null_space_curvature(J, H, rows, nf, floor):
     Hr = Z.T @ H @ Z
     lam = np.linalg.eigvalsh(0.5 * (Hr + Hr.T))
     return 1 if lam.min() > floor else 0
+
+
+@njit(cache=True, nogil=True)
+def face_rows(F, d, A, c, C, free):
+    """The rows of :func:`mcdm_pin.solvers.least_norm._face_parts` before their SVD: the objective's
+    rows ``F`` (``P = diag(d) + F^T F``) whose curvature ``|F_i|^2`` is above ``1e-12`` of the largest
+    curvature (theirs and ``|d_j|``), the equations ``A``, ``c^T`` and the strongly active cones' rows
+    ``C``. The coordinates ``S`` whose unit rows are among them (``|d_j|`` above the same threshold,
+    or a strongly active bound: not ``free``) split off, each other row's part on the remaining
+    coordinates ``rest``, divided by the whole row's norm (rows of norm zero dropped), stacked into
+    ``R``. Returns ``(S, rest, R)``."""
+    n = c.shape[0]
+    curv = np.empty(F.shape[0])
+    top = 1e-300
+    for i in range(F.shape[0]):
+        curv[i] = dot(F[i], F[i])
+        top = max(top, curv[i])
+    for j in range(n):
+        top = max(top, abs(d[j]))
+    unit = np.empty(n, dtype=np.bool_)
+    n_unit = 0
+    for j in range(n):
+        unit[j] = abs(d[j]) > 1e-12 * top or not free[j]
+        if unit[j]:
+            n_unit += 1
+    S = np.empty(n_unit, dtype=np.int64)
+    rest = np.empty(n - n_unit, dtype=np.int64)
+    a = b = 0
+    for j in range(n):
+        if unit[j]:
+            S[a] = j
+            a += 1
+        else:
+            rest[b] = j
+            b += 1
+    R = np.empty((F.shape[0] + A.shape[0] + 1 + C.shape[0], n - n_unit))
+    t = 0
+    for i in range(F.shape[0]):
+        if curv[i] > 1e-12 * top:
+            t = _face_row(F[i], np.sqrt(curv[i]), rest, R, t)
+    for i in range(A.shape[0]):
+        t = _face_row(A[i], np.sqrt(dot(A[i], A[i])), rest, R, t)
+    t = _face_row(c, np.sqrt(dot(c, c)), rest, R, t)
+    for i in range(C.shape[0]):
+        t = _face_row(C[i], np.sqrt(dot(C[i], C[i])), rest, R, t)
+    return S, rest, R[:t]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _face_row(row, norm, rest, R, t):
+    """``row``'s part on ``rest`` over ``norm`` into ``R[t]`` unless ``norm`` is zero; the next row."""
+    if not norm > 0.0:
+        return t
+    for k in range(rest.shape[0]):
+        R[t, k] = row[rest[k]] / norm
+    return t + 1

@@ -191,31 +191,27 @@ def _face_parts(qp, active):
     """The optimal face's rows as ``(S, rest, Vt)``, given the answer's strongly active set (``(free,
     cone rows, _)`` of :func:`_strongly_active`; ``None``: no duals): the coordinates ``S`` whose unit
     rows are among them, the others ``rest``, and an orthonormal basis ``Vt`` (rows over ``rest``) of
-    the other rows' parts there (:func:`optimal_face_rows`)."""
+    the other rows' parts there (:func:`optimal_face_rows`). The rows are gathered in one compiled
+    pass (:func:`._unique.face_rows`), the SVD is numpy's."""
     n = qp.n
-    unit = np.zeros(n, dtype=bool)  # variables whose unit row is among the rows
+    c_ = np.ascontiguousarray
     # the objective's rows whose curvature is above 1e-12 of the largest: one below it changes the
     # objective by less than its rounding along any move of the forces' size (a moment weighted
     # 3e-277 beside forces weighted 1, normalised into a row of its own, pinned each back-end's
     # optimum to its own moment: three "least-norm" answers, |f| 623, 637 and 73 N)
     if qp.P_factor is not None and qp.P_diag is not None:
-        curv = np.einsum("ij,ij->i", qp.P_factor, qp.P_factor)
-        top = max(curv.max(initial=0.0), np.abs(qp.P_diag).max(initial=0.0), 1e-300)
-        rows = [qp.P_factor[curv > 1e-12 * top]]
-        unit |= np.abs(qp.P_diag) > 1e-12 * top
-    else:
+        F, d = qp.P_factor, qp.P_diag
+    else:  # unit rows of the eigenvectors: every one above the threshold
         w, V = np.linalg.eigh(qp.P)
-        rows = [V[:, w > 1e-12 * max(np.abs(w).max(initial=0.0), 1e-300)].T]
-    rows += [qp.A, qp.c[None, :]]
-    if active is not None:
+        F, d = V[:, w > 1e-12 * max(np.abs(w).max(initial=0.0), 1e-300)].T, np.zeros(n)
+    if active is None:
+        free, C = np.ones(n, dtype=np.bool_), np.zeros((0, n))
+    else:
         free, cone_rows, _ = active
-        unit |= ~free
-        rows += [r[None, :] for _, r in cone_rows]
-    N = np.vstack(rows)
-    norms = np.linalg.norm(N, axis=1)
-    rest = np.flatnonzero(~unit)
-    R = N[norms > 0][:, rest] / norms[norms > 0, None]
-    S = np.flatnonzero(unit)
+        C = np.array([r for _, r in cone_rows], dtype=float).reshape(len(cone_rows), n)
+    S, rest, R = jit.kernels("solvers._unique").face_rows(
+        c_(F, dtype=float).reshape(-1, n), c_(d, dtype=float), c_(qp.A, dtype=float).reshape(-1, n),
+        c_(qp.c, dtype=float), C, c_(free, dtype=np.bool_))
     if R.size:
         _, sv, Vt = np.linalg.svd(R, full_matrices=False)
         Vt = Vt[sv > 1e-10 * max(sv.max(initial=0.0), 1.0)]
@@ -307,7 +303,7 @@ class LeastNorm(Stage):
         if sol.unique is not None:
             return sol
         s = self.settings
-        if is_unique(qp, sol, s):
+        if not sol.unique_tested and is_unique(qp, sol, s):  # (a compiled answer was tested: not proven)
             return sol.but(unique=True)
         stage2 = stage2_problem(qp, sol, s)
         if sol.active is None:
