@@ -241,18 +241,16 @@ def ruiz(A, sweeps):
     d = np.ones(n_c)
     row = np.empty(n_r)
     col = np.empty(n_c)
-    s = np.empty(n_c)
     for _ in range(sweeps):
         col[:] = 0.0
         for i in range(n_r):
             ri = r[i]
-            for j in range(n_c):  # this row's entries, and the columns' maxima so far
-                v = ri * B[i, j] * d[j]
-                s[j] = v
-                col[j] = v if v > col[j] else col[j]
+            Bi = B[i]
             m = 0.0
-            for j in range(n_c):
-                m = s[j] if s[j] > m else m
+            for j in range(n_c):  # this row's maximum, and the columns' maxima so far, in one pass
+                v = ri * Bi[j] * d[j]
+                col[j] = v if v > col[j] else col[j]
+                m = v if v > m else m
             row[i] = m
         for i in range(n_r):
             r[i] /= np.sqrt(row[i] if row[i] != 0.0 else 1.0)
