@@ -103,6 +103,9 @@ class QPData:
     def P(self) -> np.ndarray:
         if self._P is None:
             F = self.P_factor
+            if not F.shape[0]:  # a diagonal objective (f^T f, activations'): no product to form
+                self._P = np.diag(self.P_diag + 0.0)  # (+ 0.0: a -0.0 entry reads +0.0, as the sum below gives)
+                return self._P
             self._P = F.T @ F
             # (the diagonal as a strided view of the flat array: fancy indexing by
             # diag_indices_from cost 11 us of the 20 us this property took on the neck)
