@@ -3,6 +3,8 @@ r"""The compiled uniqueness test of an optimum (:func:`unique_test`):
 thresholds (the strongly active constraints, their rows' rank on the free variables, the Hessian
 of the Lagrangian on the null space of those rows); the numpy code stays the reference. The
 answer kernels of :mod:`._fast` call it, and :mod:`.least_norm` calls it through :mod:`._fast`.
+Also the rows of the optimal face that the least-norm stage pins (:func:`face_rows`, before their
+SVD), which :mod:`.least_norm` calls directly.
 """
 
 from __future__ import annotations

@@ -201,7 +201,7 @@ def _face_parts(qp, active):
     # optimum to its own moment: three "least-norm" answers, |f| 623, 637 and 73 N)
     if qp.P_factor is not None and qp.P_diag is not None:
         F, d = qp.P_factor, qp.P_diag
-    else:  # unit rows of the eigenvectors: every one above the threshold
+    else:  # the eigenvectors of the nonzero eigenvalues, of norm one: the curvature test keeps them all
         w, V = np.linalg.eigh(qp.P)
         F, d = V[:, w > 1e-12 * max(np.abs(w).max(initial=0.0), 1e-300)].T, np.zeros(n)
     if active is None:
