@@ -18,9 +18,9 @@ _BLAS_SETTERS = None  # blas_setters(), listed once
 class BlasLimit:
     """``InverseDynamics.blas_limit``'s context: each BLAS library's own setter, its count restored on
     the way out (also after an exception; entries nest). A class, not a generator: it is entered at
-    every ``InverseDynamics.solve`` (threadpoolctl's ``limit()``, which asks every
-    library for its whole description, ~15 us; a generator around the setters ~6 us; this, with the
-    libraries' own functions (:func:`blas_setters`), ~2 us)."""
+    every ``InverseDynamics.solve``, where threadpoolctl's ``limit()`` asks every library for its
+    whole description and a generator around the setters costs more than the setters; this calls the
+    libraries' own functions (:func:`blas_setters`)."""
 
     __slots__ = ("threads", "depth", "changed")
 
@@ -65,9 +65,9 @@ def blas_setters():
     the limit is set and restored within one call, so two threads solving at once with the same
     ``blas_threads`` only run each other's BLAS calls at the limit meanwhile and leave the count as
     they found it (with different limits at once, the last to leave restores what it found, which
-    may be the other's limit: as before, threadpoolctl's own setters did not order them either). In
-    a solve's time: ~0.2 us a call instead of ~1-3 us (an eighth of the instant's Python, measured
-    on the neck's cold instants: the limit cost 18 us of 0.52 ms)."""
+    may be the other's limit: as before, threadpoolctl's own setters did not order them either). A
+    call through ctypes costs a fraction of threadpoolctl's, which took an eighth of a cold instant's
+    Python on the neck."""
     global _BLAS_SETTERS
     if _BLAS_SETTERS is None:
         out = []

@@ -213,7 +213,7 @@ class InverseDynamics:
         f_prev = None
         bar = None
         if progress:
-            from tqdm import tqdm  # (imported when a bar is shown: ~30 ms)
+            from tqdm import tqdm  # (imported only when a bar is shown: its import is slow)
             bar = tqdm(total=len(indices), delay=1.5, unit="inst", leave=False, file=sys.stderr)
         try:
             for k in indices:

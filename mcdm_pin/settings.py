@@ -104,8 +104,8 @@ class Settings:
     off another back-end's answer."""
     warm_max_pivots: int = 50
     """The warm active set's pivot limit (block principal pivoting) per instant. A pivot (one active
-    set's KKT solve and check) costs ~10-25 us on the neck, a cold solve by the interior-point method a
-    few ms: at the turning point of the neck's ``roll`` (cases 2 and 3) the active set needs 33 pivots
+    set's KKT solve and check) costs a hundredth of a cold solve by the interior-point method or less
+    on the neck: at the turning point of the neck's ``roll`` (cases 2 and 3) the active set needs 33 pivots
     (~0.7 ms), and with a limit of 30 that instant costs the pivots *and* the cold solve (~4 ms, the
     trajectory's 99th percentile). 50 pivots keep a warm start that fails under ~1 ms of pivoting."""
     warm_min_pivots: int = 4

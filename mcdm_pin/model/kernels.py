@@ -100,8 +100,8 @@ def _segment_terms(X, Jt, point_key, seg_a, seg_b, seg_cable, seg_active, seg_sc
             e = b if end == 0 else a
             sg = 1.0 if end == 0 else -1.0
             x0, x1, x2 = X[e, 0], X[e, 1], X[e, 2]
-            # the end's Pluecker vector w (six scalars: as a small array, each column's product was
-            # a loop of six dependent adds, 6 of this kernel's 22 us on the neck)
+            # the end's Pluecker vector w (six scalars: as a small array, each column's product is a
+            # loop of six dependent adds)
             w0, w1, w2 = sg * u0, sg * u1, sg * u2
             w3 = sg * (x1 * u2 - x2 * u1)
             w4 = sg * (x2 * u0 - x0 * u2)

@@ -390,7 +390,8 @@ def _diagonal_floor(H):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _work_arrays(n, neq, nu, nl, K, B, rf, Ct, fold, Fm):
-    """Every work array of the iterations, made once (a small array costs ~0.1-0.3 us to make):
+    """Every work array of the iterations, made once (a small array made per iteration would cost
+    more than its arithmetic):
     ``(fw, ws, res, scaling, rb, D)`` with the Newton system's factor work ``fw = (Kb, Km, KFF, G1,
     work)`` and solve work ``ws = (r1, u, rhs, wq)``, the residuals ``res = (Px, rx, ry, rzu, rzl,
     rzc, fx)``, the barrier's and the cones' :class:`._structs.Scaling` (the cones' ``W``, ``W^-1``,

@@ -61,8 +61,8 @@ rows), the cone's unknowns share their group's three directions: with ``w' = X^T
           S = E (E + V)^{-1} V \ \text{in place of}\ E \ \text{on the group's diagonal block},
 
 a system in ``(s, dy)`` of size ``rf + k_eq`` (48 instead of 72 on the neck: its Cholesky factor ~3x
-cheaper, the solves' triangular parts ~2x, no products of the cone rows to form; 41 -> 32 us per
-case-3 iteration). No ``W^-2`` is formed: ``S`` is the
+cheaper, the solves' triangular parts ~2x, no products of the cone rows to form; docs/speed.md,
+"Fourth pass"). No ``W^-2`` is formed: ``S`` is the
 parallel sum of ``E`` and ``V``, bounded by both, small where the cone is active (``V`` small), and
 ``E + V >= E`` is as well conditioned as ``M_0``. The directions equal the expanded system's to 1e-9
 (``tests/test_warm_fast.py::test_folded_cones_give_the_expanded_systems_directions``, down to a cone

@@ -216,7 +216,7 @@ def _axpy(a, x, y):
     """``y += a x`` over slices (a loop from 0 over ``range(len)``: numba then knows the index is not
     negative and vectorises it; the loop ``for j in range(k + 1, n)`` it replaces did not, 2x slower
     for the 49 x 49 KKT systems of the crossover). Inlined, unlike :func:`._ipm_linalg.axpy`: called
-    once per row, that one made the 49 x 49 factor 24 us instead of 14."""
+    once per row, a call costs about what the row's arithmetic does at these sizes."""
     for t in range(x.shape[0]):
         y[t] += a * x[t]
 
@@ -306,8 +306,8 @@ def determined_solve(K, rhs, nf):
     if not worst <= 1e-10 * rscale:
         # lstsq's answer would fail its own check (NaNs) whenever this x, the rows' least-squares
         # point, misses by more than sqrt(m) times its threshold: no x' meets every row within
-        # 1e-10 max|rhs| then (|R x' - r_c|_inf >= |R x - r_c|_2 / sqrt(m)). Said without the SVD
-        # (~250 us on the neck: a wrong crossover guess cost more than its instant's iterations)
+        # 1e-10 max|rhs| then (|R x' - r_c|_inf >= |R x - r_c|_2 / sqrt(m)). Said without the SVD,
+        # which would make a wrong crossover guess cost more than its instant's iterations
         full = 1.0
         for i in range(N):
             full = max(full, abs(rhs[i]))

@@ -78,7 +78,7 @@ def _gradient_scale(x, c, P):
     n = x.shape[0]
     grad = c.copy()  # the objective's gradient P x + c
     for i in range(n):
-        grad[i] += dot(P[i], x)  # (vectorised: a plain loop's sum waited on each product; 3 of 14 us)
+        grad[i] += dot(P[i], x)  # (vectorised: a plain loop's sum waits on each product)
     gscale = 1e-300
     for i in range(n):
         gscale = max(gscale, abs(grad[i]), abs(c[i]))

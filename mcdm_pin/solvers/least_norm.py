@@ -34,7 +34,7 @@ the answer records it (``Solution.unique``, the results' ``unique`` column).
 
 **The shortcut.** With more free variables than active rows ``J`` (the neck's cases 2 and 3: 25 free
 cables, 24 equations) the null space needs an SVD of ``J`` and the reduced Hessian an eigenvalue
-solve: ~100 us of a cold instant's ~0.5 ms. First, a Cholesky factor of ``H + gamma J^T J - thr I``
+solve, a fifth of a cold instant there. First, a Cholesky factor of ``H + gamma J^T J - thr I``
 (``thr = unique_rel`` times the Hessian's largest entry, ``gamma = unique_penalty`` times that entry
 over ``J^T J``'s) is tried: if it exists, ``z^T H z = z^T (H + gamma J^T J) z > thr |z|^2`` for
 every ``z`` with ``J z = 0``, which is the exact test's conclusion (its null space also holds the
@@ -43,7 +43,7 @@ than ``1e-17`` of the Hessian's scale, far below ``thr``). A factor that fails p
 (``gamma`` is finite): the exact test decides. On the neck's ``roll`` 14 of 101 instants (case 2)
 and 6 (case 3) have more free cables than active rows, and the shortcut decides each of them (the
 others are vertices); on instant 37, case 2, its smallest eigenvalue is 0.16 against the exact
-test's 0.24, both against ``thr = 2e-9``, and the compiled test takes 11 us instead of 102 us
+test's 0.24, both against ``thr = 2e-9``, and the compiled test takes a tenth of the exact one's time
 (``tests/test_warm_fast.py::test_uniqueness_shortcut_only_claims_what_the_null_space_test_proves``).
 """
 
