@@ -187,6 +187,14 @@ class QPData:
             flat = not cnz(self._P)
         return flat and not cnz(self.c)
 
+    def strictly_convex(self) -> bool:
+        """Whether ``P = diag(P_diag) + P_factor^T P_factor`` has every ``P_diag`` entry above zero (a NaN
+        not): then ``P`` is positive definite and the optimum unique (case 1, the activations'
+        objective). ``False`` proves nothing."""
+        d = self.P_diag
+        # (counted: count_nonzero has no reduction's per-call machinery, as min() has, on every instant)
+        return d is not None and d.size > 0 and not np.count_nonzero(~(d > 0.0))
+
     def objective(self, x) -> float:
         """``1/2 x^T P x + c^T x + r``."""
         x = np.asarray(x, dtype=float)

@@ -42,14 +42,12 @@ def kernel_qp(qp: QPData, factor: tuple | None = None) -> QP:
     once per problem by :meth:`QPData.kernel_arrays`, and Python scalars, so that one compiled
     specialisation serves every call). ``factor``: ``(d0, F)`` with ``P = diag(d0) + F^T F`` for the
     interior-point method (:func:`.ipm.p_structure`); empty where only the active-set solver runs.
-    ``strict`` when ``P = diag(d) + F^T F`` with ``d > 0`` (:func:`.least_norm.is_unique`'s first test)."""
+    ``strict``: :meth:`QPData.strictly_convex` (:func:`.least_norm.is_unique`'s first test)."""
     c_ = np.ascontiguousarray
     c, A, b, lb, ub = qp.kernel_arrays()[:5]
     d0, F = (_EMPTY_F, np.zeros((0, qp.n))) if factor is None else (c_(factor[0], dtype=float),
                                                                        c_(factor[1], dtype=float))
-    # (every entry > 0, a NaN not; counted: count_nonzero has no reduction's per-call machinery)
-    strict = qp.P_diag is not None and qp.P_diag.size > 0 and not np.count_nonzero(~(qp.P_diag > 0.0))
-    return QP(c_(qp.P, dtype=float), d0, F, c, float(qp.r), A, b, lb, ub, bool(strict))
+    return QP(c_(qp.P, dtype=float), d0, F, c, float(qp.r), A, b, lb, ub, qp.strictly_convex())
 
 
 def kernel_cones(qp: QPData) -> Cones:

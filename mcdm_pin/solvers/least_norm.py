@@ -99,8 +99,8 @@ def _strongly_active(qp, sol: Solution, settings: Settings, curvature: bool = Tr
 def is_unique(qp, sol: Solution, settings: Settings = DEFAULT) -> bool:
     """Whether the optimum ``sol`` is provably unique (module docstring). Needs its duals; ``False``
     without them (not proven)."""
-    if qp.P_diag is not None and qp.P_diag.size and float(qp.P_diag.min()) > 0.0:
-        return True  # P = diag(d) + F^T F with d > 0 is positive definite: strictly convex (case 1)
+    if qp.strictly_convex():  # P = diag(d) + F^T F with d > 0 is positive definite (case 1)
+        return True
     if sol.z is None or (qp.cones and sol.z_cone is None):
         return False
     decided = _compiled_unique(qp, sol, settings)
@@ -209,9 +209,9 @@ def _face_parts(qp, active):
     else:
         free, cone_rows, _ = active
         C = np.array([r for _, r in cone_rows], dtype=float).reshape(len(cone_rows), n)
+    c, A = qp.kernel_arrays()[:2]
     S, rest, R = jit.kernels("solvers._unique").face_rows(
-        c_(F, dtype=float).reshape(-1, n), c_(d, dtype=float), c_(qp.A, dtype=float).reshape(-1, n),
-        c_(qp.c, dtype=float), C, c_(free, dtype=np.bool_))
+        c_(F, dtype=float).reshape(-1, n), c_(d, dtype=float), A, c, C, c_(free, dtype=np.bool_))
     if R.size:
         _, sv, Vt = np.linalg.svd(R, full_matrices=False)
         Vt = Vt[sv > 1e-10 * max(sv.max(initial=0.0), 1.0)]
