@@ -471,10 +471,11 @@ def test_folded_cones_give_the_expanded_systems_directions(instants):
             for fd, p in ((fold, rf + neq), (none, rf + 3 * K + neq)):
                 Km = np.empty((p, p))
                 Kb = Km if fd[0].shape[0] else np.empty((B.shape[0], B.shape[0]))
-                la.factor(B, rf, M0inv, Ct, cg, fd, W2, dinv, 1e-14, np.empty((2, B.shape[1])), Kb, Km,
+                gram = la.gram_plan(B, n)
+                la.factor(gram, rf, M0inv, Ct, cg, fd, W2, dinv, 1e-14, np.empty((2, B.shape[1])), Kb, Km,
                           np.empty((rf, rf)), np.empty((3 * K, rf)))
                 dx, dy, dzc = np.empty(n), np.empty(neq), np.empty((K, 3))
-                la.solve(NewtonSystem(B, rf, Ct, cg, fd, Km, F, T, A), dinv, r1, r3, r2, np.empty(n), np.empty(p),
+                la.solve(NewtonSystem(B, rf, Ct, cg, fd, Km, F, T, A, gram), dinv, r1, r3, r2, np.empty(n), np.empty(p),
                          np.empty(rf), dx, dy, dzc)
                 out.append((dx, dy, dzc))
             for got, want in zip(out[0], out[1]):

@@ -168,7 +168,7 @@ def _start(qp, T, t, iu, il, system, M0inv, floor, fw, ws, box_weight, drop_rel)
     ru, rl = np.empty(nu), np.empty(nl)
     barrier(d0, iu, il, one_u, wb * one_u, one_l, wb * one_l, floor, dbar, dinv, ru, rl)
     Kb, Km, KFF, G1, gw = fw
-    dropped = newton.factor(B, rf, M0inv, Ct, cg, fold, Vc, dinv, drop_rel, gw, Kb, Km, KFF, G1)
+    dropped = newton.factor(system.gram, rf, M0inv, Ct, cg, fold, Vc, dinv, drop_rel, gw, Kb, Km, KFF, G1)
     # refined only when the factor is not that of the exact system: a dropped equation, or a variable
     # whose D fell below the floor (without bounds or weight)
     refine = 1 if dropped else 0
@@ -333,7 +333,7 @@ def ipm_solve(qp, T, t, cones, limits):
     B, rf, M0inv, Ct, cg, fold = structure(Fm, T, A, limits.rank_tol)
     fw, ws, res, scaling, rb, D = _work_arrays(n, A.shape[0], iu.shape[0], il.shape[0], K, B, rf, Ct, fold, Fm)
     resid = (res[1], res[2], res[3], res[4], res[5])  # (rx, ry, rzu, rzl, rzc)
-    system = NewtonSystem(B, rf, Ct, cg, fold, fw[1], Fm, T, A)
+    system = NewtonSystem(B, rf, Ct, cg, fold, fw[1], Fm, T, A, newton.gram_plan(B, n))
     x, y, su, zu, sl, zl, sc, zc = _start(qp, T, t, iu, il, system, M0inv, floor, fw, ws, limits.box_weight,
                                           limits.pivot_drop)
     slacks = Slacks(su, zu, sl, zl, sc, zc)
@@ -359,8 +359,8 @@ def ipm_solve(qp, T, t, cones, limits):
         # ---- scaling and the factor of the Newton system
         cone_scalings(sc, zc, scaling.Wm, scaling.Winv, scaling.W2, scaling.lamc)
         barrier(d0, iu, il, su, zu, sl, zl, floor, scaling.dbar, scaling.dinv, scaling.ru, scaling.rl)
-        dropped = newton.factor(B, rf, M0inv, Ct, cg, fold, scaling.W2, scaling.dinv, limits.pivot_drop, fw[4], fw[0],
-                                fw[1], fw[2], fw[3])
+        dropped = newton.factor(system.gram, rf, M0inv, Ct, cg, fold, scaling.W2, scaling.dinv, limits.pivot_drop,
+                                fw[4], fw[0], fw[1], fw[2], fw[3])
         refine = 1 if dropped or gap_rel < limits.refine_gap else 0
         j, a = direction(resid, slacks, mu, system, scaling, iu, il, refine, limits.ncorr, ws, rb, D)
         a = min(1.0, limits.step_fraction * a)

@@ -90,11 +90,55 @@ _FM = {"reassoc", "contract"}  # reassociation lets numba vectorise the dot prod
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def _gram(B, dinv, W, Km):
-    """``Km <- B diag(dinv) B^T`` (lower triangle): two rows of ``B diag(dinv)`` (in ``W`` (2, nb), its
-    padding columns zero) against four rows of ``B`` at a time (eight sums share six loads)."""
+def gram_plan(B, n):
+    """How :func:`_gram` reads ``B`` (the reduced system's rows over ``n`` variables, its columns
+    padded with zeros): ``(Bg, cols, srow, scol, sval)``, made once per solve. A column of ``B`` with
+    one nonzero entry adds to one diagonal entry of ``B D^-1 B^T`` only (an actuator's torque,
+    weighted on its own, in its coordinate's row of the equation of motion: 22 of the 85 variables
+    of MyoSuite's arm), a zero column adds nothing. ``Bg`` holds the other columns (``cols``: their
+    indices in ``B``), padded with zero columns to a multiple of 8, and ``(srow, scol, sval)`` the
+    single entries' rows, columns and values. ``Bg`` is ``B`` itself when every column has two
+    nonzero entries or more."""
+    rb = B.shape[0]
+    nnz = np.zeros(n, dtype=np.int64)
+    for i in range(rb):
+        for t in range(n):
+            if B[i, t] != 0.0:
+                nnz[t] += 1
+    nd, ns = 0, 0
+    for t in range(n):
+        if nnz[t] >= 2:
+            nd += 1
+        elif nnz[t] == 1:
+            ns += 1
+    srow, scol, sval = np.empty(ns, dtype=np.int64), np.empty(ns, dtype=np.int64), np.empty(ns)
+    if nd == n:
+        return B, np.arange(n), srow, scol, sval
+    Bg = np.zeros((rb, (nd + 7) // 8 * 8))
+    cols = np.empty(nd, dtype=np.int64)
+    d, s = 0, 0
+    for t in range(n):
+        if nnz[t] >= 2:
+            cols[d] = t
+            for i in range(rb):
+                Bg[i, d] = B[i, t]
+            d += 1
+        elif nnz[t] == 1:
+            for i in range(rb):
+                if B[i, t] != 0.0:
+                    srow[s], scol[s], sval[s] = i, t, B[i, t]
+            s += 1
+    return Bg, cols, srow, scol, sval
+
+
+@njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
+def _gram(plan, dinv, W, Km):
+    """``Km <- B diag(dinv) B^T`` (lower triangle) from :func:`gram_plan`'s ``plan``: two rows of
+    ``Bg diag(dinv)`` (in ``W`` (2, at least Bg's columns), its padding columns zero) against four
+    rows of ``Bg`` at a time (eight sums share six loads), then the single entries on the diagonal."""
+    B, cols, srow, scol, sval = plan
     rb, nb = B.shape
-    n = dinv.shape[0]
+    n = cols.shape[0]
     R0, R1 = W[0], W[1]
     for t in range(n, nb):
         R0[t] = 0.0
@@ -104,11 +148,11 @@ def _gram(B, dinv, W, Km):
         two = i + 1 < rb
         Bi = B[i]
         for t in range(n):
-            R0[t] = Bi[t] * dinv[t]
+            R0[t] = Bi[t] * dinv[cols[t]]
         if two:
             Bi1 = B[i + 1]
             for t in range(n):
-                R1[t] = Bi1[t] * dinv[t]
+                R1[t] = Bi1[t] * dinv[cols[t]]
         else:
             for t in range(n):
                 R1[t] = 0.0
@@ -150,6 +194,8 @@ def _gram(B, dinv, W, Km):
                 u0 += R1[t] * Bj[t]
             Km[i + 1, i + 1] = u0
         i += 2
+    for q in range(srow.shape[0]):
+        Km[srow[q], srow[q]] += sval[q] * sval[q] * dinv[scol[q]]
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy", inline="always")
@@ -236,27 +282,27 @@ def _expand_blocks(Kb, rf, Ct, cg, KFF, G1, Km):
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
-def factor(B, rf, M0inv, Ct, cg, fold, W2, dinv, drop_rel, work, Kb, Km, KFF, G1):
+def factor(gram, rf, M0inv, Ct, cg, fold, W2, dinv, drop_rel, work, Kb, Km, KFF, G1):
     """The Cholesky factor (lower) of the reduced matrix of the module docstring, in place in ``Km``
-    ((p, p)); whether an equation was dropped. ``Kb`` ((rf + k_eq)^2 when the cones' rows are
-    expanded, else ``Km`` itself), ``work`` (2, B's columns), ``KFF``, ``G1``: work arrays (made once
-    per solve). ``fold``: :func:`_fold_blocks` (non-empty: the cones folded into their groups, ``Km``
+    ((p, p)); whether an equation was dropped. ``gram``: :func:`gram_plan` of the rows ``B``. ``Kb``
+    ((rf + k_eq)^2 when the cones' rows are expanded, else ``Km`` itself), ``work`` (2, B's columns),
+    ``KFF``, ``G1``: work arrays (made once per solve). ``fold``: :func:`_fold_blocks` (non-empty: the cones folded into their groups, ``Km``
     (rf + k_eq)^2, :func:`_fold_factor`)."""
     K = W2.shape[0]
     if fold[0].shape[0]:
-        _gram(B, dinv, work, Km)
+        _gram(gram, dinv, work, Km)
         _fold_factor(fold, W2, Km)
         dropped = chol_inplace(Km, drop_rel, rf)
         _invert_diagonal(Km)
         return dropped
     if Ct.shape[0]:
-        _gram(B, dinv, work, Kb)
+        _gram(gram, dinv, work, Kb)
         if cg.shape[0]:
             _expand_blocks(Kb, rf, Ct, cg, KFF, G1, Km)
         else:
             _expand(Kb, rf, Ct, KFF, G1, Km)
     else:
-        _gram(B, dinv, work, Km)
+        _gram(gram, dinv, work, Km)
     for a in range(rf):
         for b in range(a + 1):
             Km[a, b] += M0inv[a, b]

@@ -62,11 +62,12 @@ ActiveSetRun.__doc__ = """What :func:`mcdm_pin.solvers._kkt.active_set_run` retu
 IPMRun = namedtuple("IPMRun", ["code", "x", "y", "z", "z_cone", "iterations", "state", "cact", "mus", "dirs"])
 IPMRun.__doc__ = """What :func:`mcdm_pin.solvers._ipm.ipm_solve` returns (its docstring)."""
 
-NewtonSystem = namedtuple("NewtonSystem", ["B", "rf", "Ct", "cg", "fold", "LK", "F", "T", "A"])
+NewtonSystem = namedtuple("NewtonSystem", ["B", "rf", "Ct", "cg", "fold", "LK", "F", "T", "A", "gram"])
 NewtonSystem.__doc__ = """The interior-point method's reduced Newton system (:mod:`._ipm_newton`): its
 structure (:func:`._ipm_structure.structure`: ``B``, ``rf``, ``Ct``, ``cg``, ``fold``), its Cholesky
-factor ``LK`` (made in place each iteration) and the objective's factor ``F``, cone rows ``T`` and
-equations ``A`` that refinement multiplies by."""
+factor ``LK`` (made in place each iteration), the objective's factor ``F``, cone rows ``T`` and
+equations ``A`` that refinement multiplies by, and how the factor reads ``B``
+(:func:`._ipm_newton.gram_plan`)."""
 
 Scaling = namedtuple("Scaling", ["dinv", "dbar", "ru", "rl", "W2", "Wm", "Winv", "lamc"])
 Scaling.__doc__ = """The interior-point method's scaling at an iterate (arrays updated in place each
