@@ -102,9 +102,9 @@ def gram_plan(B, n):
     rb = B.shape[0]
     nnz = np.zeros(n, dtype=np.int64)
     for i in range(rb):
+        Bi = B[i]
         for t in range(n):
-            if B[i, t] != 0.0:
-                nnz[t] += 1
+            nnz[t] += 1 if Bi[t] != 0.0 else 0
     nd, ns = 0, 0
     for t in range(n):
         if nnz[t] >= 2:
