@@ -286,8 +286,8 @@ def factor(gram, rf, M0inv, Ct, cg, fold, W2, dinv, drop_rel, work, Kb, Km, KFF,
     """The Cholesky factor (lower) of the reduced matrix of the module docstring, in place in ``Km``
     ((p, p)); whether an equation was dropped. ``gram``: :func:`gram_plan` of the rows ``B``. ``Kb``
     ((rf + k_eq)^2 when the cones' rows are expanded, else ``Km`` itself), ``work`` (2, B's columns),
-    ``KFF``, ``G1``: work arrays (made once per solve). ``fold``: :func:`_fold_blocks` (non-empty: the cones folded into their groups, ``Km``
-    (rf + k_eq)^2, :func:`_fold_factor`)."""
+    ``KFF``, ``G1``: work arrays (made once per solve). ``fold``: :func:`_fold_blocks` (non-empty: the
+    cones folded into their groups, ``Km`` (rf + k_eq)^2, :func:`_fold_factor`)."""
     K = W2.shape[0]
     if fold[0].shape[0]:
         _gram(gram, dinv, work, Km)
