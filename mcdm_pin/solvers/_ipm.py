@@ -156,7 +156,7 @@ def _start(qp, T, t, iu, il, system, M0inv, floor, fw, ws, box_weight, drop_rel)
     factor needs); ``fw``, ``ws``: the factor's and the solves' work arrays (:func:`ipm_solve`);
     ``drop_rel``: the factor's pivot drop (``ipm_pivot_drop``)."""
     d0, c, b, lb, ub = qp.d0, qp.c, qp.b, qp.lb, qp.ub
-    B, rf, Ct, cg, fold = system.B, system.rf, system.Ct, system.cg, system.fold
+    rf, Ct, cg, fold = system.rf, system.Ct, system.cg, system.fold
     n, nu, nl, K = c.shape[0], iu.shape[0], il.shape[0], T.shape[0]
     wb = box_weight if K == 0 else 1.0  # the bounds' weight (module docstring)
     one_u, one_l = np.ones(nu), np.ones(nl)

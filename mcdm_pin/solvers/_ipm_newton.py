@@ -136,8 +136,8 @@ def _gram(plan, dinv, W, Km):
     """``Km <- B diag(dinv) B^T`` (lower triangle) from :func:`gram_plan`'s ``plan``: two rows of
     ``Bg diag(dinv)`` (in ``W`` (2, at least Bg's columns), its padding columns zero) against four
     rows of ``Bg`` at a time (eight sums share six loads), then the single entries on the diagonal."""
-    B, cols, srow, scol, sval = plan
-    rb, nb = B.shape
+    Bg, cols, srow, scol, sval = plan
+    rb, nb = Bg.shape
     n = cols.shape[0]
     R0, R1 = W[0], W[1]
     for t in range(n, nb):
@@ -146,11 +146,11 @@ def _gram(plan, dinv, W, Km):
     i = 0
     while i < rb:
         two = i + 1 < rb
-        Bi = B[i]
+        Bi = Bg[i]
         for t in range(n):
             R0[t] = Bi[t] * dinv[cols[t]]
         if two:
-            Bi1 = B[i + 1]
+            Bi1 = Bg[i + 1]
             for t in range(n):
                 R1[t] = Bi1[t] * dinv[cols[t]]
         else:
@@ -158,7 +158,7 @@ def _gram(plan, dinv, W, Km):
                 R1[t] = 0.0
         j = 0
         while j + 3 <= i:
-            B0, B1, B2, B3 = B[j], B[j + 1], B[j + 2], B[j + 3]
+            B0, B1, B2, B3 = Bg[j], Bg[j + 1], Bg[j + 2], Bg[j + 3]
             s0, s1, s2, s3 = 0.0, 0.0, 0.0, 0.0
             u0, u1, u2, u3 = 0.0, 0.0, 0.0, 0.0
             for t in range(nb):
@@ -178,7 +178,7 @@ def _gram(plan, dinv, W, Km):
                 Km[i + 1, j], Km[i + 1, j + 1], Km[i + 1, j + 2], Km[i + 1, j + 3] = u0, u1, u2, u3
             j += 4
         while j <= i:
-            Bj = B[j]
+            Bj = Bg[j]
             s0, u0 = 0.0, 0.0
             for t in range(nb):
                 s0 += R0[t] * Bj[t]
@@ -188,7 +188,7 @@ def _gram(plan, dinv, W, Km):
                 Km[i + 1, j] = u0
             j += 1
         if two:
-            Bj = B[i + 1]
+            Bj = Bg[i + 1]
             u0 = 0.0
             for t in range(nb):
                 u0 += R1[t] * Bj[t]
