@@ -12,8 +12,9 @@ gives no cone, case 3 is refused and case 2 is timed instead, with a note):
 - **ours** (``InverseDynamics``, default solver chain) and **Clarabel** (the same problem through
   ``solver="clarabel"``) in the same run, their runs taken in turns so that a slow spell of the shared
   machine falls on both. *Warm*: ``solve_trajectory`` along the trajectory, after one untimed run
-  (model and solve per instant from the result's timings, and the wall time of the whole call per
-  instant). *Cold*: every instant alone in a shuffled order after ``reset()``, the wall time of
+  (model and solve per instant from the result's timings), then ``solve`` per instant in order with
+  the previous forces (the wall time of each frame: the state's checks, the model, the solve, the
+  answer's check, the outputs and the result). *Cold*: every instant alone in a shuffled order after ``reset()``, the wall time of
   ``solve``. Cells: median and 99th percentile per instant, ms.
 - **check**: before timing, both back-ends on ``--check`` instants against Clarabel at 1e-11
   (``bench_id``'s check: objective, equation of motion, bounds, cones).
@@ -117,11 +118,19 @@ def check(idents, robot, traj, n_check: int) -> dict:
 
 
 def time_warm(ident, traj) -> dict:
-    t0 = time.perf_counter()
+    """``solve_trajectory`` (its model and solve timings per instant), then the same instants in
+    order through ``solve`` with the previous forces, each timed whole (the frame: the state's
+    checks, the model, the solve, the answer's check, the outputs and the result)."""
     res = ident.solve_trajectory(traj, progress=False)
-    wall = (time.perf_counter() - t0) / len(traj)
     ok = res.found
-    return dict(model=res.time_model_s[ok], solve=res.time_solve_s[ok], wall=np.full(1, wall),
+    ident.reset()
+    wall, f_prev = [], None
+    for k in range(len(traj)):
+        t0 = time.perf_counter()
+        one = ident.solve(*state(traj, k), f_prev=f_prev)
+        wall.append(time.perf_counter() - t0)
+        f_prev = one.f if one.found else f_prev
+    return dict(model=res.time_model_s[ok], solve=res.time_solve_s[ok], wall=np.array(wall),
                 total=(res.time_model_s + res.time_solve_s)[ok], no_answer=int((~ok).sum()))
 
 
@@ -330,10 +339,11 @@ def main(argv=None) -> int:
           f"machine); busiest processes at the end: {top_processes()}")
     for note in notes:
         print(f"note: {note}")
-    print("Cells: p50 / p99 per instant, ms. Warm: solve_trajectory (model and solve from its timings; wall = "
-          "the call / instants, a mean: it carries the load's preemptions and everything after the solve). "
-          "Cold: reset() then solve() per instant, shuffled (wall of solve). The model part's floor: "
-          "mj_inverse computes no muscle forces; ours includes the muscles' bounds.\n")
+    print("Cells: p50 / p99 per instant, ms. Warm: solve_trajectory (model and solve from its timings), then "
+          "solve() per instant in order with the previous forces (wall per frame: the whole call, with the "
+          "state's checks, the answer's check, the outputs and the result). Cold: reset() then solve() per "
+          "instant, shuffled (wall of solve). The model part's floor: mj_inverse computes no muscle forces; "
+          "ours includes the muscles' bounds.\n")
     print(table(cases, floor, parts))
     print(f"\n(ran {time.perf_counter() - t_start:.0f} s)")
     if args.json:

@@ -1,7 +1,7 @@
 r"""The compiled uniqueness test of an optimum (:func:`unique_test`):
-:func:`mcdm_pin.solvers.least_norm.is_unique` after its first two tests, the same steps and
-thresholds (the strongly active constraints, their rows' rank on the free variables, the Hessian
-of the Lagrangian on the null space of those rows); the numpy code stays the reference. The
+:func:`mcdm_pin.solvers.least_norm.is_unique` after its first test, the same steps and thresholds
+(the strongly active constraints, their rows' rank on the free variables, the Hessian of the
+Lagrangian made definite along those rows); the numpy code stays the reference. The
 answer kernels of :mod:`._fast` call it, and :mod:`.least_norm` calls it through :mod:`._fast`.
 Also the rows of the optimal face that the least-norm stage pins (:func:`face_rows`, before their
 SVD), which :mod:`.least_norm` calls directly.
@@ -24,7 +24,7 @@ def definite_beyond(H, J, rows, thr, hscale, penalty):
     penalty hscale / max |J^T J|``, ``penalty``:
     :attr:`~mcdm_pin.settings.Settings.unique_penalty`): then ``z^T H z > thr |z|^2`` for every ``z`` with
     ``J z = 0``, the uniqueness test's conclusion without the null space
-    (:mod:`mcdm_pin.solvers.least_norm`, "The shortcut")."""
+    (:mod:`mcdm_pin.solvers.least_norm`, "Skipped when unique")."""
     nf = H.shape[0]
     M = np.zeros((nf, nf))
     gram_lower(J, rows, nf, M)
@@ -43,11 +43,10 @@ def definite_beyond(H, J, rows, thr, hscale, penalty):
 @njit(cache=True, nogil=True, inline="always")
 def unique_test(x, z, zc, qp, cones, limits):
     """:func:`mcdm_pin.solvers.least_norm.is_unique` of ``x`` (duals ``z``, ``zc``) on ``qp`` and
-    ``cones`` (:class:`._structs.QP`, :class:`._structs.Cones`) after its first two tests (its
-    ``_strongly_active``, the Cholesky of ``J^T J``, the Cholesky of ``H + gamma J^T J - thr I``
-    (:func:`definite_beyond`), then the null space of ``J`` by an SVD and the reduced Hessian's
-    smallest eigenvalue), with the thresholds ``limits.near``, ``unique_rel``, ``penalty``: 1 unique,
-    0 not proven unique."""
+    ``cones`` (:class:`._structs.QP`, :class:`._structs.Cones`) after its first test (its
+    ``_strongly_active``, the Cholesky of ``J^T J``, then the Cholesky of ``H + gamma J^T J - thr I``,
+    :func:`definite_beyond`), with the thresholds ``limits.near``, ``unique_rel``, ``penalty``: 1
+    unique, 0 not proven unique."""
     c, lb, ub, A, P = qp.c, qp.lb, qp.ub, qp.A, qp.H
     G, gc, ax, tn, cosr = cones.G, cones.gc, cones.ax, cones.tn, cones.cosr
     near, unique_rel, penalty = limits.near, limits.unique_rel, limits.penalty
@@ -67,9 +66,7 @@ def unique_test(x, z, zc, qp, cones, limits):
     if rows >= nf and _full_column_rank(J, rows, nf):
         return 1
     H, hscale = _reduced_hessian(P, free, nf, cv, cs, ncv)
-    if definite_beyond(H, J, rows, unique_rel * hscale, hscale, penalty):
-        return 1
-    return _null_space_curvature(J, H, rows, nf, unique_rel * hscale)
+    return 1 if definite_beyond(H, J, rows, unique_rel * hscale, hscale, penalty) else 0
 
 
 @njit(cache=True, nogil=True)
@@ -174,29 +171,6 @@ def _reduced_hessian(P, free, nf, cv, cs, ncv):
                 hab += cs[k] * cv[k, free[a]] * cv[k, free[bb]]
             H[a, bb] = hab
     return H, hscale
-
-
-@njit(cache=True, nogil=True)
-def _null_space_curvature(J, H, rows, nf, floor):
-    """1 if ``H`` restricted to the null space of ``J[:rows]`` (by an SVD) has its smallest
-    eigenvalue above ``floor`` (or the null space is empty), else 0."""
-    if rows > 0:
-        _, sv, Vt = np.linalg.svd(J, full_matrices=True)
-        smax = 0.0
-        for i in range(sv.shape[0]):
-            smax = max(smax, sv[i])
-        rank = 0
-        for i in range(sv.shape[0]):
-            if sv[i] > 1e-10 * max(smax, 1e-300):
-                rank += 1
-        Z = np.ascontiguousarray(Vt[rank:].T)
-    else:
-        Z = np.eye(nf)
-    if Z.shape[1] == 0:
-        return 1
-    Hr = Z.T @ H @ Z
-    lam = np.linalg.eigvalsh(0.5 * (Hr + Hr.T))
-    return 1 if lam.min() > floor else 0
 
 
 @njit(cache=True, nogil=True)

@@ -28,23 +28,26 @@ cycled at every instant, 18 ms each), and the least-norm stage would then solve 
 **Skipped when unique.** The first-stage optimum is unique when the Hessian (plus the active cones'
 curvature) is positive definite on the null space of the strongly active constraints (the equations,
 the bounds and cones whose multiplier exceeds ``unique_rel`` of the gradient's scale): the
-second-order sufficient condition, which for a convex problem means a unique minimiser. At a vertex
-(as many free variables as active equations) the null space is empty. :func:`is_unique` decides it;
-the answer records it (``Solution.unique``, the results' ``unique`` column).
+second-order sufficient condition, which for a convex problem means a unique minimiser.
+:func:`is_unique` proves it in one of two ways, each a Cholesky factor; the answer records the
+outcome (``Solution.unique``, the results' ``unique`` column: true where proven):
 
-**The shortcut.** With more free variables than active rows ``J`` (the neck's cases 2 and 3: 25 free
-cables, 24 equations) the null space needs an SVD of ``J`` and the reduced Hessian an eigenvalue
-solve, a fifth of a cold instant there. First, a Cholesky factor of ``H + gamma J^T J - thr I``
-(``thr = unique_rel`` times the Hessian's largest entry, ``gamma = unique_penalty`` times that entry
-over ``J^T J``'s) is tried: if it exists, ``z^T H z = z^T (H + gamma J^T J) z > thr |z|^2`` for
-every ``z`` with ``J z = 0``, which is the exact test's conclusion (its null space also holds the
-directions whose singular value is below ``1e-10`` of ``J``'s largest; ``gamma`` charges them less
-than ``1e-17`` of the Hessian's scale, far below ``thr``). A factor that fails proves nothing
-(``gamma`` is finite): the exact test decides. On the neck's ``roll`` 14 of 101 instants (case 2)
-and 6 (case 3) have more free cables than active rows, and the shortcut decides each of them (the
-others are vertices); on instant 37, case 2, its smallest eigenvalue is 0.16 against the exact
-test's 0.24, both against ``thr = 2e-9``, and the compiled test takes a tenth of the exact one's time
-(``tests/test_warm_fast.py::test_uniqueness_shortcut_only_claims_what_the_null_space_test_proves``).
+- **a vertex:** the active rows ``J`` on the free variables have full column rank (``J^T J`` has a
+  factor), so the null space is empty;
+- **the Hessian made definite along the rows:** ``H + gamma J^T J - thr I`` has a factor (``thr =
+  unique_rel`` times the Hessian's largest entry, ``gamma = unique_penalty`` times that entry over
+  ``J^T J``'s). Then ``z^T H z = z^T (H + gamma J^T J) z > thr |z|^2`` for every ``z`` with ``J z =
+  0``: the second-order condition, without forming the null space (an SVD of ``J``) or the reduced
+  Hessian's eigenvalues.
+
+A factor that fails proves nothing (``gamma`` is finite), and the least-norm stage then runs: where
+the optimum is unique after all, its face is that one point and the stage returns it. No exact test
+(the null space by an SVD, the reduced Hessian's smallest eigenvalue) follows the two factors: over
+the shipped robots it never proved what they could not, and it cost an SVD and an eigenvalue solve on
+every answer with a face of optima (``tools/uniqueness_survey.py``; docs/speed.md, "The uniqueness
+test without its exact step").
+(``tests/test_warm_fast.py::test_uniqueness_shortcut_only_claims_what_the_null_space_test_proves``
+checks the second factor against the exact test.)
 """
 
 from __future__ import annotations
@@ -124,22 +127,11 @@ def is_unique(qp, sol: Solution, settings: Settings = DEFAULT) -> bool:
     curv = _strongly_active(qp, sol, settings)[2]
     H = (qp.P + curv)[np.ix_(free, free)]
     hscale = max(np.abs(qp.P).max(initial=0.0), 1e-300)
-    if _definite_beyond(H, J, settings.unique_rel * hscale, hscale, settings.unique_penalty):
-        return True
-    if J.shape[0]:
-        _, s, Vt = np.linalg.svd(J, full_matrices=True)
-        rank = int((s > 1e-10 * max(s.max(initial=0.0), 1e-300)).sum())
-        Z = Vt[rank:].T
-    else:
-        Z = np.eye(nf)
-    if Z.shape[1] == 0:
-        return True
-    Hr = Z.T @ H @ Z
-    return bool(np.linalg.eigvalsh(0.5 * (Hr + Hr.T)).min() > settings.unique_rel * hscale)
+    return _definite_beyond(H, J, settings.unique_rel * hscale, hscale, settings.unique_penalty)
 
 
 def _definite_beyond(H, J, thr: float, hscale: float, penalty: float) -> bool:
-    """The shortcut of the module docstring: whether ``H + gamma J^T J - thr I`` is positive definite
+    """The second factor of the module docstring: whether ``H + gamma J^T J - thr I`` is positive definite
     (has a Cholesky factor; ``gamma`` from ``penalty``, :attr:`~mcdm_pin.settings.Settings.unique_penalty`)."""
     JtJ = J.T @ J
     big = float(np.abs(JtJ).max(initial=0.0))
