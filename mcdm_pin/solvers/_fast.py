@@ -25,7 +25,7 @@ from ._ipm import CROSSOVER, INFEASIBLE_CERT, ipm_solve
 from ._kkt import FOUND, active_set_run, next_guess
 from ._kkt_eq import cone_force
 from ._structs import QP, Answer, Cones, KKTMeasures, Limits
-from ._unique import face_rows, unique_test
+from ._unique import face_setup, unique_test
 
 
 @njit(cache=True, nogil=True)
@@ -535,4 +535,4 @@ def warm_calls():
             (outside_bounds, (z(n), z(n), z(n))),
             (kkt_measures, (qp, cones, z(1), z((1, 3, n)), z((1, 3)), z(n), z(1), z(n), z((1, 3)), True, 1e-300)),
             (instant_outputs, (z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)), z(n))),
-            (face_rows, (z((1, n)), z(n), z((1, n)), z(n), z((0, n)), np.ones(n, dtype=np.bool_)))]
+            (face_setup, (z(n), z(n), z((1, 3)), qp, cones, limits, z((1, n)), z(n)))]

@@ -3,8 +3,9 @@ r"""The compiled uniqueness test of an optimum (:func:`unique_test`):
 (the strongly active constraints, their rows' rank on the free variables, the Hessian of the
 Lagrangian made definite along those rows); the numpy code stays the reference. The
 answer kernels of :mod:`._fast` call it, and :mod:`.least_norm` calls it through :mod:`._fast`.
-Also the rows of the optimal face that the least-norm stage pins (:func:`face_rows`, before their
-SVD), which :mod:`.least_norm` calls directly.
+Also the optimal face that the least-norm stage pins (:func:`face_setup`: the same strongly active
+set, the face's rows, :func:`face_rows`, and a basis of them), which :mod:`.least_norm` calls
+directly.
 """
 
 from __future__ import annotations
@@ -174,8 +175,51 @@ def _reduced_hessian(P, free, nf, cv, cs, ncv):
 
 
 @njit(cache=True, nogil=True)
+def face_setup(x, z, zc, qp, cones, limits, F, d):
+    """The least-norm stage's optimal face through ``x`` (:func:`mcdm_pin.solvers.least_norm.stage2_problem`)
+    in one pass: the strongly active set of :func:`unique_test` (the duals ``z``, ``zc``; zero: none;
+    thresholds ``limits.near``, ``unique_rel``), the rows :func:`face_rows` gathers over it (``P =
+    diag(d) + F^T F``) and an orthonormal basis of their parts on ``rest`` (:func:`_row_basis`).
+    Returns ``(free, held, S, rest, Vt)``: ``free`` (n,) the variables not strongly active at a bound,
+    ``held`` (K,) the cones strongly held, then :func:`face_rows`' ``S`` and ``rest`` and the basis'
+    rows ``Vt`` over ``rest``."""
+    n = x.shape[0]
+    K = cones.G.shape[0]
+    thr = limits.unique_rel * _gradient_scale(x, qp.c, qp.H)
+    idx, nf = _not_strongly_active(x, z, qp.lb, qp.ub, limits.near, thr)
+    free = np.zeros(n, dtype=np.bool_)
+    for a in range(nf):
+        free[idx[a]] = True
+    crow, nr, _, _, _ = _held_cone_rows(cones.G, cones.gc, cones.ax, cones.tn, cones.cosr, zc, x, thr)
+    held = np.zeros(K, dtype=np.bool_)
+    for k in range(K):
+        held[k] = zc[k, 0] * cones.cosr[k] > thr
+    S, rest, R = face_rows(F, d, qp.A, qp.c, np.ascontiguousarray(crow[:nr]), free)
+    return free, held, S, rest, _row_basis(R)
+
+
+@njit(cache=True, nogil=True)
+def _row_basis(R):
+    """An orthonormal basis of the rows of ``R``: its right singular vectors whose singular value
+    is above ``1e-10`` of the largest, or of 1 when the largest is smaller (rows of unit norm:
+    :func:`face_rows`)."""
+    m = R.shape[1]
+    if R.shape[0] == 0 or m == 0:
+        return np.zeros((0, m))
+    _, sv, Vt = np.linalg.svd(R, full_matrices=False)
+    top = 1.0
+    for i in range(sv.shape[0]):
+        top = max(top, sv[i])
+    r = 0
+    for i in range(sv.shape[0]):  # (in decreasing order)
+        if sv[i] > 1e-10 * top:
+            r += 1
+    return np.ascontiguousarray(Vt[:r])
+
+
+@njit(cache=True, nogil=True)
 def face_rows(F, d, A, c, C, free):
-    """The rows of :func:`mcdm_pin.solvers.least_norm._face_parts` before their SVD: the objective's
+    """The rows of :func:`face_setup`'s face before their basis: the objective's
     rows ``F`` (``P = diag(d) + F^T F``) whose curvature ``|F_i|^2`` is above ``1e-12`` of the largest
     curvature (theirs and ``|d_j|``), the equations ``A``, ``c^T`` and the strongly active cones' rows
     ``C``. The coordinates ``S`` whose unit rows are among them (``|d_j|`` above the same threshold,

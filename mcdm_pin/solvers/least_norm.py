@@ -171,21 +171,21 @@ def optimal_face_rows(qp, sol: Solution | None = None, settings: Settings = DEFA
     row normalised first, the threshold relative to the largest singular value of the whole, at
     least 1). On MyoSuite's arm (85 variables, ~60 of them in ``S``) that SVD is 4x25 instead of 8x85
     in flops' terms: most of the stage's cost."""
-    active = None if sol is None or sol.z is None else _strongly_active(qp, sol, settings, curvature=False)
-    S, rest, Vt = _face_parts(qp, active)
+    S, rest, Vt = _face(qp, sol, settings)[2:]
     E = np.zeros((len(S) + len(Vt), qp.n))
     E[np.arange(len(S)), S] = 1.0
     E[len(S):, rest] = Vt
     return E
 
 
-def _face_parts(qp, active):
-    """The optimal face's rows as ``(S, rest, Vt)``, given the answer's strongly active set (``(free,
-    cone rows, _)`` of :func:`_strongly_active`; ``None``: no duals): the coordinates ``S`` whose unit
-    rows are among them, the others ``rest``, and an orthonormal basis ``Vt`` (rows over ``rest``) of
-    the other rows' parts there (:func:`optimal_face_rows`). The rows are gathered in one compiled
-    pass (:func:`._unique.face_rows`), the SVD is numpy's."""
-    n = qp.n
+def _face(qp, sol: Solution | None, settings: Settings):
+    """The optimal face through ``sol.x`` (its duals' strongly active set; ``sol`` ``None`` or without
+    duals: none) as ``(free, held, S, rest, Vt)``: the variables not strongly active at a bound, the
+    cones strongly held, the coordinates ``S`` whose unit rows are among the face's rows, the others
+    ``rest``, and an orthonormal basis ``Vt`` (rows over ``rest``) of the other rows' parts there
+    (:func:`optimal_face_rows`). One compiled pass (:func:`._unique.face_setup`, with the strongly
+    active set of the compiled uniqueness test)."""
+    n, K = qp.n, len(qp.cones)
     c_ = np.ascontiguousarray
     # the objective's rows whose curvature is above 1e-12 of the largest: one below it changes the
     # objective by less than its rounding along any move of the forces' size (a moment weighted
@@ -196,20 +196,13 @@ def _face_parts(qp, active):
     else:  # the eigenvectors of the nonzero eigenvalues, of norm one: the curvature test keeps them all
         w, V = np.linalg.eigh(qp.P)
         F, d = V[:, w > 1e-12 * max(np.abs(w).max(initial=0.0), 1e-300)].T, np.zeros(n)
-    if active is None:
-        free, C = np.ones(n, dtype=np.bool_), np.zeros((0, n))
-    else:
-        free, cone_rows, _ = active
-        C = np.array([r for _, r in cone_rows], dtype=float).reshape(len(cone_rows), n)
-    c, A = qp.kernel_arrays()[:2]
-    S, rest, R = jit.kernels("solvers._unique").face_rows(
-        c_(F, dtype=float).reshape(-1, n), c_(d, dtype=float), A, c, C, c_(free, dtype=np.bool_))
-    if R.size:
-        _, sv, Vt = np.linalg.svd(R, full_matrices=False)
-        Vt = Vt[sv > 1e-10 * max(sv.max(initial=0.0), 1.0)]
-    else:
-        Vt = np.zeros((0, len(rest)))
-    return S, rest, Vt
+    duals = sol is not None and sol.z is not None
+    x = c_(sol.x, dtype=float) if sol is not None else np.zeros(n)
+    z = c_(sol.z, dtype=float) if duals else np.zeros(n)  # (no duals: nothing strongly active)
+    zc = c_(sol.z_cone, dtype=float).reshape(K, 3) if duals and K and sol.z_cone is not None else np.zeros((K, 3))
+    return jit.kernels("solvers._unique").face_setup(
+        x, z, zc, kernel_qp(qp), kernel_cones(qp), kernel_limits(settings, settings.polish_max_pivots),
+        c_(F, dtype=float).reshape(-1, n), c_(d, dtype=float))
 
 
 def stage2_problem(qp, sol: Solution, settings: Settings = DEFAULT):
@@ -221,15 +214,9 @@ def stage2_problem(qp, sol: Solution, settings: Settings = DEFAULT):
     takes out of its linear systems), not an equation: on MyoSuite's arm 55 of the face's 84 rows
     are unit rows, and 55 of its 85 variables leave the active set's KKT system."""
     n = qp.n
-    active = None if sol.z is None else _strongly_active(qp, sol, settings, curvature=False)
-    S, rest, Vt = _face_parts(qp, active)
-    lb, ub, cones = qp.lb, qp.ub, qp.cones
-    if active is not None:
-        free, cone_rows, _ = active
-        lb, ub = np.where(free, qp.lb, -np.inf), np.where(free, qp.ub, np.inf)
-        held = {k for k, _ in cone_rows}
-        cones = [c for k, c in enumerate(qp.cones) if k not in held]
-    lb, ub = lb.copy(), ub.copy()
+    free, held, S, rest, Vt = _face(qp, sol, settings)
+    lb, ub = np.where(free, qp.lb, -np.inf), np.where(free, qp.ub, np.inf)  # (new arrays)
+    cones = [c for k, c in enumerate(qp.cones) if not held[k]] if held.any() else qp.cones
     lb[S] = ub[S] = sol.x[S]
     E = np.zeros((len(Vt), n))
     E[:, rest] = Vt
