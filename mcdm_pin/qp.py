@@ -181,11 +181,11 @@ class QPData:
         """Whether the objective is a constant (``P = 0`` and ``c = 0`` exactly, as when every joint's
         weights are zero): every feasible point is then optimal."""
         cnz = np.count_nonzero  # (no reduction's per-call machinery, as any() has, on every instant)
+        if cnz(self.c):  # (c first: n entries, where P has n^2; most objectives have a linear part)
+            return False
         if self._P is None:
-            flat = not (cnz(self.P_diag) or cnz(self.P_factor))
-        else:
-            flat = not cnz(self._P)
-        return flat and not cnz(self.c)
+            return not (cnz(self.P_diag) or cnz(self.P_factor))
+        return not cnz(self._P)
 
     def strictly_convex(self) -> bool:
         """Whether ``P = diag(P_diag) + P_factor^T P_factor`` has every ``P_diag`` entry above zero (a NaN
