@@ -116,6 +116,42 @@ def test_uniqueness_decision_is_the_numpy_ones(instants):
     assert seen == {True, False}  # both answers occur (the human arm's case 2/3 optimum is a face)
 
 
+def test_the_least_norm_face_is_the_numpy_one(instants):
+    """The least-norm stage's face in one compiled pass (``least_norm._face``: the compiled uniqueness
+    test's strongly active set, the face's rows, their basis) against numpy: ``_strongly_active``'s
+    free variables and held cones, and the span of the face's rows (the objective's rows of curvature
+    above 1e-12 of the largest, the equations, ``c`` and the held cones' rows, each normalised, on the
+    coordinates that are not unit rows) by one numpy SVD."""
+    held_seen = 0
+    for qp, _, sol, _ in instants:
+        if sol.z is None or qp.strictly_convex():
+            continue
+        free, held, S, rest, Vt = LN._face(qp, sol, DEFAULT)
+        free_ref, cone_rows, _ = LN._strongly_active(qp, sol, DEFAULT, curvature=False)
+        np.testing.assert_array_equal(free, free_ref)
+        assert set(np.flatnonzero(held)) == {k for k, _ in cone_rows}
+        held_seen += int(held.sum())
+        F, d = qp.P_factor, qp.P_diag
+        curv = (F * F).sum(axis=1)
+        top = max(curv.max(initial=0.0), np.abs(d).max(initial=0.0), 1e-300)
+        unit = (np.abs(d) > 1e-12 * top) | ~free_ref
+        np.testing.assert_array_equal(S, np.flatnonzero(unit))
+        np.testing.assert_array_equal(rest, np.flatnonzero(~unit))
+        rows = [F[curv > 1e-12 * top], qp.A, qp.c[None, :]] + [r[None, :] for _, r in cone_rows]
+        N = np.vstack(rows)
+        N = N[np.linalg.norm(N, axis=1) > 0]
+        N = (N / np.linalg.norm(N, axis=1)[:, None])[:, rest]
+        if N.size:
+            _, sv, ref = np.linalg.svd(N, full_matrices=False)
+            ref = ref[sv > 1e-10 * max(sv.max(), 1.0)]
+        else:
+            ref = np.zeros((0, len(rest)))
+        assert Vt.shape == ref.shape
+        np.testing.assert_allclose(Vt @ Vt.T, np.eye(len(Vt)), atol=1e-12)
+        np.testing.assert_allclose(ref @ Vt.T @ Vt, ref, atol=1e-9)  # the same space
+    assert held_seen > 0  # the neck's case 3 holds cones
+
+
 def _exact_unique(H, J, thr):
     """The exact test the shortcut stands in for: the smallest eigenvalue of H on null(J) above thr."""
     _, s, Vt = np.linalg.svd(J, full_matrices=True)
