@@ -393,15 +393,17 @@ def answer_check_outputs(L, tau, extra, x, lb, ub, G, g, ax, angle_deg, u, RT, R
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def kkt_measures(qp, cones, angle_deg, T, t, x, y, z, zc, duals, floor):
+def kkt_measures(qp, cones, angle_deg, x, y, z, zc, duals, floor):
     """:func:`mcdm_pin.solvers.check.kkt_residuals` in one pass (:class:`._structs.KKTMeasures`, its
     numpy reference's formulas): ``qp`` with ``H`` the dense Hessian, or ``d0`` (n,) and ``F`` its
-    structure ``H = diag(d0) + F^T F``; ``cones`` and their half-angles ``angle_deg``; ``T``, ``t``
-    the cones' rows (:meth:`mcdm_pin.qp.QPData.cone_rows`); the point ``x`` and, when ``duals``, its
-    multipliers ``y``, ``z``, ``zc``; ``floor``: the gradient scale's least value."""
+    structure ``H = diag(d0) + F^T F``; ``cones`` (with ``cosr`` and ``basis``: their rows
+    :func:`cone_rows`, :meth:`mcdm_pin.qp.QPData.cone_rows`'s) and their half-angles ``angle_deg``; the
+    point ``x`` and, when ``duals``, its multipliers ``y``, ``z``, ``zc``; ``floor``: the gradient
+    scale's least value."""
     eom, bound, cone_deg = _primal_measures(qp, cones, angle_deg, x)
     if not duals:
         return KKTMeasures(eom, bound, cone_deg, np.nan, np.nan)
+    T, t = cone_rows(cones.G, cones.gc, cones.ax, cones.cosr, cones.basis)
     n, k, K = x.shape[0], qp.b.shape[0], T.shape[0]
     Px, size = _hessian_product(qp, x)
     g = np.empty(n)
@@ -533,6 +535,6 @@ def warm_calls():
             (answer_check_outputs, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1),
                                     z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)))),
             (outside_bounds, (z(n), z(n), z(n))),
-            (kkt_measures, (qp, cones, z(1), z((1, 3, n)), z((1, 3)), z(n), z(1), z(n), z((1, 3)), True, 1e-300)),
+            (kkt_measures, (qp, cones, z(1), z(n), z(1), z(n), z((1, 3)), True, 1e-300)),
             (instant_outputs, (z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)), z(n))),
             (face_setup, (z(n), z(n), z((1, 3)), qp, cones, limits, z((1, n)), z(n)))]

@@ -52,12 +52,11 @@ def kkt_residuals(qp, sol: Solution, settings: Settings = DEFAULT) -> dict:
         H, d0, F = _NO_H, c_(qp.P_diag, dtype=float), c_(qp.P_factor, dtype=float).reshape(-1, n)
     else:
         H, d0, F = c_(qp.P, dtype=float), _NO_D, _NO_H
-    T, t = qp.cone_rows() if K and duals else (np.zeros((K, 3, n)), np.zeros((K, 3)))
-    cones = Cones(G, g, ax, tn, basis0, _NO_D, _NO_B)
+    _, angles, cosr, basis = qp.cone_consts()
+    cones = Cones(G, g, ax, tn, basis0, cosr, basis)  # (the kernel makes the cones' rows from them)
     floor = settings.kkt_grad_floor if duals and qp.constant_objective() else 1e-300
     m = jit.kernels("solvers._fast").kkt_measures(
-        QP(H, d0, F, c, float(qp.r), A, b, lb, ub, False), cones, c_(qp.cone_consts()[1], dtype=float),
-        c_(T, dtype=float), c_(t, dtype=float), c_(sol.x, dtype=float),
+        QP(H, d0, F, c, float(qp.r), A, b, lb, ub, False), cones, c_(angles, dtype=float), c_(sol.x, dtype=float),
         c_(sol.y, dtype=float) if duals else _NO_D, c_(sol.z, dtype=float) if duals else _NO_D,
         c_(sol.z_cone, dtype=float).reshape(K, 3) if duals and K else np.zeros((K, 3)), duals, floor)
     return m._asdict()
@@ -65,7 +64,6 @@ def kkt_residuals(qp, sol: Solution, settings: Settings = DEFAULT) -> dict:
 
 _NO_D = np.zeros(0)
 _NO_H = np.zeros((0, 0))
-_NO_B = np.zeros((0, 2, 3))
 
 
 def numpy_kkt_residuals(qp, sol: Solution, settings: Settings = DEFAULT) -> dict:
