@@ -56,7 +56,7 @@ def unique_test(x, z, zc, qp, cones, limits):
     free, nf = _not_strongly_active(x, z, lb, ub, near, thr)
     if nf == 0:
         return 1
-    crow, nr, cv, cs, ncv = _held_cone_rows(G, gc, ax, tn, cosr, zc, x, thr)
+    crow, nr, cv, cs, ncv, _ = _held_cone_rows(G, gc, ax, tn, cosr, zc, x, thr)
     m = A.shape[0]
     rows = m + nr
     J = np.empty((rows, nf))
@@ -103,10 +103,11 @@ def _not_strongly_active(x, z, lb, ub, near, thr):
 def _held_cone_rows(G, gc, ax, tn, cosr, zc, x, thr):
     """The rows the cones held at ``x`` (multiplier beyond ``thr``) add to the active constraints'
     Jacobian, ``crow[:nr]`` (every row of ``G`` for a cone held at its apex, else its surface's
-    normal and its tangent across the axis), and their curvature ``sum_k cs[k] cv[k] cv[k]^T``
-    (``k < ncv``): ``(crow, nr, cv, cs, ncv)``."""
+    normal and its tangent across the axis), their curvature ``sum_k cs[k] cv[k] cv[k]^T``
+    (``k < ncv``) and which cones are held: ``(crow, nr, cv, cs, ncv, held)``."""
     n = x.shape[0]
     K = G.shape[0]
+    held = np.zeros(K, dtype=np.bool_)
     crow = np.empty((3 * K, n))
     cv = np.empty((K, n))  # the held cones' curvature: sum_k cs[k] cv[k] cv[k]^T
     cs = np.empty(K)
@@ -116,6 +117,7 @@ def _held_cone_rows(G, gc, ax, tn, cosr, zc, x, thr):
         mu = zc[k, 0] * cosr[k]
         if not mu > thr:
             continue
+        held[k] = True
         F0, F1, F2, al, p0, p1, p2 = cone_force(G, gc, ax, k, x)
         p = np.array([p0, p1, p2])
         perp = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
@@ -137,7 +139,7 @@ def _held_cone_rows(G, gc, ax, tn, cosr, zc, x, thr):
         cv[ncv] = crow[nr - 1]
         cs[ncv] = mu / perp
         ncv += 1
-    return crow, nr, cv, cs, ncv
+    return crow, nr, cv, cs, ncv, held
 
 
 @njit(cache=True, nogil=True)
@@ -184,16 +186,12 @@ def face_setup(x, z, zc, qp, cones, limits, F, d):
     ``held`` (K,) the cones strongly held, then :func:`face_rows`' ``S`` and ``rest`` and the basis'
     rows ``Vt`` over ``rest``."""
     n = x.shape[0]
-    K = cones.G.shape[0]
     thr = limits.unique_rel * _gradient_scale(x, qp.c, qp.H)
     idx, nf = _not_strongly_active(x, z, qp.lb, qp.ub, limits.near, thr)
     free = np.zeros(n, dtype=np.bool_)
     for a in range(nf):
         free[idx[a]] = True
-    crow, nr, _, _, _ = _held_cone_rows(cones.G, cones.gc, cones.ax, cones.tn, cones.cosr, zc, x, thr)
-    held = np.zeros(K, dtype=np.bool_)
-    for k in range(K):
-        held[k] = zc[k, 0] * cones.cosr[k] > thr
+    crow, nr, _, _, _, held = _held_cone_rows(cones.G, cones.gc, cones.ax, cones.tn, cones.cosr, zc, x, thr)
     S, rest, R = face_rows(F, d, qp.A, qp.c, np.ascontiguousarray(crow[:nr]), free)
     return free, held, S, rest, _row_basis(R)
 
