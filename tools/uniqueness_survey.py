@@ -34,16 +34,9 @@ def classify(qp, sol, settings) -> str:
     nf = int(free.sum())
     if nf == 0:
         return "vertex"
-    J = np.vstack([qp.A[:, free]] + [np.asarray(r)[free][None, :] for _, r in rows]) if (len(qp.b) or rows) \
-        else np.zeros((0, nf))
-    if J.shape[0] >= nf:
-        JtJ = J.T @ J
-        try:
-            Lc = np.linalg.cholesky(JtJ)
-            if np.diag(Lc).min() ** 2 > 1e-10 * max(np.abs(JtJ).max(), 1e-300):
-                return "vertex"
-        except np.linalg.LinAlgError:
-            pass
+    J = LN._active_rows(qp, free, rows)
+    if LN._full_column_rank(J):
+        return "vertex"
     H = (qp.P + curv)[np.ix_(free, free)]
     hscale = max(np.abs(qp.P).max(initial=0.0), 1e-300)
     thr = settings.unique_rel * hscale

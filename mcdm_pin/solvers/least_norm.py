@@ -113,21 +113,35 @@ def is_unique(qp, sol: Solution, settings: Settings = DEFAULT) -> bool:
     nf = int(free.sum())
     if nf == 0:
         return True
-    J = np.vstack([qp.A[:, free]] + [np.asarray(r)[free][None, :] for _, r in rows]) if (len(qp.b) or rows) \
-        else np.zeros((0, nf))
-    if J.shape[0] >= nf:
-        # the usual case (a vertex): J has full column rank, the null space is empty
-        try:
-            JtJ = J.T @ J
-            Lc = np.linalg.cholesky(JtJ)
-            if np.diag(Lc).min() ** 2 > 1e-10 * max(np.abs(JtJ).max(), 1e-300):
-                return True
-        except np.linalg.LinAlgError:
-            pass
+    J = _active_rows(qp, free, rows)
+    if _full_column_rank(J):  # the usual case (a vertex): the null space is empty
+        return True
     curv = _strongly_active(qp, sol, settings)[2]
     H = (qp.P + curv)[np.ix_(free, free)]
     hscale = max(np.abs(qp.P).max(initial=0.0), 1e-300)
     return _definite_beyond(H, J, settings.unique_rel * hscale, hscale, settings.unique_penalty)
+
+
+def _active_rows(qp, free, rows) -> np.ndarray:
+    """``J``: the equations' and the held cones' rows (``rows`` of :func:`_strongly_active`) on the
+    ``free`` variables."""
+    nf = int(free.sum())
+    if not (len(qp.b) or rows):
+        return np.zeros((0, nf))
+    return np.vstack([qp.A[:, free]] + [np.asarray(r)[free][None, :] for _, r in rows])
+
+
+def _full_column_rank(J) -> bool:
+    """Whether ``J`` has full column rank: ``J^T J`` has a Cholesky factor whose smallest pivot squared
+    is above 1e-10 of its largest entry (the compiled test's threshold)."""
+    if J.shape[0] < J.shape[1]:
+        return False
+    JtJ = J.T @ J
+    try:
+        Lc = np.linalg.cholesky(JtJ)
+    except np.linalg.LinAlgError:
+        return False
+    return bool(np.diag(Lc).min() ** 2 > 1e-10 * max(np.abs(JtJ).max(), 1e-300))
 
 
 def _definite_beyond(H, J, thr: float, hscale: float, penalty: float) -> bool:
