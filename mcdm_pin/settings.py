@@ -85,7 +85,8 @@ class Settings:
     """Tikhonov term on the free variables of an active-set solve, relative to each variable's own
     curvature (its diagonal entry of the Hessian; :func:`mcdm_pin.solvers._kkt.tikhonov`)."""
     active_set_step: float = 1e-10
-    """Newton steps on the cone surfaces: stop when the step is below this, relative."""
+    """Newton steps on the cone surfaces: stop when the step, or the next one as their quadratic rate
+    predicts it, is below this, relative (:func:`mcdm_pin.solvers._kkt_eq._settled`)."""
     active_set_stationary: float = 1e-8
     """Active-set verification: a free variable's entry of the Lagrangian's gradient (its stationarity
     residual) within this of the gradient's scale (``max(|H f|_inf, |c|_inf, |A^T y|_inf)``)."""

@@ -314,8 +314,9 @@ def _reference_try(qp, guess, max_pivots):
     cdir = basis0.copy()
     for k in np.flatnonzero(cact):
         cdir[k] = guess.cones[names[k]][0]
+    x0, mus0 = guess.point_guess(qp)
     run = _kkt.active_set_run(AS.kernel_qp(qp), AS.kernel_cones(qp), state, cact, cdir,
-                              AS.kernel_limits(DEFAULT, max_pivots))
+                              AS.kernel_limits(DEFAULT, max_pivots), np.ascontiguousarray(x0), np.ascontiguousarray(mus0))
     if run.code != _kkt.FOUND:
         return None
     return AS.active_solution(qp, run.f, run.y, run.grad, run.state, run.cact, run.mus, run.dirs, run.next_state,

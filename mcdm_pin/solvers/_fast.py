@@ -114,14 +114,15 @@ def instant_outputs(u, RT, R_socket, axes, f):
 
 
 @njit(cache=True, nogil=True)
-def active_set_answer(qp, cones, state0, cact0, dirs0, limits):
+def active_set_answer(qp, cones, state0, cact0, dirs0, limits, x0, mus0):
     """:func:`._kkt.active_set_run` on ``qp`` (a :class:`._structs.QP`) with ``cones``
     (:class:`._structs.Cones`) within ``limits`` (:class:`._structs.Limits`) from the guess
     ``(state0, cact0, dirs0)`` (``dirs0``: the held cones' surface directions; the others start from
-    ``cones.basis0``), then, at a verified point, what
-    :func:`mcdm_pin.solvers.active_set.active_solution` makes of it: the bounds' multipliers ``z``
-    (base convention), the cone duals ``z_cone`` (:func:`mcdm_pin.solvers.active_set.cone_duals`), the
-    objective ``1/2 f^T H f + c^T f + r`` and the cones held with a positive multiplier.
+    ``cones.basis0``; ``x0``, ``mus0``: the guess's point and its cones' multipliers, or empty),
+    then, at a verified point, what :func:`mcdm_pin.solvers.active_set.active_solution` makes of it:
+    the bounds' multipliers ``z`` (base convention), the cone duals ``z_cone``
+    (:func:`mcdm_pin.solvers.active_set.cone_duals`), the objective ``1/2 f^T H f + c^T f + r`` and
+    the cones held with a positive multiplier.
 
     And whether the optimum is provably unique (:func:`answer_unique`), so that the least-norm stage
     need not ask again.
@@ -134,7 +135,7 @@ def active_set_answer(qp, cones, state0, cact0, dirs0, limits):
         if cact0[k]:
             for a in range(3):
                 cdir[k, a] = dirs0[k, a]
-    run = active_set_run(qp, cones, state0, cact0, cdir, limits)
+    run = active_set_run(qp, cones, state0, cact0, cdir, limits, x0, mus0)
     if run.code != FOUND:
         n = run.f.shape[0]
         return Answer(run.code, run.f, run.y, np.zeros(n), np.zeros((nc, 3)), np.nan, run.solves,
@@ -529,7 +530,7 @@ def warm_calls():
     cones = Cones(z((1, 3, n)), z((1, 3)), z((1, 3)), z(1), z((1, 3)), z(1), z((1, 2, 3)))
     limits = Limits(2, 2, 1e-10, 1e-12, 1e-9, 1e-11, 1e-12, 1e-8, 1e-10, 1e-12, 1e-12, 1e-8, 1e-9, 1e3, 60, 1e-10,
                     1e-3, 1, 1e-9, 0.2, 8, 1e-14, 1e-5, 0.99, 1e-14, 1e-6)
-    calls = [(active_set_answer, (qp, cones, z(n, dtype=np.int8), z(1, dtype=np.bool_), z((1, 3)), limits))]
+    calls = [(active_set_answer, (qp, cones, z(n, dtype=np.int8), z(1, dtype=np.bool_), z((1, 3)), limits, z(n), z(1)))]
     return calls + [(answer_unique, (z(n), z(n), z((1, 3)), qp, cones, limits)),
             (answer_check, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1))),
             (answer_check_outputs, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1),

@@ -293,7 +293,7 @@ def _crossover(x, slacks, iu, il, qp, cones, limits, memo, anyway):
     if not (stable or anyway) or not _new_guess(state, cact, last_state, last_cact):
         return 0, ActiveSetRun(-1, x, np.zeros(0), np.zeros(0), state, cact, np.zeros((0, 3)), state, np.zeros(0),
                                0, 0)
-    return 1, _kkt.active_set_run(qp, cones, state, cact, cdir, limits)
+    return 1, _kkt.active_set_run(qp, cones, state, cact, cdir, limits, np.zeros(0), np.zeros(0))
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")

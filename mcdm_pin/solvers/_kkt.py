@@ -76,10 +76,12 @@ def tikhonov(H, g, ub, reg_rel):
 
 
 @njit(cache=True, nogil=True)
-def active_set_run(qp, cones, state0, cact0, cdir0, limits):
+def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
     """Block principal pivoting on ``qp`` (a :class:`._structs.QP`; its ``H``, ``c``, equations and
-    bounds) with ``cones`` (:class:`._structs.Cones`) from the guess ``(state0, cact0, cdir0)`` until a
-    verified KKT point (see :func:`mcdm_pin.solvers.active_set.try_active_set`), within ``limits``
+    bounds) with ``cones`` (:class:`._structs.Cones`) from the guess ``(state0, cact0, cdir0)`` (with
+    ``x0``, ``mus0`` a point near the answer and its cones' multipliers, or empty:
+    :func:`._kkt_eq.eq_solve`'s, for the guess's own active set) until a verified KKT point (see
+    :func:`mcdm_pin.solvers.active_set.try_active_set`), within ``limits``
     (:class:`._structs.Limits`: ``max_pivots``, ``max_newton``, the ``*_tol`` and ``reg_rel``, the
     Tikhonov terms of :func:`._kkt_eq.eq_solve` relative to each variable's curvature: :func:`tikhonov`).
 
@@ -112,12 +114,15 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits):
     best_ninf = n + nc + 1
     blocks_ok = True
     solves = 0
+    none = np.zeros(0)
     for it in range(max_pivots):
         if _seen(hist_s, hist_c, it, state, cact):
             return ActiveSetRun(CYCLE, f, mus, grad, state, cact, cdir, state, y, it, solves)
         hist_s[it] = state
         hist_c[it] = cact
-        code, f, y, mus, dirs, ns, LU, perm, lu_ok = eq_solve(qp, cones, state, cact, cdir, limits, reg)
+        # (the guess's point serves its own active set: the first solve's)
+        code, f, y, mus, dirs, ns, LU, perm, lu_ok = eq_solve(qp, cones, state, cact, cdir, limits, reg,
+                                                              x0 if it == 0 else none, mus0 if it == 0 else none)
         solves += ns
         if code == DROP:  # a cone pulls the force inwards: it is not active
             _drop_pulling(cact, mus)

@@ -43,11 +43,16 @@ def _on_surfaces(f, G, gc, ax, tn, act, tol):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def eq_solve(qp, cones, state, cact, cdir, limits, reg):
+def eq_solve(qp, cones, state, cact, cdir, limits, reg, x0, mus0):
     """Minimise ``1/2 f^T H f + c^T f`` (``qp``, a :class:`._structs.QP`) with ``A f = b``, the
     cables of ``state`` fixed at their bounds and the cones of ``cact`` (of ``cones``, a
     :class:`._structs.Cones`) held on their surface (at most ``limits.max_newton`` Newton steps down
     to ``limits.step_tol``, with the cones' curvature weighted by their multipliers).
+
+    ``x0`` (n,) and ``mus0`` (nc,), or empty: a point near the answer and its cones' multipliers (the
+    previous instant's answer), where the first Newton step takes the surfaces' curvature and its
+    directions, as the later steps take them at the point before, and from which its step counts
+    (:func:`_settled`); without one the first step linearises each held cone along ``cdir``.
 
     ``reg`` (n,) > 0 is added to the free cables' diagonal (a Tikhonov term ``1/2 sum reg_i f_i^2``):
     with a positive semidefinite objective whose optimum is a flat ridge (case 2 with ``beta = 0``)
@@ -83,6 +88,14 @@ def eq_solve(qp, cones, state, cact, cdir, limits, reg):
     have_cur = False
     have_prev = False
     last_step = -1.0  # the last Newton step's size (none yet)
+    if na > 0 and x0.shape[0] == f.shape[0] and mus0.shape[0] == nc:
+        f_cur[:] = x0
+        have_cur = True
+        for s in range(na):
+            mus[act[s]] = mus0[act[s]]
+        for p in range(nf):
+            x_prev[p] = x0[free[p]]
+        have_prev = True
     y = np.zeros(neq)
     iters = max_newton if na > 0 else 1
     flat = _flat(H, free)
@@ -109,7 +122,7 @@ def eq_solve(qp, cones, state, cact, cdir, limits, reg):
         if na == 0:
             converged = True
             break
-        if have_cur:
+        if solves > 1:  # (a first solve's multipliers, from a point of another instant, can mislead)
             for s in range(na):
                 if mus[act[s]] < 0.0:
                     return DROP, f, y, mus, dirs, solves, LU, perm, lu_ok

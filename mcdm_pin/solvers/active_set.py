@@ -80,13 +80,15 @@ class ActiveSet:
     codes per variable: 0 free, 1 lower, 2 upper), takes the place of ``lower`` and ``upper``.
     ``held``, when given, is ``cones`` as arrays for the problem's cones named ``names`` (a mask and
     the directions, (K,) and (K, 3)): what the compiled kernel takes, kept from the answer that
-    made the guess."""
+    made the guess. ``point``, when given, is that answer's point and its cones' multipliers, from
+    which the kernel's first Newton step on the held cones starts (:func:`._kkt_eq.eq_solve`)."""
 
     lower: np.ndarray
     upper: np.ndarray
     cones: dict = field(default_factory=dict)  # joint -> (direction (3,), multiplier)
     state: np.ndarray | None = None
     held: tuple | None = None  # (names, mask, directions)
+    point: tuple | None = None  # (x (n,), multipliers (K,)) of the answer that made the guess
 
     def cone_guess(self, qp: QPData) -> tuple[np.ndarray, np.ndarray]:
         """``(mask, directions)`` of the held cones over ``qp``'s cones (directions of the others:
@@ -99,6 +101,14 @@ class ActiveSet:
         for k in np.flatnonzero(mask):
             dirs[k] = self.cones[names[k]][0]
         return mask, dirs
+
+    def point_guess(self, qp: QPData) -> tuple[np.ndarray, np.ndarray]:
+        """``(x0, mus0)`` for the kernel: :attr:`point` where it was made on a problem of ``qp``'s
+        variables and cones, else empty (none)."""
+        if self.point is None or self.held is None or self.held[0] != qp.cone_consts()[0] \
+                or len(self.point[0]) != qp.n:
+            return _EMPTY_F, _EMPTY_F
+        return self.point
 
     def cable_state(self, n: int) -> np.ndarray:
         if self.state is not None and self.state.shape == (n,):
@@ -175,10 +185,11 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, stage: st
     :func:`active_solution` computes in numpy)."""
     state = guess.cable_state(qp.n)  # (the kernel frees variables guessed at an infinite bound)
     cact, cdir = guess.cone_guess(qp)
+    x0, mus0 = guess.point_guess(qp)
     c_ = np.ascontiguousarray
     out = jit.kernels("solvers._fast").active_set_answer(
         kernel_qp(qp), kernel_cones(qp), c_(state, dtype=np.int8), c_(cact, dtype=np.bool_), c_(cdir, dtype=float),
-        kernel_limits(settings, max_pivots))
+        kernel_limits(settings, max_pivots), c_(x0, dtype=float), c_(mus0, dtype=float))
     if out.code != K.FOUND:
         _miss(K.REASONS[out.code])
         return None
@@ -196,7 +207,8 @@ def compiled_answer(qp: QPData, out, **fields) -> Solution:
     held, dirs = out.held, out.dirs
     nxt_cones = {names[k]: (dirs[k], float(out.mus[k])) for k in np.flatnonzero(held)} if np.count_nonzero(held) else {}
     return Solution(out.x, OPTIMAL, float(out.objective), y=out.y, z=out.z, z_cone=out.z_cone,
-                    active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, out.next_state, (names, held, dirs)),
+                    active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, out.next_state, (names, held, dirs),
+                                     (out.x, out.mus)),
                     verified=True, unique=True if out.unique else None, unique_tested=True,
                     iterations=int(out.iterations), **fields)
 
