@@ -78,10 +78,9 @@ def tikhonov(H, g, ub, reg_rel):
 @njit(cache=True, nogil=True)
 def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
     """Block principal pivoting on ``qp`` (a :class:`._structs.QP`; its ``H``, ``c``, equations and
-    bounds) with ``cones`` (:class:`._structs.Cones`) from the guess ``(state0, cact0, cdir0)`` (with
-    ``x0``, ``mus0`` a point near the answer and its cones' multipliers, or empty:
-    :func:`._kkt_eq.eq_solve`'s, for the guess's own active set) until a verified KKT point (see
-    :func:`mcdm_pin.solvers.active_set.try_active_set`), within ``limits``
+    bounds) with ``cones`` (:class:`._structs.Cones`) from the guess ``(state0, cact0, cdir0)``, its
+    point ``x0``, ``mus0`` (or empty: :func:`._kkt_eq.eq_solve`'s, for the guess's own active set)
+    until a verified KKT point (:func:`mcdm_pin.solvers.active_set.try_active_set`), within ``limits``
     (:class:`._structs.Limits`: ``max_pivots``, ``max_newton``, the ``*_tol`` and ``reg_rel``, the
     Tikhonov terms of :func:`._kkt_eq.eq_solve` relative to each variable's curvature: :func:`tikhonov`).
 
@@ -90,13 +89,12 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
     off and cycled); then, or when a block pivot leaves a singular system (too many cables fixed for
     the equation of motion), only the worst violation changes (Judice and Pires' safeguard).
 
-    Returns an :class:`._structs.ActiveSetRun` ``(code, f, mus, grad, state, cact, dirs, next_state, y,
-    sets, solves)``: ``code`` :data:`FOUND` or a key of :data:`REASONS`; at :data:`FOUND`, ``mus`` the cones' multipliers,
-    ``grad`` the bounds' multipliers (> 0 at a lower bound), ``y`` the equations' multipliers,
-    ``(state, cact, dirs)`` the optimum's active set and ``next_state`` the guess for the next
-    instant (the bounds whose multiplier is not negligible: ``limits.keep_rel``); ``sets`` the active
-    sets tried (pivots + 1), ``solves`` the linear KKT systems solved for them (one per active set
-    without cones, one per Newton step with them).
+    Returns an :class:`._structs.ActiveSetRun`: ``code`` :data:`FOUND` or a key of :data:`REASONS`; at
+    :data:`FOUND`, ``mus`` the cones' multipliers, ``grad`` the bounds' (> 0 at a lower bound), ``y``
+    the equations', ``(state, cact, dirs)`` the optimum's active set and ``next_state`` the guess for
+    the next instant (the bounds whose multiplier is not negligible: ``limits.keep_rel``); ``sets``
+    the active sets tried (pivots + 1), ``solves`` the KKT systems solved (one per active set without
+    cones, one per Newton step with them).
     """
     H, g, A, lb, ub = qp.H, qp.c, qp.A, qp.lb, qp.ub
     G = cones.G
@@ -120,7 +118,6 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
             return ActiveSetRun(CYCLE, f, mus, grad, state, cact, cdir, state, y, it, solves)
         hist_s[it] = state
         hist_c[it] = cact
-        # (the guess's point serves its own active set: the first solve's)
         code, f, y, mus, dirs, ns, LU, perm, lu_ok = eq_solve(qp, cones, state, cact, cdir, limits, reg,
                                                               x0 if it == 0 else none, mus0 if it == 0 else none)
         solves += ns

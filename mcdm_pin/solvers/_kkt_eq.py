@@ -49,10 +49,8 @@ def eq_solve(qp, cones, state, cact, cdir, limits, reg, x0, mus0):
     :class:`._structs.Cones`) held on their surface (at most ``limits.max_newton`` Newton steps down
     to ``limits.step_tol``, with the cones' curvature weighted by their multipliers).
 
-    ``x0`` (n,) and ``mus0`` (nc,), or empty: a point near the answer and its cones' multipliers (the
-    previous instant's answer), where the first Newton step takes the surfaces' curvature and its
-    directions, as the later steps take them at the point before, and from which its step counts
-    (:func:`_settled`); without one the first step linearises each held cone along ``cdir``.
+    ``x0``, ``mus0``: a point near the answer and its cones' multipliers, or empty (:func:`_warm_start`);
+    without one the first step linearises each held cone along ``cdir``.
 
     ``reg`` (n,) > 0 is added to the free cables' diagonal (a Tikhonov term ``1/2 sum reg_i f_i^2``):
     with a positive semidefinite objective whose optimum is a flat ridge (case 2 with ``beta = 0``)
@@ -85,17 +83,8 @@ def eq_solve(qp, cones, state, cact, cdir, limits, reg, x0, mus0):
     Af = matvec(A, f)
     f_cur = f.copy()
     x_prev = np.zeros(nf)
-    have_cur = False
-    have_prev = False
+    have_cur = have_prev = _warm_start(x0, mus0, free, act, f_cur, mus, x_prev)
     last_step = -1.0  # the last Newton step's size (none yet)
-    if na > 0 and x0.shape[0] == f.shape[0] and mus0.shape[0] == nc:
-        f_cur[:] = x0
-        have_cur = True
-        for s in range(na):
-            mus[act[s]] = mus0[act[s]]
-        for p in range(nf):
-            x_prev[p] = x0[free[p]]
-        have_prev = True
     y = np.zeros(neq)
     iters = max_newton if na > 0 else 1
     flat = _flat(H, free)
@@ -114,18 +103,13 @@ def eq_solve(qp, cones, state, cact, cdir, limits, reg, x0, mus0):
         solves += 1
         if not _finite(sol):
             return SINGULAR, f, y, mus, dirs, solves, LU, perm, False
-        for p in range(nf):
-            f[free[p]] = sol[p]
-        y = sol[nf:nf + neq].copy()
-        for s in range(na):
-            mus[act[s]] = sol[nf + neq + s]
+        y = _take(sol, free, neq, act, f, mus)
         if na == 0:
             converged = True
             break
-        if solves > 1:  # (a first solve's multipliers, from a point of another instant, can mislead)
-            for s in range(na):
-                if mus[act[s]] < 0.0:
-                    return DROP, f, y, mus, dirs, solves, LU, perm, lu_ok
+        # (from the second solve: the first one's multipliers, at a point of another instant, mislead)
+        if solves > 1 and _pulling(mus, act):
+            return DROP, f, y, mus, dirs, solves, LU, perm, lu_ok
         if have_prev:
             done, last_step = _settled(sol, x_prev, f, G, gc, ax, tn, act, step_tol, last_step)
             if done:
@@ -139,6 +123,45 @@ def eq_solve(qp, cones, state, cact, cdir, limits, reg, x0, mus0):
     if not converged:
         return NO_CONVERGENCE, f, y, mus, dirs, solves, LU, perm, lu_ok
     return OK, f, y, mus, dirs, solves, LU, perm, lu_ok
+
+
+@njit(cache=True, nogil=True)
+def _warm_start(x0, mus0, free, act, f_cur, mus, x_prev):
+    """A guess's point ``x0`` (n,) and its cones' multipliers ``mus0`` (nc,) (the previous instant's
+    answer) as the Newton steps' start, in place: the point where the first step takes the surfaces'
+    curvature and directions (``f_cur``), as the later steps take them at the point before, the held
+    cones' multipliers (``mus``) and the free cables' values the first step is measured from
+    (``x_prev``, :func:`_settled`). Whether there is one: held cones (``act``) and arrays of the
+    problem's sizes (empty ones: none)."""
+    if act.shape[0] == 0 or x0.shape[0] != f_cur.shape[0] or mus0.shape[0] != mus.shape[0]:
+        return False
+    f_cur[:] = x0
+    for s in range(act.shape[0]):
+        mus[act[s]] = mus0[act[s]]
+    for p in range(free.shape[0]):
+        x_prev[p] = x0[free[p]]
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _take(sol, free, neq, act, f, mus):
+    """A KKT solve's ``sol`` (free cables, equations, held cones) into ``f`` and ``mus``, in place;
+    returns the equations' multipliers."""
+    nf = free.shape[0]
+    for p in range(nf):
+        f[free[p]] = sol[p]
+    for s in range(act.shape[0]):
+        mus[act[s]] = sol[nf + neq + s]
+    return sol[nf:nf + neq].copy()
+
+
+@njit(cache=True, nogil=True)
+def _pulling(mus, act):
+    """Whether a held cone (``act``) has a negative multiplier: it pulls the force inwards."""
+    for s in range(act.shape[0]):
+        if mus[act[s]] < 0.0:
+            return True
+    return False
 
 
 @njit(cache=True, nogil=True)
