@@ -293,7 +293,9 @@ def _crossover(x, slacks, iu, il, qp, cones, limits, memo, anyway):
     if not (stable or anyway) or not _new_guess(state, cact, last_state, last_cact):
         return 0, ActiveSetRun(-1, x, np.zeros(0), np.zeros(0), state, cact, np.zeros((0, 3)), state, np.zeros(0),
                                0, 0)
-    return 1, _kkt.active_set_run(qp, cones, state, cact, cdir, limits, np.zeros(0), np.zeros(0))
+    # the Newton steps on the held cones start from the iterate and its cone duals' multipliers
+    # (``z_cone[k, 0] = mu_k / cos(rho_k)``, :func:`mcdm_pin.solvers._fast.answer_duals`' convention)
+    return 1, _kkt.active_set_run(qp, cones, state, cact, cdir, limits, x, slacks.zc[:, 0] * cones.cosr)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")

@@ -78,9 +78,9 @@ def tikhonov(H, g, ub, reg_rel):
 @njit(cache=True, nogil=True)
 def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
     """Block principal pivoting on ``qp`` (a :class:`._structs.QP`; its ``H``, ``c``, equations and
-    bounds) with ``cones`` (:class:`._structs.Cones`) from the guess ``(state0, cact0, cdir0)``, its
-    point ``x0``, ``mus0`` (or empty: :func:`._kkt_eq.eq_solve`'s, for the guess's own active set)
-    until a verified KKT point (:func:`mcdm_pin.solvers.active_set.try_active_set`), within ``limits``
+    bounds) with ``cones`` (:class:`._structs.Cones`) from the guess ``(state0, cact0, cdir0)`` and
+    its point ``x0``, ``mus0`` (or empty; each later set's Newton steps start from the set's before:
+    :func:`._kkt_eq.eq_solve`) until a verified KKT point (:func:`mcdm_pin.solvers.active_set.try_active_set`), within ``limits``
     (:class:`._structs.Limits`: ``max_pivots``, ``max_newton``, the ``*_tol`` and ``reg_rel``, the
     Tikhonov terms of :func:`._kkt_eq.eq_solve` relative to each variable's curvature: :func:`tikhonov`).
 
@@ -108,21 +108,19 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
     have_prev = False
     prev_state, prev_cact, prev_grad, prev_dirs, prev_cone_dir, prev_in, prev_out = _memory(state, cact, cdir)
     prev_kind, prev_idx = np.int64(-1), np.int64(-1)
-    last_was_block = False
+    last_was_block, blocks_ok = False, True
     best_ninf = n + nc + 1
-    blocks_ok = True
     solves = 0
     none = np.zeros(0)
+    px, pm = x0, mus0  # where each set's Newton steps start: the guess's point, then the last set's
     for it in range(max_pivots):
         if _seen(hist_s, hist_c, it, state, cact):
             return ActiveSetRun(CYCLE, f, mus, grad, state, cact, cdir, state, y, it, solves)
-        hist_s[it] = state
-        hist_c[it] = cact
-        code, f, y, mus, dirs, ns, LU, perm, lu_ok = eq_solve(qp, cones, state, cact, cdir, limits, reg,
-                                                              x0 if it == 0 else none, mus0 if it == 0 else none)
+        code, f, y, mus, dirs, ns, LU, perm, lu_ok = eq_solve(qp, cones, state, cact, cdir, limits, reg, px, pm)
         solves += ns
         if code == DROP:  # a cone pulls the force inwards: it is not active
             _drop_pulling(cact, mus)
+            px, pm = f, mus
             continue
         if code == SINGULAR and have_prev and last_was_block:
             # the block pivot fixed too much: step back and change only the worst violation
@@ -131,6 +129,7 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
             cdir = _next_dirs(prev_in, prev_cone_dir, prev_dirs, nc)
             last_was_block = False
             blocks_ok = False  # from now on one change at a time (finite for strictly convex QPs)
+            px, pm = none, none
             continue
         if code != OK and code != NO_CONVERGENCE:
             return ActiveSetRun(code, f, mus, grad, state, cact, cdir, state, y, it + 1, solves)
@@ -155,6 +154,7 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
                                              (release, to_lower, to_upper, cone_in, cone_out), worst_kind, worst_idx,
                                              LU, perm, lu_ok)
         cdir = _next_dirs(cone_in, cone_dir, dirs, nc)
+        px, pm = f, mus
     return ActiveSetRun(PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state, y, max_pivots, solves)
 
 
@@ -223,7 +223,9 @@ def _held_at_finite(state0, lb, ub):
 @njit(cache=True, nogil=True)
 def _seen(hist_s, hist_c, it, state, cact):
     """Whether the active set ``(state, cact)`` is one of the first ``it`` tried (the pivoting
-    cycles)."""
+    cycles), recording it as the ``it``-th."""
+    hist_s[it] = state  # (the row itself is not compared below)
+    hist_c[it] = cact
     for h in range(it):
         same = True
         for i in range(state.shape[0]):
