@@ -79,8 +79,8 @@ def tikhonov(H, g, ub, reg_rel):
 def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
     """Block principal pivoting on ``qp`` (a :class:`._structs.QP`; its ``H``, ``c``, equations and
     bounds) with ``cones`` (:class:`._structs.Cones`) from the guess ``(state0, cact0, cdir0)`` and
-    its point ``x0``, ``mus0`` (or empty; each later set's Newton steps start from the set's before:
-    :func:`._kkt_eq.eq_solve`) until a verified KKT point (:func:`mcdm_pin.solvers.active_set.try_active_set`), within ``limits``
+    its point ``x0``, ``mus0`` (or empty; later sets start from the set before: :func:`._kkt_eq.eq_solve`)
+    until a verified KKT point (:func:`.active_set.try_active_set`), within ``limits``
     (:class:`._structs.Limits`: ``max_pivots``, ``max_newton``, the ``*_tol`` and ``reg_rel``, the
     Tikhonov terms of :func:`._kkt_eq.eq_solve` relative to each variable's curvature: :func:`tikhonov`).
 
@@ -114,7 +114,7 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
     none = np.zeros(0)
     px, pm = x0, mus0  # where each set's Newton steps start: the guess's point, then the last set's
     for it in range(max_pivots):
-        if _seen(hist_s, hist_c, it, state, cact):
+        if _tried_before(hist_s, hist_c, it, state, cact):
             return ActiveSetRun(CYCLE, f, mus, grad, state, cact, cdir, state, y, it, solves)
         code, f, y, mus, dirs, ns, LU, perm, lu_ok = eq_solve(qp, cones, state, cact, cdir, limits, reg, px, pm)
         solves += ns
@@ -221,10 +221,10 @@ def _held_at_finite(state0, lb, ub):
 
 
 @njit(cache=True, nogil=True)
-def _seen(hist_s, hist_c, it, state, cact):
-    """Whether the active set ``(state, cact)`` is one of the first ``it`` tried (the pivoting
-    cycles), recording it as the ``it``-th."""
-    hist_s[it] = state  # (the row itself is not compared below)
+def _tried_before(hist_s, hist_c, it, state, cact):
+    """Record the active set ``(state, cact)`` as the ``it``-th tried, and whether it is one of the
+    ``it`` tried before it (the pivoting cycles)."""
+    hist_s[it] = state  # (row ``it`` is not compared below)
     hist_c[it] = cact
     for h in range(it):
         same = True

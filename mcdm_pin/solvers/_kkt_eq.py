@@ -348,18 +348,19 @@ def _refine(K, sol, reg, free, nf, neq, na, square):
 
 @njit(cache=True, nogil=True)
 def _settled(sol, x_prev, f, G, gc, ax, tn, act, step_tol, last_step):
-    """Whether the Newton steps on the cone surfaces have settled, and this step's size: the free
-    cables' step from ``x_prev`` to ``sol`` (relative) below ``step_tol``; or, where the steps
-    converge quadratically (this one below the last one, ``last_step``), the next one, predicted as
-    this one squared times their rate (this step over the last one squared, at least one), below
-    ``step_tol``: the solve it would take moves the point by less than that (on MyoSuite's arm the
-    steps run 2e-3, 2e-6, 1e-12, and the third solve is saved). A rate below one is not trusted: on
-    the human arm a step of 2.3e-5 follows one of 2.7e-2 (rate 0.03) and the next one is larger
-    than that rate predicts, enough for its least-norm answer to fail the check of stationarity
-    (``tests/test_warm_fast.py``' instants). Or, on an ill-conditioned
-    system whose rounding floor is above ``step_tol``, below 1e-8 with every held cone on its
-    surface to 1e-11 of ``|F|``. The KKT check that follows decides in every case. Returns
-    ``(settled, step)``."""
+    """Whether the Newton steps on the cone surfaces have settled, and this step's size
+    ``(settled, step)``; the KKT check that follows decides in every case. Settled:
+
+    - the free cables' step from ``x_prev`` to ``sol`` (relative) is below ``step_tol``;
+    - or the steps converge quadratically (this one below the last one, ``last_step``) and the next
+      one, predicted as this one squared times their rate (this step over the last one squared, at
+      least one), is below ``step_tol``: the solve it would take moves the point by less than that
+      (on MyoSuite's arm the steps run 2e-3, 2e-6, 1e-12, and the third solve is saved). A rate
+      below one is not trusted: on the human arm a step of 2.3e-5 follows one of 2.7e-2 (a rate of
+      0.03) and the next one is larger than that rate predicts, enough for its least-norm answer to
+      fail the check of stationarity (``tests/test_warm_fast.py``'s instants);
+    - or, on an ill-conditioned system whose rounding floor is above ``step_tol``, the step is below
+      1e-8 with every held cone on its surface to 1e-11 of ``|F|``."""
     dx = 0.0
     xx = 0.0
     for p in range(x_prev.shape[0]):

@@ -93,9 +93,9 @@ class ActiveSet:
     def cone_guess(self, qp: QPData) -> tuple[np.ndarray, np.ndarray]:
         """``(mask, directions)`` of the held cones over ``qp``'s cones (directions of the others:
         anything, the kernel starts them from ``basis0``)."""
-        names = qp.cone_consts()[0]
-        if self.held is not None and self.held[0] == names:
+        if self._made_for(qp):
             return self.held[1], self.held[2]
+        names = qp.cone_consts()[0]
         mask = np.array([nm in self.cones for nm in names], dtype=np.bool_)
         dirs = np.zeros((len(names), 3))
         for k in np.flatnonzero(mask):
@@ -105,10 +105,13 @@ class ActiveSet:
     def point_guess(self, qp: QPData) -> tuple[np.ndarray, np.ndarray]:
         """``(x0, mus0)`` for the kernel: :attr:`point` where it was made on a problem of ``qp``'s
         variables and cones, else empty (none)."""
-        if self.point is None or self.held is None or self.held[0] != qp.cone_consts()[0] \
-                or len(self.point[0]) != qp.n:
+        if self.point is None or not self._made_for(qp) or len(self.point[0]) != qp.n:
             return _EMPTY_F, _EMPTY_F
         return self.point
+
+    def _made_for(self, qp: QPData) -> bool:
+        """Whether :attr:`held` was made on a problem with ``qp``'s cones (the same names in order)."""
+        return self.held is not None and self.held[0] == qp.cone_consts()[0]
 
     def cable_state(self, n: int) -> np.ndarray:
         if self.state is not None and self.state.shape == (n,):
