@@ -49,6 +49,7 @@ SPREAD = 1e3
 """Scale only when some factor would exceed this (either way)."""
 _NO_P = np.zeros((0, 0))
 _NO_F = np.zeros(0)
+_NO_ZC = np.zeros((0, 3))
 
 
 def equilibrate(A: np.ndarray, sweeps: int = 10) -> tuple[np.ndarray, np.ndarray]:
@@ -91,17 +92,39 @@ class Scaling:
     cone: np.ndarray
 
     def unscale(self, qp: QPData, sol: Solution) -> Solution:
-        x = self.d * sol.x
-        objective = qp.objective(x) if np.all(np.isfinite(x)) else float("nan")
-        o = self.obj
-        y = None if sol.y is None else o * self.r * sol.y
-        z = None if sol.z is None else o * sol.z / self.d
-        zc = None if sol.z_cone is None else o * self.cone[:, None] * sol.z_cone
-        return sol.but(x=x, objective=objective, y=y, z=z, z_cone=zc)
+        """``sol`` (an answer of the scaled copy of ``qp``) mapped back, its objective evaluated on
+        ``qp``: one compiled pass (:func:`mcdm_pin.model.scale_kernels.unscale_answer`)."""
+        c_ = np.ascontiguousarray
+        n = qp.n
+        if qp._P is not None:
+            P, P_diag, P_factor = c_(qp._P, dtype=float), _NO_F, _NO_P
+        else:
+            P, P_diag, P_factor = _NO_P, c_(qp.P_diag, dtype=float), c_(qp.P_factor, dtype=float).reshape(-1, n)
+        out = jit.kernels("model.scale_kernels").unscale_answer(
+            self.d, self.r, float(self.obj), self.cone, c_(sol.x, dtype=float),
+            _NO_F if sol.y is None else c_(sol.y, dtype=float), _NO_F if sol.z is None else c_(sol.z, dtype=float),
+            _NO_ZC if sol.z_cone is None else c_(sol.z_cone, dtype=float), P, P_diag, P_factor,
+            c_(qp.c, dtype=float), float(qp.r))
+        return sol.but(x=out.x, objective=float(out.objective), y=None if sol.y is None else out.y,
+                       z=None if sol.z is None else out.z, z_cone=None if sol.z_cone is None else out.z_cone)
 
 
 def _outside(v: float) -> bool:
     return not 1.0 / SPREAD <= v <= SPREAD
+
+
+def _factor_arrays(qp: QPData, f_scale) -> tuple:
+    """:func:`mcdm_pin.model.kernels.scale_factors`' problem arguments (no copies: an assembled
+    problem's arrays are C-ordered floats)."""
+    c, A, b, lb, ub, G, g = qp.kernel_arrays()[:7]
+    c_ = np.ascontiguousarray
+    n = qp.n
+    structured = qp.structured
+    P = c_(qp._P, dtype=float) if qp._P is not None else _NO_P
+    P_diag = c_(qp.P_diag, dtype=float) if structured else np.zeros(n)
+    P_factor = c_(qp.P_factor, dtype=float).reshape(-1, n) if structured else np.zeros((0, n))
+    fs = _NO_F if f_scale is None else c_(np.broadcast_to(np.asarray(f_scale, dtype=float), (n,)))
+    return A, b, lb, ub, c, P, P_diag, P_factor, bool(structured), G, g, fs
 
 
 def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool = False) -> Scaling | None:
@@ -112,15 +135,8 @@ def scaling_factors(qp: QPData, f_scale: np.ndarray | None = None, force: bool =
     the kernels off."""
     m, n = qp.A.shape
     if jit.ready():
-        c, A, b, lb, ub, G, g = qp.kernel_arrays()[:7]
-        c_ = np.ascontiguousarray  # (no copies: an assembled problem's arrays are C-ordered floats)
-        structured = qp.structured
-        P = c_(qp._P, dtype=float) if qp._P is not None else _NO_P
-        P_diag = c_(qp.P_diag, dtype=float) if structured else np.zeros(n)
-        P_factor = c_(qp.P_factor, dtype=float).reshape(-1, n) if structured else np.zeros((0, n))
-        fs = _NO_F if f_scale is None else c_(np.broadcast_to(np.asarray(f_scale, dtype=float), (n,)))
-        scaled, d, r, obj, cone = jit.kernels("model.kernels").scale_factors(
-            A, b, lb, ub, c, P, P_diag, P_factor, bool(structured), G, g, fs, bool(force), float(SPREAD))
+        args = _factor_arrays(qp, f_scale)
+        scaled, d, r, obj, cone = jit.kernels("model.kernels").scale_factors(*args, bool(force), float(SPREAD))
         return Scaling(d, r, float(obj), cone) if scaled else None
     absA = np.abs(qp.A) if m else None
     ruiz = m and (spread(qp.A) > SPREAD or f_scale is not None)
@@ -194,18 +210,42 @@ def apply_scaling(qp: QPData, s: Scaling) -> QPData:
     nw = _NO_F if qp.norm_weight is None else c_(qp.norm_weight, dtype=float)
     out = jit.kernels("model.scale_kernels").scale_qp(c, A, b, lb, ub, P, P_diag, P_factor, G0, g0, nw,
                                                        s.d, s.r, float(s.obj), s.cone)
+    return _scaled_copy(qp, out, s.obj)
+
+
+def _scaled_copy(qp: QPData, out, obj: float) -> QPData:
+    """The :class:`QPData` of ``qp``'s scaled arrays ``out`` (:class:`~mcdm_pin.model.kernel_structs.ScaledQP`;
+    ``obj``: the objective's factor)."""
     _, _, axis, tan, basis0 = qp.cone_arrays()
     cones = [ConeData(cn.joint, out.G[k], out.g[k], cn.axis, cn.angle_deg, cn.basis) for k, cn in enumerate(qp.cones)]
-    return QPData(out.P if P.shape[0] else None, out.c, qp.r / s.obj, out.A, out.b, out.lb, out.ub, cones,
+    structured = qp.P_factor is not None
+    return QPData(out.P if out.P.shape[0] else None, out.c, qp.r / obj, out.A, out.b, out.lb, out.ub, cones,
                   P_diag=out.P_diag if qp.P_diag is not None else None, P_factor=out.P_factor if structured else None,
                   norm_weight=out.norm_weight, cone_arrays=(out.G, out.g, axis, tan, basis0),
                   cone_consts=qp.cone_consts())
 
 
 def scale_problem(qp: QPData, f_scale: np.ndarray | None = None, force: bool = False):
-    """``(scaled QPData, Scaling)``, or ``(qp, None)`` when no scaling is needed."""
-    s = scaling_factors(qp, f_scale, force)
-    return (qp, None) if s is None else (apply_scaling(qp, s), s)
+    """``(scaled QPData, Scaling)``, or ``(qp, None)`` when no scaling is needed: the factors and the
+    scaled copy in one compiled call (:func:`mcdm_pin.model.scale_kernels.scale_instant`), after the
+    one-pass test that a well-scaled instant needs none (its usual answer)."""
+    if not jit.ready():  # (a test's numpy references)
+        s = scaling_factors(qp, f_scale, force)
+        return (qp, None) if s is None else (apply_scaling(qp, s), s)
+    A, b, lb, ub, c, P, P_diag, P_factor, structured, G, g, fs = _factor_arrays(qp, f_scale)
+    if structured and not force and f_scale is None and not jit.kernels("model.kernels").needs_scaling(
+            A, b, lb, ub, P_diag, P_factor, c, G, g, float(SPREAD)):
+        return qp, None
+    c_ = np.ascontiguousarray
+    if not structured:  # (the copy scales the problem's own diagonal, if it gives one)
+        P_diag = _NO_F if qp.P_diag is None else c_(qp.P_diag, dtype=float)
+    nw = _NO_F if qp.norm_weight is None else c_(qp.norm_weight, dtype=float)
+    out = jit.kernels("model.scale_kernels").scale_instant(A, b, lb, ub, c, P, P_diag, P_factor, structured, G, g,
+                                                           fs, nw, bool(force), float(SPREAD))
+    if not out.scaled:
+        return qp, None
+    s = Scaling(out.d, out.r, float(out.obj), out.cone)
+    return _scaled_copy(qp, out.qp, s.obj), s
 
 
 class ScaledSolver(Solver):

@@ -106,6 +106,58 @@ def test_scaled_copy_is_the_factors_products_to_the_bit(instants):
     assert 0 in seen_cones and max(seen_cones) >= 8  # the arm's cases 1-2, the neck's eight cones
 
 
+def test_one_call_scaling_is_the_factors_and_the_copy_to_the_bit(instants):
+    """scale_problem (the factors and the copy in one kernel, after the one-pass test) gives exactly
+    scaling_factors' factors and apply_scaling's copy, or no scaling where they give none: structured
+    or dense Hessian (no structure), forced, with the variables' units given, badly scaled rows."""
+    scaled_seen = set()
+    for qp, _, _, _ in instants:
+        dense = qp.replace(P=qp.P, P_diag=None, P_factor=None)
+        for p in (qp, dense, qp.replace(A=qp.A * 1e5, b=qp.b * 1e5), qp.replace(lb=qp.lb + 1e4, ub=qp.ub + 1e5)):
+            for f_scale, force in ((None, False), (None, True), (np.full(p.n, 8.0), False)):
+                out, s = SC.scale_problem(p, f_scale, force)
+                ref = SC.scaling_factors(p, f_scale, force)
+                assert (s is None) == (ref is None)
+                scaled_seen.add(s is not None)
+                if s is None:
+                    assert out is p
+                    continue
+                for a, b in zip((s.d, s.r, s.obj, s.cone), (ref.d, ref.r, ref.obj, ref.cone)):
+                    np.testing.assert_array_equal(a, b)
+                copy = SC.apply_scaling(p, ref)
+                for name in ("c", "A", "b", "lb", "ub", "norm_weight", "P_diag", "P_factor", "_P"):
+                    a, b = getattr(out, name), getattr(copy, name)
+                    assert (a is None) == (b is None), name
+                    if a is not None:
+                        np.testing.assert_array_equal(a, b)
+                assert out.r == copy.r and [c.joint for c in out.cones] == [c.joint for c in copy.cones]
+                np.testing.assert_array_equal(out.cone_arrays()[0], copy.cone_arrays()[0])
+                np.testing.assert_array_equal(out.cone_arrays()[1], copy.cone_arrays()[1])
+    assert scaled_seen == {True, False}
+
+
+def test_unscaled_answer_is_the_factors_products(instants):
+    """Scaling.unscale (one kernel): x = d x_s, y = obj r y_s, z = obj z_s / d and the cones' obj
+    cone_k zc_s to the bit, the objective on the original problem (dense or structured Hessian) to
+    rounding, NaN where x is not finite, and absent multipliers stay absent."""
+    for qp, _, sol, _ in instants:
+        for p in (qp, qp.replace(P=qp.P), qp.replace(A=qp.A * 1e5, b=qp.b * 1e5)):
+            s = SC.scaling_factors(p, force=True)
+            x_s, o = sol.x / s.d, s.obj
+            K = len(p.cones)
+            scaled = sol.but(x=x_s, y=np.linspace(-1.0, 1.0, len(p.b)), z=np.linspace(0.0, 2.0, p.n),
+                             z_cone=np.arange(3.0 * K).reshape(K, 3))
+            out = s.unscale(p, scaled)
+            np.testing.assert_array_equal(out.x, s.d * x_s)
+            np.testing.assert_array_equal(out.y, o * s.r * scaled.y)
+            np.testing.assert_array_equal(out.z, o * scaled.z / s.d)
+            np.testing.assert_array_equal(out.z_cone, o * s.cone[:, None] * scaled.z_cone)
+            ref = p.objective(out.x)
+            assert abs(out.objective - ref) <= 1e-13 * max(1.0, abs(ref))
+            bare = s.unscale(p, scaled.but(y=None, z=None, z_cone=None, x=np.full(p.n, np.nan)))
+            assert bare.y is None and bare.z is None and bare.z_cone is None and np.isnan(bare.objective)
+
+
 def test_uniqueness_decision_is_the_numpy_ones(instants):
     seen = set()
     for qp, _, sol, _ in instants:

@@ -66,6 +66,16 @@ ScaledQP.__doc__ = """What :func:`mcdm_pin.model.scale_kernels.scale_qp` returns
 scaled by :class:`mcdm_pin.scaling.Scaling`'s factors (``P``, ``P_diag``, ``P_factor`` empty where
 the problem has none)."""
 
+ScaledInstant = namedtuple("ScaledInstant", ["scaled", "d", "r", "obj", "cone", "qp"])
+ScaledInstant.__doc__ = """What :func:`mcdm_pin.model.scale_kernels.scale_instant` returns: whether the
+problem is scaled, :class:`mcdm_pin.scaling.Scaling`'s factors and the scaled arrays
+(:class:`ScaledQP`; all empty where ``scaled`` is false)."""
+
+Unscaled = namedtuple("Unscaled", ["x", "objective", "y", "z", "z_cone"])
+Unscaled.__doc__ = """What :func:`mcdm_pin.model.scale_kernels.unscale_answer` returns: an answer of the
+scaled problem mapped back (point, its objective on the original problem, equations', bounds' and
+cones' multipliers; a multiplier array empty where the answer has none)."""
+
 CouplingTable = namedtuple("CouplingTable", ["dep_q", "src_q", "dep_v", "src_v", "col", "coef"])
 CouplingTable.__doc__ = """A model's couplings in their order (a source before what depends on it),
 fixed per model (:func:`mcdm_pin.model.couplings._table`): each dependent's ``q`` entry and ``v``

@@ -231,12 +231,22 @@ def ruiz(A, sweeps):
     (``A`` is finite: an assembled problem's equations. The fastmath flags only let the maxima
     compile to vector instructions; no sum is reassociated, so the bits are the uncompiled code's.)"""
     n_r, n_c = A.shape
-    B = np.abs(A)
     tiny = noise_floor(A)
+    # the entries above the noise floor, row by row (compressed rows): a zero never raises a maximum,
+    # so the sweeps walk these alone (the equations of a muscle arm are about a tenth full)
+    start = np.empty(n_r + 1, dtype=np.int64)
+    cols = np.empty(n_r * n_c, dtype=np.int64)
+    vals = np.empty(n_r * n_c)
+    k = 0
     for i in range(n_r):
+        start[i] = k
         for j in range(n_c):
-            if B[i, j] <= tiny:
-                B[i, j] = 0.0
+            v = abs(A[i, j])
+            if v > tiny:
+                cols[k] = j
+                vals[k] = v
+                k += 1
+    start[n_r] = k
     r = np.ones(n_r)
     d = np.ones(n_c)
     row = np.empty(n_r)
@@ -245,10 +255,10 @@ def ruiz(A, sweeps):
         col[:] = 0.0
         for i in range(n_r):
             ri = r[i]
-            Bi = B[i]
             m = 0.0
-            for j in range(n_c):  # this row's maximum, and the columns' maxima so far, in one pass
-                v = ri * Bi[j] * d[j]
+            for k in range(start[i], start[i + 1]):  # this row's maximum, and the columns' so far
+                j = cols[k]
+                v = ri * vals[k] * d[j]
                 col[j] = v if v > col[j] else col[j]
                 m = v if v > m else m
             row[i] = m
@@ -476,12 +486,21 @@ def scale_factors(A, b, lb, ub, c, P, P_diag, P_factor, structured, G, g, f_scal
     diag(P_diag) + P_factor^T P_factor``; ``f_scale`` (n,) or empty: none). Returns ``(scaled, d,
     r, obj, cone)``: ``scaled`` false when every factor is one and ``force`` is false (then the
     rest is meaningless)."""
+    if not force and f_scale.shape[0] == 0 and structured and not needs_scaling(A, b, lb, ub, P_diag, P_factor, c, G,
+                                                                                g, limit):
+        m, n = A.shape
+        return False, np.ones(n), np.ones(m), 1.0, np.ones(G.shape[0])
+    return factors(A, b, lb, ub, c, P, P_diag, P_factor, G, g, f_scale, force, limit)
+
+
+@njit(cache=True, nogil=True)
+def factors(A, b, lb, ub, c, P, P_diag, P_factor, G, g, f_scale, force, limit):
+    """:func:`scale_factors` without its one-pass test for the well-scaled instant (which only
+    shortens: where it says "no scaling", these factors are all one as well)."""
     m, n = A.shape
     K = G.shape[0]
     ones_m, ones_n = np.ones(m), np.ones(n)
     has_f = f_scale.shape[0] > 0
-    if not force and not has_f and structured and not needs_scaling(A, b, lb, ub, P_diag, P_factor, c, G, g, limit):
-        return False, ones_n, ones_m, 1.0, np.ones(K)
     wide = m > 0 and spread(A, np.zeros(0)) > limit
     if wide:
         r, d = ruiz(A, np.int64(10))

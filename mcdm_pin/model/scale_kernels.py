@@ -1,5 +1,7 @@
 r"""The scaled copy of one instant's problem in one compiled pass (:func:`mcdm_pin.scaling.apply_scaling`:
-the products of the module docstring there, one loop per array instead of a dozen numpy calls).
+the products of the module docstring there, one loop per array instead of a dozen numpy calls), the
+factors and the copy in one call (:func:`scale_instant`), and the answer mapped back
+(:func:`unscale_answer`).
 
 Compiled by ``mcdm-pin compile`` with the other kernels and cached on disk (``cache=True``),
 registered with :mod:`mcdm_pin.jit`; until then the same code runs as Python. The factors are
@@ -14,7 +16,8 @@ import math
 import numpy as np
 
 from ..jit import njit
-from .kernel_structs import ScaledQP
+from .kernel_structs import ScaledInstant, ScaledQP, Unscaled
+from .kernels import factors
 
 
 @njit(cache=True, nogil=True)
@@ -65,13 +68,87 @@ def scale_qp(c, A, b, lb, ub, P, P_diag, P_factor, G0, g0, norm_weight, d, r, ob
     return ScaledQP(sc, sA, sb, slb, sub, sP, sPd, sF, G, g, nw)
 
 
+@njit(cache=True, nogil=True)
+def scale_instant(A, b, lb, ub, c, P, P_diag, P_factor, structured, G, g, f_scale, norm_weight, force, limit):
+    """:func:`mcdm_pin.scaling.scale_problem` in one call: the factors
+    (:func:`~mcdm_pin.model.kernels.factors`: the caller has made the quick test for the well-scaled
+    instant where it applies) and, where they scale, the scaled arrays (:func:`scale_qp`). ``P``
+    (n, n) the dense Hessian or (0, 0); ``P_diag`` (n,) or empty; ``P_factor`` (rows, n) (no rows:
+    none); ``structured``: ``P = diag(P_diag) + P_factor^T P_factor``. Returns
+    :class:`~mcdm_pin.model.kernel_structs.ScaledInstant`."""
+    n = A.shape[1]
+    if structured:
+        scaled, d, r, obj, cone = factors(A, b, lb, ub, c, P, P_diag, P_factor, G, g, f_scale, force, limit)
+    else:  # (the factors read no structure then)
+        scaled, d, r, obj, cone = factors(A, b, lb, ub, c, P, np.zeros(n), np.zeros((0, n)), G, g, f_scale, force,
+                                          limit)
+    if not scaled:
+        e = np.empty(0)
+        e2 = np.empty((0, 0))
+        return ScaledInstant(False, d, r, obj, cone, ScaledQP(e, e2, e, e, e, e2, e, e2, np.empty((0, 3, 0)),
+                                                               np.empty((0, 3)), e))
+    return ScaledInstant(True, d, r, obj, cone,
+                         scale_qp(c, A, b, lb, ub, P, P_diag, P_factor, G, g, norm_weight, d, r, obj, cone))
+
+
+@njit(cache=True, nogil=True)
+def unscale_answer(d, r, obj, cone, x_s, y_s, z_s, zc_s, P, P_diag, P_factor, c, r0):
+    """An answer of the scaled problem mapped back (:meth:`mcdm_pin.scaling.Scaling.unscale`): ``x =
+    d x_s``, its objective ``1/2 x^T P x + c^T x + r0`` on the original problem (``P`` (n, n), or
+    (0, 0) with ``P = diag(P_diag) + P_factor^T P_factor``; NaN where ``x`` is not finite), ``y =
+    obj r y_s``, ``z = obj z_s / d``, the cones' ``obj cone_k zc_s``. A multiplier array may be
+    empty (none): it stays so. Returns :class:`~mcdm_pin.model.kernel_structs.Unscaled`."""
+    n = x_s.shape[0]
+    x = np.empty(n)
+    finite = True
+    for j in range(n):
+        x[j] = d[j] * x_s[j]
+        finite = finite and np.isfinite(x[j])
+    objective = np.nan
+    if finite:
+        quad = 0.0
+        if P.shape[0]:
+            for i in range(n):
+                row = 0.0
+                for j in range(n):
+                    row += P[i, j] * x[j]
+                quad += x[i] * row
+        else:
+            for i in range(P_factor.shape[0]):
+                row = 0.0
+                for j in range(n):
+                    row += P_factor[i, j] * x[j]
+                quad += row * row
+            for j in range(n):
+                quad += P_diag[j] * x[j] * x[j]
+        lin = 0.0
+        for j in range(n):
+            lin += c[j] * x[j]
+        objective = 0.5 * quad + lin + r0
+    y = np.empty(y_s.shape[0])
+    for i in range(y_s.shape[0]):
+        y[i] = obj * r[i] * y_s[i]
+    z = np.empty(z_s.shape[0])
+    for j in range(z_s.shape[0]):
+        z[j] = obj * z_s[j] / d[j]
+    zc = np.empty(zc_s.shape)
+    for k in range(zc_s.shape[0]):
+        for e in range(zc_s.shape[1]):
+            zc[k, e] = obj * cone[k] * zc_s[k, e]
+    return Unscaled(x, objective, y, z, zc)
+
+
 def warm_calls():
     """This module's kernel with example arguments of the types the library passes (registered with
     :mod:`mcdm_pin.jit`)."""
     z = np.zeros
     o = np.ones
     return [(scale_qp, (z(2), z((1, 2)), z(1), z(2), z(2), z((0, 0)), z(2), z((1, 2)), z((1, 3, 2)), z((1, 3)),
-                        z(0), o(2), o(1), 1.0, o(1)))]
+                        z(0), o(2), o(1), 1.0, o(1))),
+            (scale_instant, (z((1, 2)), z(1), z(2), z(2), z(2), z((0, 0)), z(2), z((1, 2)), True, z((1, 3, 2)),
+                             z((1, 3)), z(0), z(0), False, 1e3)),
+            (unscale_answer, (o(2), o(1), 1.0, o(1), z(2), z(1), z(2), z((1, 3)), z((0, 0)), z(2), z((1, 2)), z(2),
+                              0.0))]
 
 
 def _register() -> None:
