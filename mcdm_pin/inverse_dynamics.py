@@ -32,6 +32,7 @@ from .results import InstantResult, TrajectoryResult, instant_columns
 from .scaling import ScaledSolver
 from .settings import DEFAULT, Settings
 from .solvers import ERROR, INACCURATE, INFEASIBLE, OPTIMAL, SOFTENED, Solution, get_solver
+from .solvers._structs import Tensions
 from .solvers.base import cone_violation_deg
 
 class InverseDynamics:
@@ -151,7 +152,8 @@ class InverseDynamics:
         outputs = None
         if sol.found:
             # the answer checked on the original problem (and, compiled, the outputs in the same pass)
-            sol, eom, outputs = _check(qp, terms, sol, m, self.settings, act, with_outputs=True)
+            sol, eom, outputs = _check(qp, terms, sol, m, self.settings, act, with_outputs=True,
+                                       cables=self.robot.cables)
             message = sol.message or message
         f, tau_act = sol.x[:m], sol.x[m:]
         if sol.found:
@@ -160,16 +162,17 @@ class InverseDynamics:
         else:
             objective = float("nan")
         if outputs is None or not sol.found:
-            outputs = _outputs(terms, f if sol.found else None, len(self.robot.joints), tau_act)
-        wrench, F_socket, angles = outputs
+            found = f if sol.found else None
+            outputs = _outputs(terms, found, len(self.robot.joints), tau_act) + (
+                _activations(terms, found, self.robot.cables, self.settings.bound_abs),)
+        wrench, F_socket, angles, activations = outputs
         return InstantResult(
             f=f, status=sol.status, objective=objective, eom_residual=eom,
             interaction_wrench=wrench, interaction_force_socket=F_socket,
             interaction_angle_deg=angles, iterations=sol.iterations, rounds=sol.rounds,
             time_model_s=t1 - t0, time_solve_s=t2 - t1, message=message, softened_deg=softened,
             needed_f_max=needed_f_max, needed_cone_deg=needed_cone, unique=bool(sol.unique and sol.found),
-            stage=sol.stage, tau_act=tau_act, activation=_activations(terms, f if sol.found else None, self.robot.cables,
-                                                                        self.settings.bound_abs))
+            stage=sol.stage, tau_act=tau_act, activation=activations)
 
     def solve_trajectory(self, traj, progress: bool | None = None, workers: int = 1,
                          scheduler: str = "local") -> TrajectoryResult:
@@ -319,12 +322,13 @@ def _activations(terms, f, cables, bound_abs: float) -> np.ndarray:
 
 
 def _check(qp: QPData, terms, sol: Solution, m: int, settings: Settings, actuation=None,
-           with_outputs: bool = False):
+           with_outputs: bool = False, cables=None):
     """Downgrade a solution that breaks a constraint beyond ``settings``' tolerances (``eom_rel``,
     ``bound_abs``, ``cone_deg``) to ``inaccurate``. Returns the
     solution and its relative equation-of-motion residual (``m`` cables; ``actuation``: the problem's
     actuated joints, whose torques follow the cable forces in ``sol.x``); ``with_outputs``: and the
-    :func:`_outputs` at its forces when they came in the same compiled pass (else ``None``)."""
+    :func:`_outputs` at its forces with the :func:`_activations` (of ``cables``' muscles) when they
+    came in the same compiled pass (else ``None``)."""
     f = sol.x
     problems = []
     extra = None if actuation is None else -actuation.rows(terms) @ f[m:]
@@ -336,10 +340,11 @@ def _check(qp: QPData, terms, sol: Solution, m: int, settings: Settings, actuati
         args = (c_(terms.L, dtype=float), c_(terms.tau, dtype=float),
                 _NO_1 if extra is None else c_(extra, dtype=float), c_(f, dtype=float), lb, ub, G, g, axis,
                 c_(qp.cone_consts()[1], dtype=float))
-        if with_outputs:
+        tensions = _tensions(terms, cables, settings.bound_abs) if with_outputs else None
+        if tensions is not None:
             eom, broken, worst, k, *outputs = fast.answer_check_outputs(
                 *args, c_(_u_of(terms, f[m:]), dtype=float), c_(terms.RT, dtype=float), c_(terms.R_socket, dtype=float),
-                c_(terms.socket_axes, dtype=float))
+                c_(terms.socket_axes, dtype=float), tensions)
         else:
             eom, broken, worst, k = fast.answer_check(*args)
     else:
@@ -361,7 +366,27 @@ def _check(qp: QPData, terms, sol: Solution, m: int, settings: Settings, actuati
     return (sol, eom, outputs) if with_outputs else (sol, eom)
 
 
+def _tensions(terms, cables, bound_abs: float) -> Tensions | None:
+    """The muscles' state as the compiled answer check takes it to give their activations
+    (:class:`~mcdm_pin.solvers._structs.Tensions`; no muscles: an empty index), or ``None`` where
+    the state's arrays do not match the muscles (:func:`_activations` then says what is wrong)."""
+    state = terms.muscles
+    if state is None:
+        return Tensions(_NO_INDEX, _NO_1, _NO_1, _NO_1, float(bound_abs))
+    if cables is None:
+        return None
+    c_ = np.ascontiguousarray
+    k = cables.muscle_index
+    # (writable C arrays: a read-only one, as a broadcast a_min is, is a type of its own to numba)
+    arrays = [c_(a, dtype=float) for a in (state.passive, state.gain, state.a_min)]
+    arrays = [a if a.flags.writeable else a.copy() for a in arrays]
+    if any(a.shape != k.shape for a in arrays):
+        return None
+    return Tensions(c_(k, dtype=np.int64), *arrays, float(bound_abs))
+
+
 _NO_1 = np.zeros(0)
+_NO_INDEX = np.zeros(0, dtype=np.int64)
 
 
 __all__ = ["InverseDynamics", "diagnose_infeasible", "soften_cones"]

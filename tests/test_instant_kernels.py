@@ -136,6 +136,8 @@ def test_ruiz_equals_the_sweeps_compiled_and_not(monkeypatch, seed):
 
     rng = np.random.default_rng(seed)
     A = rng.normal(size=(27, 85)) * 10.0 ** rng.uniform(-7, 3, (1, 85)) * 10.0 ** rng.uniform(-2, 2, (27, 1))
+    if seed >= 3:  # mostly zeros, as a muscle arm's equations (the sweeps walk the nonzeros alone)
+        A[rng.random(A.shape) < 0.88] = 0.0
     A[:, 5] = 0.0  # a column the equations do not see
     A[3] = 0.0  # and an empty row
     jit.prepare(policy="wait")
@@ -191,3 +193,33 @@ def test_the_kernels_are_registered_and_stamp_the_cache():
             "mcdm_pin.model.kernels.ruiz", "mcdm_pin.model.kernels.scale_factors",
             "mcdm_pin.model.coupling_kernels.coupling_basis"} <= set(names)
     assert "muscle_kernels.py" in {p.name for p in jit.kernel_sources()}
+
+
+def test_activations_in_the_answer_check_equal_the_formula():
+    """The answer check's compiled activations (``_fast.activations``, beside the outputs) equal
+    ``_activations`` (numpy, :func:`mcdm_pin.model.muscles.activation`) bit for bit: every cable a
+    muscle or some, gains of zero at and away from the passive force, NaN on the other cables."""
+    from types import SimpleNamespace
+
+    from mcdm_pin.inverse_dynamics import _activations, _tensions
+    from mcdm_pin.solvers import _fast
+
+    jit.prepare(policy="wait")
+    rng = np.random.default_rng(7)
+    m, bound = 12, 1e-6
+    for index in (np.arange(m), np.array([1, 4, 5, 9, 11])):
+        k = len(index)
+        passive, gain = rng.uniform(0, 50, k), rng.uniform(10, 900, k)
+        gain[[0, 2]] = 0.0
+        f = rng.uniform(0, 900, m + 3)  # (three actuators' torques after the cables)
+        f[index[0]] = passive[0] + 0.5 * bound  # at the passive force: a_min; index[2]: away, NaN
+        state = mu.MuscleState(passive, gain, passive, passive + gain, np.broadcast_to(0.01, (k,)), np.ones(k))
+        terms = SimpleNamespace(muscles=state)
+        cables = SimpleNamespace(muscle_index=index, all_muscles=len(index) == m, m=m)
+        compiled = _fast.activations(_tensions(terms, cables, bound), f, m)
+        reference = _activations(terms, f[:m], cables, bound)
+        np.testing.assert_array_equal(compiled, reference)
+        assert compiled[index[0]] == 0.01 and np.isnan(compiled[index[2]])
+        assert np.isnan(compiled[np.setdiff1d(np.arange(m), index)]).all()
+    none = _tensions(SimpleNamespace(muscles=None), None, bound)
+    assert _fast.activations(none, np.ones(3), 3).shape == (0,)

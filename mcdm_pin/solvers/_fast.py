@@ -24,7 +24,7 @@ from ._ipm_linalg import dot
 from ._ipm import CROSSOVER, INFEASIBLE_CERT, ipm_solve
 from ._kkt import FOUND, active_set_run, next_guess
 from ._kkt_eq import cone_force
-from ._structs import QP, Answer, Cones, KKTMeasures, Limits
+from ._structs import QP, Answer, Cones, KKTMeasures, Limits, Tensions
 from ._unique import face_setup, unique_test
 
 
@@ -385,12 +385,35 @@ def with_fixed(code, x, y, z, zc, nxt, qp, T, fixed, free, keep_rel):
 
 
 @njit(cache=True, nogil=True)
-def answer_check_outputs(L, tau, extra, x, lb, ub, G, g, ax, angle_deg, u, RT, R_socket, axes):
-    """:func:`answer_check` and :func:`instant_outputs` (at the first ``L.shape[0]`` entries of
-    ``x``, the cable forces) in one call: ``(eom, broken, viol, k, W, Fs, angles)``."""
+def answer_check_outputs(L, tau, extra, x, lb, ub, G, g, ax, angle_deg, u, RT, R_socket, axes, tensions):
+    """:func:`answer_check`, :func:`instant_outputs` and :func:`activations` (at the first
+    ``L.shape[0]`` entries of ``x``, the cable forces; ``tensions``: :class:`._structs.Tensions`) in
+    one call: ``(eom, broken, viol, k, W, Fs, angles, activation)``."""
+    m = L.shape[0]
     eom, broken, viol, k = answer_check(L, tau, extra, x, lb, ub, G, g, ax, angle_deg)
-    W, Fs, ang = instant_outputs(u, RT, R_socket, axes, x[:L.shape[0]])
-    return eom, broken, viol, k, W, Fs, ang
+    W, Fs, ang = instant_outputs(u, RT, R_socket, axes, x[:m])
+    return eom, broken, viol, k, W, Fs, ang, activations(tensions, x, m)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def activations(tensions, f, m):
+    """The muscles' activations at the tensions ``f`` (:func:`mcdm_pin.model.muscles.activation`'s
+    formulas: ``(f - passive) / gain``; where ``gain`` is 0, ``a_min`` when ``f`` is within
+    ``bound_abs`` of the passive force, else NaN), NaN on the other cables: (m,); (0,) without
+    muscles."""
+    idx = tensions.index
+    if idx.shape[0] == 0:
+        return np.empty(0)
+    out = np.full(m, np.nan)
+    for i in range(idx.shape[0]):
+        c = idx[i]
+        d = f[c] - tensions.passive[i]
+        gain = tensions.gain[i]
+        if gain == 0.0:
+            out[c] = tensions.a_min[i] if abs(d) <= tensions.bound_abs else np.nan
+        else:
+            out[c] = d / gain
+    return out
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -534,7 +557,8 @@ def warm_calls():
     return calls + [(answer_unique, (z(n), z(n), z((1, 3)), qp, cones, limits)),
             (answer_check, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1))),
             (answer_check_outputs, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1),
-                                    z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)))),
+                                    z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)),
+                                    Tensions(z(1, dtype=np.int64), z(1), z(1), z(1), 1e-6))),
             (outside_bounds, (z(n), z(n), z(n))),
             (kkt_measures, (qp, cones, z(1), z(n), z(1), z(n), z((1, 3)), True, 1e-300)),
             (instant_outputs, (z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)), z(n))),

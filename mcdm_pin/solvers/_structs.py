@@ -84,5 +84,12 @@ KKTMeasures.__doc__ = """The answer check's residuals at a point (:func:`mcdm_pi
 module docstring): relative equation-of-motion residual, bound violation, cone violation in degrees,
 relative stationarity and complementarity (NaN without duals)."""
 
-KERNEL_STRUCTURES = (QP, Cones, Limits, Answer, ActiveSetRun, IPMRun, NewtonSystem, Scaling, Slacks, KKTMeasures)
+Tensions = namedtuple("Tensions", ["index", "passive", "gain", "a_min", "bound_abs"])
+Tensions.__doc__ = """The muscles' state at an instant as the answer check reads it to give their activations
+(:func:`mcdm_pin.model.muscles.activation`): the muscles' cables ``index`` (k,), their tensions'
+``passive`` part and ``gain`` per unit of activation, their ``a_min`` (k,), and the check's
+``bound_abs`` (N); ``index`` empty: no muscles."""
+
+KERNEL_STRUCTURES = (QP, Cones, Limits, Answer, ActiveSetRun, IPMRun, NewtonSystem, Scaling, Slacks, KKTMeasures,
+                     Tensions)
 """The structures above (the marker :func:`mcdm_pin.jit.kernel_sources` looks for)."""
