@@ -22,7 +22,8 @@ gives no cone, case 3 is refused and case 2 is timed instead, with a note):
   tendons with their wraps and moment arms, the inertia; then RNE for ``qfrc_inverse``), contacts
   disabled, on the same states, per frame; and ``mj_inverse`` + ``mj_rnePostConstraint`` (the
   interaction forces ``cfrc_int``). Ours: ``TermsEvaluator.__call__`` per frame (RNEA, tendon paths
-  over the wraps, lengths, ``L``, the interaction-wrench maps, muscle bounds, couplings).
+  over the wraps, lengths, ``L``, the interaction-wrench maps, muscle bounds, couplings). Their passes
+  over the trajectory are taken in turns, so that the ratio holds when the machine changes speed.
 
 One BLAS thread throughout (threadpoolctl). The machine is shared: the 1-minute load average is
 printed at the start and the end, with the processes that used the most CPU meanwhile.
@@ -190,20 +191,22 @@ def time_floor(robot, traj, mj, repeat: int) -> dict:
     def copy_only(s):
         load_state(s)
 
-    out = {}
-    for name, fn, items in (("ours", ours, states), ("mj_inverse", inverse, mj_states),
-                            ("mj_inverse+rnePostConstraint", inverse_cfrc, mj_states),
-                            ("state copy", copy_only, mj_states)):
+    runs = (("ours", ours, states), ("mj_inverse", inverse, mj_states),
+            ("mj_inverse+rnePostConstraint", inverse_cfrc, mj_states), ("state copy", copy_only, mj_states))
+    for _, fn, items in runs:
         for s in items:  # untimed pass
             fn(s)
-        ts = []
-        for _ in range(repeat * 5):
+    out = {name: [] for name, _, _ in runs}
+    # the passes taken in turns (one pass of each, then the next round): a change of the shared
+    # machine's speed falls on all four, and their ratio stays what it is
+    for _ in range(repeat * 5):
+        for name, fn, items in runs:
+            ts = out[name]
             for s in items:
                 t0 = time.perf_counter()
                 fn(s)
                 ts.append(time.perf_counter() - t0)
-        out[name] = np.array(ts)
-    return out
+    return {name: np.array(ts) for name, ts in out.items()}
 
 
 def time_parts(robot, traj, repeat: int) -> dict:
