@@ -61,7 +61,22 @@ def kernel_cones(qp: QPData) -> Cones:
 def kernel_limits(settings: Settings, max_pivots: int) -> Limits:
     """The compiled solvers' limits and tolerances (:class:`._structs.Limits`) from ``settings``, with
     the active-set solver's pivot limit ``max_pivots`` (the warm start's, the polish's or each
-    crossover's)."""
+    crossover's); made once per settings object and limit (settings are immutable)."""
+    key = (id(settings), max_pivots)
+    hit = _LIMITS.get(key)
+    if hit is not None and hit[0] is settings:
+        return hit[1]
+    if len(_LIMITS) > 256:  # (many settings objects, as a sweep over them makes: start again)
+        _LIMITS.clear()
+    limits = _limits(settings, max_pivots)
+    _LIMITS[key] = (settings, limits)
+    return limits
+
+
+_LIMITS: dict = {}  # (id(settings), max_pivots) -> (settings, Limits)
+
+
+def _limits(settings: Settings, max_pivots: int) -> Limits:
     s = settings
     return Limits(int(max_pivots), int(s.active_set_max_newton), float(s.active_set_step), float(s.active_set_primal),
                   float(s.active_set_dual), float(s.active_set_eom), float(s.active_set_reg),
@@ -96,6 +111,8 @@ class ActiveSet:
         if self._made_for(qp):
             return self.held[1], self.held[2]
         names = qp.cone_consts()[0]
+        if not names:  # (a least-norm problem whose one cone is held: no mask to make)
+            return _NO_MASK, _NO_DIRS
         mask = np.array([nm in self.cones for nm in names], dtype=np.bool_)
         dirs = np.zeros((len(names), 3))
         for k in np.flatnonzero(mask):
@@ -230,6 +247,8 @@ def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state, **fields)
 
 _EMPTY = np.zeros(0, dtype=int)
 _EMPTY_F = np.zeros(0)
+_NO_MASK = np.zeros(0, dtype=np.bool_)
+_NO_DIRS = np.zeros((0, 3))
 MISSES: dict[str, int] = {}  # why guesses were rejected (counts, for profiling)
 
 

@@ -214,7 +214,7 @@ class ProxQPStage(Stage):
             self._warm = sol.x
 
     def seed(self, hint):
-        if np.all(np.isfinite(hint.x)):
+        if np.isfinite(hint.x).all():
             self._warm = hint.x
 
     def _start(self, qp):
