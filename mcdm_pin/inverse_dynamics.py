@@ -162,9 +162,9 @@ class InverseDynamics:
         else:
             objective = float("nan")
         if outputs is None or not sol.found:
-            found = f if sol.found else None
-            outputs = _outputs(terms, found, len(self.robot.joints), tau_act) + (
-                _activations(terms, found, self.robot.cables, self.settings.bound_abs),)
+            forces = f if sol.found else None
+            outputs = _outputs(terms, forces, len(self.robot.joints), tau_act) + (
+                _activations(terms, forces, self.robot.cables, self.settings.bound_abs),)
         wrench, F_socket, angles, activations = outputs
         return InstantResult(
             f=f, status=sol.status, objective=objective, eom_residual=eom,
