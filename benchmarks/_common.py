@@ -107,7 +107,8 @@ def load_robot(robot_path: str, trajectory: str, chain: int | None = None):
 
 def captured_ipm_arguments(ident, traj, instants: int) -> list:
     """The arguments of ``_fast.ipm_answer`` at ``instants`` cold instants of ``traj`` (shuffled with
-    seed 0, each after ``ident.reset()``), captured from ``solvers.ipm.ipm_arguments``."""
+    seed 0, each after ``ident.reset()``), captured from ``solvers.ipm.ipm_arguments``: the named
+    structures (the kernel takes each as a plain tuple, ``tuple(s)``)."""
     import random
 
     from mcdm_pin.settings import DEFAULT

@@ -62,18 +62,20 @@ def main(argv=None) -> int:
         captured = captured_ipm_arguments(ident, tr, a.instants)
         its, whole, loop = [], [], []
         for args in captured:
-            it = int(_fast.ipm_answer(*args).iterations)
+            plain = tuple(map(tuple, args))  # (the entry point takes plain tuples: mcdm_pin/solvers/_structs.py)
+            it = int(_fast.ipm_answer(*plain).iterations)
             its.append(it)
-            whole.append(_per_call(_fast.ipm_answer, args, a.calls))
+            whole.append(_per_call(_fast.ipm_answer, plain, a.calls))
             kqp, cones, limits = args  # the iterations alone: no crossover, as many iterations
-            only = (kqp, cones, limits._replace(max_iter=it, crossover_gap=0.0))
+            only = tuple(map(tuple, (kqp, cones, limits._replace(max_iter=it, crossover_gap=0.0))))
             loop.append(_per_call(_fast.ipm_answer, only, a.calls))
         its, whole, loop = np.array(its), np.array(whole), np.array(loop)
         print(f"| {case} | {np.median(its):.0f} | {np.median(whole):.1f} | {np.median(loop / its):.1f} | "
               f"{np.median(whole - loop):.1f} |")
         for g in a.objective_scale:  # P (and its diagonal and factor), c and r times g
-            mean = np.mean([_fast.ipm_answer(kqp._replace(H=kqp.H * g, d0=kqp.d0 * g, F=kqp.F * np.sqrt(g),
-                                                          c=kqp.c * g, r=kqp.r * g), cones, limits).iterations
+            mean = np.mean([_fast.ipm_answer(tuple(kqp._replace(H=kqp.H * g, d0=kqp.d0 * g, F=kqp.F * np.sqrt(g),
+                                                                c=kqp.c * g, r=kqp.r * g)), tuple(cones),
+                                             tuple(limits)).iterations
                             for kqp, cones, limits in captured])
             print(f"|   objective x{g:g} | {mean:.2f} (mean) | | | |")
     rng = np.random.default_rng(0)

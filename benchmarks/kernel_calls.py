@@ -11,7 +11,9 @@ dispatch of flat arguments against named structures.
    Run it at two commits, alternated, to compare the kernels (docs/speed.md, "Fourth pass").
 2. numba's dispatch: a kernel of 18 arguments (7 arrays of the neck's sizes, a bool, 10 numbers)
    that returns a 5-tuple, against the same arguments in two namedtuples with a namedtuple returned,
-   and each half alone. Least of 5 runs of 20,000 calls, wall time per call.
+   each half alone, and the two structures passed as plain tuples and named again inside (what the
+   library's entry points take: ``mcdm_pin/solvers/_structs.py``). Least of 5 runs of 20,000 calls,
+   wall time per call.
 
 Default robot: the CASPR neck with the paper's weights and 15 deg cones
 (``_common.neck_case_options``), trajectory ``roll``; ``--chain N``: ``benchmarks/scaling.py``'s
@@ -58,7 +60,8 @@ def ipm_calls(robot, tr, opts, cases, instants: int, batches: int) -> None:
     print("|---|---|---|---|")
     for case in cases:
         ident = InverseDynamics.for_case(robot, case, **opts[case])
-        captured = captured_ipm_arguments(ident, tr, instants)
+        # (the entry point takes its structures as plain tuples: mcdm_pin/solvers/_structs.py)
+        captured = [tuple(map(tuple, a)) for a in captured_ipm_arguments(ident, tr, instants)]
         cpu = np.array([_least(_fast.ipm_answer, a, batches, time.thread_time) for a in captured])
         wall = np.array([_least(_fast.ipm_answer, a, batches, time.perf_counter) for a in captured])
         print(f"| {case} | {len(captured)} | {np.median(cpu):.1f} / {np.percentile(cpu, 99):.1f} | "
@@ -88,6 +91,11 @@ def dispatch() -> None:
     def struct_out(H, c, r, A, b, lb, ub, strict, a, bb, cc, d, e, f, g, h, i, j):
         return Out(0, c, b, lb, r)
 
+    @njit
+    def plain_in(q, lim):  # the library's entry points: plain tuples in, named again inside
+        q, lim = Q(*q), L(*lim)
+        return Out(0, q.c, q.b, q.lb, q.r)
+
     n = 85
     args = (np.eye(n), np.zeros(n), 0.0, np.ones((27, n)), np.ones(27), np.zeros(n), np.ones(n), False, 1, 2, 3.0,
             4.0, 5.0, 6.0, 7.0, True, 1e-9, 1e3)
@@ -95,7 +103,8 @@ def dispatch() -> None:
     rows = [("18 flat arguments, a tuple returned", flat, args),
             ("two namedtuples in, a namedtuple returned", structs, (q, lim)),
             ("two namedtuples in, a tuple returned", structs_in, (q, lim)),
-            ("18 flat arguments, a namedtuple returned", struct_out, args)]
+            ("18 flat arguments, a namedtuple returned", struct_out, args),
+            ("two plain tuples in (named inside), a namedtuple returned", plain_in, (tuple(q), tuple(lim)))]
     print("| kernel call | us per call |")
     print("|---|---|")
     for name, fn, a in rows:

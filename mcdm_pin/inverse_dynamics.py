@@ -331,7 +331,7 @@ def _check(qp: QPData, terms, sol: Solution, m: int, settings: Settings, actuati
     came in the same compiled pass (else ``None``)."""
     f = sol.x
     problems = []
-    extra = None if actuation is None else -actuation.rows(terms) @ f[m:]
+    extra = None if actuation is None else -(actuation.rows(terms) @ f[m:])  # (the product negated: exact)
     outputs = None
     if jit.ready():  # one compiled pass, the same formulas
         fast = jit.kernels("solvers._fast")
@@ -344,7 +344,7 @@ def _check(qp: QPData, terms, sol: Solution, m: int, settings: Settings, actuati
         if tensions is not None:
             eom, broken, worst, k, *outputs = fast.answer_check_outputs(
                 *args, c_(_u_of(terms, f[m:]), dtype=float), c_(terms.RT, dtype=float), c_(terms.R_socket, dtype=float),
-                c_(terms.socket_axes, dtype=float), tensions)
+                c_(terms.socket_axes, dtype=float), tuple(tensions))  # (a plain tuple: solvers._structs)
         else:
             eom, broken, worst, k = fast.answer_check(*args)
     else:
@@ -377,12 +377,12 @@ def _tensions(terms, cables, bound_abs: float) -> Tensions | None:
         return None
     c_ = np.ascontiguousarray
     k = cables.muscle_index
-    # (writable C arrays: a read-only one, as a broadcast a_min is, is a type of its own to numba)
-    arrays = [c_(a, dtype=float) for a in (state.passive, state.gain, state.a_min)]
-    arrays = [a if a.flags.writeable else a.copy() for a in arrays]
-    if any(a.shape != k.shape for a in arrays):
+    passive, gain, a_min = c_(state.passive, dtype=float), c_(state.gain, dtype=float), c_(state.a_min, dtype=float)
+    if not passive.shape == gain.shape == a_min.shape == k.shape:
         return None
-    return Tensions(c_(k, dtype=np.int64), *arrays, float(bound_abs))
+    # (writable C arrays: a read-only one, as a broadcast a_min is, is a type of its own to numba)
+    passive, gain, a_min = (a if a.flags.writeable else a.copy() for a in (passive, gain, a_min))
+    return Tensions(c_(k, dtype=np.int64), passive, gain, a_min, float(bound_abs))
 
 
 _NO_1 = np.zeros(0)

@@ -125,6 +125,7 @@ _READY = True  # the kernels answer (tests set it False to reach the numpy refer
 _COMPILED = False  # the compiled kernels are loaded in this process
 _NOTED = False  # the "uncompiled" note was printed
 _PURE: dict[str, types.ModuleType] = {}  # "model.kernels" -> the module's uncompiled twin namespace
+_LOADED: dict[str, types.ModuleType] = {}  # "model.kernels" -> the module, once the compiled kernels are loaded
 
 
 def register(name: str, calls) -> None:
@@ -149,7 +150,10 @@ def kernels(module: str):
     itself when the compiled kernels are loaded, else its uncompiled namespace (the same functions'
     Python code, :func:`_pure_modules`)."""
     if _COMPILED:
-        return sys.modules.get(f"mcdm_pin.{module}") or importlib.import_module(f"mcdm_pin.{module}")
+        mod = _LOADED.get(module)
+        if mod is None:
+            mod = _LOADED[module] = importlib.import_module(f"mcdm_pin.{module}")
+        return mod
     ns = _PURE.get(module)
     if ns is None:
         _pure_modules()

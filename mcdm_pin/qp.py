@@ -84,7 +84,7 @@ class QPData:
     """
 
     __slots__ = ("_P", "c", "r", "A", "b", "lb", "ub", "cones", "P_diag", "P_factor", "norm_weight",
-                 "_cone_arrays", "_cone_consts", "_kernel_arrays")
+                 "_cone_arrays", "_cone_consts", "_kernel_arrays", "_kernel_qp")
 
     def __init__(self, P, c, r, A, b, lb, ub, cones=(), *, P_diag=None, P_factor=None, norm_weight=None,
                  cone_arrays=None, cone_consts=None):
@@ -96,6 +96,7 @@ class QPData:
         self._cone_arrays = cone_arrays
         self._cone_consts = cone_consts
         self._kernel_arrays = None
+        self._kernel_qp = None  # (the compiled solvers' view of it: solvers.active_set.kernel_qp)
         if P is None and (P_diag is None or P_factor is None):
             raise ProblemError("QPData: give P or both P_diag and P_factor")
 
@@ -192,8 +193,11 @@ class QPData:
         not): then ``P`` is positive definite and the optimum unique (case 1, the activations'
         objective). ``False`` proves nothing."""
         d = self.P_diag
-        # (counted: count_nonzero has no reduction's per-call machinery, as min() has, on every instant)
-        return d is not None and d.size > 0 and not np.count_nonzero(~(d > 0.0))
+        # (the first entry first: the interaction objectives' diagonal is zero; then counted:
+        # count_nonzero has no reduction's per-call machinery, as min() has, on every instant)
+        if d is None or d.size == 0 or not d[0] > 0.0:
+            return False
+        return not np.count_nonzero(~(d > 0.0))
 
     def objective(self, x) -> float:
         """``1/2 x^T P x + c^T x + r``."""

@@ -108,6 +108,7 @@ def test_the_compiled_solvers_read_their_thresholds_from_the_settings():
     np.testing.assert_allclose(slow.x, base.x, atol=1e-8)
     # (without the crossover, which would answer from where the iterations stopped)
     kqp, cones, limits = ipm_arguments(qp, DEFAULT.replace(ipm_min_step=0.999, ipm_step_fraction=0.5))
-    assert jit.kernels("solvers._fast").ipm_answer(kqp, cones, limits._replace(crossover_gap=0.0)).code == NUMERICAL
+    limits = limits._replace(crossover_gap=0.0)  # (the entry point takes plain tuples: solvers._structs)
+    assert jit.kernels("solvers._fast").ipm_answer(*map(tuple, (kqp, cones, limits))).code == NUMERICAL
     assert list(base.active.state) == [0, 0, 1]
     assert list(ipm_solve(qp, DEFAULT.replace(active_set_keep=1.0)).active.state) == [0, 0, 0]

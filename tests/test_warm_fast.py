@@ -173,12 +173,20 @@ def test_the_least_norm_face_is_the_numpy_one(instants):
     test's strongly active set, the face's rows, their basis) against numpy: ``_strongly_active``'s
     free variables and held cones, and the span of the face's rows (the objective's rows of curvature
     above 1e-12 of the largest, the equations, ``c`` and the held cones' rows, each normalised, on the
-    coordinates that are not unit rows) by one numpy SVD."""
+    coordinates that are not unit rows) by one numpy SVD; and the least-norm problem's bounds and rows
+    made in the same pass equal their numpy formulas."""
     held_seen = 0
     for qp, _, sol, _ in instants:
         if sol.z is None or qp.strictly_convex():
             continue
-        free, held, S, rest, Vt = LN._face(qp, sol, DEFAULT)
+        free, held, S, rest, Vt, lb, ub, E = LN._face(qp, sol, DEFAULT)
+        lb_ref, ub_ref = np.where(free, qp.lb, -np.inf), np.where(free, qp.ub, np.inf)
+        lb_ref[S] = ub_ref[S] = sol.x[S]
+        E_ref = np.zeros((len(Vt), qp.n))
+        E_ref[:, rest] = Vt
+        np.testing.assert_array_equal(lb, lb_ref)
+        np.testing.assert_array_equal(ub, ub_ref)
+        np.testing.assert_array_equal(E, E_ref)
         free_ref, cone_rows, _ = LN._strongly_active(qp, sol, DEFAULT, curvature=False)
         np.testing.assert_array_equal(free, free_ref)
         assert set(np.flatnonzero(held)) == {k for k, _ in cone_rows}
@@ -202,6 +210,33 @@ def test_the_least_norm_face_is_the_numpy_one(instants):
         np.testing.assert_allclose(Vt @ Vt.T, np.eye(len(Vt)), atol=1e-12)
         np.testing.assert_allclose(ref @ Vt.T @ Vt, ref, atol=1e-9)  # the same space
     assert held_seen > 0  # the neck's case 3 holds cones
+
+
+def test_the_least_norm_problem_keeps_the_cones_not_held_as_stacked_afresh(instants):
+    """Where some cones are held on the optimal face and others not, the least-norm problem takes the
+    others' stacked arrays and constants from the problem's (``stage2_problem``), and they equal
+    those stacked afresh from its cones. The human arm's answers hold its one cone: a second, wide
+    cone on the same joint (85 deg, not binding) is added to each problem and solved again."""
+    from mcdm_pin.qp import ConeData, QPData
+
+    partial = 0
+    for qp, _, _, idp in instants:
+        if len(qp.cones) != 1 or qp.strictly_convex():
+            continue
+        c = qp.cones[0]
+        wide = ConeData("wide", c.G, c.g, c.axis, 85.0, c.basis)
+        qp2 = qp.with_cones([c, wide])
+        sol = idp.solver.fresh().solve(qp2)
+        if sol.status != "optimal" or sol.z is None or not LN._face(qp2, sol, DEFAULT).held[0]:
+            continue
+        p = LN.stage2_problem(qp2, sol, DEFAULT)
+        assert [k.joint for k in p.cones] == ["wide"]
+        fresh = QPData(p.P, p.c, p.r, p.A, p.b, p.lb, p.ub, p.cones)
+        for got, want in zip(p.cone_arrays() + p.cone_consts()[1:], fresh.cone_arrays() + fresh.cone_consts()[1:]):
+            np.testing.assert_array_equal(got, want)
+        assert p.cone_consts()[0] == fresh.cone_consts()[0] == ("wide",)
+        partial += 1
+    assert partial > 0
 
 
 def _exact_unique(H, J, thr):

@@ -65,6 +65,7 @@ def coupled_terms(q, table, fvals, independent, L, tau):
     """:func:`coupling_basis`'s ``N`` with ``L N`` and ``N^T tau`` (``L`` (m, nv), ``tau`` (nv,)): ``N``
     has one entry at most per row, so each product is a sum over the rows of ``L^T`` (``tau``) that
     land in a column, in the order of the couplings, instead of a dense product."""
+    table = CouplingTable(*table)  # (a plain tuple at the boundary: solvers._structs)
     nv = tau.shape[0]
     N = coupling_basis(q, table, fvals, independent, nv)
     m, n = L.shape[0], independent.shape[0]
@@ -94,6 +95,7 @@ def coupling_violation(q, v, a, table, fvals, tol):
     the first coupling (in their order: a source before what depends on it, so the cause before its
     echoes) whose dependent is more than ``tol (1 + |value|)`` from the value it gives (NaN counts as
     beyond): 0/1/2 for ``q``/``v``/``a``, and that value; ``(-1, -1, 0.0)`` when every coupling holds."""
+    table = CouplingTable(*table)  # (a plain tuple at the boundary: solvers._structs)
     has_v, has_a = v.shape[0] > 0, a.shape[0] > 0
     src_v = table.src_v
     for k in range(table.dep_q.shape[0]):
@@ -124,8 +126,8 @@ def warm_calls():
                           z((1, 5)))
     fvals = np.full((1, 3), np.nan)
     return [(coupling_basis, (z(2), table, fvals, z(1, dtype=i64), 2)),
-            (coupled_terms, (z(2), table, fvals, z(1, dtype=i64), z((1, 2)), z(2))),
-            (coupling_violation, (z(2), z(2), z(2), table, fvals, 1e-9))]
+            (coupled_terms, (z(2), tuple(table), fvals, z(1, dtype=i64), z((1, 2)), z(2))),
+            (coupling_violation, (z(2), z(2), z(2), tuple(table), fvals, 1e-9))]
 
 
 def _register() -> None:

@@ -100,6 +100,7 @@ class Couplings:
         self.independent = np.array([i for i in range(nv) if i not in dep], dtype=int)
         self.independent_names = tuple(self.names[i] for i in self.independent)
         self._table, self._functions = _table(self)
+        self._table_plain = tuple(self._table)  # (as the per-instant kernels take it: solvers._structs)
         self._no_functions = np.full((len(self.items), 3), np.nan)  # (the kernels take it writable)
         self._independent64 = self.independent.astype(np.int64)
 
@@ -157,7 +158,7 @@ class Couplings:
         vv = _EMPTY if v is None else np.asarray(v, dtype=float)
         aa = _EMPTY if v is None or a is None else np.asarray(a, dtype=float)
         k, what, value = jit.kernels("model.coupling_kernels").coupling_violation(
-            q, vv, aa, self._table, self._function_values(q), float(tol))
+            q, vv, aa, self._table_plain, self._function_values(q), float(tol))
         if k >= 0:
             c = self.items[k]
             name = ("q", "v", "a")[what]
@@ -184,7 +185,7 @@ class Couplings:
         (:func:`mcdm_pin.model.coupling_kernels.coupled_terms`: ``N`` has one entry at most per row)."""
         q = np.asarray(q, dtype=float)
         return jit.kernels("model.coupling_kernels").coupled_terms(
-            q, self._table, self._function_values(q), self._independent64, np.ascontiguousarray(L, dtype=float),
+            q, self._table_plain, self._function_values(q), self._independent64, np.ascontiguousarray(L, dtype=float),
             np.ascontiguousarray(tau, dtype=float))
 
     def _function_values(self, q) -> np.ndarray:

@@ -27,9 +27,11 @@ def cable_terms(oM, Jt, route, maps):
         oM: (K, 4, 4) world placements (homogeneous) of the key bodies.
         Jt: (nv, 6) the world Jacobian, transposed: row v is column v's spatial velocity at the
             world origin (Pinocchio's column-major ``data.J`` transposed: a C-ordered view).
-        route: the routes at this instant (:class:`~mcdm_pin.model.kernel_structs.Route`; a segment
-            whose ``seg_scale`` is 0 adds neither length nor wrench).
-        maps: what the key bodies move and carry (:class:`~mcdm_pin.model.kernel_structs.KeyMaps`).
+        route: the routes at this instant (a :class:`~mcdm_pin.model.kernel_structs.Route`'s fields, as
+            a plain tuple: :mod:`mcdm_pin.solvers._structs`; a segment whose ``seg_scale`` is 0 adds
+            neither length nor wrench).
+        maps: what the key bodies move and carry (a :class:`~mcdm_pin.model.kernel_structs.KeyMaps`'
+            fields, as a plain tuple).
 
     Returns a :class:`~mcdm_pin.model.kernel_structs.CableTerms`.
     """
@@ -557,11 +559,12 @@ def warm_calls():
             (cone_batch, (z((1, 6, 2)), z((1, 6)), z((1, 3, 3)), z((1, 3)), z(1, dtype=i64), np.ones(1, dtype=np.bool_))),
             (needs_scaling, (z((1, 2)), z(1), z(2), z(2), z(2), z((1, 2)), z(2), z((1, 3, 2)), z((1, 3)), 1e3)),
             (bound_unit, (z(2), z(2), np.ones(2))),
+            # (plain tuples at the boundary: solvers._structs)
             (cable_terms, (np.tile(np.eye(4), (1, 1, 1)), z((1, 6)),
-                           Route(z((2, 3)), z(2, dtype=i64), np.array([0], dtype=i64), np.array([1], dtype=i64),
-                                 np.array([0], dtype=i64), np.array([False]), np.ones(1)),
-                           KeyMaps(z(2, dtype=i64), z(0, dtype=i64), z(2, dtype=i64), z(0, dtype=i64),
-                                   z(0, dtype=i64), z(0, dtype=i64), z((0, 3, 3)), 1, 0)))]
+                           tuple(Route(z((2, 3)), z(2, dtype=i64), np.array([0], dtype=i64), np.array([1], dtype=i64),
+                                       np.array([0], dtype=i64), np.array([False]), np.ones(1))),
+                           tuple(KeyMaps(z(2, dtype=i64), z(0, dtype=i64), z(2, dtype=i64), z(0, dtype=i64),
+                                         z(0, dtype=i64), z(0, dtype=i64), z((0, 3, 3)), 1, 0))))]
 
 
 def warm_up() -> None:

@@ -187,6 +187,7 @@ def osim_route_pass(oM, q, paths, route, arc_length, L_extra, lever):
     answer as their Python runs do. A zero divisor elsewhere (a degenerate route) gives inf or NaN,
     which the terms report as not finite; the Python run raises ``ZeroDivisionError`` there, which
     :class:`~mcdm_pin.model.routes.RoutePaths` turns into a :class:`~mcdm_pin.exceptions.StateError`."""
+    paths, route = OsimPaths(*paths), Route(*route)  # (plain tuples at the boundary: solvers._structs)
     osim_routes(oM, q, paths, route, arc_length, L_extra, lever)
 
 
@@ -251,7 +252,7 @@ def warm_calls():
                       np.zeros((2, 3)))
     points = Route(np.array([[0.0, 0, 0], [1, 0, 0]]), np.zeros(2, dtype=i64), np.array([0], dtype=i64),
                    np.array([1], dtype=i64), np.array([0], dtype=i64), np.array([False]), np.ones(1))
-    osim_args = (oM, np.zeros(1), paths, points, np.zeros(1), np.zeros((1, 1)), np.zeros((2, 3)))
+    osim_args = (oM, np.zeros(1), tuple(paths), tuple(points), np.zeros(1), np.zeros((1, 1)), np.zeros((2, 3)))
     qi = np.zeros((1, NQ_INT), dtype=i64)
     qi[0, Q_SCREW] = 1
     qf = np.zeros((1, NQ_FLOAT))

@@ -117,7 +117,8 @@ class RoutePaths:
                              f"at this configuration")
         if self._osim is not None:  # OpenSim's routes read the configuration too
             try:
-                self._osim_pass(oM, q, self._osim.arrays, self.route, self.arc_length, self.L_extra, self.lever)
+                self._osim_pass(oM, q, tuple(self._osim.arrays), tuple(self.route), self.arc_length, self.L_extra,
+                                self.lever)  # (plain tuples at the kernel's boundary: solvers._structs)
             except ZeroDivisionError:  # (uncompiled; compiled, the pass divides as C does and the terms
                 # report the inf or NaN as not finite)
                 raise StateError("an OpenSim path divides by zero at this configuration (a degenerate wrap: "

@@ -295,10 +295,10 @@ class TermsEvaluator:
             self._point_key.astype(np.int64), cables.seg_a.astype(np.int64),
             cables.seg_b.astype(np.int64), cables.seg_cable.astype(np.int64),
             cables.seg_active.astype(np.bool_), np.ascontiguousarray(cables.seg_scale, dtype=float))
-        self._kernel_args = KeyMaps(
+        self._kernel_args = tuple(KeyMaps(  # (a plain tuple, as the kernel takes it: solvers._structs)
             *self._v_csr, *self._a_csr,
             self._child_key.astype(np.int64), self._parent_key.astype(np.int64),
-            np.ascontiguousarray(self._R_sp, dtype=float), int(cables.m), len(self.joints))
+            np.ascontiguousarray(self._R_sp, dtype=float), int(cables.m), len(self.joints)))
 
     def _setup_numpy(self, K: int) -> None:
         """The numpy reference formulation's index maps (fixed routes)."""
@@ -360,7 +360,8 @@ class TermsEvaluator:
                 route, arc = self._route_args, None
             else:
                 route, arc = self._routes(oMi, q)
-            X, _, lengths, L, RT, R_socket, bad = self._kernel(oMi, np.ascontiguousarray(J.T), route,
+            # (plain tuples at the kernel's boundary: solvers._structs)
+            X, _, lengths, L, RT, R_socket, bad = self._kernel(oMi, np.ascontiguousarray(J.T), tuple(route),
                                                                self._kernel_args)
             if bad >= 0:
                 raise StateError(f"cable {cables.cables[route.seg_cable[bad]].name!r}: a segment has zero "

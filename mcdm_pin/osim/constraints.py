@@ -94,8 +94,10 @@ class PointLoops:
         self._no_actuators = np.zeros((model.nv, 0))
         self._eye = np.eye(model.nv)
         self._eye.flags.writeable = False
-        self._tables = LoopTables(self._pt_frame, self._pt_sign, self._pt_loop, self._pt_cols, self._pair_joint,
-                                  self._pair_frame, self._pair_sign, self._pair_loop, int(model.njoints), self.k)
+        # (a plain tuple, as the kernel takes it: solvers._structs)
+        self._tables_plain = tuple(LoopTables(self._pt_frame, self._pt_sign, self._pt_loop, self._pt_cols,
+                                              self._pair_joint, self._pair_frame, self._pair_sign, self._pair_loop,
+                                              int(model.njoints), self.k))
         self._no_joints = np.zeros(0, dtype=np.int64)  # (instant: no joint's wrenches asked for)
 
     def _views(self) -> None:
@@ -184,7 +186,8 @@ class PointLoops:
         ``(N K)^T tau0``, ``(N K)^T S``). ``S``: (nv, n_act) or ``None``."""
         d = self._jacobians(q)
         out = jit.kernels("osim.loop_kernels").loop_terms(
-            d.J, self._fp, self._oR, self._op, self._tables, self._coupling_basis(q), np.asarray(tau0, dtype=float),
+            d.J, self._fp, self._oR, self._op, self._tables_plain, self._coupling_basis(q),
+            np.asarray(tau0, dtype=float),
             L, self._no_actuators if S is None else np.ascontiguousarray(S, dtype=float), u, RT, child)
         self._check_rank(out.s)
         return out

@@ -92,6 +92,7 @@ def loop_terms(J, fp, oR, op, tables, N, tau0, L, S, u, RT, child):
     (:func:`loop_wrench_map` from ``oR``, ``op``), then for each physical joint (its Pinocchio joint
     ``child[j]``) its wrenches ``u[j] + W lam0`` and ``RT[j] + W Lam`` and the actuators' share
     ``W Lam_act``, and the equation of motion in the basis. ``tables``: :class:`LoopTables`."""
+    tables = LoopTables(*tables)  # (a plain tuple at the boundary: solvers._structs)
     t = tables
     G = loop_jacobian(J, fp, t.pt_frame, t.pt_sign, t.pt_loop, t.pt_cols, t.k)
     s, NK, lam0, Lam, Lam_act = loop_instant(G, N, tau0, L, S, t.k)
@@ -130,7 +131,7 @@ def warm_calls():
             (loop_instant, (G, identity, z(4), z((2, 4)), z((4, 0)), 3)),
             (loop_instant, (G, identity, z(4), z((2, 4)), z((4, 1)), 3)),
             (loop_wrench_map, (oR, op, op, z(1, dtype=i64), z(1, dtype=i64), z(1), z(1, dtype=i64), 2, 3))] + [
-        (loop_terms, (np.asfortranarray(z((6, 4))), op, oR, op, tables, basis, z(4), z((2, 4)), z((4, n_act)),
+        (loop_terms, (np.asfortranarray(z((6, 4))), op, oR, op, tuple(tables), basis, z(4), z((2, 4)), z((4, n_act)),
                       z((1, 6)), z((1, 6, 2)), np.ones(1, dtype=i64)))
         for basis in (np.eye(4), identity) for n_act in (0, 1)]
 

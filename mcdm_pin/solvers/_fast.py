@@ -129,6 +129,7 @@ def active_set_answer(qp, cones, state0, cact0, dirs0, limits, x0, mus0):
 
     Returns an :class:`._structs.Answer` (``iterations``: the KKT systems solved); only ``code`` and
     ``iterations`` mean anything unless ``code`` is :data:`._kkt.FOUND`."""
+    qp, cones, limits = QP(*qp), Cones(*cones), Limits(*limits)  # (plain tuples at the boundary: ._structs)
     nc = cones.G.shape[0]
     cdir = cones.basis0.copy()
     for k in range(nc):
@@ -230,6 +231,7 @@ def ipm_answer(qp, cones, limits):
 
     Returns an :class:`._structs.Answer`: after a crossover as :func:`active_set_answer`'s;
     otherwise ``z, z_cone`` the method's own (or the certificate), the rest empty and ``unique`` 0."""
+    qp, cones, limits = QP(*qp), Cones(*cones), Limits(*limits)  # (plain tuples at the boundary: ._structs)
     T, t = cone_rows(cones.G, cones.gc, cones.ax, cones.cosr, cones.basis)
     fixed, free = fixed_split(qp.lb, qp.ub)
     reduce = fixed.shape[0] > 0 and free.shape[0] > 0
@@ -389,6 +391,7 @@ def answer_check_outputs(L, tau, extra, x, lb, ub, G, g, ax, angle_deg, u, RT, R
     """:func:`answer_check`, :func:`instant_outputs` and :func:`activations` (at the first
     ``L.shape[0]`` entries of ``x``, the cable forces; ``tensions``: :class:`._structs.Tensions`) in
     one call: ``(eom, broken, viol, k, W, Fs, angles, activation)``."""
+    tensions = Tensions(*tensions)  # (a plain tuple at the boundary: ._structs)
     m = L.shape[0]
     eom, broken, viol, k = answer_check(L, tau, extra, x, lb, ub, G, g, ax, angle_deg)
     W, Fs, ang = instant_outputs(u, RT, R_socket, axes, x[:m])
@@ -424,6 +427,7 @@ def kkt_measures(qp, cones, angle_deg, x, y, z, zc, duals, floor):
     :func:`cone_rows`, :meth:`mcdm_pin.qp.QPData.cone_rows`'s) and their half-angles ``angle_deg``; the
     point ``x`` and, when ``duals``, its multipliers ``y``, ``z``, ``zc``; ``floor``: the gradient
     scale's least value."""
+    qp, cones = QP(*qp), Cones(*cones)  # (plain tuples at the boundary: ._structs)
     eom, bound, cone_deg = _primal_measures(qp, cones, angle_deg, x)
     if not duals:
         return KKTMeasures(eom, bound, cone_deg, np.nan, np.nan)
@@ -553,13 +557,15 @@ def warm_calls():
     cones = Cones(z((1, 3, n)), z((1, 3)), z((1, 3)), z(1), z((1, 3)), z(1), z((1, 2, 3)))
     limits = Limits(2, 2, 1e-10, 1e-12, 1e-9, 1e-11, 1e-12, 1e-8, 1e-10, 1e-12, 1e-12, 1e-8, 1e-9, 1e3, 60, 1e-10,
                     1e-3, 1, 1e-9, 0.2, 8, 1e-14, 1e-5, 0.99, 1e-14, 1e-6)
-    calls = [(active_set_answer, (qp, cones, z(n, dtype=np.int8), z(1, dtype=np.bool_), z((1, 3)), limits, z(n), z(1)))]
+    # (the entry points Python calls at every instant take plain tuples: ._structs)
+    tq, tc, tl = tuple(qp), tuple(cones), tuple(limits)
+    calls = [(active_set_answer, (tq, tc, z(n, dtype=np.int8), z(1, dtype=np.bool_), z((1, 3)), tl, z(n), z(1)))]
     return calls + [(answer_unique, (z(n), z(n), z((1, 3)), qp, cones, limits)),
             (answer_check, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1))),
             (answer_check_outputs, (z((n, 1)), z(1), z(0), z(n), z(n), z(n), z((1, 3, n)), z((1, 3)), z((1, 3)), z(1),
                                     z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)),
-                                    Tensions(z(1, dtype=np.int64), z(1), z(1), z(1), 1e-6))),
+                                    tuple(Tensions(z(1, dtype=np.int64), z(1), z(1), z(1), 1e-6)))),
             (outside_bounds, (z(n), z(n), z(n))),
-            (kkt_measures, (qp, cones, z(1), z(n), z(1), z(n), z((1, 3)), True, 1e-300)),
+            (kkt_measures, (tq, tc, z(1), z(n), z(1), z(n), z((1, 3)), True, 1e-300)),
             (instant_outputs, (z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)), z(n))),
-            (face_setup, (z(n), z(n), z((1, 3)), qp, cones, limits, z((1, n)), z(n)))]
+            (face_setup, (z(n), z(n), z((1, 3)), tq, tc, tl, z((1, n)), z(n)))]

@@ -6,7 +6,15 @@ uncompiled path the same classes are plain Python tuples. A kernel then takes a 
 instead of two dozen positional arrays and numbers, and returns one structure instead of a 12-tuple.
 
 Every field's type is fixed by what the library passes (C-ordered float64 arrays, ``int`` limits,
-``float`` tolerances): one compiled specialisation serves every call. The builders from a
+``float`` tolerances): one compiled specialisation serves every call.
+
+**At the boundary, plain tuples.** An entry point that Python calls at every instant takes its
+structures as plain tuples (``tuple(qp)``) and names them again in its first line
+(``qp = QP(*qp)``); the kernels it calls get the structures as before. numba's dispatcher types a
+plain tuple of arrays and numbers in C, but a namedtuple through its Python ``typeof``: 1.3-3.0 us
+more per call with a ``QP``, ``Cones`` and ``Limits`` (docs/speed.md, "Plain tuples at the
+kernels' boundary"). :func:`mcdm_pin.solvers._fast.answer_unique`, which Python calls rarely and
+the kernels often, keeps the named ones. The builders from a
 :class:`~mcdm_pin.problem.QPData` and a :class:`~mcdm_pin.settings.Settings` are
 :func:`mcdm_pin.solvers.active_set.kernel_qp`, ``kernel_cones`` and ``kernel_limits``.
 
@@ -90,6 +98,15 @@ Tensions.__doc__ = """The muscles' state at an instant as the answer check reads
 ``passive`` part and ``gain`` per unit of activation, their ``a_min`` (k,), and the check's
 ``bound_abs`` (N); ``index`` empty: no muscles."""
 
-KERNEL_STRUCTURES = (QP, Cones, Limits, Answer, ActiveSetRun, IPMRun, NewtonSystem, Scaling, Slacks, KKTMeasures,
+Face = namedtuple("Face", ["free", "held", "S", "rest", "Vt", "lb", "ub", "E"])
+Face.__doc__ = """The optimal face through an answer, as :func:`mcdm_pin.solvers._unique.face_setup` gives it
+(:func:`mcdm_pin.solvers.least_norm.stage2_problem`): the variables not strongly active at a bound
+``free`` (n,), the cones strongly held ``held`` (K,), the coordinates ``S`` whose unit rows are among
+the face's rows and the others ``rest``, an orthonormal basis ``Vt`` (rows over ``rest``) of the
+other rows' parts there; and the least-norm problem's bounds ``lb``, ``ub`` (n,: a free variable's
+own, infinite at a strongly active bound, ``x_i`` at both for ``i`` in ``S``) and equations' rows
+``E`` (``Vt`` placed in the columns ``rest``)."""
+
+KERNEL_STRUCTURES = (QP, Cones, Limits, Answer, ActiveSetRun, IPMRun, NewtonSystem, Scaling, Slacks, KKTMeasures, Face,
                      Tensions)
 """The structures above (the marker :func:`mcdm_pin.jit.kernel_sources` looks for)."""

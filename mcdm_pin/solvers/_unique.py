@@ -17,6 +17,7 @@ from ..model.kernels import gram_lower
 from ._ipm_linalg import dot
 from ._kkt_eq import cone_force
 from ._kkt_linalg import chol_lower
+from ._structs import QP, Cones, Face, Limits
 
 
 @njit(cache=True, nogil=True)
@@ -181,10 +182,9 @@ def face_setup(x, z, zc, qp, cones, limits, F, d):
     """The least-norm stage's optimal face through ``x`` (:func:`mcdm_pin.solvers.least_norm.stage2_problem`)
     in one pass: the strongly active set of :func:`unique_test` (the duals ``z``, ``zc``; zero: none;
     thresholds ``limits.near``, ``unique_rel``), the rows :func:`face_rows` gathers over it (``P =
-    diag(d) + F^T F``) and an orthonormal basis of their parts on ``rest`` (:func:`_row_basis`).
-    Returns ``(free, held, S, rest, Vt)``: ``free`` (n,) the variables not strongly active at a bound,
-    ``held`` (K,) the cones strongly held, then :func:`face_rows`' ``S`` and ``rest`` and the basis'
-    rows ``Vt`` over ``rest``."""
+    diag(d) + F^T F``) and an orthonormal basis of their parts on ``rest`` (:func:`_row_basis`), and
+    the least-norm problem's bounds and rows made from them. Returns a :class:`._structs.Face`."""
+    qp, cones, limits = QP(*qp), Cones(*cones), Limits(*limits)  # (plain tuples at the boundary: ._structs)
     n = x.shape[0]
     thr = limits.unique_rel * _gradient_scale(x, qp.c, qp.H)
     idx, nf = _not_strongly_active(x, z, qp.lb, qp.ub, limits.near, thr)
@@ -193,7 +193,19 @@ def face_setup(x, z, zc, qp, cones, limits, F, d):
         free[idx[a]] = True
     crow, nr, _, _, _, held = _held_cone_rows(cones.G, cones.gc, cones.ax, cones.tn, cones.cosr, zc, x, thr)
     S, rest, R = face_rows(F, d, qp.A, qp.c, np.ascontiguousarray(crow[:nr]), free)
-    return free, held, S, rest, _row_basis(R)
+    Vt = _row_basis(R)
+    # the least-norm problem's bounds: a strongly active bound drops (the face holds it), x_i pins S
+    lb, ub = np.empty(n), np.empty(n)
+    for i in range(n):
+        lb[i] = qp.lb[i] if free[i] else -np.inf
+        ub[i] = qp.ub[i] if free[i] else np.inf
+    for a in range(S.shape[0]):
+        lb[S[a]] = ub[S[a]] = x[S[a]]
+    E = np.zeros((Vt.shape[0], n))
+    for r in range(Vt.shape[0]):
+        for a in range(rest.shape[0]):
+            E[r, rest[a]] = Vt[r, a]
+    return Face(free, held, S, rest, Vt, lb, ub, E)
 
 
 @njit(cache=True, nogil=True)

@@ -41,13 +41,19 @@ def kernel_qp(qp: QPData, factor: tuple | None = None) -> QP:
     """``qp`` as the compiled solvers take it (:class:`._structs.QP`: C-ordered float arrays, made
     once per problem by :meth:`QPData.kernel_arrays`, and Python scalars, so that one compiled
     specialisation serves every call). ``factor``: ``(d0, F)`` with ``P = diag(d0) + F^T F`` for the
-    interior-point method (:func:`.ipm.p_structure`); empty where only the active-set solver runs.
+    interior-point method (:func:`.ipm.p_structure`); empty where only the active-set solver runs,
+    and then made once per problem (the least-norm stage reads the first stage's again).
     ``strict``: :meth:`QPData.strictly_convex` (:func:`.least_norm.is_unique`'s first test)."""
+    if factor is None and qp._kernel_qp is not None:
+        return qp._kernel_qp
     c_ = np.ascontiguousarray
     c, A, b, lb, ub = qp.kernel_arrays()[:5]
     d0, F = (_EMPTY_F, np.zeros((0, qp.n))) if factor is None else (c_(factor[0], dtype=float),
                                                                        c_(factor[1], dtype=float))
-    return QP(c_(qp.P, dtype=float), d0, F, c, float(qp.r), A, b, lb, ub, qp.strictly_convex())
+    out = QP(c_(qp.P, dtype=float), d0, F, c, float(qp.r), A, b, lb, ub, qp.strictly_convex())
+    if factor is None:
+        qp._kernel_qp = out
+    return out
 
 
 def kernel_cones(qp: QPData) -> Cones:
@@ -207,9 +213,9 @@ def try_active_set(qp: QPData, guess: ActiveSet, max_pivots: int = 30, stage: st
     cact, cdir = guess.cone_guess(qp)
     x0, mus0 = guess.point_guess(qp)
     c_ = np.ascontiguousarray
-    out = jit.kernels("solvers._fast").active_set_answer(
-        kernel_qp(qp), kernel_cones(qp), c_(state, dtype=np.int8), c_(cact, dtype=np.bool_), c_(cdir, dtype=float),
-        kernel_limits(settings, max_pivots), c_(x0, dtype=float), c_(mus0, dtype=float))
+    out = jit.kernels("solvers._fast").active_set_answer(  # (plain tuples at the boundary: ._structs)
+        tuple(kernel_qp(qp)), tuple(kernel_cones(qp)), c_(state, dtype=np.int8), c_(cact, dtype=np.bool_),
+        c_(cdir, dtype=float), tuple(kernel_limits(settings, max_pivots)), c_(x0, dtype=float), c_(mus0, dtype=float))
     if out.code != K.FOUND:
         _miss(K.REASONS[out.code])
         return None

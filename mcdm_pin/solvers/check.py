@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import jit
 from ..settings import DEFAULT, Settings
-from ._structs import QP, Cones
+from ._structs import Cones
 from .base import INACCURATE, OPTIMAL, Solution, Stage, cone_violation_deg
 
 
@@ -55,8 +55,8 @@ def kkt_residuals(qp, sol: Solution, settings: Settings = DEFAULT) -> dict:
     _, angles, cosr, basis = qp.cone_consts()
     cones = Cones(G, g, ax, tn, basis0, cosr, basis)  # (the kernel makes the cones' rows from them)
     floor = settings.kkt_grad_floor if duals and qp.constant_objective() else 1e-300
-    m = jit.kernels("solvers._fast").kkt_measures(
-        QP(H, d0, F, c, float(qp.r), A, b, lb, ub, False), cones, c_(angles, dtype=float), c_(sol.x, dtype=float),
+    m = jit.kernels("solvers._fast").kkt_measures(  # (plain tuples at the boundary: ._structs; a QP's fields)
+        (H, d0, F, c, float(qp.r), A, b, lb, ub, False), tuple(cones), c_(angles, dtype=float), c_(sol.x, dtype=float),
         c_(sol.y, dtype=float) if duals else _NO_D, c_(sol.z, dtype=float) if duals else _NO_D,
         c_(sol.z_cone, dtype=float).reshape(K, 3) if duals and K else np.zeros((K, 3)), duals, floor)
     return m._asdict()

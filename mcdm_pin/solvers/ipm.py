@@ -41,7 +41,7 @@ def ipm_arguments(qp, settings: Settings = DEFAULT) -> tuple:
     """The arguments of :func:`._fast.ipm_answer` for ``qp``: its :class:`._structs.QP` with ``P``'s
     structure (:func:`p_structure`), its :class:`._structs.Cones` and the limits and tolerances of
     ``settings`` (``ipm_*``, ``active_set_*``, ``unique_*``; each crossover's pivot limit
-    ``ipm_crossover_pivots``)."""
+    ``ipm_crossover_pivots``). The kernel takes each as a plain tuple (:mod:`._structs`)."""
     return (kernel_qp(qp, p_structure(qp)), kernel_cones(qp), kernel_limits(settings, settings.ipm_crossover_pivots))
 
 
@@ -50,7 +50,7 @@ def ipm_solve(qp, settings: Settings = DEFAULT) -> Solution:
     compiled call (:func:`._fast.ipm_answer`) makes the cone rows, solves, and after a crossover
     computes the answer's duals, the next guess (:func:`.active_set.active_solution` in numpy) and
     whether the optimum is provably unique (:func:`.least_norm.is_unique`)."""
-    out = jit.kernels("solvers._fast").ipm_answer(*ipm_arguments(qp, settings))
+    out = jit.kernels("solvers._fast").ipm_answer(*map(tuple, ipm_arguments(qp, settings)))  # (plain: ._structs)
     n, it = qp.n, int(out.iterations)
     if out.code == _ipm.CROSSOVER:
         return compiled_answer(qp, out, stage="ipm")
@@ -89,7 +89,7 @@ def warm_calls():
     axis = np.array([0.0, 0.0, 1.0])
     cone = ConeData("j", np.ones((3, n)), np.zeros(3), axis, 30.0, perpendicular_basis(axis))
     qp = QPData(np.eye(n), np.zeros(n), 0.0, np.ones((1, n)), np.ones(1), np.zeros(n), np.ones(n), [cone])
-    return [(_fast.ipm_answer, ipm_arguments(qp))]
+    return [(_fast.ipm_answer, tuple(map(tuple, ipm_arguments(qp))))]  # (plain tuples: ._structs)
 
 
 jit.register("mcdm_pin.solvers", warm_calls)

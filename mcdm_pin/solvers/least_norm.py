@@ -185,7 +185,7 @@ def optimal_face_rows(qp, sol: Solution | None = None, settings: Settings = DEFA
     row normalised first, the threshold relative to the largest singular value of the whole, at
     least 1). On MyoSuite's arm (85 variables, ~60 of them in ``S``) that SVD is 4x25 instead of 8x85
     in flops' terms: most of the stage's cost."""
-    S, rest, Vt = _face(qp, sol, settings)[2:]
+    _, _, S, rest, Vt = _face(qp, sol, settings)[:5]
     E = np.zeros((len(S) + len(Vt), qp.n))
     E[np.arange(len(S)), S] = 1.0
     E[len(S):, rest] = Vt
@@ -194,11 +194,11 @@ def optimal_face_rows(qp, sol: Solution | None = None, settings: Settings = DEFA
 
 def _face(qp, sol: Solution | None, settings: Settings):
     """The optimal face through ``sol.x`` (its duals' strongly active set; ``sol`` ``None`` or without
-    duals: none) as ``(free, held, S, rest, Vt)``: the variables not strongly active at a bound, the
+    duals: none) as a :class:`._structs.Face`: the variables not strongly active at a bound, the
     cones strongly held, the coordinates ``S`` whose unit rows are among the face's rows, the others
-    ``rest``, and an orthonormal basis ``Vt`` (rows over ``rest``) of the other rows' parts there
-    (:func:`optimal_face_rows`). One compiled pass (:func:`._unique.face_setup`, with the strongly
-    active set of the compiled uniqueness test)."""
+    ``rest``, an orthonormal basis ``Vt`` (rows over ``rest``) of the other rows' parts there
+    (:func:`optimal_face_rows`), and :func:`stage2_problem`'s bounds and rows. One compiled pass
+    (:func:`._unique.face_setup`, with the strongly active set of the compiled uniqueness test)."""
     n, K = qp.n, len(qp.cones)
     c_ = np.ascontiguousarray
     # the objective's rows whose curvature is above 1e-12 of the largest: one below it changes the
@@ -214,8 +214,9 @@ def _face(qp, sol: Solution | None, settings: Settings):
     x = c_(sol.x, dtype=float) if sol is not None else np.zeros(n)
     z = c_(sol.z, dtype=float) if duals else np.zeros(n)  # (no duals: nothing strongly active)
     zc = c_(sol.z_cone, dtype=float).reshape(K, 3) if duals and K and sol.z_cone is not None else np.zeros((K, 3))
-    return jit.kernels("solvers._unique").face_setup(
-        x, z, zc, kernel_qp(qp), kernel_cones(qp), kernel_limits(settings, settings.polish_max_pivots),
+    return jit.kernels("solvers._unique").face_setup(  # (plain tuples at the boundary: solvers._structs)
+        x, z, zc, tuple(kernel_qp(qp)), tuple(kernel_cones(qp)),
+        tuple(kernel_limits(settings, settings.polish_max_pivots)),
         c_(F, dtype=float).reshape(-1, n), c_(d, dtype=float))
 
 
@@ -227,14 +228,20 @@ def stage2_problem(qp, sol: Solution, settings: Settings = DEFAULT):
     ``x*_i``: it becomes the bounds ``lb_i = ub_i = x*_i`` (a fixed variable, which every stage
     takes out of its linear systems), not an equation: on MyoSuite's arm 55 of the face's 84 rows
     are unit rows, and 55 of its 85 variables leave the active set's KKT system."""
-    n = qp.n
-    free, held, S, rest, Vt = _face(qp, sol, settings)
-    lb, ub = np.where(free, qp.lb, -np.inf), np.where(free, qp.ub, np.inf)  # (new arrays)
-    cones = [c for k, c in enumerate(qp.cones) if not held[k]] if held.any() else qp.cones
-    lb[S] = ub[S] = sol.x[S]
-    E = np.zeros((len(Vt), n))
-    E[:, rest] = Vt
-    return least_norm_problem(qp, A=E, b=E @ sol.x, lb=lb, ub=ub, cones=cones)
+    face = _face(qp, sol, settings)
+    held = face.held
+    if not held.any():
+        return least_norm_problem(qp, A=face.E, b=face.E @ sol.x, lb=face.lb, ub=face.ub)
+    keep = ~held
+    if not keep.any():  # (every cone held: the problem has none, whose arrays are made once per size)
+        return least_norm_problem(qp, A=face.E, b=face.E @ sol.x, lb=face.lb, ub=face.ub, cones=[])
+    # the cones not held, their stacked arrays and constants taken from the problem's (not stacked again)
+    names, angles, cosr, basis = qp.cone_consts()
+    return least_norm_problem(qp, A=face.E, b=face.E @ sol.x, lb=face.lb, ub=face.ub,
+                              cones=[c for k, c in enumerate(qp.cones) if keep[k]],
+                              cone_arrays=tuple(a[keep] for a in qp.cone_arrays()),
+                              cone_consts=(tuple(nm for k, nm in enumerate(names) if keep[k]), angles[keep],
+                                           cosr[keep], basis[keep]))
 
 
 def least_norm_problem(qp, **changes):
