@@ -11,8 +11,8 @@ Every field's type is fixed by what the library passes (C-ordered float64 arrays
 **At the boundary, plain tuples.** An entry point that Python calls at every instant takes its
 structures as plain tuples (``tuple(qp)``) and names them again in its first line
 (``qp = QP(*qp)``); the kernels it calls get the structures as before. numba's dispatcher types a
-plain tuple of arrays and numbers in C, but a namedtuple through its Python ``typeof``: 1.3-3.0 us
-more per call with a ``QP``, ``Cones`` and ``Limits`` (docs/speed.md, "Plain tuples at the
+plain tuple of arrays and numbers in C, but a namedtuple through its Python ``typeof``: 0.7-3.0 us
+more per call, 3.0 with a ``QP``, ``Cones`` and ``Limits`` (docs/speed.md, "Plain tuples at the
 kernels' boundary"). :func:`mcdm_pin.solvers._fast.answer_unique`, which Python calls rarely and
 the kernels often, keeps the named ones. The builders from a
 :class:`~mcdm_pin.problem.QPData` and a :class:`~mcdm_pin.settings.Settings` are
