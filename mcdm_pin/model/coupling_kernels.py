@@ -47,6 +47,7 @@ def coupling_basis(q, table, fvals, independent, nv):
     is its coupling's slope ``p'(x)`` times its source row's, in the column of its chain's root
     (none where the chain starts at a fixed coordinate: a zero row); the independent rows' ones in
     their own columns."""
+    table = CouplingTable(*table)  # (a plain tuple at the boundary: solvers._structs)
     n = independent.shape[0]
     value = np.ones(nv)
     N = np.zeros((nv, n))
@@ -65,9 +66,9 @@ def coupled_terms(q, table, fvals, independent, L, tau):
     """:func:`coupling_basis`'s ``N`` with ``L N`` and ``N^T tau`` (``L`` (m, nv), ``tau`` (nv,)): ``N``
     has one entry at most per row, so each product is a sum over the rows of ``L^T`` (``tau``) that
     land in a column, in the order of the couplings, instead of a dense product."""
-    table = CouplingTable(*table)  # (a plain tuple at the boundary: solvers._structs)
     nv = tau.shape[0]
-    N = coupling_basis(q, table, fvals, independent, nv)
+    N = coupling_basis(q, table, fvals, independent, nv)  # (the plain tuple, as Python passes it)
+    table = CouplingTable(*table)  # (a plain tuple at the boundary: solvers._structs)
     m, n = L.shape[0], independent.shape[0]
     LN = np.empty((m, n))
     Nt = np.empty(n)
@@ -125,7 +126,7 @@ def warm_calls():
     table = CouplingTable(z(1, dtype=i64), z(1, dtype=i64), z(1, dtype=i64), z(1, dtype=i64), z(1, dtype=i64),
                           z((1, 5)))
     fvals = np.full((1, 3), np.nan)
-    return [(coupling_basis, (z(2), table, fvals, z(1, dtype=i64), 2)),
+    return [(coupling_basis, (z(2), tuple(table), fvals, z(1, dtype=i64), 2)),
             (coupled_terms, (z(2), tuple(table), fvals, z(1, dtype=i64), z((1, 2)), z(2))),
             (coupling_violation, (z(2), z(2), z(2), tuple(table), fvals, 1e-9))]
 

@@ -176,7 +176,7 @@ class Couplings:
         taken in order: one compiled pass (:func:`mcdm_pin.model.coupling_kernels.coupling_basis`, compiled
         or not: mcdm_pin/jit.py)."""
         q = np.asarray(q, dtype=float)
-        return jit.kernels("model.coupling_kernels").coupling_basis(q, self._table, self._function_values(q),
+        return jit.kernels("model.coupling_kernels").coupling_basis(q, self._table_plain, self._function_values(q),
                                                                     self._independent64, int(self.nv))
 
     def project(self, q, L, tau):
