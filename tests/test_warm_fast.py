@@ -19,6 +19,7 @@ from mcdm_pin.problem import Context
 from mcdm_pin.settings import DEFAULT
 from mcdm_pin.solvers import _kkt, _kkt_linalg
 from mcdm_pin.solvers import least_norm as LN
+from mcdm_pin.solvers.check import project_to_bounds
 from mcdm_pin.trajectory import load_trajectory
 
 from .conftest import REPO
@@ -179,7 +180,7 @@ def test_the_least_norm_face_is_the_numpy_one(instants):
     for qp, _, sol, _ in instants:
         if sol.z is None or qp.strictly_convex():
             continue
-        free, held, S, rest, Vt, lb, ub, E = LN._face(qp, sol, DEFAULT)
+        free, held, S, rest, Vt, lb, ub, E = LN._face(qp, sol, DEFAULT)[:8]
         lb_ref, ub_ref = np.where(free, qp.lb, -np.inf), np.where(free, qp.ub, np.inf)
         lb_ref[S] = ub_ref[S] = sol.x[S]
         E_ref = np.zeros((len(Vt), qp.n))
@@ -210,6 +211,61 @@ def test_the_least_norm_face_is_the_numpy_one(instants):
         np.testing.assert_allclose(Vt @ Vt.T, np.eye(len(Vt)), atol=1e-12)
         np.testing.assert_allclose(ref @ Vt.T @ Vt, ref, atol=1e-9)  # the same space
     assert held_seen > 0  # the neck's case 3 holds cones
+
+
+def _face_frames(robot_file, traj, case, every=1):
+    """(qp, first-stage answer, face, the least-norm stage's chain) at the instants of ``traj`` whose
+    first-stage optimum is not proven unique (the least-norm stage's work)."""
+    jit.prepare(policy="wait")
+    robot = Robot.load(REPO / "robots" / robot_file)
+    tr = load_trajectory(robot, traj)
+    idp = InverseDynamics.for_case(robot, case)
+    stage = next(s for s in idp.solver.inner.stages if isinstance(s, LN.LeastNorm))
+    seen = []
+    run = stage.run
+
+    def spy(qp, sol, deadline):  # the first stage's answer as the least-norm stage receives it
+        if sol.unique is None and not (not sol.unique_tested and LN.is_unique(qp, sol, DEFAULT)):
+            seen.append((qp, sol, LN._face(qp, sol, DEFAULT), stage.inner))
+        return run(qp, sol, deadline)
+
+    stage.run = spy
+    f = None
+    for k in range(0, len(tr.t), every):
+        f = idp.solve(tr.q[k], tr.qd[k], tr.qdd[k], f_prev=f).f
+    return seen
+
+
+@pytest.mark.parametrize("robot_file, traj, case, expect", [("myosuite/myoarm.yaml", "abduction", 3, "all"),
+                                                            ("myosuite/myoelbow.yaml", "flexion", 2, "some"),
+                                                            ("human_arm.yaml", "abduct", 3, "none")])
+def test_the_faces_least_norm_point_is_the_least_norm_problems_answer(robot_file, traj, case, expect):
+    """Where no bound or cone limits the optimal face's least-norm point (``Face.direct``: MyoSuite's
+    arm, whose faces are lines, and most of the elbow's), the least-norm stage answers with it: it equals the
+    least-norm problem's optimum as the stage's chain solves it (with its bounds and cones) to
+    1e-12, keeps the bounds exactly and lies on the face (the same ``E x``, the pinned coordinates
+    unmoved). Where a bound binds it (the human arm's faces of dimension three), ``direct`` is
+    false and the chain answers, as before."""
+    frames = _face_frames(robot_file, traj, case, every=3)
+    assert frames
+    direct = 0
+    for qp, sol, face, inner in frames:
+        out = inner.solve(LN.stage2_problem(qp, sol, DEFAULT, face), hint=sol)
+        assert out.status == "optimal"
+        x_chain = project_to_bounds(qp, out, DEFAULT).x
+        if not face.direct:
+            continue
+        direct += 1
+        x = face.x
+        scale = max(np.abs(x_chain).max(), 1e-300)
+        assert np.abs(x - x_chain).max() <= 1e-12 * scale
+        assert np.all(x >= qp.lb) and np.all(x <= qp.ub)
+        np.testing.assert_array_equal(x[face.S], sol.x[face.S])
+        np.testing.assert_allclose(face.E @ x, face.E @ sol.x, rtol=0, atol=1e-12 * scale)
+        w = LN._norm_weight(qp)
+        assert w @ x**2 <= w @ sol.x**2 * (1 + 1e-12)  # no farther from the origin than the first stage's
+    assert direct == {"all": len(frames), "none": 0}.get(expect, direct)
+    assert expect != "some" or 0 < direct < len(frames)
 
 
 def test_the_least_norm_problem_keeps_the_cones_not_held_as_stacked_afresh(instants):

@@ -568,4 +568,4 @@ def warm_calls():
             (outside_bounds, (z(n), z(n), z(n))),
             (kkt_measures, (tq, tc, z(1), z(n), z(1), z(n), z((1, 3)), True, 1e-300)),
             (instant_outputs, (z((1, 6)), z((1, 6, n)), z((1, 3, 3)), z((1, 3)), z(n))),
-            (face_setup, (z(n), z(n), z((1, 3)), tq, tc, tl, z((1, n)), z(n)))]
+            (face_setup, (z(n), z(n), z((1, 3)), tq, tc, tl, z((1, n)), z(n), z(n)))]

@@ -178,12 +178,14 @@ def _reduced_hessian(P, free, nf, cv, cs, ncv):
 
 
 @njit(cache=True, nogil=True)
-def face_setup(x, z, zc, qp, cones, limits, F, d):
+def face_setup(x, z, zc, qp, cones, limits, F, d, w):
     """The least-norm stage's optimal face through ``x`` (:func:`mcdm_pin.solvers.least_norm.stage2_problem`)
     in one pass: the strongly active set of :func:`unique_test` (the duals ``z``, ``zc``; zero: none;
     thresholds ``limits.near``, ``unique_rel``), the rows :func:`face_rows` gathers over it (``P =
-    diag(d) + F^T F``) and an orthonormal basis of their parts on ``rest`` (:func:`_row_basis`), and
-    the least-norm problem's bounds and rows made from them. Returns a :class:`._structs.Face`."""
+    diag(d) + F^T F``) and an orthonormal basis of their parts on ``rest`` (:func:`_row_basis`), the
+    least-norm problem's bounds and rows made from them, and the least-norm point of the face where
+    no inequality limits it (:func:`_face_least_norm`, weights ``w``). Returns a
+    :class:`._structs.Face`."""
     qp, cones, limits = QP(*qp), Cones(*cones), Limits(*limits)  # (plain tuples at the boundary: ._structs)
     n = x.shape[0]
     thr = limits.unique_rel * _gradient_scale(x, qp.c, qp.H)
@@ -193,7 +195,7 @@ def face_setup(x, z, zc, qp, cones, limits, F, d):
         free[idx[a]] = True
     crow, nr, _, _, _, held = _held_cone_rows(cones.G, cones.gc, cones.ax, cones.tn, cones.cosr, zc, x, thr)
     S, rest, R = face_rows(F, d, qp.A, qp.c, np.ascontiguousarray(crow[:nr]), free)
-    Vt = _row_basis(R)
+    Vt, N = _row_basis(R)
     # the least-norm problem's bounds: a strongly active bound drops (the face holds it), x_i pins S
     lb, ub = np.empty(n), np.empty(n)
     for i in range(n):
@@ -205,18 +207,23 @@ def face_setup(x, z, zc, qp, cones, limits, F, d):
     for r in range(Vt.shape[0]):
         for a in range(rest.shape[0]):
             E[r, rest[a]] = Vt[r, a]
-    return Face(free, held, S, rest, Vt, lb, ub, E)
+    x_face, direct = _face_least_norm(x, w, rest, N, lb, ub, held)
+    return Face(free, held, S, rest, Vt, lb, ub, E, x_face, direct)
 
 
 @njit(cache=True, nogil=True)
 def _row_basis(R):
-    """An orthonormal basis of the rows of ``R``: its right singular vectors whose singular value
-    is above ``1e-10`` of the largest, or of 1 when the largest is smaller (rows of unit norm:
-    :func:`face_rows`)."""
+    """An orthonormal basis of the rows of ``R`` (its right singular vectors whose singular value
+    is above ``1e-10`` of the largest, or of 1 when the largest is smaller: rows of unit norm,
+    :func:`face_rows`), and one of their null space (the other right singular vectors): ``(Vt,
+    N)``, both over ``R``'s columns."""
     m = R.shape[1]
-    if R.shape[0] == 0 or m == 0:
-        return np.zeros((0, m))
-    _, sv, Vt = np.linalg.svd(R, full_matrices=False)
+    if m == 0:
+        return np.zeros((0, 0)), np.zeros((0, 0))
+    if R.shape[0] == 0:
+        return np.zeros((0, m)), np.eye(m)
+    # (every right singular vector: the thin SVD gives them all when the rows are at least the columns)
+    _, sv, Vt = np.linalg.svd(R, full_matrices=R.shape[0] < m)
     top = 1.0
     for i in range(sv.shape[0]):
         top = max(top, sv[i])
@@ -224,7 +231,48 @@ def _row_basis(R):
     for i in range(sv.shape[0]):  # (in decreasing order)
         if sv[i] > 1e-10 * top:
             r += 1
-    return np.ascontiguousarray(Vt[:r])
+    return np.ascontiguousarray(Vt[:r]), np.ascontiguousarray(Vt[r:])
+
+
+@njit(cache=True, nogil=True)
+def _face_least_norm(x, w, rest, N, lb, ub, held):
+    """The least-norm problem solved on the face itself where no inequality limits it: the point
+    ``x + N^T t`` (``N``'s rows placed on ``rest``; the face's free directions) that minimises
+    ``sum_i w_i x_i^2``, ``t`` from the normal equations ``(N W N^T) t = -N W x`` (``N`` has
+    orthonormal rows and ``w > 0``: positive definite). It answers the least-norm problem when every
+    cone is held (no cone inequality is left) and every bound of ``rest`` holds there: then the
+    bounds' multipliers are zero and ``W x`` is orthogonal to the face, the problem's KKT conditions.
+    Returns ``(x_face, answers)``; where it does not answer, the least-norm stage's chain solves the
+    problem with its bounds and cones."""
+    xf = x.copy()
+    for c in range(held.shape[0]):
+        if not held[c]:
+            return xf, False
+    k, m = N.shape
+    if k > 0:
+        H = np.zeros((k, k))
+        g = np.zeros(k)
+        for a in range(m):
+            i = rest[a]
+            for p in range(k):
+                wn = w[i] * N[p, a]
+                g[p] -= wn * x[i]
+                for q in range(p + 1):
+                    H[p, q] += wn * N[q, a]
+        for p in range(k):
+            for q in range(p):
+                H[q, p] = H[p, q]
+        t = np.linalg.solve(H, g)
+        for a in range(m):
+            s = 0.0
+            for p in range(k):
+                s += N[p, a] * t[p]
+            xf[rest[a]] += s
+    for a in range(m):
+        i = rest[a]
+        if not (lb[i] <= xf[i] <= ub[i]):
+            return xf, False
+    return xf, True
 
 
 @njit(cache=True, nogil=True)

@@ -18,6 +18,15 @@ row space (rank-revealed by an SVD; for ``P = diag(d) + F^T F`` the rows of ``F`
 ``d_i != 0``), picks the least-norm optimum: a strictly convex problem with one answer, solved by
 the same back-end's chain (``w``: ``QPData.norm_weight``, ones unless the problem was scaled).
 
+**On the face itself first.** The face's rows leave free directions ``N`` (orthonormal, over the
+coordinates not pinned: the right singular vectors the SVD above leaves out), and along them the
+least-norm point is ``x* + N^T t`` with ``(N W N^T) t = -N W x*``, one small solve. Where every cone
+on the face is held (no cone inequality is left) and that point keeps the bounds, it satisfies stage
+2's KKT conditions (the bounds' multipliers zero, ``W x`` orthogonal to the face) and is the answer;
+the chain runs only where a bound or a cone limits it (:func:`._unique._face_least_norm`). On
+MyoSuite's arm every face of optima is a line that no bound limits; on the human arm's ``abduct`` the
+faces have three dimensions and bounds bind, so the chain answers there.
+
 **A constant objective.** Where ``P = 0`` and ``c = 0`` (every joint's weights zero: case 2 on a robot
 without ball joints, as the CASPR import weighs them) every feasible point is optimal, and the least-norm
 optimum is the least-norm feasible point. :class:`FlatObjective`, the first stage of every chain,
@@ -217,18 +226,19 @@ def _face(qp, sol: Solution | None, settings: Settings):
     return jit.kernels("solvers._unique").face_setup(  # (plain tuples at the boundary: solvers._structs)
         x, z, zc, tuple(kernel_qp(qp)), tuple(kernel_cones(qp)),
         tuple(kernel_limits(settings, settings.polish_max_pivots)),
-        c_(F, dtype=float).reshape(-1, n), c_(d, dtype=float))
+        c_(F, dtype=float).reshape(-1, n), c_(d, dtype=float), _norm_weight(qp))
 
 
-def stage2_problem(qp, sol: Solution, settings: Settings = DEFAULT):
+def stage2_problem(qp, sol: Solution, settings: Settings = DEFAULT, face=None):
     """The least-norm problem over the optimal face of ``qp`` through ``sol.x`` (module docstring):
     every row constant on the face is an equation; the strongly active bounds and cones are among
     them (their inequalities are dropped: on the face they hold with equality, and an inequality
     without interior would stall an interior-point method). A unit row ``e_i`` pins ``x_i`` to
     ``x*_i``: it becomes the bounds ``lb_i = ub_i = x*_i`` (a fixed variable, which every stage
     takes out of its linear systems), not an equation: on MyoSuite's arm 55 of the face's 84 rows
-    are unit rows, and 55 of its 85 variables leave the active set's KKT system."""
-    face = _face(qp, sol, settings)
+    are unit rows, and 55 of its 85 variables leave the active set's KKT system. ``face``: the
+    :class:`._structs.Face` of :func:`_face` when made already."""
+    face = _face(qp, sol, settings) if face is None else face
     held = face.held
     if not held.any():
         return least_norm_problem(qp, A=face.E, b=face.E @ sol.x, lb=face.lb, ub=face.ub)
@@ -251,8 +261,12 @@ def least_norm_problem(qp, **changes):
     inverse (2^22 on CoGiRo's platform), on which the interior-point method ran into its iteration
     limit at a third of the instants."""
     n = qp.n
-    w = np.ones(n) if qp.norm_weight is None else qp.norm_weight / qp.norm_weight.max()
-    return qp.replace(P=None, P_diag=w, P_factor=np.zeros((0, n)), c=np.zeros(n), r=0.0, **changes)
+    return qp.replace(P=None, P_diag=_norm_weight(qp), P_factor=np.zeros((0, n)), c=np.zeros(n), r=0.0, **changes)
+
+
+def _norm_weight(qp) -> np.ndarray:
+    """The least-norm objective's weights ``w`` (:func:`least_norm_problem`)."""
+    return np.ones(qp.n) if qp.norm_weight is None else qp.norm_weight / qp.norm_weight.max()
 
 
 class FlatObjective(Stage):
@@ -305,7 +319,10 @@ class LeastNorm(Stage):
         s = self.settings
         if not sol.unique_tested and is_unique(qp, sol, s):  # (a compiled answer was tested: not proven)
             return sol.but(unique=True)
-        stage2 = stage2_problem(qp, sol, s)
+        face = _face(qp, sol, s)
+        if face.direct:  # no bound or cone limits the face's least-norm point: it is the answer
+            return self._answer(qp, sol, face.x, 1)
+        stage2 = stage2_problem(qp, sol, s, face)
         if sol.active is None:
             sol = sol.but(active=ActiveSet.from_duals(qp, sol, s.active_set_from_solution))
         out = self.inner.solve(stage2, hint=sol, deadline=deadline)
@@ -313,10 +330,13 @@ class LeastNorm(Stage):
             note = (f"least-norm stage failed ({out.status}: {out.message}); the answer is optimal but "
                     f"may not be the least-norm one")
             return sol.but(unique=False, message=f"{sol.message}; {note}" if sol.message else note)
-        x = project_to_bounds(qp, out, s).x
-        # stage 2's multipliers of the original rows are not those of the original problem: the
-        # first stage's duals stay (they certify x too: x lies on the same optimal face), and so does
-        # its active set, the next instant's guess for its first stage (a guess made again from the
-        # duals at x costs a pass over the bounds and cones and saves no KKT solve: docs/speed.md)
+        return self._answer(qp, sol, project_to_bounds(qp, out, s).x, out.iterations)
+
+    def _answer(self, qp, sol, x, iterations):
+        """``sol`` moved to the least-norm optimum ``x``, found in ``iterations`` linear solves. Stage 2's
+        multipliers of the original rows are not those of the original problem: the first stage's
+        duals stay (they certify ``x`` too: it lies on the same optimal face), and so does its active
+        set, the next instant's guess for its first stage (a guess made again from the duals at ``x``
+        costs a pass over the bounds and cones and saves no KKT solve: docs/speed.md)."""
         return sol.but(x=x, objective=qp.objective(x), unique=False, stage=f"{sol.stage}>{self.name}",
-                       iterations=sol.iterations + out.iterations, verified=False)
+                       iterations=sol.iterations + iterations, verified=False)
