@@ -7,6 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mcdm_pin import jit
+
 from mcdm_pin.solvers.base import OPTIMAL, Solution
 from mcdm_pin.solvers.least_norm import optimal_face_rows
 
@@ -70,3 +72,29 @@ def test_face_rows_of_a_dense_objective_span_its_range_and_the_equations(seed):
     np.testing.assert_allclose(E @ E.T, np.eye(len(E)), atol=1e-12)
     np.testing.assert_allclose(ref @ E.T @ E, ref, atol=1e-10)
     np.testing.assert_allclose(E @ ref.T @ ref, E, atol=1e-10)
+
+
+def test_the_faces_least_norm_point_solves_the_weighted_projection():
+    """``_face_least_norm``: ``x + N^T t`` with ``t`` minimising ``sum_i w_i x_i^2`` (the weighted
+    projection onto the face, checked by its normal equations); ``False`` where a bound of ``rest``
+    is broken there or a cone is not held; a face of one point (no free direction) is ``x``."""
+    kernel = jit.kernels("solvers._unique")._face_least_norm
+    rng = np.random.default_rng(3)
+    n, rest = 9, np.array([1, 2, 4, 5, 7])
+    x, w = rng.uniform(1.0, 5.0, n), rng.uniform(0.5, 2.0, n)
+    N = np.linalg.qr(rng.standard_normal((len(rest), 2)))[0].T.copy()  # two orthonormal directions
+    lb, ub = np.full(n, -np.inf), np.full(n, np.inf)
+    held = np.ones(1, dtype=np.bool_)
+    xf, direct = kernel(x, w, rest, N, lb, ub, held)
+    assert direct
+    d = xf - x
+    assert np.all(d[np.setdiff1d(np.arange(n), rest)] == 0.0)
+    t = np.linalg.lstsq(N.T, d[rest], rcond=None)[0]
+    np.testing.assert_allclose(N.T @ t, d[rest], atol=1e-12)  # a move along the face
+    np.testing.assert_allclose(N @ (w[rest] * xf[rest]), 0.0, atol=1e-12)  # the normal equations
+    lb2 = lb.copy()
+    lb2[rest[0]] = xf[rest[0]] + 1e-9  # a bound that the projection breaks
+    assert not kernel(x, w, rest, N, lb2, ub, held)[1]
+    assert not kernel(x, w, rest, N, lb, ub, np.array([True, False]))[1]  # a cone not held
+    xf0, direct0 = kernel(x, w, rest, np.zeros((0, len(rest))), lb, ub, held)
+    assert direct0 and np.array_equal(xf0, x)
