@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.optimize import nnls
 
 from mcdm_pin import jit
 
@@ -74,27 +75,73 @@ def test_face_rows_of_a_dense_objective_span_its_range_and_the_equations(seed):
     np.testing.assert_allclose(E @ ref.T @ ref, E, atol=1e-10)
 
 
-def test_the_faces_least_norm_point_solves_the_weighted_projection():
-    """``_face_least_norm``: ``x + N^T t`` with ``t`` minimising ``sum_i w_i x_i^2`` (the weighted
-    projection onto the face, checked by its normal equations); ``False`` where a bound of ``rest``
-    is broken there or a cone is not held; a face of one point (no free direction) is ``x``."""
-    kernel = jit.kernels("solvers._unique")._face_least_norm
-    rng = np.random.default_rng(3)
-    n, rest = 9, np.array([1, 2, 4, 5, 7])
-    x, w = rng.uniform(1.0, 5.0, n), rng.uniform(0.5, 2.0, n)
-    N = np.linalg.qr(rng.standard_normal((len(rest), 2)))[0].T.copy()  # two orthonormal directions
+def _random_face(rng, n=14):
+    """A face of ``k`` orthonormal directions over ``m`` of ``n`` coordinates, a point on it within its
+    bounds (some at them) and weights."""
+    m = int(rng.integers(3, 10))
+    k = int(rng.integers(1, min(4, m) + 1))
+    rest = np.sort(rng.choice(n, m, replace=False))
+    x, w = rng.uniform(0.5, 5.0, n), rng.uniform(0.2, 2.0, n)
+    N = np.linalg.qr(rng.standard_normal((m, k)))[0].T.copy()
     lb, ub = np.full(n, -np.inf), np.full(n, np.inf)
-    held = np.ones(1, dtype=np.bool_)
-    xf, direct = kernel(x, w, rest, N, lb, ub, held)
+    for i in rest:
+        if rng.uniform() < 0.7:
+            lb[i] = x[i] - rng.uniform(0.0, 1.0) * (rng.uniform() < 0.9)  # a tenth exactly at the bound
+        if rng.uniform() < 0.3:
+            ub[i] = x[i] + rng.uniform(0.0, 1.0)
+    return x, w, rest, N, lb, ub
+
+
+_NO_CONES = (np.zeros(0, dtype=np.bool_), np.zeros((0, 3, 14)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0))
+
+
+def test_the_faces_least_norm_point_is_optimal_among_its_bounds():
+    """``face_least_norm`` on 300 random faces (1-4 directions, 3-9 coordinates, some bounds binding,
+    some met exactly at the start): the point lies on the face (``x + N^T t``, the other coordinates
+    unmoved), keeps every bound, and satisfies the least-norm problem's KKT conditions: ``N W x``
+    (the gradient along the face) is a nonnegative combination of the binding bounds' normals
+    (``scipy.optimize.nnls``, residual 1e-10 of its size)."""
+    kernel = jit.kernels("solvers._face_qp").face_least_norm
+    rng = np.random.default_rng(1)
+    binding = 0
+    for _ in range(300):
+        x, w, rest, N, lb, ub = _random_face(rng)
+        xf, direct, steps = kernel(x, w, rest, N, lb, ub, *_NO_CONES)
+        assert direct and steps >= 1
+        others = np.setdiff1d(np.arange(len(x)), rest)
+        assert np.array_equal(xf[others], x[others])
+        t = np.linalg.lstsq(N.T, xf[rest] - x[rest], rcond=None)[0]
+        np.testing.assert_allclose(N.T @ t, xf[rest] - x[rest], atol=1e-12)
+        assert np.all(xf >= lb) and np.all(xf <= ub)
+        at_lb, at_ub = xf[rest] == lb[rest], xf[rest] == ub[rest]
+        C = np.hstack([N[:, at_lb], -N[:, at_ub]])  # the binding bounds' inward normals, over t
+        grad = N @ (w[rest] * xf[rest])
+        lam, res = nnls(C, grad) if C.shape[1] else (None, np.linalg.norm(grad))
+        assert res <= 1e-10 * max(np.linalg.norm(N @ (w[rest] * x[rest])), 1.0)
+        binding += int(C.shape[1] > 0)
+    assert binding > 150  # most faces have a bound that binds
+
+
+def test_the_faces_least_norm_point_answers_only_where_its_cones_hold():
+    """A cone not held on the face is an inequality the face's problem leaves out: the point
+    answers where it meets the cone, not where it breaks it; with no free direction the face is
+    its one point."""
+    kernel = jit.kernels("solvers._face_qp").face_least_norm
+    rng = np.random.default_rng(3)
+    x, w, rest, N, lb, ub = _random_face(rng)
+    lb[:] = -np.inf
+    ub[:] = np.inf
+    n = len(x)
+    xf, direct, _ = kernel(x, w, rest, N, lb, ub, *_NO_CONES)
     assert direct
-    d = xf - x
-    assert np.all(d[np.setdiff1d(np.arange(n), rest)] == 0.0)
-    t = np.linalg.lstsq(N.T, d[rest], rcond=None)[0]
-    np.testing.assert_allclose(N.T @ t, d[rest], atol=1e-12)  # a move along the face
-    np.testing.assert_allclose(N @ (w[rest] * xf[rest]), 0.0, atol=1e-12)  # the normal equations
-    lb2 = lb.copy()
-    lb2[rest[0]] = xf[rest[0]] + 1e-9  # a bound that the projection breaks
-    assert not kernel(x, w, rest, N, lb2, ub, held)[1]
-    assert not kernel(x, w, rest, N, lb, ub, np.array([True, False]))[1]  # a cone not held
-    xf0, direct0 = kernel(x, w, rest, np.zeros((0, len(rest))), lb, ub, held)
-    assert direct0 and np.array_equal(xf0, x)
+    G = np.zeros((1, 3, n))
+    G[0, 2, rest[0]] = np.sign(xf[rest[0]])  # the cone's axial force: |x_rest[0]| at the point; its side force: 0.1
+    gc, ax = np.array([[0.1, 0.0, 0.0]]), np.array([[0.0, 0.0, 1.0]])
+    not_held = np.zeros(1, dtype=np.bool_)
+    wide = np.array([0.2 / max(abs(xf[rest[0]]), 1e-9)])  # 0.1 <= tan * F_z at the point, with a margin of 2
+    assert kernel(x, w, rest, N, lb, ub, not_held, G, gc, ax, wide)[1]
+    assert not kernel(x, w, rest, N, lb, ub, not_held, G, gc, ax, 0.25 * wide)[1]
+    held = np.ones(1, dtype=np.bool_)  # held: its rows are the face's, not an inequality
+    assert kernel(x, w, rest, N, lb, ub, held, G, gc, ax, 0.25 * wide)[1]
+    xf0, direct0, steps0 = kernel(x, w, rest, np.zeros((0, len(rest))), lb, ub, *_NO_CONES)
+    assert direct0 and steps0 == 0 and np.array_equal(xf0, x)

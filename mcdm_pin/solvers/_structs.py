@@ -98,7 +98,7 @@ Tensions.__doc__ = """The muscles' state at an instant as the answer check reads
 ``passive`` part and ``gain`` per unit of activation, their ``a_min`` (k,), and the check's
 ``bound_abs`` (N); ``index`` empty: no muscles."""
 
-Face = namedtuple("Face", ["free", "held", "S", "rest", "Vt", "lb", "ub", "E", "x", "direct"])
+Face = namedtuple("Face", ["free", "held", "S", "rest", "Vt", "lb", "ub", "E", "x", "direct", "steps"])
 Face.__doc__ = """The optimal face through an answer, as :func:`mcdm_pin.solvers._unique.face_setup` gives it
 (:func:`mcdm_pin.solvers.least_norm.stage2_problem`): the variables not strongly active at a bound
 ``free`` (n,), the cones strongly held ``held`` (K,), the coordinates ``S`` whose unit rows are among
@@ -106,8 +106,9 @@ the face's rows and the others ``rest``, an orthonormal basis ``Vt`` (rows over 
 other rows' parts there; and the least-norm problem's bounds ``lb``, ``ub`` (n,: a free variable's
 own, infinite at a strongly active bound, ``x_i`` at both for ``i`` in ``S``) and equations' rows
 ``E`` (``Vt`` placed in the columns ``rest``); the least-norm point of the face ``x`` (n,) and
-whether it answers the least-norm problem, ``direct`` (no bound or cone limits it there:
-:func:`mcdm_pin.solvers._unique._face_least_norm`)."""
+whether it answers the least-norm problem, ``direct`` (the problem in the face's free directions,
+with its bounds, and every cone not held met there: :func:`mcdm_pin.solvers._face_qp.face_least_norm`),
+in ``steps`` KKT systems of the face's size."""
 
 KERNEL_STRUCTURES = (QP, Cones, Limits, Answer, ActiveSetRun, IPMRun, NewtonSystem, Scaling, Slacks, KKTMeasures, Face,
                      Tensions)

@@ -16,6 +16,7 @@ from ..jit import njit
 from ..model.kernels import gram_lower
 from ._ipm_linalg import dot
 from ._kkt_eq import cone_force
+from ._face_qp import face_least_norm
 from ._kkt_linalg import chol_lower
 from ._structs import QP, Cones, Face, Limits
 
@@ -183,8 +184,8 @@ def face_setup(x, z, zc, qp, cones, limits, F, d, w):
     in one pass: the strongly active set of :func:`unique_test` (the duals ``z``, ``zc``; zero: none;
     thresholds ``limits.near``, ``unique_rel``), the rows :func:`face_rows` gathers over it (``P =
     diag(d) + F^T F``) and an orthonormal basis of their parts on ``rest`` (:func:`_row_basis`), the
-    least-norm problem's bounds and rows made from them, and the least-norm point of the face where
-    no inequality limits it (:func:`_face_least_norm`, weights ``w``). Returns a
+    least-norm problem's bounds and rows made from them, and the least-norm point of the face in
+    its own coordinates (:func:`._face_qp.face_least_norm`, weights ``w``). Returns a
     :class:`._structs.Face`."""
     qp, cones, limits = QP(*qp), Cones(*cones), Limits(*limits)  # (plain tuples at the boundary: ._structs)
     n = x.shape[0]
@@ -207,8 +208,8 @@ def face_setup(x, z, zc, qp, cones, limits, F, d, w):
     for r in range(Vt.shape[0]):
         for a in range(rest.shape[0]):
             E[r, rest[a]] = Vt[r, a]
-    x_face, direct = _face_least_norm(x, w, rest, N, lb, ub, held)
-    return Face(free, held, S, rest, Vt, lb, ub, E, x_face, direct)
+    x_face, direct, steps = face_least_norm(x, w, rest, N, lb, ub, held, cones.G, cones.gc, cones.ax, cones.tn)
+    return Face(free, held, S, rest, Vt, lb, ub, E, x_face, direct, steps)
 
 
 @njit(cache=True, nogil=True)
@@ -232,47 +233,6 @@ def _row_basis(R):
         if sv[i] > 1e-10 * top:
             r += 1
     return np.ascontiguousarray(Vt[:r]), np.ascontiguousarray(Vt[r:])
-
-
-@njit(cache=True, nogil=True)
-def _face_least_norm(x, w, rest, N, lb, ub, held):
-    """The least-norm problem solved on the face itself where no inequality limits it: the point
-    ``x + N^T t`` (``N``'s rows placed on ``rest``; the face's free directions) that minimises
-    ``sum_i w_i x_i^2``, ``t`` from the normal equations ``(N W N^T) t = -N W x`` (``N`` has
-    orthonormal rows and ``w > 0``: positive definite). It answers the least-norm problem when every
-    cone is held (no cone inequality is left) and every bound of ``rest`` holds there: then the
-    bounds' multipliers are zero and ``W x`` is orthogonal to the face, the problem's KKT conditions.
-    Returns ``(x_face, answers)``; where it does not answer, the least-norm stage's chain solves the
-    problem with its bounds and cones."""
-    xf = x.copy()
-    for c in range(held.shape[0]):
-        if not held[c]:
-            return xf, False
-    k, m = N.shape
-    if k > 0:
-        H = np.zeros((k, k))
-        g = np.zeros(k)
-        for a in range(m):
-            i = rest[a]
-            for p in range(k):
-                wn = w[i] * N[p, a]
-                g[p] -= wn * x[i]
-                for q in range(p + 1):
-                    H[p, q] += wn * N[q, a]
-        for p in range(k):
-            for q in range(p):
-                H[q, p] = H[p, q]
-        t = np.linalg.solve(H, g)
-        for a in range(m):
-            s = 0.0
-            for p in range(k):
-                s += N[p, a] * t[p]
-            xf[rest[a]] += s
-    for a in range(m):
-        i = rest[a]
-        if not (lb[i] <= xf[i] <= ub[i]):
-            return xf, False
-    return xf, True
 
 
 @njit(cache=True, nogil=True)
