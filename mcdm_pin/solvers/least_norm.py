@@ -25,8 +25,8 @@ pinned, and the cones the face does not hold. Its bounds are solved by a ``k``-s
 (:mod:`._face_qp`); where the point also meets every cone not held, it is the answer (the least-norm
 point of a larger set that lies in the problem's own), and the chain runs only where a cone not held
 breaks there or the small method does not converge. Over the shipped robots' least-norm instants the
-chain now answers only the human arm's case 3 instants whose cone is not held and breaks along the
-face (69 of ``abduct``'s 151 and 11 of ``reach_forward``'s 151 have one not held).
+face answers every one (the human arm's ``abduct``, case 3, has its cone not held at 69 of 151, met
+along the face), and its point equals the chain's answer to 7.9e-15 of the largest force.
 
 **A constant objective.** Where ``P = 0`` and ``c = 0`` (every joint's weights zero: case 2 on a robot
 without ball joints, as the CASPR import weighs them) every feasible point is optimal, and the least-norm
