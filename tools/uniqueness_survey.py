@@ -15,6 +15,10 @@ whose objective is not strictly convex (case 1 is always unique), one of:
 
 The library decides with the two factors alone; ``exact only`` counts what that leaves to the
 least-norm stage (which returns the optimum itself where the optimum is unique).
+
+Two more columns count how the least-norm stage answered, per instant it worked on: ``on the face``
+(the face's own least-norm point, :mod:`mcdm_pin.solvers._face_qp`) and ``by the chain`` (a cone
+not held broke there, or the small method did not converge).
 """
 
 from __future__ import annotations
@@ -64,6 +68,7 @@ def main(argv=None) -> int:
 
     from mcdm_pin import jit
     from mcdm_pin.solvers import active_set, ipm
+    from mcdm_pin.solvers import least_norm as LN
 
     jit.prepare(policy="wait")
     tally: collections.Counter = collections.Counter()
@@ -77,10 +82,18 @@ def main(argv=None) -> int:
         return sol
 
     active_set.compiled_answer = ipm.compiled_answer = spy
+    face = LN._face
+
+    def face_spy(*args):  # every face the least-norm stage works on, and whether it answers there
+        out = face(*args)
+        tally[(current["label"], "on the face" if out.direct else "by the chain")] += 1
+        return out
+
+    LN._face = face_spy
     for label, ident, traj in robot_runs(args.robots, args.cases, args.trajectories):
         current.update(label=label, settings=ident.settings)
         ident.solve_trajectory(traj, progress=False)
-    kinds = ("vertex", "factor", "exact only", "face")
+    kinds = ("vertex", "factor", "exact only", "face", "on the face", "by the chain")
     print("| robot, trajectory, case | " + " | ".join(kinds) + " |")
     print("|---|" + "---|" * len(kinds))
     for run in sorted({r for r, _ in tally}):
