@@ -231,7 +231,10 @@ def compiled_answer(qp: QPData, out, **fields) -> Solution:
     ``iterations`` the answer's; ``fields``: more of the solution's fields (``stage``)."""
     names = qp.cone_consts()[0]
     held, dirs = out.held, out.dirs
-    nxt_cones = {names[k]: (dirs[k], float(out.mus[k])) for k in np.flatnonzero(held)} if np.count_nonzero(held) else {}
+    nxt_cones = {}
+    for k, h in enumerate(held.tolist()):  # (a plain loop over the few cones: no numpy index search per answer)
+        if h:
+            nxt_cones[names[k]] = (dirs[k], float(out.mus[k]))
     return Solution(out.x, OPTIMAL, float(out.objective), y=out.y, z=out.z, z_cone=out.z_cone,
                     active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, out.next_state, (names, held, dirs),
                                      (out.x, out.mus)),
