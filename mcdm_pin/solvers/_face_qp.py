@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..jit import njit
+from ._ipm_linalg import inf_norm
 from ._kkt_eq import cone_force
 from ._kkt_linalg import lu_apply, lu_factor
 
@@ -106,15 +107,6 @@ def _within_bounds(x, rest, lb, ub):
 
 
 @njit(cache=True, nogil=True)
-def _norm(p):
-    """``max |p_i|``."""
-    out = 0.0
-    for q in range(p.shape[0]):
-        out = max(out, abs(p[q]))
-    return out
-
-
-@njit(cache=True, nogil=True)
 def _active_set(H, g, N, rows, sign, d, max_steps):
     """``min 1/2 t^T H t + g^T t`` subject to ``sign_j N[:, rows_j]^T t >= d_j`` from ``t = 0`` (feasible:
     every ``d_j <= 0``) by the primal active-set method. Returns ``(t, held, n_held, ok, steps)``: the
@@ -144,7 +136,7 @@ def _active_set(H, g, N, rows, sign, d, max_steps):
                 ct += N[q, rows[j]] * t[q]
             cp *= sign[j]
             ct *= sign[j]
-            if cp < -1e-14 * _norm(p):  # (a step along the row's surface, to rounding, crosses nothing)
+            if cp < -1e-14 * inf_norm(p):  # (a step along the row's surface, to rounding, crosses nothing)
                 a = max((d[j] - ct) / cp, 0.0)
                 if a < alpha:
                     alpha, block = a, j
@@ -157,11 +149,7 @@ def _active_set(H, g, N, rows, sign, d, max_steps):
             continue
         # a minimiser of the rows held: done when no multiplier is negative, else the most negative leaves
         worst, at = 0.0, -1
-        scale = 0.0
-        for h in range(n_held):
-            scale = max(scale, abs(lam[h]))
-        for q in range(k):
-            scale = max(scale, abs(g[q]))
+        scale = max(inf_norm(lam), inf_norm(g))  # (lam: the n_held rows' multipliers)
         for h in range(n_held):
             if lam[h] < worst and lam[h] < -1e-12 * scale:
                 worst, at = lam[h], h

@@ -1,7 +1,7 @@
 r"""Small dense kernels of the compiled interior-point method (:mod:`._ipm`, :mod:`._ipm_structure`,
 :mod:`._ipm_newton`), also used by the active-set kernels: vectorised dot products and updates, the
 Cholesky factor that drops dependent equations' pivots (:func:`chol_inplace`) and its solves, the
-products with a block of rows, and 3 x 3 inverses.
+products with a block of rows, 3 x 3 inverses and the largest magnitude of a vector.
 
 Kernels call them with typed integers (``np.int64(0)``) and contiguous arrays, not literals or
 slices: numba compiles a kernel once per argument type, and a literal ``0`` or an ``A``-ordered
@@ -14,6 +14,15 @@ from ..jit import njit
 
 
 _FM = {"reassoc", "contract"}  # reassociation lets numba vectorise the dot products; no NaN/inf flags
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def inf_norm(v):
+    """``max |v_i|`` (0 for an empty ``v``)."""
+    m = 0.0
+    for i in range(v.shape[0]):
+        m = max(m, abs(v[i]))
+    return m
 
 
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
