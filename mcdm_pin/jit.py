@@ -98,7 +98,8 @@ except ImportError:
 
 MODULES = ("mcdm_pin.model.kernels", "mcdm_pin.model.coupling_kernels", "mcdm_pin.model.route_kernels",
            "mcdm_pin.model.scale_kernels", "mcdm_pin.model.muscle_kernels", "mcdm_pin.model.bezier_kernels",
-           "mcdm_pin.osim.loop_kernels", "mcdm_pin.solvers.ipm")  # modules that register kernels
+           "mcdm_pin.model.actuated_kernels", "mcdm_pin.osim.loop_kernels",
+           "mcdm_pin.solvers.ipm")  # modules that register kernels
 POLICIES = ("auto", "compile", "wait", "off")
 STAMP = "mcdm_pin_kernels.stamp"  # the stamp's file name, in the kernels' cache folder
 LOCK = "mcdm_pin_kernels.lock"  # the compile lock's file name, beside the stamp

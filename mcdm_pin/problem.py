@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import jit
 from .constraints import (CableForceBounds, Constraint, EquationOfMotion, InteractionCone,
                           constraint_from_spec)
 from .constraints.cone import ConeBatch
@@ -31,6 +32,9 @@ from .exceptions import ProblemError
 from .objectives import MinActivations, MinCableForces, MinInteractions, Objective, Smoothing, Sum, objective_from_spec
 from .qp import ConeData, QPData
 from .vocabulary import CASES
+
+_NO_F = np.zeros(0)
+_NO_P = np.zeros((0, 0))
 
 
 @dataclass
@@ -199,8 +203,8 @@ class _Actuation:
         acts = tuple(getattr(robot, "actuators", ()) or ())
         if not acts:
             return None
-        lo = np.concatenate([a.tau_min for a in acts])
-        hi = np.concatenate([a.tau_max for a in acts])
+        lo = np.concatenate([a.tau_min for a in acts]).astype(float)
+        hi = np.concatenate([a.tau_max for a in acts]).astype(float)
         w = np.concatenate([np.full(len(a.idx_v), float(a.weight)) for a in acts])
         # w |tau|^2 = 1/2 tau (2 w) tau: the Hessian's diagonal is 2 w (case 1's f^T f has 2 I)
         return cls(robot.actuation, lo, hi, 2.0 * w)
@@ -217,36 +221,29 @@ class _Actuation:
         force, that force's share of the torques (``terms.RT_act``); the actuators' bounds and
         ``w |tau|^2`` are added. What ``qp`` has formed already (its dense Hessian, its cones' stacked
         arrays and constants) is padded, not formed again from the structure."""
-        m, k = qp.n, self.n
-        n = m + k
-        A = np.zeros((qp.A.shape[0], n))
-        A[:, :m] = qp.A
-        if eom:
-            A[:nv, m:] = -self.rows(terms)
-        RT_act = getattr(terms, "RT_act", None)
+        c_ = np.ascontiguousarray
+        m = qp.n
         G0, g, axis, tan, basis0 = qp.cone_arrays()
-        G = np.zeros((len(g), 3, n))
-        G[:, :, :m] = G0
+        # the dense Hessian the objective gave (a compiled Gram product) is padded too: forming it
+        # again from the padded factor would cost a dense (rows, n) x (n, n) product
+        dense = qp._P is not None or not qp.structured
+        structured = qp.structured
+        S = self.rows(terms)
+        out = jit.kernels("model.actuated_kernels").actuated_arrays(
+            c_(qp.A, dtype=float), c_(S, dtype=float), nv if eom else 0, c_(G0, dtype=float),
+            c_(qp.P, dtype=float) if dense else _NO_P, dense, c_(qp.P_diag, dtype=float) if structured else _NO_F,
+            c_(qp.P_factor, dtype=float).reshape(-1, m) if structured else _NO_P, structured, c_(qp.c, dtype=float),
+            c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), self.lo, self.hi, self.weight,
+            _NO_F if qp.norm_weight is None else c_(qp.norm_weight, dtype=float))
+        G = out.G
+        RT_act = getattr(terms, "RT_act", None)
         if RT_act is not None:
             for i, c in enumerate(qp.cones):
                 G[i, :, m:] = self._cone_block(c, terms, RT_act, cone_frames)
         cones = [ConeData(c.joint, G[i], c.g, c.axis, c.angle_deg, c.basis) for i, c in enumerate(qp.cones)]
-        P = None
-        if qp._P is not None or not qp.structured:
-            # the dense Hessian the objective gave (a compiled Gram product), padded: forming it
-            # again from the padded factor would cost a dense (rows, n) x (n, n) product
-            P = np.zeros((n, n))
-            P[:m, :m] = qp.P
-            P.flat[m * (n + 1):: n + 1] = self.weight
-        P_diag = P_factor = None
-        if qp.structured:
-            P_diag = np.concatenate([qp.P_diag, self.weight])
-            P_factor = np.zeros((qp.P_factor.shape[0], n))
-            P_factor[:, :m] = qp.P_factor
-        norm_weight = None if qp.norm_weight is None else np.concatenate([qp.norm_weight, np.ones(k)])
-        return QPData(P, np.concatenate([qp.c, np.zeros(k)]), qp.r, A, qp.b,
-                      np.concatenate([qp.lb, self.lo]), np.concatenate([qp.ub, self.hi]), cones,
-                      P_diag=P_diag, P_factor=P_factor, norm_weight=norm_weight,
+        return QPData(out.P if dense else None, out.c, qp.r, out.A, qp.b, out.lb, out.ub, cones,
+                      P_diag=out.P_diag if structured else None, P_factor=out.P_factor if structured else None,
+                      norm_weight=None if qp.norm_weight is None else out.norm_weight,
                       cone_arrays=(G, g, axis, tan, basis0), cone_consts=qp.cone_consts())
 
     def _cone_block(self, cone, terms, RT_act, cone_frames) -> np.ndarray:

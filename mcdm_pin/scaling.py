@@ -225,15 +225,16 @@ def _scaled_copy(qp: QPData, out, obj: float) -> QPData:
                   cone_consts=qp.cone_consts())
 
 
-def scale_problem(qp: QPData, f_scale: np.ndarray | None = None, force: bool = False):
+def scale_problem(qp: QPData, f_scale: np.ndarray | None = None, force: bool = False, quick: bool = True):
     """``(scaled QPData, Scaling)``, or ``(qp, None)`` when no scaling is needed: the factors and the
     scaled copy in one compiled call (:func:`mcdm_pin.model.scale_kernels.scale_instant`), after the
-    one-pass test that a well-scaled instant needs none (its usual answer)."""
+    one-pass test that a well-scaled instant needs none (its usual answer; ``quick=False`` skips
+    it, for an instant that likely needs scaling: the factors then say "none" where it would)."""
     if not jit.ready():  # (a test's numpy references)
         s = scaling_factors(qp, f_scale, force)
         return (qp, None) if s is None else (apply_scaling(qp, s), s)
     A, b, lb, ub, c, P, P_diag, P_factor, structured, G, g, fs = _factor_arrays(qp, f_scale)
-    if structured and not force and f_scale is None and not jit.kernels("model.kernels").needs_scaling(
+    if quick and structured and not force and f_scale is None and not jit.kernels("model.kernels").needs_scaling(
             A, b, lb, ub, P_diag, P_factor, c, G, g, float(SPREAD)):
         return qp, None
     c_ = np.ascontiguousarray
@@ -258,18 +259,23 @@ class ScaledSolver(Solver):
     def __init__(self, inner: Solver):
         self.inner = inner
         self.name = inner.name
+        # whether the last instant was scaled: along a trajectory the next one usually is too, and
+        # then the one-pass test for a well-scaled instant (scale_problem's ``quick``) is skipped
+        self._scaled_last = False
 
     def fresh(self) -> "ScaledSolver":
         return ScaledSolver(self.inner.fresh())
 
     def reset(self) -> None:
         self.inner.reset()
+        self._scaled_last = False
 
     def needs_scaling(self, qp: QPData) -> bool:
         return scale_problem(qp)[1] is not None
 
     def solve(self, qp: QPData) -> Solution:
-        scaled, scaling = scale_problem(qp)
+        scaled, scaling = scale_problem(qp, quick=not self._scaled_last)
+        self._scaled_last = scaling is not None
         sol = self.inner.solve(scaled)
         if scaling is None:
             return sol

@@ -223,3 +223,106 @@ def test_activations_in_the_answer_check_equal_the_formula():
         assert np.isnan(compiled[np.setdiff1d(np.arange(m), index)]).all()
     none = _tensions(SimpleNamespace(muscles=None), None, bound)
     assert _fast.activations(none, np.ones(3), 3).shape == (0,)
+
+
+def _padded_reference(act, qp, eom, nv, terms, cone_frames):
+    """The actuated problem's arrays as numpy pads them (``[f; tau_act]``: ``-S`` beside the equation
+    of motion, zero blocks, the actuators' bounds and weights)."""
+    m, k = qp.n, act.n
+    n = m + k
+    A = np.zeros((qp.A.shape[0], n))
+    A[:, :m] = qp.A
+    if eom:
+        A[:nv, m:] = -act.rows(terms)
+    G0 = qp.cone_arrays()[0]
+    G = np.zeros((len(G0), 3, n))
+    G[:, :, :m] = G0
+    RT_act = getattr(terms, "RT_act", None)
+    if RT_act is not None:
+        for i, c in enumerate(qp.cones):
+            G[i, :, m:] = act._cone_block(c, terms, RT_act, cone_frames)
+    out = dict(A=A, G=G, c=np.concatenate([qp.c, np.zeros(k)]), lb=np.concatenate([qp.lb, act.lo]),
+               ub=np.concatenate([qp.ub, act.hi]))
+    if qp._P is not None or not qp.structured:
+        P = np.zeros((n, n))
+        P[:m, :m] = qp.P
+        P.flat[m * (n + 1):: n + 1] = act.weight
+        out["P"] = P
+    if qp.structured:
+        out["P_diag"] = np.concatenate([qp.P_diag, act.weight])
+        F = np.zeros((qp.P_factor.shape[0], n))
+        F[:, :m] = qp.P_factor
+        out["P_factor"] = F
+    if qp.norm_weight is not None:
+        out["norm_weight"] = np.concatenate([qp.norm_weight, np.ones(k)])
+    return out
+
+
+def _hybrid(name):
+    """``(robot, trajectory, problem)`` of a robot with actuators beside its muscles."""
+    from mcdm_pin import Robot, load_trajectory
+    from mcdm_pin.problem import case_problem
+
+    from .conftest import REPO
+
+    if name.startswith("myoarm"):
+        arm = Robot.load(REPO / "robots" / "myosuite" / "myoarm.yaml")
+        return arm, load_trajectory(arm, "abduction"), case_problem(arm, int(name[-1]))
+    from mcdm_pin.osim.motion import read_table
+    from mcdm_pin.osim.rmr import RATE, frame_rows, frame_states, rmr_problem, rmr_robot
+    from mcdm_pin.trajectory import Trajectory
+
+    shoulder = rmr_robot("abd01")
+    files = tuple(REPO / "robots" / "opensim" / "motions" / "abd01" / f"Kinematics_{k}.sto" for k in ("q", "u", "dudt"))
+    rows = frame_rows(files)
+    rows = rows[np.isin(np.round(rows / RATE, 9), np.round(read_table(files[0]).time, 9))][:3]
+    q, v, a = frame_states(shoulder, files, rows)
+    return shoulder, Trajectory(name="abd01", t=rows / RATE, q=q, qd=v, qdd=a), rmr_problem(shoulder, True)
+
+
+@pytest.mark.parametrize("name", ["myoarm case 1", "myoarm case 3", "rmr"])
+def test_the_actuated_problem_is_padded_to_the_bit_compiled_and_not(monkeypatch, tmp_path, name):
+    """:meth:`mcdm_pin.problem._Actuation.extend` (one compiled pass,
+    :func:`mcdm_pin.model.actuated_kernels.actuated_arrays`) gives numpy's padding bit for bit (signs
+    of zero included), compiled and not: MyoSuite's arm with the activations' objective (case 1)
+    and with the interaction objective and its cone (case 3), RMR's shoulder
+    (its problem with the glenohumeral cone) with its closed loop's share of the actuator torques in
+    the cone (``RT_act``)."""
+    from mcdm_pin import InverseDynamics
+    from mcdm_pin.problem import Context
+
+    monkeypatch.chdir(tmp_path)
+    robot, traj, problem = _hybrid(name)
+    ident = InverseDynamics(robot, problem)
+    problem, act = ident.problem, ident.problem.actuation
+    assert act is not None
+    jit.prepare(policy="wait")
+    for k in (0, len(traj) // 2):
+        q, qd, qdd = traj.q[k], traj.qd[k], traj.qdd[k]
+        terms = ident.evaluate(robot.check_configuration(q), qd, qdd, checked=True)
+        monkeypatch.setattr(problem, "actuation", None)
+        qp = problem.assemble(terms, Context(robot, None))
+        monkeypatch.setattr(problem, "actuation", act)
+        plan = problem._plan
+        args = (qp, plan["eom"], terms.L.shape[1], terms, plan["cone_frames"])
+        fast = act.extend(*args)
+        with monkeypatch.context() as mp:
+            _uncompiled(mp)
+            slow = act.extend(*args)
+        ref = _padded_reference(act, *args)
+        assert (getattr(terms, "RT_act", None) is not None) == (name == "rmr")
+        for out in (fast, slow):
+            got = dict(A=out.A, G=out.cone_arrays()[0], c=out.c, lb=out.lb, ub=out.ub)
+            if "P" in ref:
+                got["P"] = out._P
+            if qp.structured:
+                got["P_diag"], got["P_factor"] = out.P_diag, out.P_factor
+            if qp.norm_weight is not None:
+                got["norm_weight"] = out.norm_weight
+            assert set(got) == set(ref) and (out._P is None) == ("P" not in ref)
+            for key, want in ref.items():
+                np.testing.assert_array_equal(got[key], want, err_msg=key)
+                np.testing.assert_array_equal(np.signbit(got[key]), np.signbit(want), err_msg=key)
+            for i, cone in enumerate(out.cones):
+                np.testing.assert_array_equal(cone.G, ref["G"][i])
+            assert out.b is qp.b and out.r == qp.r
