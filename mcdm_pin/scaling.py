@@ -228,8 +228,9 @@ def _scaled_copy(qp: QPData, out, obj: float) -> QPData:
 def scale_problem(qp: QPData, f_scale: np.ndarray | None = None, force: bool = False, quick: bool = True):
     """``(scaled QPData, Scaling)``, or ``(qp, None)`` when no scaling is needed: the factors and the
     scaled copy in one compiled call (:func:`mcdm_pin.model.scale_kernels.scale_instant`), after the
-    one-pass test that a well-scaled instant needs none (its usual answer; ``quick=False`` skips
-    it, for an instant that likely needs scaling: the factors then say "none" where it would)."""
+    one-pass test that a well-scaled instant needs none (its usual answer; ``quick=False`` leaves
+    it to the compiled call, which makes it too: one call fewer for an instant that likely needs
+    scaling, the same factors)."""
     if not jit.ready():  # (a test's numpy references)
         s = scaling_factors(qp, f_scale, force)
         return (qp, None) if s is None else (apply_scaling(qp, s), s)
@@ -260,7 +261,8 @@ class ScaledSolver(Solver):
         self.inner = inner
         self.name = inner.name
         # whether the last instant was scaled: along a trajectory the next one usually is too, and
-        # then the one-pass test for a well-scaled instant (scale_problem's ``quick``) is skipped
+        # then the one-pass test for a well-scaled instant is left to the compiled call that
+        # scales (scale_problem's ``quick``: one call fewer, the same factors)
         self._scaled_last = False
 
     def fresh(self) -> "ScaledSolver":

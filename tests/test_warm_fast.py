@@ -115,8 +115,9 @@ def test_one_call_scaling_is_the_factors_and_the_copy_to_the_bit(instants):
     for qp, _, _, _ in instants:
         dense = qp.replace(P=qp.P, P_diag=None, P_factor=None)
         for p in (qp, dense, qp.replace(A=qp.A * 1e5, b=qp.b * 1e5), qp.replace(lb=qp.lb + 1e4, ub=qp.ub + 1e5)):
-            for f_scale, force in ((None, False), (None, True), (np.full(p.n, 8.0), False)):
-                out, s = SC.scale_problem(p, f_scale, force)
+            for f_scale, force, quick in ((None, False, True), (None, True, True), (np.full(p.n, 8.0), False, True),
+                                          (None, False, False)):
+                out, s = SC.scale_problem(p, f_scale, force, quick)
                 ref = SC.scaling_factors(p, f_scale, force)
                 assert (s is None) == (ref is None)
                 scaled_seen.add(s is not None)
@@ -135,6 +136,26 @@ def test_one_call_scaling_is_the_factors_and_the_copy_to_the_bit(instants):
                 np.testing.assert_array_equal(out.cone_arrays()[0], copy.cone_arrays()[0])
                 np.testing.assert_array_equal(out.cone_arrays()[1], copy.cone_arrays()[1])
     assert scaled_seen == {True, False}
+
+
+def test_the_one_pass_test_left_to_the_compiled_call_decides_alike():
+    """``scale_problem(.., quick=False)`` (what the scaled solver does after a scaled instant) leaves
+    the one-pass test for a well-scaled instant to the compiled call, which decides as the test
+    before it would: also where the test says "none" although the objective's size at the bounds
+    (``ub = 0.01``: ``2 * 0.01^2``) alone would have the factors scale it."""
+    from mcdm_pin.qp import QPData
+
+    n = 4
+    A = np.array([[1.0, 0.5, 0.0, 0.25], [0.0, 1.0, 1.0, 0.5]])
+    qp = QPData(None, np.zeros(n), 0.0, A, np.array([0.005, 0.004]), np.zeros(n), np.full(n, 0.01), [],
+                P_diag=np.full(n, 2.0), P_factor=np.zeros((0, n)))
+    assert SC.scale_problem(qp) == (qp, None)
+    assert SC.scale_problem(qp, quick=False) == (qp, None)
+    assert SC.scale_problem(qp, force=True)[1].obj != 1.0  # (the factors alone scale the objective)
+    bad = qp.replace(A=A * 1e6, b=qp.b * 1e6)
+    (one, s1), (two, s2) = SC.scale_problem(bad), SC.scale_problem(bad, quick=False)
+    for a, b in ((s1.d, s2.d), (s1.r, s2.r), (s1.obj, s2.obj), (one.A, two.A), (one.b, two.b), (one.P_diag, two.P_diag)):
+        np.testing.assert_array_equal(a, b)
 
 
 def test_unscaled_answer_is_the_factors_products(instants):

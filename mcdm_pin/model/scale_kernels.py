@@ -17,7 +17,7 @@ import numpy as np
 
 from ..jit import njit
 from .kernel_structs import ScaledInstant, ScaledQP, Unscaled
-from .kernels import factors
+from .kernels import scale_factors
 
 
 @njit(cache=True, nogil=True)
@@ -71,17 +71,19 @@ def scale_qp(c, A, b, lb, ub, P, P_diag, P_factor, G0, g0, norm_weight, d, r, ob
 @njit(cache=True, nogil=True)
 def scale_instant(A, b, lb, ub, c, P, P_diag, P_factor, structured, G, g, f_scale, norm_weight, force, limit):
     """:func:`mcdm_pin.scaling.scale_problem` in one call: the factors
-    (:func:`~mcdm_pin.model.kernels.factors`: the caller has made the quick test for the well-scaled
-    instant where it applies) and, where they scale, the scaled arrays (:func:`scale_qp`). ``P``
-    (n, n) the dense Hessian or (0, 0); ``P_diag`` (n,) or empty; ``P_factor`` (rows, n) (no rows:
-    none); ``structured``: ``P = diag(P_diag) + P_factor^T P_factor``. Returns
+    (:func:`~mcdm_pin.model.kernels.scale_factors`, with its one-pass test for the well-scaled
+    instant where it applies: the caller may have made it already, or skip it along a trajectory
+    that is being scaled) and, where they scale, the scaled arrays (:func:`scale_qp`). ``P`` (n, n)
+    the dense Hessian or (0, 0); ``P_diag`` (n,) or empty; ``P_factor`` (rows, n) (no rows: none);
+    ``structured``: ``P = diag(P_diag) + P_factor^T P_factor``. Returns
     :class:`~mcdm_pin.model.kernel_structs.ScaledInstant`."""
     n = A.shape[1]
     if structured:
-        scaled, d, r, obj, cone = factors(A, b, lb, ub, c, P, P_diag, P_factor, G, g, f_scale, force, limit)
+        scaled, d, r, obj, cone = scale_factors(A, b, lb, ub, c, P, P_diag, P_factor, True, G, g, f_scale, force,
+                                                limit)
     else:  # (the factors read no structure then)
-        scaled, d, r, obj, cone = factors(A, b, lb, ub, c, P, np.zeros(n), np.zeros((0, n)), G, g, f_scale, force,
-                                          limit)
+        scaled, d, r, obj, cone = scale_factors(A, b, lb, ub, c, P, np.zeros(n), np.zeros((0, n)), False, G, g,
+                                                f_scale, force, limit)
     if not scaled:
         e = np.empty(0)
         e2 = np.empty((0, 0))
