@@ -228,13 +228,14 @@ class _Actuation:
         # again from the padded factor would cost a dense (rows, n) x (n, n) product
         dense = qp._P is not None or not qp.structured
         structured = qp.structured
-        S = self.rows(terms)
-        out = jit.kernels("model.actuated_kernels").actuated_arrays(
-            c_(qp.A, dtype=float), c_(S, dtype=float), nv if eom else 0, c_(G0, dtype=float),
-            c_(qp.P, dtype=float) if dense else _NO_P, dense, c_(qp.P_diag, dtype=float) if structured else _NO_F,
-            c_(qp.P_factor, dtype=float).reshape(-1, m) if structured else _NO_P, structured, c_(qp.c, dtype=float),
-            c_(qp.lb, dtype=float), c_(qp.ub, dtype=float), self.lo, self.hi, self.weight,
-            _NO_F if qp.norm_weight is None else c_(qp.norm_weight, dtype=float))
+        cables = (c_(qp.A, dtype=float), c_(G0, dtype=float), c_(qp.P, dtype=float) if dense else _NO_P,
+                  c_(qp.P_diag, dtype=float) if structured else _NO_F,
+                  c_(qp.P_factor, dtype=float).reshape(-1, m) if structured else _NO_P, c_(qp.c, dtype=float),
+                  c_(qp.lb, dtype=float), c_(qp.ub, dtype=float),
+                  _NO_F if qp.norm_weight is None else c_(qp.norm_weight, dtype=float))
+        actuators = (c_(self.rows(terms), dtype=float), nv if eom else 0, self.lo, self.hi, self.weight)
+        # (plain tuples at the kernel's boundary: solvers._structs)
+        out = jit.kernels("model.actuated_kernels").actuated_arrays(cables, dense, structured, actuators)
         G = out.G
         RT_act = getattr(terms, "RT_act", None)
         if RT_act is not None:
