@@ -184,31 +184,74 @@ def vertex_solve_lu(K, rhs, nf, square):
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def lu_factor(R):
     """``R[perm] = L U`` by partial pivoting (L unit lower, both in one array). Returns
-    ``(LU, perm, ok)``; ``ok`` false when a pivot is exactly zero or not finite."""
+    ``(LU, perm, ok)``; ``ok`` false when a pivot is exactly zero or not finite.
+
+    Right-looking, in panels of four columns: each panel is factored column by column (its updates
+    kept to the panel), its rows of ``U`` right of it follow by forward substitution, and the rows
+    below take the four columns' updates in one pass (:func:`_trailing4`), so each trailing entry is
+    loaded and stored once per panel instead of once per column. Every entry receives the same
+    operations in the same order as column-by-column elimination, so the factors are the same to
+    the bit; a 59 x 59 system (a warm frame of MyoSuite's arm) factors about a fifth faster, one of
+    100 to 250 unknowns about 1.7x (docs/speed.md)."""
     n = R.shape[0]
     M = R.copy()
     perm = np.arange(n)
-    for k in range(n):
-        p = k
-        big = abs(M[k, k])
-        for i in range(k + 1, n):
-            v = abs(M[i, k])
-            if v > big:
-                big, p = v, i
-        if not (big > 0.0) or not np.isfinite(big):
-            return M, perm, False
-        if p != k:
-            for j in range(n):
-                M[k, j], M[p, j] = M[p, j], M[k, j]
-            perm[k], perm[p] = perm[p], perm[k]
-        inv = 1.0 / M[k, k]
-        Mk = M[k, k + 1:]
-        for i in range(k + 1, n):
-            l = M[i, k] * inv
-            M[i, k] = l
-            if l != 0.0:
-                _axpy(-l, Mk, M[i, k + 1:])
+    for k0 in range(0, n, 4):
+        k1 = min(k0 + 4, n)
+        for k in range(k0, k1):  # the panel: its pivots, its columns' multipliers and updates
+            p = k
+            big = abs(M[k, k])
+            for i in range(k + 1, n):
+                v = abs(M[i, k])
+                if v > big:
+                    big, p = v, i
+            if not (big > 0.0) or not np.isfinite(big):
+                return M, perm, False
+            if p != k:
+                for j in range(n):
+                    M[k, j], M[p, j] = M[p, j], M[k, j]
+                perm[k], perm[p] = perm[p], perm[k]
+            inv = 1.0 / M[k, k]
+            for i in range(k + 1, n):
+                l = M[i, k] * inv
+                M[i, k] = l
+                if l != 0.0:
+                    for j in range(k + 1, k1):
+                        M[i, j] -= l * M[k, j]
+        for k in range(k0, k1):  # the panel's rows of U right of it
+            for i in range(k + 1, k1):
+                l = M[i, k]
+                if l != 0.0:
+                    _axpy(-l, M[k, k1:], M[i, k1:])
+        if k1 - k0 == 4:
+            _trailing4(M, k0, k1, n)
+        else:  # (the last, narrower panel)
+            for i in range(k1, n):
+                for t in range(k0, k1):
+                    l = M[i, t]
+                    if l != 0.0:
+                        _axpy(-l, M[t, k1:], M[i, k1:])
     return M, perm, True
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"}, inline="always")
+def _trailing4(M, k0, k1, n):
+    """Rows and columns ``k1:`` of ``M`` less the four panel columns' products ``L[:, k0:k1]
+    U[k0:k1, :]``, subtracted one after the other as four column eliminations would (no sum
+    reassociated: each entry's differences are taken left to right). A row with a zero multiplier
+    skips that column's update, as column elimination does (a zero's sign stays as it was)."""
+    U0, U1, U2, U3 = M[k0, k1:], M[k0 + 1, k1:], M[k0 + 2, k1:], M[k0 + 3, k1:]
+    for i in range(k1, n):
+        l0, l1, l2, l3 = M[i, k0], M[i, k0 + 1], M[i, k0 + 2], M[i, k0 + 3]
+        row = M[i, k1:]
+        if l0 != 0.0 and l1 != 0.0 and l2 != 0.0 and l3 != 0.0:
+            for j in range(row.shape[0]):
+                row[j] = row[j] - l0 * U0[j] - l1 * U1[j] - l2 * U2[j] - l3 * U3[j]
+            continue
+        for t in range(k0, k1):
+            l = M[i, t]
+            if l != 0.0:
+                _axpy(-l, M[t, k1:], row)
 
 
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"}, inline="always")
