@@ -15,26 +15,22 @@ from mcdm_pin import jit
 
 
 def _columns(R):
-    """Column-by-column elimination with partial pivoting (the reference)."""
+    """Column-by-column elimination with partial pivoting (the reference): the first largest
+    pivot candidate, whole rows swapped, each row below less its multiple of the pivot row (a zero
+    multiplier's row left as it is)."""
     n = R.shape[0]
     M = R.copy()
     perm = np.arange(n)
     for k in range(n):
-        p = k
-        big = abs(M[k, k])
-        for i in range(k + 1, n):
-            v = abs(M[i, k])
-            if v > big:
-                big, p = v, i
-        if not (big > 0.0) or not np.isfinite(big):
+        p = k + int(np.argmax(np.abs(M[k:, k])))
+        big = abs(M[p, k])
+        if not (big > 0.0 and np.isfinite(big)):
             return M, perm, False
-        if p != k:
-            for j in range(n):
-                M[k, j], M[p, j] = M[p, j], M[k, j]
-            perm[k], perm[p] = perm[p], perm[k]
-        inv = 1.0 / M[k, k]
+        row = M[k].copy()
+        M[k], M[p] = M[p], row
+        perm[k], perm[p] = perm[p], perm[k]
         for i in range(k + 1, n):
-            l = M[i, k] * inv
+            l = M[i, k] * (1.0 / M[k, k])
             M[i, k] = l
             if l != 0.0:
                 for j in range(k + 1, n):
