@@ -96,8 +96,8 @@ def warm_calls():
     """This module's kernel with example arguments of the types the library passes (registered with
     :mod:`mcdm_pin.jit`)."""
     z = np.zeros
-    return [(actuated_arrays, (tuple(ProblemArrays(z((1, 2)), z((1, 3, 2)), z((0, 0)), z(2), z((1, 2)), z(2), z(2), z(2),
-                                                    z(0))), False, True, tuple(Actuators(z((1, 1)), 1, z(1), z(1), z(1)))))]
+    problem = ProblemArrays(z((1, 2)), z((1, 3, 2)), z((0, 0)), z(2), z((1, 2)), z(2), z(2), z(2), z(0))
+    return [(actuated_arrays, (tuple(problem), False, True, tuple(Actuators(z((1, 1)), 1, z(1), z(1), z(1)))))]
 
 
 def _register() -> None:

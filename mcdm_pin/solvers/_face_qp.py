@@ -24,7 +24,7 @@ import numpy as np
 from ..jit import njit
 from ._ipm_linalg import inf_norm
 from ._kkt_eq import cone_force
-from ._kkt_linalg import lu_apply, lu_factor
+from ._kkt_linalg import lu_solve
 
 
 @njit(cache=True, nogil=True)
@@ -182,11 +182,7 @@ def _step(H, g, N, rows, sign, held, n_held, t):
             c = sign[j] * N[q, rows[j]]
             K[k + h, q] = c
             K[q, k + h] = -c
-    LU, perm, ok = lu_factor(K)
-    if not ok:
+    sol, ok = lu_solve(K, rhs)
+    if not (ok and np.all(np.isfinite(sol))):
         return np.zeros(k), np.zeros(n_held), False
-    sol = lu_apply(LU, perm, rhs)
-    for s in range(n):
-        if not np.isfinite(sol[s]):
-            return np.zeros(k), np.zeros(n_held), False
     return sol[:k].copy(), sol[k:].copy(), True

@@ -15,7 +15,7 @@ from ._ipm_linalg import chol_inplace, chol_solve_inplace, dot
 
 
 @njit(cache=True, nogil=True)
-def _lu_solve(K, rhs):
+def lu_solve(K, rhs):
     """``K x = rhs`` by LU with partial pivoting (:func:`lu_factor`, then :func:`lu_apply`): LAPACK's
     ``dgesv`` without the copies to Fortran order that ``np.linalg.solve`` makes, 3x faster at these
     sizes. Returns ``(x, ok)``; ``ok`` false when a pivot is exactly zero or not finite."""
@@ -30,7 +30,7 @@ def kkt_solve(K, rhs, square):
     """``K x = rhs`` by LU; least squares when ``K`` is not square-solvable (then the residual must be
     at rounding level, else NaNs: a singular, inconsistent system)."""
     if square:
-        sol, ok = _lu_solve(K, rhs)
+        sol, ok = lu_solve(K, rhs)
         if ok:
             ok = np.all(np.isfinite(sol))
         if ok:
@@ -227,10 +227,7 @@ def lu_factor(R):
             _trailing4(M, k0, k1, n)
         else:  # (the last, narrower panel)
             for i in range(k1, n):
-                for t in range(k0, k1):
-                    l = M[i, t]
-                    if l != 0.0:
-                        _axpy(-l, M[t, k1:], M[i, k1:])
+                _columnwise(M, k0, k1, i)
     return M, perm, True
 
 
@@ -247,11 +244,19 @@ def _trailing4(M, k0, k1, n):
         if l0 != 0.0 and l1 != 0.0 and l2 != 0.0 and l3 != 0.0:
             for j in range(row.shape[0]):
                 row[j] = row[j] - l0 * U0[j] - l1 * U1[j] - l2 * U2[j] - l3 * U3[j]
-            continue
-        for t in range(k0, k1):
-            l = M[i, t]
-            if l != 0.0:
-                _axpy(-l, M[t, k1:], row)
+        else:
+            _columnwise(M, k0, k1, i)
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"}, inline="always")
+def _columnwise(M, k0, k1, i):
+    """Row ``i`` of ``M``, columns ``k1:``, less the panel columns' updates one column at a time, a
+    zero multiplier's skipped (:func:`lu_factor`)."""
+    row = M[i, k1:]
+    for t in range(k0, k1):
+        l = M[i, t]
+        if l != 0.0:
+            _axpy(-l, M[t, k1:], row)
 
 
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"}, inline="always")
