@@ -116,6 +116,25 @@ class Settings:
     cube of the problem's size: at 96 DoF and 288 cables, 11 instants over a second, every warm start
     failed after its 50 pivots and took longer than the cold solve that followed (docs/speed.md, "The
     first stage of a cold instant")."""
+    warm_dual_steps: int = 30
+    """Where the warm active set's guess fails on a problem whose objective is diagonal and positive
+    definite and which has no cones (case 1's ``f^T f``, the muscles' activations), the stage guesses
+    again: at most this many Newton steps on the problem's dual from the last answer's multipliers
+    (:mod:`mcdm_pin.solvers._dual_guess`), then the active-set solver from the active set they reach
+    (``warm_min_pivots``); 0: no second guess. On the neck's ``roll`` (case 1) the three warm starts
+    that fail reach their optimum's active set in 3-21 steps (docs/speed.md, "The warm start's dual
+    guess")."""
+    warm_dual_after: int = 6
+    """Where the dual guess applies (``warm_dual_steps``), the warm active set's own guess gets at most
+    this many pivots (and ``warm_max_pivots``' halving) before it: of 18,565 warm starts that
+    answered the shipped robots' case 1 (their first two trajectories), four needed more than six
+    KKT solves (8, 10, 11 and 28), and a guess that fails pivots on to its limit (~1 ms on the neck)."""
+    warm_dual_regularisation: float = 1e-6
+    """The dual guess's Newton matrix is ``A_F D_F^-1 A_F^T + r A D^-1 A^T`` with this ``r``: positive
+    definite where the free variables do not span the equations (:mod:`mcdm_pin.solvers._dual_guess`)."""
+    warm_dual_tol: float = 1e-9
+    """The dual guess stops when its active set repeats and ``|A x - b|`` is within this of the
+    problem's size (``max(|b|, max |A| max |x|)``), relative."""
     polish_max_pivots: int = 30
     """The polish's pivot limit from another stage's active set."""
     active_set_max_newton: int = 10
@@ -218,13 +237,14 @@ class Settings:
 
 def _check(name: str, default, value) -> None:
     """``value`` of the field ``name`` is of its default's kind: a positive int for the limits (zero
-    allowed for ``ipm_correctors``), a positive finite float for the tolerances (``same_cut_cos`` and
-    ``ipm_step_fraction`` at most 1), a float >= 0 or ``None`` for the budget."""
+    allowed for ``ipm_correctors`` and ``warm_dual_steps``), a positive finite float for the
+    tolerances (``same_cut_cos`` and ``ipm_step_fraction`` at most 1), a float >= 0 or ``None`` for
+    the budget."""
     if name == "budget_s" and (value is None or (isinstance(value, (int, float)) and not isinstance(value, bool)
                                                  and value == 0)):
         return  # (a zero budget: no answering stage after the first starts)
     if isinstance(default, int) and not isinstance(default, bool):
-        least = 0 if name == "ipm_correctors" else 1
+        least = 0 if name in ("ipm_correctors", "warm_dual_steps") else 1
         if isinstance(value, bool) or not isinstance(value, int) or value < least:
             raise SolverError(f"setting {name!r} must be an integer >= {least}, got {value!r}")
         return

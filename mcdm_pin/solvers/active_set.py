@@ -31,7 +31,7 @@ import numpy as np
 from .. import jit
 from ..qp import QPData
 from ..settings import DEFAULT, Settings
-from . import _fast
+from . import _dual_guess, _fast
 from . import _kkt as K
 from ._structs import QP, Cones, Limits
 from .base import OPTIMAL, Solution, Stage
@@ -268,9 +268,16 @@ def _miss(reason: str) -> None:
 class WarmActiveSet(Stage):
     """Answering stage: the previous answer's active set (see the module docstring).
 
+    Where that guess fails on a problem whose objective is diagonal and positive definite and which
+    has no cones, a second guess comes from the problem's dual, climbed by Newton's method from the
+    previous answer's multipliers (:mod:`._dual_guess`; ``settings.warm_dual_steps``): block
+    principal pivoting from a guess several exchanges away can wander until its pivot limit. There
+    the first guess gets ``settings.warm_dual_after`` pivots at most.
+
     Args:
         settings: the pivot limit per instant (``warm_max_pivots``, halved after each failure down to
-            ``warm_min_pivots``, restored by a success) and the tolerances.
+            ``warm_min_pivots``, restored by a success), the dual guess's steps and the first guess's
+            pivots before it, and the tolerances.
     """
 
     name = "warm_active_set"
@@ -278,27 +285,61 @@ class WarmActiveSet(Stage):
     def __init__(self, settings: Settings = DEFAULT):
         self.settings = settings
         self.guess: ActiveSet | None = None
+        self.y: np.ndarray | None = None  # the previous answer's equations' multipliers
         self.max_pivots = settings.warm_max_pivots  # this instant's limit
 
     def run(self, qp, sol, deadline):
         if self.guess is None or not jit.ready():
             return None
         s = self.settings
-        out = try_active_set(qp, self.guess, self.max_pivots, stage=self.name, settings=s)
+        dual = self._dual_applies(qp)
+        # (where the second guess applies, the first gets fewer pivots: a guess that needs more than
+        # a few is wandering, and the dual guess answers it for less)
+        first = min(self.max_pivots, s.warm_dual_after) if dual else self.max_pivots
+        out = try_active_set(qp, self.guess, first, stage=self.name, settings=s)
+        if out is None and dual:
+            out = self._dual_guess(qp)
         least = min(s.warm_min_pivots, s.warm_max_pivots)
         self.max_pivots = s.warm_max_pivots if out is not None else max(least, self.max_pivots // 2)
         return out
 
+    def _dual_applies(self, qp) -> bool:
+        """Whether the second guess (class docstring) applies to ``qp``."""
+        y = self.y
+        return bool(self.settings.warm_dual_steps) and y is not None and not qp.cones and len(y) == len(qp.b) \
+            and _separable(qp)
+
+    def _dual_guess(self, qp) -> Solution | None:
+        """The second guess (class docstring), verified by the active-set solver within
+        ``warm_min_pivots``; ``None`` where it fails. Its ``iterations`` count the Newton steps'
+        linear systems with the KKT systems."""
+        s, y = self.settings, self.y
+        c, A, b, lb, ub = qp.kernel_arrays()[:5]
+        state, steps, _ = jit.kernels("solvers._dual_guess").dual_guess(
+            np.ascontiguousarray(qp.P_diag, dtype=float), c, A, b, lb, ub, np.ascontiguousarray(y, dtype=float),
+            s.warm_dual_steps, s.warm_dual_regularisation, s.warm_dual_tol)
+        out = try_active_set(qp, ActiveSet(_EMPTY, _EMPTY, state=state), min(s.warm_min_pivots, s.warm_max_pivots),
+                             stage=self.name, settings=s)
+        return None if out is None else out.but(iterations=out.iterations + int(steps))
+
     def learn(self, qp, sol):
         self.guess = sol.active if sol.active is not None else ActiveSet.from_duals(
             qp, sol, self.settings.active_set_from_solution)
+        self.y = sol.y
 
     def seed(self, hint):
         self.guess = hint.active
+        self.y = hint.y
 
     def reset(self):
         self.guess = None
+        self.y = None
         self.max_pivots = self.settings.warm_max_pivots
+
+
+def _separable(qp: QPData) -> bool:
+    """Whether ``qp``'s objective is ``diag(P_diag)`` with every entry positive (no factor rows)."""
+    return qp.P_factor is not None and qp.P_factor.shape[0] == 0 and qp.strictly_convex()
 
 
 class Polish(Stage):
@@ -381,8 +422,10 @@ def _eom_met(qp: QPData, x, eom_rel: float) -> bool:
 
 def warm_calls():
     """The warm path's compiled entry points (:mod:`._fast`: the active-set answer and the answer's
-    checks), with example arguments of the types the library passes."""
-    return _fast.warm_calls()
+    checks; :mod:`._dual_guess`), with example arguments of the types the library passes."""
+    z, n = np.zeros, 2
+    return _fast.warm_calls() + [(_dual_guess.dual_guess, (np.ones(n), z(n), z((1, n)), z(1), z(n), z(n), z(1), 2,
+                                                           1e-6, 1e-9))]
 
 
 def _register() -> None:
