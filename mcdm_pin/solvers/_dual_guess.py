@@ -34,6 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..jit import njit
+from ._kkt_linalg import chol_apply, chol_lower
 
 
 @njit(cache=True, nogil=True)
@@ -75,9 +76,45 @@ def dual_guess(d, c, A, b, lb, ub, y0, max_steps, reg, tol):
     x = np.empty(n)
     state = np.zeros(n, dtype=np.int8)
     last = np.full(n, -1, dtype=np.int8)
-    # A D^-1 A^T (the regularising term's matrix) as a sum over the variables of the outer products
-    # of the rows of Bt = A^T D^-1/2, lower triangle; the Newton matrix sums the free rows alike
     AT = np.ascontiguousarray(A.T)
+    Bt, S, floor = _metric(AT, d)
+    size = 0.0
+    for i in range(m):
+        size = max(size, abs(b[i]))
+    amax = 0.0
+    for j in range(n):
+        for i in range(m):
+            amax = max(amax, abs(AT[j, i]))
+    val = _primal(AT, c, d, lb, ub, y, x) - _dot(b, y)
+    r = np.empty(m)
+    M = np.empty((m, m))
+    work = (np.empty(m), np.empty(n))
+    steps = 0
+    while True:
+        xmax = _read_state(x, lb, ub, state)
+        rmax = _residual(A, x, b, r)  # grad g
+        same = True
+        for j in range(n):
+            same = same and state[j] == last[j]
+        if same and rmax <= tol * max(size, amax * xmax, 1e-300):
+            return state, steps, True
+        if steps >= max_steps:
+            return state, steps, False
+        last[:] = state
+        _newton_matrix(M, S, Bt, state, reg, floor)
+        ok, _ = chol_lower(M, m, 0.0)
+        if not ok:
+            return state, steps, False
+        val = _line_search(AT, c, d, lb, ub, b, y, x, chol_apply(M, r), r, val, work)
+        steps += 1
+
+
+@njit(cache=True, nogil=True)
+def _metric(AT, d):
+    """``(Bt, S, floor)``: the rows ``Bt = A^T D^-1/2``, the lower triangle of ``S = A D^-1 A^T`` (the
+    regularising term's matrix) as the sum of their outer products, and the floor ``1e-14`` of its
+    mean diagonal."""
+    n, m = AT.shape
     Bt = np.empty((n, m))
     for j in range(n):
         w = 1.0 / np.sqrt(d[j])
@@ -89,95 +126,70 @@ def dual_guess(d, c, A, b, lb, ub, y0, max_steps, reg, tol):
     trace = 0.0
     for i in range(m):
         trace += S[i, i]
-    floor = 1e-14 * trace / max(m, 1) + 1e-300
-    size = 0.0
-    amax = 0.0
+    return Bt, S, 1e-14 * trace / max(m, 1) + 1e-300
+
+
+@njit(cache=True, nogil=True)
+def _newton_matrix(M, S, Bt, state, reg, floor):
+    """The lower triangle of ``A_F D_F^-1 A_F^T + reg S + floor I`` in ``M`` (``F``: the free
+    variables of ``state``)."""
+    m = M.shape[0]
     for i in range(m):
-        size = max(size, abs(b[i]))
-        for j in range(n):
-            amax = max(amax, abs(A[i, j]))
-    val = _primal(AT, c, d, lb, ub, y, x)
-    for i in range(m):
-        val -= b[i] * y[i]
-    r = np.empty(m)
-    M = np.empty((m, m))
-    step = np.empty(m)
-    y_try = np.empty(m)
-    x_try = np.empty(n)
-    converged = False
-    steps = 0
+        for k in range(i + 1):
+            M[i, k] = reg * S[i, k]
+        M[i, i] += floor
+    for j in range(state.shape[0]):
+        if state[j] == 0:
+            _outer_lower(M, Bt[j], 1.0)
+
+
+@njit(cache=True, nogil=True)
+def _line_search(AT, c, d, lb, ub, b, y, x, step, grad, val, work):
+    """Armijo's backtracking along ``step`` on the concave dual (``step`` is an ascent direction:
+    ``grad . step > 0``): ``y`` and ``x`` moved in place to the first of the steps ``1, 1/2, ...``
+    that gains ``1e-4`` of its slope (or the last, below ``1e-10``); returns the dual's new value.
+    ``work``: scratch arrays (m,) and (n,)."""
+    y_try, x_try = work
+    slope = _dot(grad, step)
+    t = 1.0
     while True:
-        xmax = 0.0
-        for j in range(n):
-            xmax = max(xmax, abs(x[j]))
-            state[j] = 1 if x[j] <= lb[j] else (2 if x[j] >= ub[j] else 0)
-        rmax = 0.0
-        for i in range(m):
-            s = -b[i]
-            for j in range(n):
-                s += A[i, j] * x[j]
-            r[i] = s  # grad g
-            rmax = max(rmax, abs(s))
-        same = True
-        for j in range(n):
-            if state[j] != last[j]:
-                same = False
-        if same and rmax <= tol * max(size, amax * xmax, 1e-300):
-            converged = True
+        for i in range(y.shape[0]):
+            y_try[i] = y[i] + t * step[i]
+        v = _primal(AT, c, d, lb, ub, y_try, x_try) - _dot(b, y_try)
+        if v >= val + 1e-4 * t * slope or t < 1e-10:
             break
-        if steps >= max_steps:
-            break
-        last[:] = state
-        # the Newton matrix: A_F D_F^-1 A_F^T + reg A D^-1 A^T + floor I, by Cholesky (lower, in M)
-        for i in range(m):
-            for k in range(i + 1):
-                M[i, k] = reg * S[i, k]
-            M[i, i] += floor
-        for j in range(n):
-            if state[j] == 0:
-                _outer_lower(M, Bt[j], 1.0)
-        ok = True
-        for k in range(m):
-            s = M[k, k]
-            for q in range(k):
-                s -= M[k, q] * M[k, q]
-            if not s > 0.0:
-                ok = False
-                break
-            M[k, k] = np.sqrt(s)
-            for i in range(k + 1, m):
-                t = M[i, k]
-                for q in range(k):
-                    t -= M[i, q] * M[k, q]
-                M[i, k] = t / M[k, k]
-        if not ok:
-            break
-        for i in range(m):  # M step = r: forward, then back substitution
-            s = r[i]
-            for q in range(i):
-                s -= M[i, q] * step[q]
-            step[i] = s / M[i, i]
-        for i in range(m - 1, -1, -1):
-            s = step[i]
-            for q in range(i + 1, m):
-                s -= M[q, i] * step[q]
-            step[i] = s / M[i, i]
-        slope = 0.0
-        for i in range(m):
-            slope += r[i] * step[i]
-        # Armijo's backtracking on the concave dual: the step is an ascent direction (slope > 0)
-        t = 1.0
-        while True:
-            for i in range(m):
-                y_try[i] = y[i] + t * step[i]
-            v = _primal(AT, c, d, lb, ub, y_try, x_try)
-            for i in range(m):
-                v -= b[i] * y_try[i]
-            if v >= val + 1e-4 * t * slope or t < 1e-10:
-                break
-            t *= 0.5
-        y[:] = y_try
-        x[:] = x_try
-        val = v
-        steps += 1
-    return state, steps, converged
+        t *= 0.5
+    y[:] = y_try
+    x[:] = x_try
+    return v
+
+
+@njit(cache=True, nogil=True)
+def _read_state(x, lb, ub, state):
+    """Each variable's bound at ``x`` into ``state`` (1 lower, 2 upper, 0 free); returns ``max |x|``."""
+    xmax = 0.0
+    for j in range(x.shape[0]):
+        xmax = max(xmax, abs(x[j]))
+        state[j] = 1 if x[j] <= lb[j] else (2 if x[j] >= ub[j] else 0)
+    return xmax
+
+
+@njit(cache=True, nogil=True)
+def _residual(A, x, b, r):
+    """``r = A x - b`` in place; returns ``max |r|``."""
+    rmax = 0.0
+    for i in range(A.shape[0]):
+        s = -b[i]
+        for j in range(A.shape[1]):
+            s += A[i, j] * x[j]
+        r[i] = s
+        rmax = max(rmax, abs(s))
+    return rmax
+
+
+@njit(cache=True, nogil=True)
+def _dot(a, b):
+    s = 0.0
+    for i in range(a.shape[0]):
+        s += a[i] * b[i]
+    return s

@@ -339,7 +339,7 @@ def determined_solve(K, rhs, nf):
         ri = rhs[nf + i]
         for a in range(nf):
             v[a] += K[nf + i, a] * ri
-    x = _chol_apply(Nm, v)
+    x = chol_apply(Nm, v)
     # the rows must be consistent (else the instant's active set is wrong: lstsq decides)
     rscale = 1.0
     for i in range(m):
@@ -371,7 +371,7 @@ def determined_solve(K, rhs, nf):
         for b in range(nf):
             acc -= K[a, b] * x[b]
         w[a] = acc
-    u = _chol_apply(Nm, w)
+    u = chol_apply(Nm, w)
     sol = np.empty(N)
     sol[:nf] = x
     for i in range(m):
@@ -408,7 +408,7 @@ def chol_lower(M, n, floor):
 
 
 @njit(cache=True, nogil=True)
-def _chol_apply(L, r):
+def chol_apply(L, r):
     """``(L L^T)^-1 r``."""
     n = L.shape[0]
     y = r.copy()
