@@ -122,8 +122,8 @@ class Settings:
     again: at most this many Newton steps on the problem's dual from the last answer's multipliers
     (:mod:`mcdm_pin.solvers._dual_guess`), then the active-set solver from the active set they reach
     (``warm_min_pivots``); 0: no second guess. On the neck's ``roll`` (case 1) the three warm starts
-    that fail reach their optimum's active set in 3-21 steps (docs/speed.md, "The warm start's dual
-    guess")."""
+    that fail reach their optimum's active set in 6, 10 and 15 steps (docs/speed.md, "The warm
+    start's dual guess")."""
     warm_dual_after: int = 6
     """Where the dual guess applies (``warm_dual_steps``), the warm active set's own guess gets at most
     this many pivots (and ``warm_max_pivots``' halving) before it: of 18,565 warm starts that
