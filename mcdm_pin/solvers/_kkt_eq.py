@@ -288,7 +288,8 @@ def _solve_rows(K, rhs, nf, neq, na, square):
     equations and held cones) through the rows alone (:func:`._kkt_linalg.vertex_solve_lu`, whose
     factors come back), else, when square, through the rows' Schur complement where the free
     cables' block is diagonal (:func:`._kkt_linalg.schur_solve`) and by LU where it is not, and by
-    :func:`._kkt_linalg.determined_solve` when not square (then ``lu_ok`` is false)."""
+    :func:`._kkt_linalg.determined_solve` when not square (then ``lu_ok`` is false; where that finds
+    the free cables' columns dependent, by the Schur complement if their block is diagonal)."""
     if nf == neq + na:
         return vertex_solve_lu(K, rhs, nf, square)
     if square:
@@ -296,6 +297,13 @@ def _solve_rows(K, rhs, nf, neq, na, square):
         if ok:
             return sol, np.empty((0, 0)), np.empty(0, dtype=np.int64), False
     sol = kkt_solve(K, rhs, square) if square else determined_solve(K, rhs, nf)
+    if not square and not _finite(sol):
+        # free cables whose columns are themselves dependent (two along one line: the neck's pitch)
+        # leave the equations short of determining them; where the free block is diagonal the
+        # rows' Schur complement still solves the system, a dependent row's multiplier zero
+        alt, ok = schur_solve(K, rhs, nf)
+        if ok:
+            sol = alt
     return sol, np.empty((0, 0)), np.empty(0, dtype=np.int64), False
 
 
