@@ -34,6 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..jit import njit
+from ._ipm_linalg import dot, inf_norm
 from ._kkt_linalg import chol_apply, chol_lower
 
 
@@ -78,14 +79,12 @@ def dual_guess(d, c, A, b, lb, ub, y0, max_steps, reg, tol):
     last = np.full(n, -1, dtype=np.int8)
     AT = np.ascontiguousarray(A.T)
     Bt, S, floor = _metric(AT, d)
-    size = 0.0
-    for i in range(m):
-        size = max(size, abs(b[i]))
+    size = inf_norm(b)
     amax = 0.0
     for j in range(n):
         for i in range(m):
             amax = max(amax, abs(AT[j, i]))
-    val = _primal(AT, c, d, lb, ub, y, x) - _dot(b, y)
+    val = _primal(AT, c, d, lb, ub, y, x) - dot(b, y)
     r = np.empty(m)
     M = np.empty((m, m))
     work = (np.empty(m), np.empty(n))
@@ -150,12 +149,12 @@ def _line_search(AT, c, d, lb, ub, b, y, x, step, grad, val, work):
     that gains ``1e-4`` of its slope (or the last, below ``1e-10``); returns the dual's new value.
     ``work``: scratch arrays (m,) and (n,)."""
     y_try, x_try = work
-    slope = _dot(grad, step)
+    slope = dot(grad, step)
     t = 1.0
     while True:
         for i in range(y.shape[0]):
             y_try[i] = y[i] + t * step[i]
-        v = _primal(AT, c, d, lb, ub, y_try, x_try) - _dot(b, y_try)
+        v = _primal(AT, c, d, lb, ub, y_try, x_try) - dot(b, y_try)
         if v >= val + 1e-4 * t * slope or t < 1e-10:
             break
         t *= 0.5
@@ -185,11 +184,3 @@ def _residual(A, x, b, r):
         r[i] = s
         rmax = max(rmax, abs(s))
     return rmax
-
-
-@njit(cache=True, nogil=True)
-def _dot(a, b):
-    s = 0.0
-    for i in range(a.shape[0]):
-        s += a[i] * b[i]
-    return s
