@@ -296,7 +296,7 @@ def _solve_rows(K, rhs, nf, neq, na, square):
         sol, ok = schur_solve(K, rhs, nf)
         if ok:
             return sol, np.empty((0, 0)), np.empty(0, dtype=np.int64), False
-    sol = kkt_solve(K, rhs, square) if square else determined_solve(K, rhs, nf)
+    sol = kkt_solve(K, rhs, nf, square) if square else determined_solve(K, rhs, nf)
     if not square and not _finite(sol):
         # free cables whose columns are themselves dependent (two along one line: the neck's pitch)
         # leave the equations short of determining them; where the free block is diagonal the

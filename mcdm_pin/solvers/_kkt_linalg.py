@@ -26,16 +26,116 @@ def lu_solve(K, rhs):
 
 
 @njit(cache=True, nogil=True)
-def kkt_solve(K, rhs, square):
-    """``K x = rhs`` by LU; least squares when ``K`` is not square-solvable (then the residual must be
-    at rounding level, else NaNs: a singular, inconsistent system)."""
+def kkt_solve(K, rhs, nf, square):
+    """``K x = rhs`` (``K = [[Hxx, R^T], [R, 0]]``, ``nf`` unknowns before the rows ``R``) by LU when
+    ``square``; otherwise, or where the LU meets an exactly zero pivot, NaNs when
+    :func:`rows_inconsistent` finds the rows inconsistent beyond what least squares passes, else
+    least squares (:func:`lstsq_solve`: NaNs unless its residual is at rounding level, a singular,
+    inconsistent system)."""
     if square:
         sol, ok = lu_solve(K, rhs)
         if ok:
             ok = np.all(np.isfinite(sol))
         if ok:
             return sol
+    if rows_inconsistent(K, rhs, nf):
+        return _nans(K.shape[0])
     return lstsq_solve(K, rhs)
+
+
+@njit(cache=True, nogil=True)
+def _nans(n):
+    out = np.empty(n)
+    out[:] = np.nan
+    return out
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _row_gram(K, nf):
+    """The lower triangle of ``R^T R`` for the rows ``R = K[nf:, :nf]``."""
+    Nm = np.zeros((nf, nf))
+    for i in range(K.shape[0] - nf):
+        Ri = K[nf + i]
+        for a in range(nf):
+            ra = Ri[a]
+            if ra != 0.0:
+                for b in range(a + 1):
+                    Nm[a, b] += ra * Ri[b]
+    return Nm
+
+
+@njit(cache=True, nogil=True)
+def _beyond_lstsq(worst, m, rhs):
+    """Whether ``m`` rows whose least-squares point misses one by ``worst`` are inconsistent beyond
+    what :func:`lstsq_solve` passes: no ``x'`` meets every row within ``1e-10 max(1, max|rhs|)``
+    then (``|R x' - r_c|_inf >= |R x - r_c|_2 / sqrt(m) >= worst / sqrt(m)``)."""
+    full = 1.0
+    for i in range(rhs.shape[0]):
+        full = max(full, abs(rhs[i]))
+    return worst > np.sqrt(m) * 1e-10 * full
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def rows_inconsistent(K, rhs, nf):
+    """Whether the rows ``R x = r_c`` of ``K = [[Hxx, R^T], [R, 0]]`` (``R = K[nf:, :nf]``) are
+    inconsistent beyond what :func:`lstsq_solve` passes (:func:`_beyond_lstsq`), judged at their
+    least-squares point: ``R^T R x = R^T r_c`` by a Cholesky that drops a pivot at or below
+    ``1e-12`` of the largest diagonal entry (a dependent column: its unknown zero, the others' point
+    still a least-squares one), with one step of refinement. A singular KKT system of a wrong
+    active-set guess (a crossover's, on large chains: docs/speed.md) is rejected so without an SVD
+    of ``K``, whose cost is several of its LUs."""
+    m = K.shape[0] - nf
+    if m == 0:
+        return False
+    Nm = _row_gram(K, nf)
+    scale = 1e-300
+    for a in range(nf):
+        scale = max(scale, Nm[a, a])
+    keep = np.ones(nf, dtype=np.bool_)
+    for j in range(nf):
+        acc = Nm[j, j]
+        for k in range(j):
+            acc -= Nm[j, k] * Nm[j, k]
+        if not acc > 1e-12 * scale:  # dependent on the columns before it: dropped
+            keep[j] = False
+            for k in range(j):
+                Nm[j, k] = 0.0
+            Nm[j, j] = 1.0
+            for i in range(j + 1, nf):
+                Nm[i, j] = 0.0
+            continue
+        d = np.sqrt(acc)
+        Nm[j, j] = d
+        for i in range(j + 1, nf):
+            t = Nm[i, j]
+            for k in range(j):
+                t -= Nm[i, k] * Nm[j, k]
+            Nm[i, j] = t / d
+    x = np.zeros(nf)
+    res = np.empty(m)
+    for i in range(m):
+        res[i] = rhs[nf + i]
+    worst = 0.0
+    for _ in range(2):  # the point, then one step of refinement on its residual
+        v = np.zeros(nf)
+        for i in range(m):
+            ri = res[i]
+            for a in range(nf):
+                v[a] += K[nf + i, a] * ri
+        for a in range(nf):
+            if not keep[a]:
+                v[a] = 0.0
+        dx = chol_apply(Nm, v)
+        worst = 0.0
+        for a in range(nf):
+            x[a] += dx[a] if keep[a] else 0.0
+        for i in range(m):
+            acc = rhs[nf + i]
+            for a in range(nf):
+                acc -= K[nf + i, a] * x[a]
+            res[i] = acc
+            worst = max(worst, abs(acc))
+    return _beyond_lstsq(worst, m, rhs)
 
 
 @njit(cache=True, nogil=True)
@@ -162,7 +262,7 @@ def vertex_solve_lu(K, rhs, nf, square):
             R[i, j] = K[nf + i, j]
     LU, perm, ok = lu_factor(R)
     if not ok:
-        return kkt_solve(K, rhs, square), LU, perm, False
+        return kkt_solve(K, rhs, nf, square), LU, perm, False
     x = lu_apply(LU, perm, rhs[nf:])
     w = np.empty(nf)
     for a in range(nf):
@@ -177,7 +277,7 @@ def vertex_solve_lu(K, rhs, nf, square):
         sol[nf + i] = lam[i]
     for i in range(N):
         if not np.isfinite(sol[i]):
-            return kkt_solve(K, rhs, square), LU, perm, False
+            return kkt_solve(K, rhs, nf, square), LU, perm, False
     return sol, LU, perm, True
 
 
@@ -320,19 +420,12 @@ def determined_solve(K, rhs, nf):
     :func:`lstsq_solve` otherwise."""
     N = K.shape[0]
     m = N - nf
-    Nm = np.zeros((nf, nf))
-    for i in range(m):
-        Ri = K[nf + i]
-        for a in range(nf):
-            ra = Ri[a]
-            if ra != 0.0:
-                for b in range(a + 1):
-                    Nm[a, b] += ra * Ri[b]
+    Nm = _row_gram(K, nf)
     scale = 1e-300
     for a in range(nf):
         scale = max(scale, Nm[a, a])
-    if not chol_lower(Nm, nf, 1e-12 * scale)[0]:
-        return lstsq_solve(K, rhs)
+    if not chol_lower(Nm, nf, 1e-12 * scale)[0]:  # dependent columns
+        return _nans(N) if rows_inconsistent(K, rhs, nf) else lstsq_solve(K, rhs)
     # x = N^-1 R^T r_c
     v = np.zeros(nf)
     for i in range(m):
@@ -356,14 +449,7 @@ def determined_solve(K, rhs, nf):
         # point, misses by more than sqrt(m) times its threshold: no x' meets every row within
         # 1e-10 max|rhs| then (|R x' - r_c|_inf >= |R x - r_c|_2 / sqrt(m)). Said without the SVD,
         # which would make a wrong crossover guess cost more than its instant's iterations
-        full = 1.0
-        for i in range(N):
-            full = max(full, abs(rhs[i]))
-        if worst > np.sqrt(m) * 1e-10 * full:
-            out = np.empty(N)
-            out[:] = np.nan
-            return out
-        return lstsq_solve(K, rhs)
+        return _nans(N) if _beyond_lstsq(worst, m, rhs) else lstsq_solve(K, rhs)
     # l = R N^-1 (r_x - Hxx x)
     w = np.empty(nf)
     for a in range(nf):
