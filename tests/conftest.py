@@ -1,4 +1,4 @@
-"""Shared fixtures: the bundled 2-link robot and paths."""
+"""Shared fixtures: the bundled 2-link robot, paths, and the kernels both ways."""
 
 from __future__ import annotations
 
@@ -22,6 +22,20 @@ def two_link():
     from mcdm_pin import Robot
 
     return Robot.load(TWO_LINK)
+
+
+@pytest.fixture(params=[True, False], ids=["compiled", "uncompiled"])
+def kernel_modules(request, monkeypatch):
+    """``jit.kernels`` over the compiled kernels (waiting for them) and over their uncompiled Python
+    code: a test that takes it runs both ways."""
+    from mcdm_pin import jit
+
+    if request.param:
+        pytest.importorskip("numba")
+        jit.prepare(policy="wait")
+    else:
+        monkeypatch.setattr(jit, "_COMPILED", False)
+    return jit.kernels
 
 
 @pytest.fixture(scope="session")

@@ -50,14 +50,9 @@ def _qp(d, c, A, b, lb, ub) -> QPData:
     return QPData(np.diag(d), c, 0.0, A, b, lb, ub, P_diag=d, P_factor=np.zeros((0, n)))
 
 
-@pytest.fixture(params=[True, False], ids=["compiled", "uncompiled"])
-def kernel(request, monkeypatch):
-    if request.param:
-        pytest.importorskip("numba")
-        jit.prepare(policy="wait")
-    else:
-        monkeypatch.setattr(jit, "_COMPILED", False)
-    return jit.kernels("solvers._dual_guess").dual_guess
+@pytest.fixture
+def kernel(kernel_modules):
+    return kernel_modules("solvers._dual_guess").dual_guess
 
 
 def test_the_dual_guess_is_the_optimums_active_set(kernel):

@@ -10,17 +10,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mcdm_pin import jit
 
-
-@pytest.fixture(params=[True, False], ids=["compiled", "uncompiled"])
-def linalg(request, monkeypatch):
-    if request.param:
-        pytest.importorskip("numba")
-        jit.prepare(policy="wait")
-    else:
-        monkeypatch.setattr(jit, "_COMPILED", False)
-    return jit.kernels("solvers._kkt_linalg")
+@pytest.fixture
+def linalg(kernel_modules):
+    return kernel_modules("solvers._kkt_linalg")
 
 
 def _systems(seed, count, big=40):
