@@ -27,6 +27,9 @@ test within 60 steps, 6 against 3 from zero multipliers.) Where the free set cha
 near a vertex the line search cuts the steps short and the method may need tens of steps; its
 guess is then often right all the same. An infeasible problem has an unbounded dual: the method
 stops at its step limit and the guess it returns fails its verification, as any wrong guess does.
+No sum here is reassociated (``dot_in_order``, and the Cholesky factor and solve compiled with
+``fastmath=False`` stated, since numba's callees otherwise take a caller's ``fastmath``), so the
+compiled and the uncompiled guesses, and their step counts, are the same to the bit.
 """
 
 from __future__ import annotations
@@ -34,7 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..jit import njit
-from ._ipm_linalg import dot, inf_norm
+from ._ipm_linalg import dot_in_order, inf_norm
 from ._kkt_linalg import chol_apply, chol_lower
 
 
@@ -84,7 +87,7 @@ def dual_guess(d, c, A, b, lb, ub, y0, max_steps, reg, tol):
     for j in range(n):
         for i in range(m):
             amax = max(amax, abs(AT[j, i]))
-    val = _primal(AT, c, d, lb, ub, y, x) - dot(b, y)
+    val = _primal(AT, c, d, lb, ub, y, x) - dot_in_order(b, y)
     r = np.empty(m)
     M = np.empty((m, m))
     work = (np.empty(m), np.empty(n))
@@ -149,12 +152,12 @@ def _line_search(AT, c, d, lb, ub, b, y, x, step, grad, val, work):
     that gains ``1e-4`` of its slope (or the last, below ``1e-10``); returns the dual's new value.
     ``work``: scratch arrays (m,) and (n,)."""
     y_try, x_try = work
-    slope = dot(grad, step)
+    slope = dot_in_order(grad, step)
     t = 1.0
     while True:
         for i in range(y.shape[0]):
             y_try[i] = y[i] + t * step[i]
-        v = _primal(AT, c, d, lb, ub, y_try, x_try) - dot(b, y_try)
+        v = _primal(AT, c, d, lb, ub, y_try, x_try) - dot_in_order(b, y_try)
         if v >= val + 1e-4 * t * slope or t < 1e-10:
             break
         t *= 0.5

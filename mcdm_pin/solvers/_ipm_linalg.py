@@ -33,6 +33,17 @@ def dot(a, b):
     return s
 
 
+@njit(cache=True, nogil=True, fastmath=False, error_model="numpy")  # (stated: else inherited from a caller)
+def dot_in_order(a, b):
+    """:func:`dot` summed in index order, without reassociation: the same to the bit as the
+    uncompiled code, for a kernel whose decisions must not depend on the compile (the dual guess's
+    line search: :mod:`._dual_guess`)."""
+    s = 0.0
+    for i in range(a.shape[0]):
+        s += a[i] * b[i]
+    return s
+
+
 @njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
 def axpy(a, x, y):
     """``y += a x`` in place."""

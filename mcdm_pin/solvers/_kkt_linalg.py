@@ -468,7 +468,7 @@ def determined_solve(K, rhs, nf):
     return sol
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, fastmath=False)  # (stated: numba's callees inherit a caller's fastmath)
 def chol_lower(M, n, floor):
     """The Cholesky factor of ``M[:n, :n]``'s lower triangle, in place (column by column): ``(True,
     its smallest pivot)``, or ``(False, 0)`` at the first pivot (before its square root) at or below
@@ -493,7 +493,7 @@ def chol_lower(M, n, floor):
     return True, dmin
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, fastmath=False)  # (stated: numba's callees inherit a caller's fastmath)
 def chol_apply(L, r):
     """``(L L^T)^-1 r``."""
     n = L.shape[0]
