@@ -39,15 +39,8 @@ def kkt_solve(K, rhs, nf, square):
         if ok:
             return sol
     if rows_inconsistent(K, rhs, nf):
-        return _nans(K.shape[0])
+        return np.full(K.shape[0], np.nan)
     return lstsq_solve(K, rhs)
-
-
-@njit(cache=True, nogil=True)
-def _nans(n):
-    out = np.empty(n)
-    out[:] = np.nan
-    return out
 
 
 @njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
@@ -75,46 +68,39 @@ def _beyond_lstsq(worst, m, rhs):
     return worst > np.sqrt(m) * 1e-10 * full
 
 
-@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+@njit(cache=True, nogil=True)
 def rows_inconsistent(K, rhs, nf):
     """Whether the rows ``R x = r_c`` of ``K = [[Hxx, R^T], [R, 0]]`` (``R = K[nf:, :nf]``) are
-    inconsistent beyond what :func:`lstsq_solve` passes (:func:`_beyond_lstsq`), judged at their
-    least-squares point: ``R^T R x = R^T r_c`` by a Cholesky that drops a pivot at or below
-    ``1e-12`` of the largest diagonal entry (a dependent column: its unknown zero, the others' point
-    still a least-squares one), with one step of refinement. A singular KKT system of a wrong
-    active-set guess (a crossover's, on large chains: docs/speed.md) is rejected so without an SVD
-    of ``K``, whose cost is several of its LUs."""
-    m = K.shape[0] - nf
-    if m == 0:
+    inconsistent beyond what :func:`lstsq_solve` passes (:func:`_rows_miss`), from a Cholesky of
+    ``R^T R`` that drops a pivot at or below ``1e-12`` of the largest diagonal entry (a dependent
+    column: :func:`chol_lower`). A singular KKT system of a wrong active-set guess (a crossover's,
+    on large chains: docs/speed.md) is rejected so without an SVD of ``K``, whose cost is several
+    of its LUs."""
+    if K.shape[0] == nf:
         return False
     Nm = _row_gram(K, nf)
-    scale = 1e-300
-    for a in range(nf):
-        scale = max(scale, Nm[a, a])
     keep = np.ones(nf, dtype=np.bool_)
-    for j in range(nf):
-        acc = Nm[j, j]
-        for k in range(j):
-            acc -= Nm[j, k] * Nm[j, k]
-        if not acc > 1e-12 * scale:  # dependent on the columns before it: dropped
-            keep[j] = False
-            for k in range(j):
-                Nm[j, k] = 0.0
-            Nm[j, j] = 1.0
-            for i in range(j + 1, nf):
-                Nm[i, j] = 0.0
-            continue
-        d = np.sqrt(acc)
-        Nm[j, j] = d
-        for i in range(j + 1, nf):
-            t = Nm[i, j]
-            for k in range(j):
-                t -= Nm[i, k] * Nm[j, k]
-            Nm[i, j] = t / d
+    chol_lower(Nm, nf, 1e-12 * _max_diagonal(Nm), keep)
+    return _rows_miss(K, rhs, nf, Nm, keep)
+
+
+@njit(cache=True, nogil=True)
+def _max_diagonal(M):
+    scale = 1e-300
+    for a in range(M.shape[0]):
+        scale = max(scale, M[a, a])
+    return scale
+
+
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _rows_miss(K, rhs, nf, L, keep):
+    """Whether the rows of ``K`` (:func:`rows_inconsistent`) miss beyond what :func:`lstsq_solve`
+    passes at their least-squares point: ``R^T R x = R^T r_c`` through ``L``, the factor of ``R^T R``
+    with the dependent columns dropped (``keep`` false: their unknowns zero, the others' point still
+    a least-squares one), with one step of refinement (:func:`_beyond_lstsq`)."""
+    m = K.shape[0] - nf
     x = np.zeros(nf)
-    res = np.empty(m)
-    for i in range(m):
-        res[i] = rhs[nf + i]
+    res = rhs[nf:].copy()
     worst = 0.0
     for _ in range(2):  # the point, then one step of refinement on its residual
         v = np.zeros(nf)
@@ -124,11 +110,9 @@ def rows_inconsistent(K, rhs, nf):
                 v[a] += K[nf + i, a] * ri
         for a in range(nf):
             if not keep[a]:
-                v[a] = 0.0
-        dx = chol_apply(Nm, v)
+                v[a] = 0.0  # (chol_apply passes a dropped unknown through: zero)
+        x += chol_apply(L, v)
         worst = 0.0
-        for a in range(nf):
-            x[a] += dx[a] if keep[a] else 0.0
         for i in range(m):
             acc = rhs[nf + i]
             for a in range(nf):
@@ -421,11 +405,10 @@ def determined_solve(K, rhs, nf):
     N = K.shape[0]
     m = N - nf
     Nm = _row_gram(K, nf)
-    scale = 1e-300
-    for a in range(nf):
-        scale = max(scale, Nm[a, a])
-    if not chol_lower(Nm, nf, 1e-12 * scale)[0]:  # dependent columns
-        return _nans(N) if rows_inconsistent(K, rhs, nf) else lstsq_solve(K, rhs)
+    keep = np.ones(nf, dtype=np.bool_)
+    chol_lower(Nm, nf, 1e-12 * _max_diagonal(Nm), keep)
+    if not np.all(keep):  # dependent columns: the rows judged on the kept ones' factor
+        return np.full(N, np.nan) if _rows_miss(K, rhs, nf, Nm, keep) else lstsq_solve(K, rhs)
     # x = N^-1 R^T r_c
     v = np.zeros(nf)
     for i in range(m):
@@ -449,7 +432,7 @@ def determined_solve(K, rhs, nf):
         # point, misses by more than sqrt(m) times its threshold: no x' meets every row within
         # 1e-10 max|rhs| then (|R x' - r_c|_inf >= |R x - r_c|_2 / sqrt(m)). Said without the SVD,
         # which would make a wrong crossover guess cost more than its instant's iterations
-        return _nans(N) if _beyond_lstsq(worst, m, rhs) else lstsq_solve(K, rhs)
+        return np.full(N, np.nan) if _beyond_lstsq(worst, m, rhs) else lstsq_solve(K, rhs)
     # l = R N^-1 (r_x - Hxx x)
     w = np.empty(nf)
     for a in range(nf):
@@ -469,19 +452,32 @@ def determined_solve(K, rhs, nf):
 
 
 @njit(cache=True, nogil=True, fastmath=False)  # (stated: numba's callees inherit a caller's fastmath)
-def chol_lower(M, n, floor):
+def chol_lower(M, n, floor, keep=None):
     """The Cholesky factor of ``M[:n, :n]``'s lower triangle, in place (column by column): ``(True,
     its smallest pivot)``, or ``(False, 0)`` at the first pivot (before its square root) at or below
     ``floor`` (then ``M`` is partly overwritten). Shared by the small factors of the active-set and
     uniqueness tests (:func:`determined_solve`, :func:`mcdm_pin.solvers._unique.unique_test`,
-    :func:`mcdm_pin.solvers._unique.definite_beyond`)."""
+    :func:`mcdm_pin.solvers._unique.definite_beyond`).
+
+    With ``keep`` ((n,) bools, true), such a pivot drops its column instead (a dependent one):
+    ``keep[j]`` false, the factor's row and column ``j`` zero and its diagonal 1, so that
+    :func:`chol_apply` passes that unknown through and the others are the factor of the kept
+    columns alone; the factor then always completes."""
     dmin = np.inf
     for j in range(n):
         acc = M[j, j]
         for k in range(j):
             acc -= M[j, k] * M[j, k]
         if not acc > floor:
-            return False, 0.0
+            if keep is None:
+                return False, 0.0
+            keep[j] = False
+            for k in range(j):
+                M[j, k] = 0.0
+            M[j, j] = 1.0
+            for i in range(j + 1, n):
+                M[i, j] = 0.0
+            continue
         d = np.sqrt(acc)
         M[j, j] = d
         dmin = min(dmin, d)
