@@ -27,9 +27,9 @@ test within 60 steps, 6 against 3 from zero multipliers.) Where the free set cha
 near a vertex the line search cuts the steps short and the method may need tens of steps; its
 guess is then often right all the same. An infeasible problem has an unbounded dual: the method
 stops at its step limit and the guess it returns fails its verification, as any wrong guess does.
-No sum here is reassociated (``dot_in_order``, and the Cholesky factor and solve compiled with
-``fastmath=False`` stated, since numba's callees otherwise take a caller's ``fastmath``), so the
-compiled and the uncompiled guesses, and their step counts, are the same to the bit.
+No sum here is reassociated (``dot_in_order``; the Cholesky factor and solve are inlined and take
+this module's flags, which have no ``fastmath``), so the compiled and the uncompiled guesses, and
+their step counts, are the same to the bit.
 """
 
 from __future__ import annotations

@@ -68,7 +68,7 @@ def _beyond_lstsq(worst, m, rhs):
     return worst > np.sqrt(m) * 1e-10 * full
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def rows_inconsistent(K, rhs, nf):
     """Whether the rows ``R x = r_c`` of ``K = [[Hxx, R^T], [R, 0]]`` (``R = K[nf:, :nf]``) are
     inconsistent beyond what :func:`lstsq_solve` passes (:func:`_rows_miss`), from a Cholesky of
@@ -451,7 +451,7 @@ def determined_solve(K, rhs, nf):
     return sol
 
 
-@njit(cache=True, nogil=True, fastmath=False)  # (stated: numba's callees inherit a caller's fastmath)
+@njit(cache=True, nogil=True, inline="always")  # (inlined: each caller's fastmath applies)
 def chol_lower(M, n, floor, keep=None):
     """The Cholesky factor of ``M[:n, :n]``'s lower triangle, in place (column by column): ``(True,
     its smallest pivot)``, or ``(False, 0)`` at the first pivot (before its square root) at or below
@@ -462,7 +462,11 @@ def chol_lower(M, n, floor, keep=None):
     With ``keep`` ((n,) bools, true), such a pivot drops its column instead (a dependent one):
     ``keep[j]`` false, the factor's row and column ``j`` zero and its diagonal 1, so that
     :func:`chol_apply` passes that unknown through and the others are the factor of the kept
-    columns alone; the factor then always completes."""
+    columns alone; the factor then always completes.
+
+    Inlined into each caller, so that the caller's ``fastmath`` applies: numba's callees otherwise
+    take the flags of whichever caller compiled them first, and the dual guess
+    (:mod:`._dual_guess`) needs it exact where :func:`determined_solve` wants it vectorised."""
     dmin = np.inf
     for j in range(n):
         acc = M[j, j]
@@ -489,7 +493,7 @@ def chol_lower(M, n, floor, keep=None):
     return True, dmin
 
 
-@njit(cache=True, nogil=True, fastmath=False)  # (stated: numba's callees inherit a caller's fastmath)
+@njit(cache=True, nogil=True, inline="always")  # (inlined: each caller's fastmath applies)
 def chol_apply(L, r):
     """``(L L^T)^-1 r``."""
     n = L.shape[0]
