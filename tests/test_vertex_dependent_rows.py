@@ -3,8 +3,9 @@
 directions (two cables along one line). The LU of the rows then meets a pivot of rounding size
 instead of zero, and its point is noise of 1e15 and more. Where the free block is diagonal, the rows'
 Schur complement solves the system instead, so the optimum's own active set verifies: on the neck's
-``pitch`` (case 1) eight instants went on to the interior-point method because of it (docs/speed.md,
-"A vertex's dependent rows"). Compiled and uncompiled alike."""
+``pitch`` (case 1) instants 31-37 went on to the interior-point method because of it (docs/speed.md,
+"A vertex's dependent rows"). The linear algebra's tests run compiled and uncompiled; the neck's, on
+the compiled kernels the library answers with."""
 
 from __future__ import annotations
 
