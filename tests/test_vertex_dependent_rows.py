@@ -26,8 +26,9 @@ def linalg(kernel_modules):
 
 
 def _vertex_system(seed, diagonal=True, consistent=True):
-    """``[[H, R^T], [R, 0]]`` with a square ``R`` of rank ``nf - 2`` (two of its columns the sums of
-    others, rows mixed so that no zero shows exactly) and ``r_c`` in its range, or not."""
+    """``[[H, R^T], [R, 0]]`` with a square ``R`` of rank ``nf - 2`` (two of its columns combinations of
+    others, then every column mixed by an orthogonal matrix so that no zero shows exactly), ``H``
+    diagonal or not, and ``r_c`` in ``R``'s range, or not."""
     rng = np.random.default_rng(seed)
     nf = int(rng.integers(6, 30))
     B = rng.standard_normal((nf, nf - 2))

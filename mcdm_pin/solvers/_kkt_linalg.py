@@ -249,11 +249,11 @@ def vertex_solve_lu(K, rhs, nf, square):
         return kkt_solve(K, rhs, nf, square), LU, perm, False
     if _rounding_pivot(LU, R):
         # rows dependent but for rounding (free cables along one line: the neck's pitch, case 1, at
-        # its optimum's own active set): the vertex's point is noise (1e15-1e32) and fails the
-        # check at the right active set. Where the free block is diagonal, the rows' Schur
-        # complement drops the dependent rows and solves the system, or finds it inconsistent;
-        # then, and where the block is not diagonal, the vertex's point stands (a wrong guess's
-        # noise still says which cables to exchange: docs/speed.md)
+        # its optimum's own active set): the vertex's point is noise and fails the check at the
+        # right active set. Where the free block is diagonal, the rows' Schur complement drops the
+        # dependent rows and solves the system, or finds it inconsistent; then, and where the block
+        # is not diagonal, the vertex's point stands (a wrong guess's noise still says which cables
+        # to exchange: docs/speed.md, "A vertex's dependent rows")
         alt, diagonal = schur_solve(K, rhs, nf)
         if diagonal and np.all(np.isfinite(alt)):
             return alt, LU, perm, False
@@ -278,8 +278,8 @@ def vertex_solve_lu(K, rhs, nf, square):
 @njit(cache=True, nogil=True)
 def _rounding_pivot(LU, R):
     """Whether a pivot of ``R``'s factors ``LU`` (:func:`lu_factor`) is at or below ``1e-13`` of ``R``'s
-    largest entry: the rounding of a zero (healthy pivots of the chains' and the neck's vertices sit
-    at 1e-6 to 1e-1 of it, these at 1e-21 to 1e-15)."""
+    largest entry: the rounding of a zero, many decades below a healthy pivot (docs/speed.md, "A
+    vertex's dependent rows", says where each kind sits)."""
     n = R.shape[0]
     big = 0.0
     for i in range(n):
