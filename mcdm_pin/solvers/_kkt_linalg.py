@@ -247,7 +247,7 @@ def vertex_solve_lu(K, rhs, nf, square):
     LU, perm, ok = lu_factor(R)
     if not ok:
         return kkt_solve(K, rhs, nf, square), LU, perm, False
-    if _rounding_pivot(LU, R):
+    if _rounding_pivot(LU):
         # rows dependent but for rounding (free cables along one line: the neck's pitch, case 1, at
         # its optimum's own active set): the vertex's point is noise and fails the check at the
         # right active set. Where the free block is diagonal, the rows' Schur complement drops the
@@ -276,15 +276,15 @@ def vertex_solve_lu(K, rhs, nf, square):
 
 
 @njit(cache=True, nogil=True)
-def _rounding_pivot(LU, R):
-    """Whether a pivot of ``R``'s factors ``LU`` (:func:`lu_factor`) is at or below ``1e-13`` of ``R``'s
-    largest entry: the rounding of a zero, many decades below a healthy pivot (docs/speed.md, "A
-    vertex's dependent rows", says where each kind sits)."""
-    n = R.shape[0]
+def _rounding_pivot(LU):
+    """Whether a pivot of the factors ``LU`` (:func:`lu_factor`) is at or below ``1e-13`` of the largest
+    one: the rounding of a zero, many decades below a healthy pivot (docs/speed.md, "A vertex's
+    dependent rows", says where each kind sits). The pivots alone, not the matrix's entries: a pass
+    over those costs about a seventh of the LU itself."""
+    n = LU.shape[0]
     big = 0.0
-    for i in range(n):
-        for j in range(n):
-            big = max(big, abs(R[i, j]))
+    for k in range(n):
+        big = max(big, abs(LU[k, k]))
     for k in range(n):
         if abs(LU[k, k]) <= 1e-13 * big:
             return True
