@@ -9,6 +9,8 @@ the compiled kernels the library answers with."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -17,7 +19,7 @@ from mcdm_pin.problem import Context
 from mcdm_pin.scaling import scale_problem
 from mcdm_pin.settings import DEFAULT
 
-NECK = "robots/caspr/8S_neck/8S_neck.yaml"
+NECK = Path(__file__).resolve().parents[1] / "robots" / "caspr" / "8S_neck" / "8S_neck.yaml"
 
 
 @pytest.fixture
