@@ -76,3 +76,42 @@ def test_myoarm_case3_cold_instants_answer_in_the_ipm(monkeypatch, tmp_path):
         assert a.status == b.status == "optimal", (k, a.message)
         assert a.stage.split(">")[0] == "ipm", (k, a.stage)
         assert a.objective == pytest.approx(b.objective, rel=OBJ_RTOL), k
+
+
+def test_an_equation_without_variables_is_infeasible_at_once():
+    """``0 = b_i`` with ``b_i != 0`` (a coordinate that no cable moves, under a load: BioBiped's
+    torso) is its own certificate: the interior-point stage says infeasible before iterating, naming
+    the rows (the method itself ran this problem to its iteration limit, 60, with one such row or
+    two). A zero row with ``b_i = 0`` is only a redundant equation, and the problem solves."""
+    from mcdm_pin import jit
+    from mcdm_pin.qp import QPData
+    from mcdm_pin.solvers.base import INFEASIBLE, OPTIMAL
+    from mcdm_pin.solvers.ipm import ipm_solve
+
+    jit.prepare(policy="wait")
+    n = 4
+    A = np.array([[1.0, -1.0, 0.5, 0.0], [0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0], [0.2, 0.3, -0.4, 1.0]])
+    qp = QPData(np.eye(n), np.zeros(n), 0.0, A, np.array([0.3, 0.0, 0.0, 0.1]), np.zeros(n), np.full(n, 10.0))
+    assert ipm_solve(qp).status == OPTIMAL  # (two zero rows with zero right-hand sides: redundant)
+    for b in ([0.3, 0.0, 2.0, 0.1], [0.3, -1.0, 2.0, 0.1]):
+        sol = ipm_solve(qp.replace(b=np.array(b)))
+        assert sol.status == INFEASIBLE and sol.iterations == 0 and sol.stage == "ipm", sol.message
+        assert ("rows 1, 2" if b[1] else "row 2") in sol.message
+
+
+def test_biobiped_torso_is_certified_by_the_ipm():
+    """BioBiped's torso: coordinates that no cable spans, one of them loaded (the torso's height, its
+    column of ``L`` exactly zero); every instant is infeasible, said by the interior-point stage at
+    once, and the diagnosis names the lost wrench closure."""
+    from mcdm_pin import InverseDynamics, Robot, load_trajectory
+
+    from .conftest import REPO
+
+    with pytest.warns(Warning):  # (CASPR's inertias, accepted as shipped: docs/limits.md)
+        robot = Robot.load(REPO / "robots" / "caspr" / "BioBiped_one_leg" / "BioBiped_one_leg.yaml")
+    traj = load_trajectory(robot, "traj_test")
+    ident = InverseDynamics.for_case(robot, 1)
+    for k in (0, 100, 2500):
+        one = ident.solve(traj.q[k], traj.qd[k], traj.qdd[k])
+        assert one.status == "infeasible" and one.stage == "ipm" and one.iterations == 0, (k, one.stage, one.message)
+        assert "wrench closure lost" in one.message

@@ -49,7 +49,18 @@ def ipm_solve(qp, settings: Settings = DEFAULT) -> Solution:
     """Solve ``qp`` with the compiled interior-point method (``settings``: :func:`ipm_arguments`): one
     compiled call (:func:`._fast.ipm_answer`) makes the cone rows, solves, and after a crossover
     computes the answer's duals, the next guess (:func:`.active_set.active_solution` in numpy) and
-    whether the optimum is provably unique (:func:`.least_norm.is_unique`)."""
+    whether the optimum is provably unique (:func:`.least_norm.is_unique`).
+
+    An equation without a variable whose right-hand side is not zero (``0 = b_i``: a coordinate that
+    no cable or actuator moves, under a load) is its own certificate of infeasibility, given before
+    the iterations: the method's iterates do not settle on a certificate along such a row (on a
+    four-variable problem with one of them it ran to its iteration limit:
+    ``tests/test_ipm_fixed.py``)."""
+    empty = _empty_rows(qp)
+    if len(empty):
+        rows = f"rows {', '.join(map(str, empty.tolist()))} have" if len(empty) > 1 else f"row {empty[0]} has"
+        return failure(qp.n, INFEASIBLE, f"no point meets the equation of motion: its {rows} no variable and a "
+                                         f"nonzero right-hand side", 0, stage="ipm")
     out = jit.kernels("solvers._fast").ipm_answer(*map(tuple, ipm_arguments(qp, settings)))  # (plain: ._structs)
     n, it = qp.n, int(out.iterations)
     if out.code == _ipm.CROSSOVER:
@@ -62,6 +73,14 @@ def ipm_solve(qp, settings: Settings = DEFAULT) -> Solution:
         return failure(n, INFEASIBLE, f"no point meets the equation of motion and {what} (an "
                                       f"infeasibility certificate of the interior-point method)", it, stage="ipm")
     return failure(n, INACCURATE, f"interior-point method: {REASONS.get(out.code, out.code)}", it, stage="ipm")
+
+
+def _empty_rows(qp) -> np.ndarray:
+    """The equations whose row of ``A`` is exactly zero and whose right-hand side is not."""
+    A, b = qp.A, qp.b
+    if not len(b):
+        return np.zeros(0, dtype=int)
+    return np.flatnonzero((b != 0.0) & ~np.asarray(A).any(axis=1))
 
 
 class IPMStage(Stage):
