@@ -4,7 +4,8 @@ iterations (mcdm_pin.solvers._fast.ipm_answer): before, a box without interior l
 room, and on MyoSuite's arm with the glenohumeral cone (case 3) 54 of 101 cold instants ended in a
 numerical breakdown or a failed crossover and fell through to Clarabel. The answers are checked
 against Clarabel's optimum and against the KKT conditions in the duals' convention
-(mcdm_pin/solvers/base.py)."""
+(mcdm_pin/solvers/base.py). Last, the other case the stage settles before its iterations: an
+equation without a variable and a nonzero right-hand side (mcdm_pin/solvers/ipm.py, ``ipm_solve``)."""
 
 from __future__ import annotations
 
