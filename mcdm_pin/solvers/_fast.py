@@ -164,7 +164,10 @@ def answer_duals(qp, cones, f, grad, state, cact, mus, dirs):
     computes in numpy): the bounds' multipliers ``z`` (base convention), the cone duals ``z_cone``
     (:func:`mcdm_pin.solvers.active_set.cone_duals`, from the half-angles' cosines ``cosr`` and the
     planes ``basis`` normal to the axes), the objective ``1/2 f^T H f + c^T f + r`` and the cones
-    held with a positive multiplier. Returns ``(z, z_cone, objective, held)``."""
+    held with a positive multiplier. Returns ``(z, z_cone, objective, held)``.
+
+    A held cone's dual points along its force's own direction across the axis at ``f``
+    (:func:`held_direction`), the direction :func:`._kkt_verify.verify` judged stationarity with."""
     H, g, r = qp.H, qp.c, qp.r
     cosr, basis = cones.cosr, cones.basis
     n = f.shape[0]
@@ -179,16 +182,32 @@ def answer_duals(qp, cones, f, grad, state, cact, mus, dirs):
         mu = mus[k] if cact[k] else 0.0
         held[k] = cact[k] and mus[k] > 0.0
         if mu != 0.0:
+            d0, d1, d2 = held_direction(cones.G, cones.gc, cones.ax, k, f, dirs)
             zc[k, 0] = mu / cosr[k]
             for e in range(2):
-                zc[k, 1 + e] = -zc[k, 0] * (basis[k, e, 0] * dirs[k, 0] + basis[k, e, 1] * dirs[k, 1]
-                                            + basis[k, e, 2] * dirs[k, 2])
+                zc[k, 1 + e] = -zc[k, 0] * (basis[k, e, 0] * d0 + basis[k, e, 1] * d1 + basis[k, e, 2] * d2)
     quad = 0.0
     lin = 0.0
     for i in range(n):
         quad += dot(H[i], f) * f[i]  # (H symmetric: row i is column i)
         lin += g[i] * f[i]
     return z, zc, 0.5 * quad + lin + r, held
+
+
+@njit(cache=True, nogil=True)
+def held_direction(G, gc, ax, k, f, dirs):
+    """The unit direction of held cone ``k``'s force across its axis at ``f``; ``dirs[k]`` (the
+    surface direction the active set carried) where that part is of rounding size (at most 1e-12 of
+    the force, as :func:`._unique._held_cone_rows` judges a cone held at its apex). The active-set solver
+    stops Newton's method on the surface once the force is on it to ``surface_tol``, and its
+    ``dirs`` then lag the force's own direction by up to ~1e-5 (the human arm's ``abduct``, case 3,
+    with its shoulder's multiplier ~700): duals aimed along ``dirs`` left a stationarity residual of
+    4.5e-6 of the gradient's scale, where the force's own direction leaves 2e-9."""
+    F0, F1, F2, _, p0, p1, p2 = cone_force(G, gc, ax, k, f)
+    perp = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+    if perp > 1e-12 * np.sqrt(F0 * F0 + F1 * F1 + F2 * F2):
+        return p0 / perp, p1 / perp, p2 / perp
+    return dirs[k, 0], dirs[k, 1], dirs[k, 2]
 
 
 @njit(cache=True, nogil=True)

@@ -250,8 +250,20 @@ def active_solution(qp, x, y, grad, state, cact, mus, dirs, nxt_state, **fields)
     held = np.flatnonzero(cact & (mus > 0))
     nxt_cones = {qp.cones[k].joint: (dirs[k], float(mus[k])) for k in held}
     return Solution(x, OPTIMAL, qp.objective(x), y=y, z=z,
-                    z_cone=cone_duals(qp, np.where(cact, mus, 0.0), dirs) if qp.cones else np.zeros((0, 3)),
+                    z_cone=cone_duals(qp, np.where(cact, mus, 0.0), _force_directions(qp, x, dirs))
+                    if qp.cones else np.zeros((0, 3)),
                     active=ActiveSet(_EMPTY, _EMPTY, nxt_cones, nxt_state), verified=True, **fields)
+
+
+def _force_directions(qp, x, dirs) -> np.ndarray:
+    """Each cone's force's unit direction across its axis at ``x``, ``dirs[k]`` where that part is
+    at most 1e-12 of the force (:func:`._fast.held_direction` in numpy)."""
+    G, g, ax = qp.cone_arrays()[:3]
+    F = g + G @ x
+    p = F - np.einsum("ka,ka->k", F, ax)[:, None] * ax
+    perp = np.linalg.norm(p, axis=1)
+    across = perp > 1e-12 * np.linalg.norm(F, axis=1)
+    return np.where(across[:, None], p / np.where(across, perp, 1.0)[:, None], dirs)
 
 
 _EMPTY = np.zeros(0, dtype=int)
