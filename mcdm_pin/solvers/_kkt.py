@@ -17,6 +17,7 @@ from ..jit import njit
 
 from ._kkt_eq import DROP, NO_CONVERGENCE, OK, SINGULAR, VANISHED, eq_solve
 from ._kkt_linalg import lu_apply_t
+from ._kkt_rank import restore_rank
 from ._kkt_verify import KKT_EOM, KKT_OPTIMAL, KKT_PIVOT, KKT_STATIONARY, KKT_SURFACE, verify
 from ._structs import ActiveSetRun
 
@@ -194,16 +195,18 @@ def _drop_pulling(cact, mus):
 def _pivot(block, qp, cones, state, cact, dirs, grad, changes, worst_kind, worst_idx, LU, perm, lu_ok):
     """The next active set: every violation exchanged at once when ``block`` and it leaves enough
     cables free (:func:`_block_pivot`), else only the worst (:func:`_one_change`); ``changes``:
-    :func:`._kkt_verify.verify`'s ``(release, to_lower, to_upper, cone_in, cone_out)``. ``(state,
-    cact, was_block)``."""
+    :func:`._kkt_verify.verify`'s ``(release, to_lower, to_upper, cone_in, cone_out)``; either way
+    with the equations' rank kept (:func:`._kkt_rank.restore_rank`). ``(state, cact, was_block)``."""
     release, to_lower, to_upper, cone_in, cone_out = changes
     fits, new_state, new_cact = _block_pivot(state, cact, release, to_lower, to_upper, cone_in, cone_out,
                                              qp.A.shape[0])
     if block and fits:
+        restore_rank(qp.A, qp.b, qp.lb, qp.ub, state, new_state, grad)
         return new_state, new_cact, True
-    state, cact = _one_change(qp, cones, cact, dirs, state, grad, worst_kind, worst_idx, cone_in, cone_out, LU, perm,
-                              lu_ok)
-    return state, cact, False
+    new_state, cact = _one_change(qp, cones, cact, dirs, state, grad, worst_kind, worst_idx, cone_in, cone_out, LU,
+                                  perm, lu_ok)
+    restore_rank(qp.A, qp.b, qp.lb, qp.ub, state, new_state, grad)
+    return new_state, cact, False
 
 
 @njit(cache=True, nogil=True)

@@ -1,0 +1,138 @@
+r"""The equations' rank through a pivot of the active-set solver (:func:`._kkt.active_set_run`).
+
+A pivot fixes at their bounds the free cables that left them. Where the equations need such a
+cable's column (no other free cable pulls along the direction it gives them), the free columns stop
+spanning the equations: the next KKT system is singular, its solution a point of 1e25 or none, and
+the exchanges that follow wander among sets of the same deficient rank. Along the 96-DoF chain's
+sweep (``benchmarks/scaling.py``'s, case 2) every one of the 53 warm starts that failed had lost the
+rank this way, 39 at a block pivot and 14 at a single one (docs/speed.md, "The equations' rank
+through a pivot").
+
+:func:`restore_rank` keeps the rank: after a pivot that fixed cables, where the free columns no
+longer span the equations, it frees, for each direction lost, one fixed cable that pulls along it:
+of those whose move off their bound closes the residual the fixed cables leave along that
+direction, the one with the least multiplier for its pull (a dual simplex ratio test). The cables the
+pivot fixed stay fixed. With it the chain's case 2 answers 93 of 100 warm starts (47 before).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..jit import njit
+from ._kkt_linalg import chol_apply, chol_lower
+
+
+@njit(cache=True, nogil=True)
+def restore_rank(A, b, lb, ub, before, state, grad):
+    """``state`` (in place, the active set after a pivot from ``before``) with fixed cables freed
+    where the free columns of ``A`` no longer span its rows (module docstring); ``b``, ``lb``,
+    ``ub`` the equations' right-hand side and the bounds; ``grad`` the bounds' multipliers at the set
+    before (> 0 binds a cable at its lower bound). Returns the number of cables freed.
+
+    Tested only after a pivot that fixed cables and left at most ``4 k + 4`` free columns to spare
+    beyond the equations (``k`` the cables it fixed: the rank is lost where few are left, and the
+    test costs a share of a KKT solve at 96 DoF, where case 1 tested at every pivot took 1.5x as
+    long): the rows' Gram matrix on the free columns, factored with its dependent rows dropped (a
+    pivot at or below 1e-13 of its largest diagonal entry: a dependent row's is of rounding size; at
+    1e-20 the guard missed most losses)."""
+    neq, n = A.shape
+    n_fixed, nf = 0, 0
+    for i in range(n):
+        n_fixed += before[i] == 0 and state[i] != 0
+        nf += state[i] == 0
+    if neq == 0 or n_fixed == 0 or nf - neq > 4 * n_fixed + 4:
+        return 0
+    G = _free_gram(A, state)
+    big = 0.0
+    for r in range(neq):
+        big = max(big, G[r, r])
+    if big == 0.0:
+        return 0
+    keep = np.ones(neq, dtype=np.bool_)
+    chol_lower(G, neq, 1e-13 * big, keep)
+    freed = 0
+    for j in range(neq):
+        if not keep[j]:
+            w = _lost_direction(A, state, G, keep, j)
+            k = _least_binding_along(A, b, lb, ub, before, state, grad, w)
+            if k >= 0:
+                state[k] = 0
+                freed += 1
+    return freed
+
+
+@njit(cache=True, nogil=True)
+def _free_gram(A, state):
+    """The lower triangle of ``A_F A_F^T`` over the free columns ``F`` (``state == 0``)."""
+    neq, n = A.shape
+    G = np.zeros((neq, neq))
+    for i in range(n):
+        if state[i] != 0:
+            continue
+        for r in range(neq):
+            ar = A[r, i]
+            if ar != 0.0:
+                for s in range(r + 1):
+                    G[r, s] += ar * A[s, i]
+    return G
+
+
+@njit(cache=True, nogil=True)
+def _lost_direction(A, state, L, keep, j):
+    """A direction ``w`` of the rows that the free columns do not reach (``w^T A_F ~ 0``): ``e_j``
+    less its projection on the kept rows, ``w_kept = -(A_K A_K^T)^-1 A_K a_j`` on the free
+    columns, with the kept rows' factor ``L`` (:func:`._kkt_linalg.chol_lower` with ``keep``: a
+    dropped row passes through it)."""
+    neq, n = A.shape
+    rhs = np.zeros(neq)
+    for i in range(n):
+        if state[i] == 0:
+            aj = A[j, i]
+            if aj != 0.0:
+                for r in range(neq):
+                    if keep[r]:
+                        rhs[r] += A[r, i] * aj
+    c = chol_apply(L, rhs)
+    w = np.zeros(neq)
+    for r in range(neq):
+        if keep[r]:
+            w[r] = -c[r]
+    w[j] = 1.0
+    return w
+
+
+@njit(cache=True, nogil=True)
+def _least_binding_along(A, b, lb, ub, before, state, grad, w):
+    """The fixed cable (not one the pivot has just fixed) to free along the lost direction ``w``: of
+    those whose move off their bound (up from a lower, down from an upper) closes the residual the
+    fixed cables leave along ``w`` (``w^T (b - A x)`` with every fixed cable at its bound), the one
+    with the smallest ratio of its multiplier to its pull ``|w^T a_k|`` (a dual simplex ratio test);
+    -1 when none pulls along ``w``."""
+    neq, n = A.shape
+    s = np.zeros(n)
+    top = 0.0
+    res = 0.0
+    for r in range(neq):
+        res += w[r] * b[r]
+    for k in range(n):
+        if state[k] != 0:
+            acc = 0.0
+            for r in range(neq):
+                acc += w[r] * A[r, k]
+            s[k] = acc
+            res -= acc * (lb[k] if state[k] == 1 else ub[k])
+            if before[k] != 0:
+                top = max(top, abs(acc))
+    best, best_ratio = -1, np.inf
+    for k in range(n):
+        if state[k] == 0 or before[k] == 0 or not abs(s[k]) > 1e-8 * top or top == 0.0:
+            continue
+        up = state[k] == 1  # (a cable at its lower bound moves up, one at its upper bound down)
+        if res != 0.0 and (s[k] * res > 0.0) != up:
+            continue
+        lam = grad[k] if up else -grad[k]
+        ratio = max(lam, 0.0) / abs(s[k])
+        if ratio < best_ratio:
+            best, best_ratio = k, ratio
+    return best
