@@ -1,7 +1,8 @@
-"""The equations' rank through a pivot of the active-set solver (mcdm_pin/solvers/_kkt_rank.py): a pivot
-that fixes cables whose columns the equations need frees, for each direction lost, a fixed cable that
-pulls along it. Without it the 96-DoF chain's warm starts in case 2 failed at 53 of 100 instants, each
-after losing the rank (docs/speed.md, "The equations' rank through a pivot")."""
+"""The large chains' warm starts (mcdm_pin/solvers/_kkt_rank.py, mcdm_pin/solvers/_kkt.py): a pivot
+that fixes cables whose columns the equations need frees, for each direction lost, a fixed cable
+that pulls along it; and a set whose Newton steps stopped short of a held cone's surface goes on
+from there. Without them the 96-DoF chain's warm starts failed at 53 of 100 instants in case 2, each
+after losing the rank, and at 76 in case 3 (docs/speed.md, "The equations' rank through a pivot")."""
 
 from __future__ import annotations
 
@@ -64,6 +65,29 @@ def test_the_96_dof_chains_warm_starts_keep_the_rank(chain96):
     warm = np.flatnonzero(res.stage == "warm_active_set")
     assert len(warm) >= 90, len(warm)
     ref = InverseDynamics.for_case(robot, 2, solver="clarabel")
+    for k in warm[:: max(1, len(warm) // 4)]:
+        r = ref.solve(traj.q[k], traj.qd[k], traj.qdd[k])
+        assert r.status == "optimal"
+        assert res.objective[k] == pytest.approx(r.objective, rel=1e-6, abs=1e-8)
+
+
+def test_the_96_dof_chains_warm_starts_with_cones_reach_their_surfaces(chain96):
+    """The same sweep in case 3 (15 deg cones on every joint): no warm start ends because its Newton
+    steps stopped short of a held cone's surface with nothing left to exchange (23 of 48 failures
+    before the set's steps went on from where they stopped), at least 70 instants answer warm (52
+    before, 25 before the rank guard), every answer optimal, and the warm answers equal Clarabel's
+    optimum (objective to 1e-6) at a few of them."""
+    from mcdm_pin import InverseDynamics
+    from mcdm_pin.solvers import active_set as AS
+
+    robot, traj = chain96
+    AS.MISSES.clear()
+    res = InverseDynamics.for_case(robot, 3).solve_trajectory(traj, progress=False)
+    assert (res.status == "optimal").all()
+    assert "a held cone's force off its surface" not in AS.MISSES, dict(AS.MISSES)
+    warm = np.flatnonzero(res.stage == "warm_active_set")
+    assert len(warm) >= 70, len(warm)
+    ref = InverseDynamics.for_case(robot, 3, solver="clarabel")
     for k in warm[:: max(1, len(warm) // 4)]:
         r = ref.solve(traj.q[k], traj.qd[k], traj.qdd[k])
         assert r.status == "optimal"

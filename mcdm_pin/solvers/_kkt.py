@@ -78,12 +78,11 @@ def tikhonov(H, g, ub, reg_rel):
 
 @njit(cache=True, nogil=True)
 def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
-    """Block principal pivoting on ``qp`` (a :class:`._structs.QP`; its ``H``, ``c``, equations and
-    bounds) with ``cones`` (:class:`._structs.Cones`) from the guess ``(state0, cact0, cdir0)`` and
-    its point ``x0``, ``mus0`` (or empty; later sets start from the set before: :func:`._kkt_eq.eq_solve`)
-    until a verified KKT point (:func:`.active_set.try_active_set`), within ``limits``
-    (:class:`._structs.Limits`: ``max_pivots``, ``max_newton``, the ``*_tol`` and ``reg_rel``, the
-    Tikhonov terms of :func:`._kkt_eq.eq_solve` relative to each variable's curvature: :func:`tikhonov`).
+    """Block principal pivoting on ``qp`` (a :class:`._structs.QP`) with ``cones``
+    (:class:`._structs.Cones`) from the guess ``(state0, cact0, cdir0)`` and its point ``x0``, ``mus0``
+    (or empty; later sets start from the set before: :func:`._kkt_eq.eq_solve`) until a verified KKT
+    point (:func:`.active_set.try_active_set`), within ``limits`` (:class:`._structs.Limits`; the
+    Tikhonov terms relative to each variable's curvature: :func:`tikhonov`).
 
     Every violated condition is exchanged at once (a block pivot) while the number of violations
     falls (Judice and Pires allow a few steps without progress; here none: on the neck that wandered
@@ -91,32 +90,28 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
     the equation of motion), only the worst violation changes (Judice and Pires' safeguard).
 
     Returns an :class:`._structs.ActiveSetRun`: ``code`` :data:`FOUND` or a key of :data:`REASONS`; at
-    :data:`FOUND`, ``mus`` the cones' multipliers, ``grad`` the bounds' (> 0 at a lower bound), ``y``
-    the equations', ``(state, cact, dirs)`` the optimum's active set and ``next_state`` the guess for
-    the next instant (the bounds whose multiplier is not negligible: ``limits.keep_rel``); ``sets``
-    the active sets tried (pivots + 1), ``solves`` the KKT systems solved (one per active set without
-    cones, one per Newton step with them).
+    :data:`FOUND`, the multipliers (``mus`` the cones', ``grad`` the bounds', > 0 at a lower bound,
+    ``y`` the equations'), the optimum's active set ``(state, cact, dirs)`` and the next instant's
+    guess ``next_state`` (:func:`next_guess`); ``sets`` the active sets tried, ``solves`` the KKT
+    systems solved (one per active set without cones, one per Newton step with them).
     """
-    H, g, A, lb, ub = qp.H, qp.c, qp.A, qp.lb, qp.ub
-    G = cones.G
-    n, neq, nc, max_pivots = H.shape[0], A.shape[0], G.shape[0], limits.max_pivots
-    reg = tikhonov(H, g, ub, limits.reg_rel)
-    state = _held_at_finite(state0, lb, ub)
+    n, neq, nc, max_pivots = qp.H.shape[0], qp.A.shape[0], cones.G.shape[0], limits.max_pivots
+    reg = tikhonov(qp.H, qp.c, qp.ub, limits.reg_rel)
+    state = _held_at_finite(state0, qp.lb, qp.ub)
     cact, cdir = cact0.copy(), cdir0.copy()
     hist_s, hist_c = np.zeros((max_pivots, n), dtype=np.int8), np.zeros((max_pivots, nc), dtype=np.bool_)
     f, y, mus, grad = np.zeros(n), np.zeros(neq), np.zeros(nc), np.zeros(n)
     # the last verified-but-not-optimal point, to step back to when a block pivot fails
-    have_prev = False
+    have_prev, last_was_block, blocks_ok = False, False, True
     prev_state, prev_cact, prev_grad, prev_dirs, prev_cone_dir, prev_in, prev_out = _memory(state, cact, cdir)
     prev_kind, prev_idx = np.int64(-1), np.int64(-1)
-    last_was_block, blocks_ok = False, True
-    best_ninf = n + nc + 1
-    solves = 0
-    none = np.zeros(0)
-    px, pm = x0, mus0  # where each set's Newton steps start: the guess's point, then the last set's
+    best_ninf, solves, none = n + nc + 1, 0, np.zeros(0)
+    # each set's Newton steps start at (px, pm): the guess's point, then the last set's (resume: the same set)
+    px, pm, resume = x0, mus0, False
     for it in range(max_pivots):
-        if _tried_before(hist_s, hist_c, it, state, cact):
+        if _tried_before(hist_s, hist_c, it, state, cact) and not resume:
             return ActiveSetRun(CYCLE, f, mus, grad, state, cact, cdir, state, y, it, solves)
+        again, resume = resume, False
         code, f, y, mus, dirs, ns, LU, perm, lu_ok = eq_solve(qp, cones, state, cact, cdir, limits, reg, px, pm)
         solves += ns
         if code == DROP:  # a cone pulls the force inwards: it is not active
@@ -128,8 +123,8 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
             state, cact = _single_pivot(prev_state, prev_cact, prev_grad, prev_kind, prev_idx,
                                         prev_in, prev_out, neq, nc, n)
             cdir = _next_dirs(prev_in, prev_cone_dir, prev_dirs, nc)
-            last_was_block = False
-            blocks_ok = False  # from now on one change at a time (finite for strictly convex QPs)
+            # from now on one change at a time (finite for strictly convex QPs)
+            last_was_block = blocks_ok = False
             px, pm = none, none
             continue
         if code != OK and code != NO_CONVERGENCE:
@@ -141,6 +136,11 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
         if vcode == KKT_OPTIMAL:
             return ActiveSetRun(FOUND, f, mus, grad, state, cact, dirs, next_guess(state, grad, limits.keep_rel), y,
                                 it + 1, solves)
+        if vcode == KKT_SURFACE and not again:
+            # nothing to exchange, but the Newton steps stopped short of a held cone's surface (their
+            # test is relative to every free cable, the surface's to the cone's force): once more
+            resume, px, pm = True, f, mus
+            continue
         if vcode != KKT_PIVOT:
             return ActiveSetRun(20 + vcode, f, mus, grad, state, cact, cdir, state, y, it + 1, solves)
         have_prev = True
