@@ -151,10 +151,9 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
         # a block pivot only while the number of violations keeps falling
         block = blocks_ok and ninf < best_ninf
         best_ninf = min(best_ninf, ninf)
-        state, cact, last_was_block = _pivot(block, qp, cones, state, cact, dirs, grad,
-                                             (release, to_lower, to_upper, cone_in, cone_out), worst_kind, worst_idx,
-                                             LU, perm, lu_ok)
-        cdir = _next_dirs(cone_in, cone_dir, dirs, nc)
+        state, cact, cdir, last_was_block = _pivot(block, qp, cones, state, cact, dirs, grad,
+                                                   (release, to_lower, to_upper, cone_in, cone_out, cone_dir),
+                                                   worst_kind, worst_idx, LU, perm, lu_ok)
         px, pm = f, mus
     return ActiveSetRun(PIVOT_LIMIT, f, mus, grad, state, cact, cdir, state, y, max_pivots, solves)
 
@@ -195,18 +194,20 @@ def _drop_pulling(cact, mus):
 def _pivot(block, qp, cones, state, cact, dirs, grad, changes, worst_kind, worst_idx, LU, perm, lu_ok):
     """The next active set: every violation exchanged at once when ``block`` and it leaves enough
     cables free (:func:`_block_pivot`), else only the worst (:func:`_one_change`); ``changes``:
-    :func:`._kkt_verify.verify`'s ``(release, to_lower, to_upper, cone_in, cone_out)``; either way
-    with the equations' rank kept (:func:`._kkt_rank.restore_rank`). ``(state, cact, was_block)``."""
-    release, to_lower, to_upper, cone_in, cone_out = changes
+    :func:`._kkt_verify.verify`'s ``(release, to_lower, to_upper, cone_in, cone_out, cone_dir)``;
+    either way with the rank of the equations and the held cones' surfaces kept
+    (:func:`._kkt_rank.restore_rank`). ``(state, cact, cdir, was_block)``, ``cdir`` the held cones'
+    surface directions (a cone taken: its ``cone_dir``)."""
+    release, to_lower, to_upper, cone_in, cone_out, cone_dir = changes
+    cdir = _next_dirs(cone_in, cone_dir, dirs, cact.shape[0])
     fits, new_state, new_cact = _block_pivot(state, cact, release, to_lower, to_upper, cone_in, cone_out,
                                              qp.A.shape[0])
-    if block and fits:
-        restore_rank(qp.A, qp.b, qp.lb, qp.ub, state, new_state, grad)
-        return new_state, new_cact, True
-    new_state, cact = _one_change(qp, cones, cact, dirs, state, grad, worst_kind, worst_idx, cone_in, cone_out, LU,
-                                  perm, lu_ok)
-    restore_rank(qp.A, qp.b, qp.lb, qp.ub, state, new_state, grad)
-    return new_state, cact, False
+    was_block = block and fits
+    if not was_block:
+        new_state, new_cact = _one_change(qp, cones, cact, dirs, state, grad, worst_kind, worst_idx, cone_in,
+                                          cone_out, LU, perm, lu_ok)
+    restore_rank(qp, cones, state, new_state, grad, cact, new_cact, cdir)
+    return new_state, new_cact, cdir, was_block
 
 
 @njit(cache=True, nogil=True)

@@ -13,6 +13,10 @@ longer span the equations, it frees, for each direction lost, one fixed cable th
 of those whose move off their bound closes the residual the fixed cables leave along that
 direction, the one with the least multiplier for its pull (a dual simplex ratio test). The cables the
 pivot fixed stay fixed. With it the chain's case 2 answers 93 of 100 warm starts (47 before).
+
+The held cones' surfaces are rows too: a pivot that takes a cone beside the equations can leave
+their rows dependent over the free cables (the same chain's case 3: a cone taken next to a held one
+at its tip gave a singular KKT system).
 """
 
 from __future__ import annotations
@@ -24,25 +28,62 @@ from ._kkt_linalg import chol_apply, chol_lower
 
 
 @njit(cache=True, nogil=True)
-def restore_rank(A, b, lb, ub, before, state, grad):
+def restore_rank(qp, cones, before, state, grad, held_before, held, dirs):
     """``state`` (in place, the active set after a pivot from ``before``) with fixed cables freed
-    where the free columns of ``A`` no longer span its rows (module docstring); ``b``, ``lb``,
-    ``ub`` the equations' right-hand side and the bounds; ``grad`` the bounds' multipliers at the set
-    before (> 0 binds a cable at its lower bound). Returns the number of cables freed.
+    where the free columns no longer span the equations of ``qp`` (a :class:`._structs.QP`) and the
+    surfaces of the cones ``held`` after it (of ``cones``, along their surface directions ``dirs``;
+    ``held_before`` those held before it): module docstring. ``grad``: the bounds' multipliers at the
+    set before (> 0 binds a cable at its lower bound). Returns the number of cables freed.
 
-    Tested only after a pivot that fixed cables and left at most ``4 k + 4`` free columns to spare
-    beyond the equations (``k`` the cables it fixed: the rank is lost where few are left, and the
-    test costs a share of a KKT solve at 96 DoF, where case 1 tested at every pivot took 1.5x as
-    long): the rows' Gram matrix on the free columns, factored with its dependent rows dropped (a
-    pivot at or below 1e-13 of its largest diagonal entry: a dependent row's is of rounding size; at
-    1e-20 the guard missed most losses)."""
-    neq, n = A.shape
-    n_fixed, nf = 0, 0
+    Tested only after a pivot that fixed cables or took a cone and left at most ``4 k + 4`` free
+    columns to spare beyond the rows (``k`` the cables it fixed and the cones it took: the rank is
+    lost where few are left, and the test costs a share of a KKT solve at 96 DoF, where case 1
+    tested at every pivot took 1.5x as long): the rows' Gram matrix on the free columns, factored
+    with its dependent rows dropped (a pivot at or below 1e-13 of its largest diagonal entry: a
+    dependent row's is of rounding size; at 1e-20 the guard missed most losses)."""
+    n = state.shape[0]
+    k, nf, na = 0, 0, 0
     for i in range(n):
-        n_fixed += before[i] == 0 and state[i] != 0
+        k += before[i] == 0 and state[i] != 0
         nf += state[i] == 0
-    if neq == 0 or n_fixed == 0 or nf - neq > 4 * n_fixed + 4:
+    for c in range(held.shape[0]):
+        k += held[c] and not held_before[c]
+        na += held[c]
+    neq = qp.A.shape[0] + na
+    if neq == 0 or k == 0 or nf - neq > 4 * k + 4:
         return 0
+    R, r = _rows(qp.A, qp.b, cones, held, dirs, na)
+    return _restore(R, r, qp.lb, qp.ub, before, state, grad)
+
+
+@njit(cache=True, nogil=True)
+def _rows(A, b, cones, held, dirs, na):
+    """The equations and the ``na`` held cones' surfaces as rows ``(R, r)`` (``R f = r``): a cone's
+    surface along its direction ``d`` is ``w^T (G_k f + g_k) = 0``, ``w = d - tan(rho) a`` (its
+    gradient at a force on the surface whose part across the axis points along ``d``)."""
+    neq, n = A.shape
+    R = np.empty((neq + na, n))
+    r = np.empty(neq + na)
+    R[:neq] = A
+    r[:neq] = b
+    s = neq
+    for c in range(held.shape[0]):
+        if not held[c]:
+            continue
+        w0 = dirs[c, 0] - cones.tn[c] * cones.ax[c, 0]
+        w1 = dirs[c, 1] - cones.tn[c] * cones.ax[c, 1]
+        w2 = dirs[c, 2] - cones.tn[c] * cones.ax[c, 2]
+        for i in range(n):
+            R[s, i] = w0 * cones.G[c, 0, i] + w1 * cones.G[c, 1, i] + w2 * cones.G[c, 2, i]
+        r[s] = -(w0 * cones.gc[c, 0] + w1 * cones.gc[c, 1] + w2 * cones.gc[c, 2])
+        s += 1
+    return R, r
+
+
+@njit(cache=True, nogil=True)
+def _restore(A, b, lb, ub, before, state, grad):
+    """:func:`restore_rank` on the rows ``A f = b``: the cables freed."""
+    neq = A.shape[0]
     G = _free_gram(A, state)
     big = 0.0
     for r in range(neq):
