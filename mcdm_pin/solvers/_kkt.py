@@ -196,17 +196,19 @@ def _pivot(block, qp, cones, state, cact, dirs, grad, changes, worst_kind, worst
     cables free (:func:`_block_pivot`), else only the worst (:func:`_one_change`); ``changes``:
     :func:`._kkt_verify.verify`'s ``(release, to_lower, to_upper, cone_in, cone_out, cone_dir)``;
     either way with the rank of the equations and the held cones' surfaces kept
-    (:func:`._kkt_rank.restore_rank`). ``(state, cact, cdir, was_block)``, ``cdir`` the held cones'
-    surface directions (a cone taken: its ``cone_dir``)."""
+    (:func:`._kkt_rank.restore_rank`; not after a vertex's ratio-test swap, which keeps it: its pivot
+    element is not zero). ``(state, cact, cdir, was_block)``, ``cdir`` the held cones' surface
+    directions (a cone taken: its ``cone_dir``)."""
     release, to_lower, to_upper, cone_in, cone_out, cone_dir = changes
     cdir = _next_dirs(cone_in, cone_dir, dirs, cact.shape[0])
     fits, new_state, new_cact = _block_pivot(state, cact, release, to_lower, to_upper, cone_in, cone_out,
                                              qp.A.shape[0])
-    was_block = block and fits
+    was_block, swapped = block and fits, False
     if not was_block:
-        new_state, new_cact = _one_change(qp, cones, cact, dirs, state, grad, worst_kind, worst_idx, cone_in,
-                                          cone_out, LU, perm, lu_ok)
-    restore_rank(qp, cones, state, new_state, grad, cact, new_cact, cdir)
+        new_state, new_cact, swapped = _one_change(qp, cones, cact, dirs, state, grad, worst_kind, worst_idx,
+                                                   cone_in, cone_out, LU, perm, lu_ok)
+    if not swapped:
+        restore_rank(qp, cones, state, new_state, grad, cact, new_cact, cdir)
     return new_state, new_cact, cdir, was_block
 
 
@@ -289,9 +291,10 @@ def _block_pivot(state, cact, release, to_lower, to_upper, cone_in, cone_out, ne
 
 @njit(cache=True, nogil=True, inline="always")
 def _one_change(qp, cones, cact, dirs, state, grad, worst_kind, worst_idx, cone_in, cone_out, LU, perm, lu_ok):
-    """Only the worst violation changes: ``(state, cact)`` after it. At a vertex (as many free cables
-    as equations and held cones) a cable reaching a bound swaps with the fixed cable the ratio test
-    picks (:func:`_ratio_test`); otherwise, or when none is eligible, :func:`_single_pivot`."""
+    """Only the worst violation changes: ``(state, cact, swapped)`` after it. At a vertex (as many free
+    cables as equations and held cones) a cable reaching a bound swaps with the fixed cable the ratio
+    test picks (:func:`_ratio_test`; ``swapped``); otherwise, or when none is eligible,
+    :func:`_single_pivot`."""
     A, G, gc, ax, tn = qp.A, cones.G, cones.gc, cones.ax, cones.tn
     n = state.shape[0]
     neq = A.shape[0]
@@ -309,8 +312,9 @@ def _one_change(qp, cones, cact, dirs, state, grad, worst_kind, worst_idx, cone_
         new_state = state.copy()
         new_state[worst_idx] = worst_kind
         new_state[enter] = 0
-        return new_state, cact
-    return _single_pivot(state, cact, grad, worst_kind, worst_idx, cone_in, cone_out, neq, nc, n)
+        return new_state, cact, True
+    new_state, new_cact = _single_pivot(state, cact, grad, worst_kind, worst_idx, cone_in, cone_out, neq, nc, n)
+    return new_state, new_cact, False
 
 
 @njit(cache=True, nogil=True, inline="always")
