@@ -198,11 +198,11 @@ def answer_duals(qp, cones, f, grad, state, cact, mus, dirs):
 def held_direction(G, gc, ax, k, f, dirs):
     """The unit direction of held cone ``k``'s force across its axis at ``f``; ``dirs[k]`` (the
     surface direction the active set carried) where that part is of rounding size (at most 1e-12 of
-    the force, as :func:`._unique._held_cone_rows` judges a cone held at its apex). The active-set solver
-    stops Newton's method on the surface once the force is on it to ``surface_tol``, and its
-    ``dirs`` then lag the force's own direction by up to ~1e-5 (the human arm's ``abduct``, case 3,
-    with its shoulder's multiplier ~700): duals aimed along ``dirs`` left a stationarity residual of
-    4.5e-6 of the gradient's scale, where the force's own direction leaves 2e-9."""
+    the force, as :func:`._unique._held_cone_rows` judges a cone held at its apex). The active-set
+    solver stops Newton's method on the surface once the force is on it to ``surface_tol``, where
+    ``dirs`` may still lag the force's own direction; with a large multiplier, duals aimed along
+    ``dirs`` fail the chain's check of stationarity at a point the active-set check verified
+    (docs/speed.md, "The equations' rank through a pivot")."""
     F0, F1, F2, _, p0, p1, p2 = cone_force(G, gc, ax, k, f)
     perp = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
     if perp > 1e-12 * np.sqrt(F0 * F0 + F1 * F1 + F2 * F2):

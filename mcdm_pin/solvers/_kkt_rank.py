@@ -3,20 +3,19 @@ r"""The equations' rank through a pivot of the active-set solver (:func:`._kkt.a
 A pivot fixes at their bounds the free cables that left them. Where the equations need such a
 cable's column (no other free cable pulls along the direction it gives them), the free columns stop
 spanning the equations: the next KKT system is singular, its solution a point of 1e25 or none, and
-the exchanges that follow wander among sets of the same deficient rank. Along the 96-DoF chain's
-sweep (``benchmarks/scaling.py``'s, case 2) every one of the 53 warm starts that failed had lost the
-rank this way, 39 at a block pivot and 14 at a single one (docs/speed.md, "The equations' rank
-through a pivot").
+the exchanges that follow wander among sets of the same deficient rank: on large chains most warm
+starts that failed had lost the rank this way (docs/speed.md, "The equations' rank through a
+pivot").
 
 :func:`restore_rank` keeps the rank: after a pivot that fixed cables, where the free columns no
 longer span the equations, it frees, for each direction lost, one fixed cable that pulls along it:
 of those whose move off their bound closes the residual the fixed cables leave along that
 direction, the one with the least multiplier for its pull (a dual simplex ratio test). The cables the
-pivot fixed stay fixed. With it the chain's case 2 answers 93 of 100 warm starts (47 before).
+pivot fixed stay fixed.
 
 The held cones' surfaces are rows too: a pivot that takes a cone beside the equations can leave
-their rows dependent over the free cables (the same chain's case 3: a cone taken next to a held one
-at its tip gave a singular KKT system).
+their rows dependent over the free cables (on a chain, a cone taken beside a held one at its tip
+made the next KKT system singular).
 """
 
 from __future__ import annotations
@@ -37,10 +36,9 @@ def restore_rank(qp, cones, before, state, grad, held_before, held, dirs):
 
     Tested only after a pivot that fixed cables or took a cone and left at most ``4 k + 4`` free
     columns to spare beyond the rows (``k`` the cables it fixed and the cones it took: the rank is
-    lost where few are left, and the test costs a share of a KKT solve at 96 DoF, where case 1
-    tested at every pivot took 1.5x as long): the rows' Gram matrix on the free columns, factored
-    with its dependent rows dropped (a pivot at or below 1e-13 of its largest diagonal entry: a
-    dependent row's is of rounding size; at 1e-20 the guard missed most losses)."""
+    lost where few are left, and the test costs a share of a KKT solve): the rows' Gram matrix on
+    the free columns, factored with its dependent rows dropped (a pivot at or below 1e-13 of its
+    largest diagonal entry: a dependent row's is of rounding size, about 1e-16 of the largest)."""
     n = state.shape[0]
     k, nf, na = 0, 0, 0
     for i in range(n):
