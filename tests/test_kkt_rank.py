@@ -105,14 +105,19 @@ def test_the_96_dof_chains_warm_starts_keep_the_rank(chain96):
     """The 96-DoF, 288-cable chain of ``benchmarks/scaling.py`` along its 101-instant sweep, case 2:
     the warm start answers at least 90 instants (47 before the guard), every answer optimal, and
     the warm answers equal Clarabel's optimum (objective to 1e-6) at a few of them."""
+    _check_sweep(*chain96, 2, at_least=90)
+
+
+def _check_sweep(robot, traj, case, at_least):
+    """``case`` along ``traj``: every answer optimal, at least ``at_least`` instants answered warm,
+    and the warm answers' objective equal to Clarabel's (1e-6) at four of them."""
     from mcdm_pin import InverseDynamics
 
-    robot, traj = chain96
-    res = InverseDynamics.for_case(robot, 2).solve_trajectory(traj, progress=False)
+    res = InverseDynamics.for_case(robot, case).solve_trajectory(traj, progress=False)
     assert (res.status == "optimal").all()
     warm = np.flatnonzero(res.stage == "warm_active_set")
-    assert len(warm) >= 90, len(warm)
-    ref = InverseDynamics.for_case(robot, 2, solver="clarabel")
+    assert len(warm) >= at_least, len(warm)
+    ref = InverseDynamics.for_case(robot, case, solver="clarabel")
     for k in warm[:: max(1, len(warm) // 4)]:
         r = ref.solve(traj.q[k], traj.qd[k], traj.qdd[k])
         assert r.status == "optimal"
@@ -126,18 +131,8 @@ def test_the_96_dof_chains_warm_starts_with_cones_reach_their_surfaces(chain96):
     with the held cones' surfaces among the guard's rows, 75 without, 52 before the surfaces' steps,
     25 before the guard), every answer optimal, and the warm answers equal Clarabel's optimum
     (objective to 1e-6) at a few of them."""
-    from mcdm_pin import InverseDynamics
     from mcdm_pin.solvers import active_set as AS
 
-    robot, traj = chain96
     AS.MISSES.clear()
-    res = InverseDynamics.for_case(robot, 3).solve_trajectory(traj, progress=False)
-    assert (res.status == "optimal").all()
+    _check_sweep(*chain96, 3, at_least=90)
     assert "a held cone's force off its surface" not in AS.MISSES, dict(AS.MISSES)
-    warm = np.flatnonzero(res.stage == "warm_active_set")
-    assert len(warm) >= 90, len(warm)
-    ref = InverseDynamics.for_case(robot, 3, solver="clarabel")
-    for k in warm[:: max(1, len(warm) // 4)]:
-        r = ref.solve(traj.q[k], traj.qd[k], traj.qdd[k])
-        assert r.status == "optimal"
-        assert res.objective[k] == pytest.approx(r.objective, rel=1e-6, abs=1e-8)
