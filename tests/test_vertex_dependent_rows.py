@@ -9,8 +9,6 @@ the compiled kernels the library answers with."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -19,7 +17,9 @@ from mcdm_pin.problem import Context
 from mcdm_pin.scaling import scale_problem
 from mcdm_pin.settings import DEFAULT
 
-NECK = Path(__file__).resolve().parents[1] / "robots" / "caspr" / "8S_neck" / "8S_neck.yaml"
+from .conftest import REPO
+
+NECK = REPO / "robots" / "caspr" / "8S_neck" / "8S_neck.yaml"
 
 
 @pytest.fixture

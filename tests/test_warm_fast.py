@@ -581,6 +581,8 @@ def test_projection_decision_is_the_numpy_ones(instants):
 def test_ratio_test_with_the_vertex_factors_is_the_fresh_ones():
     """The dual simplex step's ratio test reuses the vertex solve's LU of the free columns (the same
     matrix): the same entering cable as solving that matrix afresh."""
+    from mcdm_pin.solvers._structs import QP, Cones
+
     rng = np.random.default_rng(5)
     n, neq = 12, 5
     for _ in range(50):
@@ -592,10 +594,13 @@ def test_ratio_test_with_the_vertex_factors_is_the_fresh_ones():
         grad = rng.standard_normal(n)
         LU, perm, ok = _kkt_linalg.lu_factor(np.ascontiguousarray(A[:, free]))
         assert ok
-        G, z3 = np.zeros((0, 3, n)), np.zeros((0, 3))
+        z3 = np.zeros((0, 3))
+        qp = QP(np.zeros((n, n)), np.zeros(0), np.zeros((0, n)), np.zeros(n), 0.0, A, np.zeros(neq), np.zeros(n),
+                np.full(n, 1.0), False)
+        cones = Cones(np.zeros((0, 3, n)), z3, z3, np.zeros(0), z3, np.zeros(0), np.zeros((0, 2, 3)))
         for kind in (1, 2):
             r = int(free[rng.integers(neq)])
-            args = (A, G, z3, z3, np.zeros(0), np.zeros(0, dtype=np.bool_), z3, state, grad, kind, r, n)
+            args = (qp, cones, np.zeros(0, dtype=np.bool_), z3, state, grad, kind, r, 0)
             assert _kkt._ratio_test(*args, LU, perm, True) == \
                 _kkt._ratio_test(*args, np.zeros((0, 0)), np.zeros(0, dtype=np.int64), False)
 

@@ -17,7 +17,7 @@ from ..jit import njit
 
 from ._kkt_eq import DROP, NO_CONVERGENCE, OK, SINGULAR, VANISHED, eq_solve
 from ._kkt_linalg import lu_apply_t
-from ._kkt_rank import restore_rank
+from ._kkt_rank import equation_rows, restore_rank
 from ._kkt_verify import KKT_EOM, KKT_OPTIMAL, KKT_PIVOT, KKT_STATIONARY, KKT_SURFACE, verify
 from ._structs import ActiveSetRun
 
@@ -295,10 +295,9 @@ def _one_change(qp, cones, cact, dirs, state, grad, worst_kind, worst_idx, cone_
     cables as equations and held cones) a cable reaching a bound swaps with the fixed cable the ratio
     test picks (:func:`_ratio_test`; ``swapped``); otherwise, or when none is eligible,
     :func:`_single_pivot`."""
-    A, G, gc, ax, tn = qp.A, cones.G, cones.gc, cones.ax, cones.tn
     n = state.shape[0]
-    neq = A.shape[0]
-    nc = G.shape[0]
+    neq = qp.A.shape[0]
+    nc = cones.G.shape[0]
     n_act = 0
     for k in range(nc):
         n_act += cact[k]
@@ -306,8 +305,7 @@ def _one_change(qp, cones, cact, dirs, state, grad, worst_kind, worst_idx, cone_
     if (worst_kind == 1 or worst_kind == 2) and n - np.count_nonzero(state) == neq + n_act:
         # at a vertex (as many free cables as equations): a dual simplex step, the fixed
         # cable to free chosen by the ratio test (keeps the other multipliers' signs)
-        enter = _ratio_test(A, G, gc, ax, tn, cact, dirs, state, grad, worst_kind, worst_idx, n,
-                            LU, perm, lu_ok)
+        enter = _ratio_test(qp, cones, cact, dirs, state, grad, worst_kind, worst_idx, n_act, LU, perm, lu_ok)
     if enter >= 0:
         new_state = state.copy()
         new_state[worst_idx] = worst_kind
@@ -318,28 +316,18 @@ def _one_change(qp, cones, cact, dirs, state, grad, worst_kind, worst_idx, cone_
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _ratio_test(A, G, gc, ax, tn, cact, dirs, state, grad, kind, r, n, LU, perm, lu_ok):
+def _ratio_test(qp, cones, cact, dirs, state, grad, kind, r, n_act, LU, perm, lu_ok):
     """The fixed cable whose release lets the leaving free cable ``r`` reach its bound (``kind`` 1:
     it is below its lower bound, 2: above its upper bound) at the least dual cost: min over eligible
     j of multiplier_j / |dx_r/df_j|, with ``x_F = B^-1 (rhs - col_j f_j)`` and ``B`` the square
-    matrix of the equations (and held cones' surface rows) on the free cables. -1 if none is
+    matrix of the equations and the ``n_act`` held cones' surface rows (:func:`._kkt_rank.equation_rows`)
+    on the free cables. -1 if none is
     eligible or ``B`` is singular. ``(LU, perm)``: ``B``'s factors when ``lu_ok`` (the vertex solve
     of this active set factored the same matrix, :func:`vertex_solve_lu`), else ``B`` is solved
     afresh."""
-    neq = A.shape[0]
-    nc = G.shape[0]
-    rows = np.zeros((neq + nc, n))
-    m = 0
-    for i in range(neq):
-        rows[m] = A[i]
-        m += 1
-    for k in range(nc):
-        if cact[k]:
-            w0 = dirs[k, 0] - tn[k] * ax[k, 0]
-            w1 = dirs[k, 1] - tn[k] * ax[k, 1]
-            w2 = dirs[k, 2] - tn[k] * ax[k, 2]
-            rows[m] = w0 * G[k, 0] + w1 * G[k, 1] + w2 * G[k, 2]
-            m += 1
+    n = state.shape[0]
+    rows = equation_rows(qp.A, qp.b, cones, cact, dirs, n_act)[0]
+    m = rows.shape[0]
     free = np.flatnonzero(state == 0)
     if free.shape[0] != m:
         return -1

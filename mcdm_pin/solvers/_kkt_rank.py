@@ -50,15 +50,16 @@ def restore_rank(qp, cones, before, state, grad, held_before, held, dirs):
     neq = qp.A.shape[0] + na
     if neq == 0 or k == 0 or nf - neq > 4 * k + 4:
         return 0
-    R, r = _rows(qp.A, qp.b, cones, held, dirs, na)
+    R, r = equation_rows(qp.A, qp.b, cones, held, dirs, na)
     return _restore(R, r, qp.lb, qp.ub, before, state, grad)
 
 
 @njit(cache=True, nogil=True)
-def _rows(A, b, cones, held, dirs, na):
+def equation_rows(A, b, cones, held, dirs, na):
     """The equations and the ``na`` held cones' surfaces as rows ``(R, r)`` (``R f = r``): a cone's
     surface along its direction ``d`` is ``w^T (G_k f + g_k) = 0``, ``w = d - tan(rho) a`` (its
-    gradient at a force on the surface whose part across the axis points along ``d``)."""
+    gradient at a force on the surface whose part across the axis points along ``d``). The rows of
+    the ratio test's basis too (:func:`._kkt._ratio_test`)."""
     neq, n = A.shape
     R = np.empty((neq + na, n))
     r = np.empty(neq + na)
