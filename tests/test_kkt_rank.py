@@ -1,7 +1,7 @@
 """The large chains' warm starts (mcdm_pin/solvers/_kkt_rank.py, mcdm_pin/solvers/_kkt.py): a pivot
 that fixes cables whose columns the equations need frees, for each direction lost, a fixed cable
-that pulls along it; and a set whose Newton steps stopped short of a held cone's surface goes on
-from there; the held cones' surfaces count among the rows whose rank is kept. Without them the 96-DoF
+that pulls along it; the Newton steps on a held cone's surface do not stop short of it; the held
+cones' surfaces count among the rows whose rank is kept. Without them the 96-DoF
 chain's warm starts failed at 53 of 100 instants in case 2, each after losing the rank, and at 76 in
 case 3 (docs/speed.md, "The equations' rank through a pivot")."""
 
@@ -127,7 +127,7 @@ def _check_sweep(robot, traj, case, at_least):
 def test_the_96_dof_chains_warm_starts_with_cones_reach_their_surfaces(chain96):
     """The same sweep in case 3 (15 deg cones on every joint): no warm start ends because its Newton
     steps stopped short of a held cone's surface with nothing left to exchange (23 of 48 failures
-    before the set's steps went on from where they stopped), at least 90 instants answer warm (99
+    before the steps' prediction waited for the surfaces), at least 90 instants answer warm (99
     with the held cones' surfaces among the guard's rows, 75 without, 52 before the surfaces' steps,
     25 before the guard), every answer optimal, and the warm answers equal Clarabel's optimum
     (objective to 1e-6) at a few of them."""

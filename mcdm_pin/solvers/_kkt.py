@@ -106,12 +106,10 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
     prev_state, prev_cact, prev_grad, prev_dirs, prev_cone_dir, prev_in, prev_out = _memory(state, cact, cdir)
     prev_kind, prev_idx = np.int64(-1), np.int64(-1)
     best_ninf, solves, none = n + nc + 1, 0, np.zeros(0)
-    # each set's Newton steps start at (px, pm): the guess's point, then the last set's (resume: the same set)
-    px, pm, resume = x0, mus0, False
+    px, pm = x0, mus0  # where each set's Newton steps start: the guess's point, then the last set's
     for it in range(max_pivots):
-        if _tried_before(hist_s, hist_c, it, state, cact) and not resume:
+        if _tried_before(hist_s, hist_c, it, state, cact):
             return ActiveSetRun(CYCLE, f, mus, grad, state, cact, cdir, state, y, it, solves)
-        again, resume = resume, False
         code, f, y, mus, dirs, ns, LU, perm, lu_ok = eq_solve(qp, cones, state, cact, cdir, limits, reg, px, pm)
         solves += ns
         if code == DROP:  # a cone pulls the force inwards: it is not active
@@ -136,11 +134,6 @@ def active_set_run(qp, cones, state0, cact0, cdir0, limits, x0, mus0):
         if vcode == KKT_OPTIMAL:
             return ActiveSetRun(FOUND, f, mus, grad, state, cact, dirs, next_guess(state, grad, limits.keep_rel), y,
                                 it + 1, solves)
-        if vcode == KKT_SURFACE and not again:
-            # nothing to exchange, but the Newton steps stopped short of a held cone's surface (their
-            # test is relative to every free cable, the surface's to the cone's force): once more
-            resume, px, pm = True, f, mus
-            continue
         if vcode != KKT_PIVOT:
             return ActiveSetRun(20 + vcode, f, mus, grad, state, cact, cdir, state, y, it + 1, solves)
         have_prev = True
