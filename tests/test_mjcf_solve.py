@@ -82,3 +82,15 @@ def test_a_state_that_breaks_a_coupling_is_refused_by_solve():
     bad[robot.couplings.q_index[robot.couplings.dependent[0]]] += 0.1
     with pytest.raises(StateError, match="coupling"):
         ident.solve(bad)
+
+
+@pytest.mark.parametrize("name", ["myoelbow", "myoelbow_2dof"])
+def test_the_bundled_elbows_motions_are_answered_at_every_instant(name):
+    """The motions shipped with the elbows are within their muscles' reach: every instant answered in
+    case 1, at Clarabel's optimum (the 2-DoF elbow's flexion moves its shoulder too: with the shoulder
+    held at 0 the muscles cannot hold the arm past about 1.67 rad of flexion, and that is infeasible)."""
+    robot = Robot.load(ROBOTS / f"{name}.yaml")
+    for t in robot.sidecar.trajectories:
+        traj = load_trajectory(robot, t)
+        ours, ref = _both(robot, case_problem(robot, 1), traj)
+        _same_answer(ours, ref)
