@@ -111,11 +111,13 @@ class Settings:
     trajectory's 99th percentile). 50 pivots keep a warm start that fails under ~1 ms of pivoting."""
     warm_min_pivots: int = 4
     """After a warm start fails, the next instant's pivot limit is half the last one, down to this (at
-    most ``warm_max_pivots``); an answer from the warm start restores ``warm_max_pivots``. A guess that
-    failed tends to fail again where the instants lie far apart, and a pivot's KKT solve grows with the
-    cube of the problem's size: at 96 DoF and 288 cables, 11 instants over a second, every warm start
-    failed after its 50 pivots and took longer than the cold solve that followed (docs/speed.md, "The
-    first stage of a cold instant")."""
+    most ``warm_max_pivots``); an answer from the warm start restores ``warm_max_pivots``, and so does
+    an instant whose answer lies within ``warm_max_pivots`` bound and cone changes of the guess that
+    failed (the instants do not jump there). A guess that failed tends to fail again where the
+    instants lie far apart, and a pivot's KKT solve grows with the cube of the problem's size: at 96
+    DoF and 288 cables, 11 instants over a second, every warm start failed after its 50 pivots and
+    took longer than the cold solve that followed (docs/speed.md, "The first stage of a cold
+    instant"; "The pivot limit after a failure")."""
     warm_dual_steps: int = 30
     """Where the warm active set's guess fails on a problem whose objective is diagonal and positive
     definite and which has no cones (case 1's ``f^T f``, the muscles' activations), the stage guesses

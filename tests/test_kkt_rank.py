@@ -103,9 +103,10 @@ def chain96(tmp_path_factory):
 
 def test_the_96_dof_chains_warm_starts_keep_the_rank(chain96):
     """The 96-DoF, 288-cable chain of ``benchmarks/scaling.py`` along its 101-instant sweep, case 2:
-    the warm start answers at least 90 instants (47 before the guard), every answer optimal, and
-    the warm answers equal Clarabel's optimum (objective to 1e-6) at a few of them."""
-    _check_sweep(*chain96, 2, at_least=90)
+    the warm start answers at least 97 instants (99; 47 before the guard, 93 while a failure near
+    its answer halved the next pivot limit), every answer optimal, and the warm answers equal
+    Clarabel's optimum (objective to 1e-6) at a few of them."""
+    _check_sweep(*chain96, 2, at_least=97)
 
 
 def _check_sweep(robot, traj, case, at_least):

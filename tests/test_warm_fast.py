@@ -726,3 +726,30 @@ def test_a_warm_start_that_fails_halves_the_next_instants_pivot_limit(monkeypatc
     assert limits == [50, 25, 12, 6, 4, 4, 50]
     stage.reset()
     assert stage.max_pivots == 50
+
+
+def test_a_failed_warm_start_near_its_answer_keeps_the_whole_pivot_limit(monkeypatch):
+    """WarmActiveSet: where the instant's answer lies within ``warm_max_pivots`` bound and cone
+    changes of the guess that failed, the instants do not jump, and the next one gets the whole
+    limit; an answer further off leaves it halved (a run of far-apart instants)."""
+    from mcdm_pin.qp import QPData
+    from mcdm_pin.solvers import active_set
+    from mcdm_pin.solvers.base import Solution
+
+    n = 12
+    qp = QPData(np.eye(n), np.zeros(n), 0.0, np.ones((1, n)), np.ones(1), np.zeros(n), np.ones(n))
+    monkeypatch.setattr(jit, "ready", lambda: True)
+    monkeypatch.setattr(active_set, "try_active_set", lambda *a, **k: None)
+    state = np.zeros(n, dtype=np.int8)
+    for moved, limit in ((3, 8), (8, 8), (9, 4)):  # changes between the failed guess and the answer
+        stage = active_set.WarmActiveSet(DEFAULT.replace(warm_max_pivots=8, warm_min_pivots=2, warm_dual_steps=0))
+        stage.guess = active_set.ActiveSet(np.zeros(0, int), np.zeros(0, int), state=state.copy())
+        assert stage.run(qp, None, None) is None and stage.max_pivots == 4
+        answer = state.copy()
+        answer[:moved] = 1
+        answer[0] = 2  # (another bound counts as a change too)
+        stage.learn(qp, Solution(x=np.zeros(n), status="optimal",
+                                 active=active_set.ActiveSet(np.zeros(0, int), np.zeros(0, int), state=answer)))
+        assert active_set.changes(qp, active_set.ActiveSet(np.zeros(0, int), np.zeros(0, int), state=state),
+                                  stage.guess) == moved
+        assert stage.max_pivots == limit, (moved, stage.max_pivots)

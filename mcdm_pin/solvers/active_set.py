@@ -288,8 +288,9 @@ class WarmActiveSet(Stage):
 
     Args:
         settings: the pivot limit per instant (``warm_max_pivots``, halved after each failure down to
-            ``warm_min_pivots``, restored by a success), the dual guess's steps and the first guess's
-            pivots before it, and the tolerances.
+            ``warm_min_pivots``, restored by a success or by an answer within ``warm_max_pivots``
+            changes of the guess that failed), the dual guess's steps and the first guess's pivots
+            before it, and the tolerances.
     """
 
     name = "warm_active_set"
@@ -299,6 +300,7 @@ class WarmActiveSet(Stage):
         self.guess: ActiveSet | None = None
         self.y: np.ndarray | None = None  # the previous answer's equations' multipliers
         self.max_pivots = settings.warm_max_pivots  # this instant's limit
+        self._failed: ActiveSet | None = None  # this instant's guess, where it failed
 
     def run(self, qp, sol, deadline):
         if self.guess is None or not jit.ready():
@@ -313,6 +315,7 @@ class WarmActiveSet(Stage):
             out = self._dual_guess(qp)
         least = min(s.warm_min_pivots, s.warm_max_pivots)
         self.max_pivots = s.warm_max_pivots if out is not None else max(least, self.max_pivots // 2)
+        self._failed = None if out is not None else self.guess  # (judged against the answer: learn)
         return out
 
     def _dual_applies(self, qp) -> bool:
@@ -335,9 +338,16 @@ class WarmActiveSet(Stage):
         return None if out is None else out.but(iterations=out.iterations + int(steps))
 
     def learn(self, qp, sol):
+        failed, self._failed = self._failed, None
         self.guess = sol.active if sol.active is not None else ActiveSet.from_duals(
             qp, sol, self.settings.active_set_from_solution)
         self.y = sol.y
+        # a guess that failed with the answer within the pivot limit's reach of it (at most as many
+        # bound and cone changes): the instants do not jump, and the next one, a like step from this
+        # answer, gets the whole limit; halved there, each instant of a stretch of close ones would
+        # get fewer pivots than it needs (docs/speed.md, "The pivot limit after a failure")
+        if failed is not None and changes(qp, failed, self.guess) <= self.settings.warm_max_pivots:
+            self.max_pivots = self.settings.warm_max_pivots
 
     def seed(self, hint):
         self.guess = hint.active
@@ -347,6 +357,30 @@ class WarmActiveSet(Stage):
         self.guess = None
         self.y = None
         self.max_pivots = self.settings.warm_max_pivots
+        self._failed = None
+
+
+def changes(qp: QPData, a: ActiveSet, b: ActiveSet) -> int:
+    """How many of ``qp``'s variables have another bound (or none) in ``a`` than in ``b``, plus how
+    many of its cones one holds and the other does not."""
+    n = qp.n
+    ca, cb = _bound_codes(a, n), _bound_codes(b, n)
+    if ca.shape != cb.shape:  # (made on another problem: as far as can be)
+        return n + len(qp.cones)
+    out = int(np.count_nonzero(ca != cb))
+    if qp.cones:
+        out += int(np.count_nonzero(a.cone_guess(qp)[0] != b.cone_guess(qp)[0]))
+    return out
+
+
+def _bound_codes(a: ActiveSet, n: int) -> np.ndarray:
+    """(n,) int8: 0 free, 1 at the lower bound, 2 at the upper (:attr:`ActiveSet.state`'s codes)."""
+    if a.state is not None:
+        return np.asarray(a.state)
+    out = np.zeros(n, dtype=np.int8)
+    out[a.lower] = 1
+    out[a.upper] = 2
+    return out
 
 
 def _separable(qp: QPData) -> bool:
