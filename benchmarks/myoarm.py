@@ -15,7 +15,9 @@ gives no cone, case 3 is refused and case 2 is timed instead, with a note):
   (model and solve per instant from the result's timings), then ``solve`` per instant in order with
   the previous forces (the wall time of each frame: the state's checks, the model, the solve, the
   answer's check, the outputs and the result). *Cold*: every instant alone in a shuffled order after ``reset()``, the wall time of
-  ``solve``. Cells: median and 99th percentile per instant, ms.
+  ``solve``. Cells: median and 99th percentile per instant, ms. A warm run's first frame has no
+  previous answer (a cold frame in the warm column, which sets its p99): the warm frames after it
+  are also given apart.
 - **check**: before timing, both back-ends on ``--check`` instants against Clarabel at 1e-11
   (``bench_id``'s check: objective, equation of motion, bounds, cones).
 - **the model part's floor**: MuJoCo 4.0's ``mj_inverse`` (its position stage runs kinematics, the
@@ -132,7 +134,8 @@ def time_warm(ident, traj) -> dict:
         wall.append(time.perf_counter() - t0)
         f_prev = one.f if one.found else f_prev
     return dict(model=res.time_model_s[ok], solve=res.time_solve_s[ok], wall=np.array(wall),
-                total=(res.time_model_s + res.time_solve_s)[ok], no_answer=int((~ok).sum()))
+                total=(res.time_model_s + res.time_solve_s)[ok], no_answer=int((~ok).sum()),
+                later=np.array(wall[1:]))  # (the first frame has no previous answer: a cold one)
 
 
 def time_cold(ident, traj, order) -> dict:
@@ -153,11 +156,13 @@ def time_case(idents, traj, repeat: int, seed: int = 0) -> dict:
             for name, ident in idents.items():
                 ident.reset()
                 one = time_warm(ident, traj) if mode == "warm" else time_cold(ident, traj, order)
-                r = rec.setdefault((name, mode), dict(model=[], solve=[], wall=[], total=[], no_answer=0))
-                for key in ("model", "solve", "wall", "total"):
-                    r[key].append(one[key])
+                r = rec.setdefault((name, mode), dict(model=[], solve=[], wall=[], total=[], later=[], no_answer=0))
+                for key in ("model", "solve", "wall", "total", "later"):
+                    if key in one:
+                        r[key].append(one[key])
                 r["no_answer"] += one["no_answer"]
-    return {k: {p: (np.concatenate(v) if p != "no_answer" else v) for p, v in r.items()} for k, r in rec.items()}
+    return {k: {p: (v if p == "no_answer" else np.concatenate(v) if v else np.zeros(0)) for p, v in r.items()}
+            for k, r in rec.items()}
 
 
 def time_floor(robot, traj, mj, repeat: int) -> dict:
@@ -291,6 +296,9 @@ def table(cases: list, floor: dict, parts: dict) -> str:
                              f"{_cell(r['total'])} | {_cell(r['wall'])} | "
                              f"{'1' if name == 'ours' else f'{ratio:.1f}x'} | {r['no_answer']} | "
                              f"{c['check'][name]} |")
+    for c in cases:  # a warm run's first frame has no previous answer: it is a cold one
+        later = ", ".join(f"{name} {_cell(c['times'][(name, 'warm')]['later'])}" for name, _ in BACKENDS)
+        lines.append(f"\nCase {c['case']}, warm frames after each run's first (p50 / p99 wall, ms): {later}")
     lines += ["", "| model part per frame | p50, ms | p99, ms | vs mj_inverse (p50) |", "|---|---|---|---|"]
     ref = stats_ms(floor["mj_inverse"])["median"]
     for name, x in floor.items():
