@@ -4,6 +4,7 @@ stay in sync with the code. Each runs in a temporary folder (its outputs go to .
 from __future__ import annotations
 
 import os
+import re
 
 import pytest
 
@@ -93,3 +94,21 @@ def test_rmr_shoulder(tmp_path):
     text = _text(nb)
     assert "without GH: 21/21 optimal" in text and "with GH   : 21/21 optimal" in text, text
     assert "largest GH angle ours 19.03 deg" in text
+
+
+def test_myosuite_arm(tmp_path):
+    pytest.importorskip("mujoco", reason="pip install -e '.[test]' (mujoco: the MJCF loader's compiler)")
+    nb = _run("myosuite_arm", tmp_path)
+    text = _text(nb)
+    assert "27 of them independent; 63 muscles over 97 wrapping surfaces" in text
+    for what in ("muscle-tendon lengths", "moment arms"):  # the paths against MuJoCo's
+        err = float(re.search(rf"{what}: largest difference to MuJoCo (\S+) m", text).group(1))
+        assert err < 1e-9, (what, err)
+    assert "without the glenohumeral cone: 26/26 instants optimal" in text
+    assert "with the glenohumeral cone: 26/26 instants optimal" in text
+    rel = [float(x) for x in re.findall(r"objective equal to Clarabel's within (\S+)", text)]
+    assert len(rel) == 2 and max(rel) < 1e-6, rel
+    assert "19.03 deg with it" in text  # the cone holds the force on its surface
+    before, after = (float(x) for x in re.search(r"rotator cuff\s+mean summed activation (\S+) -> (\S+)", text).groups())
+    assert after > 2 * before  # recruitment shifts to the rotator cuff
+    assert (tmp_path / "out" / "myosuite_glenohumeral.png").stat().st_size > 20_000
