@@ -78,9 +78,10 @@ def ipm_solve(qp, settings: Settings = DEFAULT) -> Solution:
 def _empty_rows(qp) -> np.ndarray:
     """The equations whose row of ``A`` is exactly zero and whose right-hand side is not."""
     A, b = qp.A, qp.b
-    if not len(b):
+    used = np.asarray(A).any(axis=1)
+    if not len(b) or used.all():  # (the usual case: one pass)
         return np.zeros(0, dtype=int)
-    return np.flatnonzero((b != 0.0) & ~np.asarray(A).any(axis=1))
+    return np.flatnonzero((b != 0.0) & ~used)
 
 
 class IPMStage(Stage):
