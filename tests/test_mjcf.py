@@ -1,8 +1,10 @@
 """MJCF robots against MuJoCo 4.0 itself: tendon lengths and moment arms over wraps and pulleys, muscle
 tensions at given activations, and interaction wrenches with wrapped muscles pressing on bones.
 
-MyoSuite's models come from ``myo_sim`` (the test extra); the arm is composed in code by MyoSuite and
-written out by MuJoCo. Every comparison runs at 50 random states per model.
+MyoSuite's models come from ``myo_sim`` (the test extra); the arms, hands, legs and torsos are composed
+in code by MyoSuite and compiled by MuJoCo. Every comparison runs on every MyoSuite model that loads (the
+18 "loaded" rows of docs/musculoskeletal.md's table, ``tools/myosuite_table.py``'s ``LOADED``), at 50
+random states per model.
 """
 
 from __future__ import annotations
@@ -19,16 +21,23 @@ from mcdm_pin.robot import Robot  # noqa: E402
 from mcdm_pin.model.terms import TermsEvaluator  # noqa: E402
 
 STATES = 50
-# every kind of model that loads: elbows, a finger with pulleys and one with motors on its tendons,
-# the arm (couplings), a hand, the legs (a free root, couplings), the torso (208 muscles)
-MODELS = ("myoelbow", "myoelbow_2dof", "myofinger", "motorfinger", "myoarm_r", "myohand", "myolegs", "myotorso")
+# every model that loads: elbows, a finger with pulleys and one with motors on its tendons, the arm
+# (couplings), the hands, the legs (a free root, couplings; the OSL prosthesis's joint motors), the
+# torsos (208-414 muscles), both arms and the full body
+MODELS = ("myoelbow", "myoelbow_2dof", "myofinger", "motorfinger", "myoarm_r", "myohand", "myolegs", "myotorso",
+          "myolegs_osl", "myohand_l", "myoarms", "myohands", "myolegs26", "myolegs_abdomen", "myotorso_abdomen",
+          "myotorso_arm_r", "myotorso_arms", "myofullbody")
 
 
 def _compile(name):
     if name == "motorfinger":
         return mujoco.MjModel.from_xml_path(str(myo_sim.get_xml_path("myofinger")).replace("myofinger_v0",
                                                                                           "motorfinger_v0"))
-    if name in ("myoarm_r", "myohand", "myolegs", "myotorso"):
+    if name == "myohand_l":  # (a fragment: no load_spec name)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return myo_sim.FRAGMENT_SPEC_BUILDERS[name]().compile()
+    if name not in ("myoelbow", "myoelbow_2dof", "myofinger", "myolegs_osl"):  # composed in code by MyoSuite
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             return myo_sim.load_spec(name).compile()
