@@ -574,7 +574,7 @@ def warm_calls():
     n = 2
     qp = QP(z((n, n)), z(0), z((0, n)), z(n), 0.0, z((1, n)), z(1), z(n), z(n), False)
     cones = Cones(z((1, 3, n)), z((1, 3)), z((1, 3)), z(1), z((1, 3)), z(1), z((1, 2, 3)))
-    limits = Limits(2, 2, 1e-10, 1e-12, 1e-9, 1e-11, 1e-12, 1e-8, 1e-10, 1e-12, 1e-12, 1e-8, 1e-9, 1e3, 60, 1e-10,
+    limits = Limits(2, 2, 1e-10, 1e-12, 1e-9, 1e-11, 1e-12, 1e-8, 1e-10, 1e-12, 1e-12, 1e-12, 1e-8, 1e-9, 1e3, 60, 1e-10,
                     1e-3, 1, 1e-9, 0.2, 8, 1e-14, 1e-5, 0.99, 1e-14, 1e-6)
     # (the entry points Python calls at every instant take plain tuples: ._structs)
     tq, tc, tl = tuple(qp), tuple(cones), tuple(limits)

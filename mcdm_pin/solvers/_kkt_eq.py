@@ -111,7 +111,7 @@ def eq_solve(qp, cones, state, cact, cdir, limits, reg, x0, mus0):
         if solves > 1 and _pulling(mus, act):
             return DROP, f, y, mus, dirs, solves, LU, perm, lu_ok
         if have_prev:
-            done, last_step = _settled(sol, x_prev, f, G, gc, ax, tn, act, step_tol, last_step, limits.surface_tol)
+            done, last_step = _settled(sol, x_prev, f, G, gc, ax, tn, act, step_tol, last_step, limits.settle_tol)
             if done:
                 converged = True
                 break
@@ -355,7 +355,7 @@ def _refine(K, sol, reg, free, nf, neq, na, square):
 
 
 @njit(cache=True, nogil=True)
-def _settled(sol, x_prev, f, G, gc, ax, tn, act, step_tol, last_step, surface_tol):
+def _settled(sol, x_prev, f, G, gc, ax, tn, act, step_tol, last_step, settle_tol):
     """Whether the Newton steps on the cone surfaces have settled, and this step's size
     ``(settled, step)``; the KKT check that follows decides in every case. Settled:
 
@@ -367,9 +367,11 @@ def _settled(sol, x_prev, f, G, gc, ax, tn, act, step_tol, last_step, surface_to
       below one is not trusted: on the human arm a step of 2.3e-5 follows one of 2.7e-2 (a rate of
       0.03) and the next one is larger than that rate predicts, enough for its least-norm answer to
       fail the check of stationarity (``tests/test_warm_fast.py``'s instants). The prediction is
-      trusted only with every held cone on its surface to ``surface_tol`` of ``|F|``, the active-set
-      check's own test: the step is relative to every free cable, the surface to the cone's own
-      force, which may be a small part of them (a large chain's tip);
+      trusted only with every held cone on its surface to ``settle_tol`` of ``|F|``
+      (``Settings.active_set_settle``, a hundredth of the active-set check's ``surface_tol``): the
+      step is relative to every free cable, the surface to the cone's own force, which may be a small
+      part of them (a large chain's tip), and a point the check accepts on the surface to
+      ``surface_tol`` would be another chain's point only to that;
     - or, on an ill-conditioned system whose rounding floor is above ``step_tol``, the step is below
       1e-8 with every held cone on its surface to 1e-11 of ``|F|``."""
     dx = 0.0
@@ -381,6 +383,6 @@ def _settled(sol, x_prev, f, G, gc, ax, tn, act, step_tol, last_step, surface_to
     if step <= step_tol:
         return True, step
     if 0.0 < last_step and step <= last_step and step * step * max(1.0, step / last_step ** 2) <= step_tol \
-            and _on_surfaces(f, G, gc, ax, tn, act, surface_tol):
+            and _on_surfaces(f, G, gc, ax, tn, act, settle_tol):
         return True, step
     return step <= 1e-8 and _on_surfaces(f, G, gc, ax, tn, act, 1e-11), step

@@ -40,7 +40,7 @@ unit axis ``ax[k]`` (K, 3); ``basis0`` (K, 3) a unit vector normal to each axis 
 surface direction tried) and ``basis`` (K, 2, 3) the plane normal to each axis."""
 
 Limits = namedtuple("Limits", ["max_pivots", "max_newton", "step_tol", "primal_tol", "dual_tol", "eom_tol",
-                               "reg_rel", "stationary_tol", "surface_tol", "cone_tol", "keep_rel", "near",
+                               "reg_rel", "stationary_tol", "surface_tol", "settle_tol", "cone_tol", "keep_rel", "near",
                                "unique_rel", "penalty", "max_iter", "eps", "crossover_gap", "ncorr", "rank_tol",
                                "box_weight", "crossover_attempts", "pivot_drop", "refine_gap", "step_fraction",
                                "min_step", "certificate_rel"])
@@ -48,7 +48,7 @@ Limits.__doc__ = """The compiled solvers' limits and tolerances, each a field of
 :class:`~mcdm_pin.settings.Settings` (``kernel_limits`` copies them): the active-set solver's pivot
 limit (``max_pivots``: the warm start's, the polish's or a crossover's), cone Newton steps and
 tolerances (``active_set_max_newton``, ``active_set_step``, ``_primal``, ``_dual``, ``_eom``,
-``_reg``, ``_stationary``, ``_surface``, ``_cone``, ``_keep``); the uniqueness test's (``near``:
+``_reg``, ``_stationary``, ``_surface``, ``_settle``, ``_cone``, ``_keep``); the uniqueness test's (``near``:
 ``active_set_from_solution``, ``unique_rel``, ``penalty``: ``unique_penalty``); the interior-point
 method's (``ipm_max_iter``, ``_eps``, ``_crossover_gap``, ``_correctors``, ``_rank_tol``,
 ``_start_box_weight``, ``_crossover_attempts``, ``_pivot_drop``, ``_refine_gap``, ``_step_fraction``,

@@ -86,8 +86,8 @@ def _limits(settings: Settings, max_pivots: int) -> Limits:
     s = settings
     return Limits(int(max_pivots), int(s.active_set_max_newton), float(s.active_set_step), float(s.active_set_primal),
                   float(s.active_set_dual), float(s.active_set_eom), float(s.active_set_reg),
-                  float(s.active_set_stationary), float(s.active_set_surface), float(s.active_set_cone),
-                  float(s.active_set_keep), float(s.active_set_from_solution), float(s.unique_rel),
+                  float(s.active_set_stationary), float(s.active_set_surface), float(s.active_set_settle),
+                  float(s.active_set_cone), float(s.active_set_keep), float(s.active_set_from_solution), float(s.unique_rel),
                   float(s.unique_penalty), int(s.ipm_max_iter), float(s.ipm_eps), float(s.ipm_crossover_gap),
                   int(s.ipm_correctors), float(s.ipm_rank_tol), float(s.ipm_start_box_weight),
                   int(s.ipm_crossover_attempts), float(s.ipm_pivot_drop), float(s.ipm_refine_gap),
