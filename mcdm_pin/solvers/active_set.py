@@ -361,25 +361,13 @@ class WarmActiveSet(Stage):
 
 
 def changes(qp: QPData, a: ActiveSet, b: ActiveSet) -> int:
-    """How many of ``qp``'s variables have another bound (or none) in ``a`` than in ``b``, plus how
-    many of its cones one holds and the other does not."""
+    """How many of ``qp``'s variables have another bound (or none) in ``a`` than in ``b`` (each read
+    as the warm start reads it: :meth:`ActiveSet.cable_state`), plus how many of its cones one holds
+    and the other does not."""
     n = qp.n
-    ca, cb = _bound_codes(a, n), _bound_codes(b, n)
-    if ca.shape != cb.shape:  # (made on another problem: as far as can be)
-        return n + len(qp.cones)
-    out = int(np.count_nonzero(ca != cb))
+    out = int(np.count_nonzero(a.cable_state(n) != b.cable_state(n)))
     if qp.cones:
         out += int(np.count_nonzero(a.cone_guess(qp)[0] != b.cone_guess(qp)[0]))
-    return out
-
-
-def _bound_codes(a: ActiveSet, n: int) -> np.ndarray:
-    """(n,) int8: 0 free, 1 at the lower bound, 2 at the upper (:attr:`ActiveSet.state`'s codes)."""
-    if a.state is not None:
-        return np.asarray(a.state)
-    out = np.zeros(n, dtype=np.int8)
-    out[a.lower] = 1
-    out[a.upper] = 2
     return out
 
 
