@@ -17,7 +17,8 @@ gives no cone, case 3 is refused and case 2 is timed instead, with a note):
   answer's check, the outputs and the result). *Cold*: every instant alone in a shuffled order after ``reset()``, the wall time of
   ``solve``. Cells: median and 99th percentile per instant, ms. A warm run's first frame has no
   previous answer (a cold frame in the warm column, which sets its p99): the warm frames after it
-  are also given apart.
+  are also given apart, and among them ours split by whether the instant's optimum is a face (not
+  unique: the least-norm stage moves the answer along it; a third of the arm's frames in case 3).
 - **check**: before timing, both back-ends on ``--check`` instants against Clarabel at 1e-11
   (``bench_id``'s check: objective, equation of motion, bounds, cones).
 - **the model part's floor**: MuJoCo 4.0's ``mj_inverse`` (its position stage runs kinematics, the
@@ -127,15 +128,20 @@ def time_warm(ident, traj) -> dict:
     res = ident.solve_trajectory(traj, progress=False)
     ok = res.found
     ident.reset()
-    wall, f_prev = [], None
+    wall, face, f_prev = [], [], None
     for k in range(len(traj)):
         t0 = time.perf_counter()
         one = ident.solve(*state(traj, k), f_prev=f_prev)
         wall.append(time.perf_counter() - t0)
+        face.append(LEAST_NORM in (one.stage or ""))
         f_prev = one.f if one.found else f_prev
+    later, face = np.array(wall[1:]), np.array(face[1:])  # (the first frame has no previous answer: a cold one)
     return dict(model=res.time_model_s[ok], solve=res.time_solve_s[ok], wall=np.array(wall),
                 total=(res.time_model_s + res.time_solve_s)[ok], no_answer=int((~ok).sum()),
-                later=np.array(wall[1:]))  # (the first frame has no previous answer: a cold one)
+                later=later, later_face=later[face], later_plain=later[~face])
+
+
+LEAST_NORM = "least_norm"  # (the stage that moves an answer along a face of optima: its name in `stage`)
 
 
 def time_cold(ident, traj, order) -> dict:
@@ -156,8 +162,9 @@ def time_case(idents, traj, repeat: int, seed: int = 0) -> dict:
             for name, ident in idents.items():
                 ident.reset()
                 one = time_warm(ident, traj) if mode == "warm" else time_cold(ident, traj, order)
-                r = rec.setdefault((name, mode), dict(model=[], solve=[], wall=[], total=[], later=[], no_answer=0))
-                for key in ("model", "solve", "wall", "total", "later"):
+                r = rec.setdefault((name, mode), dict(model=[], solve=[], wall=[], total=[], later=[], later_face=[],
+                                                      later_plain=[], no_answer=0))
+                for key in ("model", "solve", "wall", "total", "later", "later_face", "later_plain"):
                     if key in one:
                         r[key].append(one[key])
                 r["no_answer"] += one["no_answer"]
@@ -299,6 +306,11 @@ def table(cases: list, floor: dict, parts: dict) -> str:
     for c in cases:  # a warm run's first frame has no previous answer: it is a cold one
         later = ", ".join(f"{name} {_cell(c['times'][(name, 'warm')]['later'])}" for name, _ in BACKENDS)
         lines.append(f"\nCase {c['case']}, warm frames after each run's first (p50 / p99 wall, ms): {later}")
+        ours = c["times"][("ours", "warm")]
+        n_face, n_all = len(ours["later_face"]), len(ours["later"])
+        lines.append(f"Case {c['case']}, ours, those frames whose optimum is a face (the least-norm stage moves the "
+                     f"answer along it): {n_face} of {n_all}, {_cell(ours['later_face'])}; the others "
+                     f"{_cell(ours['later_plain'])}")
     lines += ["", "| model part per frame | p50, ms | p99, ms | vs mj_inverse (p50) |", "|---|---|---|---|"]
     ref = stats_ms(floor["mj_inverse"])["median"]
     for name, x in floor.items():

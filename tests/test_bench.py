@@ -64,7 +64,8 @@ def test_missing_peer_is_skipped(bench, monkeypatch):
 def test_the_arm_benchmark_checks_both_back_ends_and_splits_the_first_warm_frame(bench, capsys):
     """``benchmarks/myoarm.py`` on MyoSuite's arm, case 3, one run: both back-ends pass the check
     against Clarabel at 1e-11, every instant is answered, and the warm frames after each run's first
-    (which has no previous answer) are reported apart (what is printed is checked, not the times)."""
+    (which has no previous answer) are reported apart, and among them those whose optimum is a face
+    (what is printed is checked, not the times)."""
     pytest.importorskip("mujoco")
     spec = importlib.util.spec_from_file_location("myoarm_bench", BENCH.parent / "myoarm.py")
     mod = importlib.util.module_from_spec(spec)
@@ -74,3 +75,6 @@ def test_the_arm_benchmark_checks_both_back_ends_and_splits_the_first_warm_frame
     rows = [line.split(" | ") for line in out.splitlines() if line.startswith("| 3 | ")]
     assert len(rows) == 4 and all(r[-2] == "0" and r[-1].rstrip(" |") == "ok" for r in rows), rows
     assert "Case 3, warm frames after each run's first (p50 / p99 wall, ms): ours " in out
+    # a third of the arm's frames have a face of optima (33 of 101): reported apart
+    face = [line for line in out.splitlines() if line.startswith("Case 3, ours, those frames whose optimum is a face")]
+    assert len(face) == 1 and ": 33 of 100, " in face[0], face
