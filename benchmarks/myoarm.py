@@ -49,8 +49,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import REPO, machine  # noqa: E402
 from bench_id import check_solution, cold_instants, reference_solve, state, stats_ms  # noqa: E402
 
+from mcdm_pin.solvers.least_norm import LeastNorm  # noqa: E402
+
 DEFAULT_ROBOT = REPO / "robots" / "myosuite" / "myoarm.yaml"
 BACKENDS = (("ours", "default"), ("clarabel", "clarabel"))
+LEAST_NORM = LeastNorm.name  # (the stage that moves an answer along a face of optima: its name in `stage`)
 
 
 def load(robot_path: Path, trajectory: str, tmp: Path):
@@ -140,8 +143,6 @@ def time_warm(ident, traj) -> dict:
                 total=(res.time_model_s + res.time_solve_s)[ok], no_answer=int((~ok).sum()),
                 later=later, later_face=later[face], later_plain=later[~face])
 
-
-LEAST_NORM = "least_norm"  # (the stage that moves an answer along a face of optima: its name in `stage`)
 
 
 def time_cold(ident, traj, order) -> dict:
