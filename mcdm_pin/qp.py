@@ -81,13 +81,16 @@ class QPData:
         norm_weight: (n,) weights of the least-norm stage, which picks among equally optimal points
             the one of least ``sum_i norm_weight_i x_i^2`` (``None``: ones, i.e. ``|x|^2``). A scaled
             copy carries the weights that keep that norm the original variables' ``|f|^2``.
+        cone_arrays, cone_consts, kernel_arrays: :meth:`cone_arrays`, :meth:`cone_consts` and
+            :meth:`kernel_arrays` when the caller has them already (a scaled copy: the scaling
+            kernel's arrays), instead of made on first use.
     """
 
     __slots__ = ("_P", "c", "r", "A", "b", "lb", "ub", "cones", "P_diag", "P_factor", "norm_weight",
-                 "_cone_arrays", "_cone_consts", "_kernel_arrays", "_kernel_qp")
+                 "_cone_arrays", "_cone_consts", "_kernel_arrays", "_kernel_qp", "_strict")
 
     def __init__(self, P, c, r, A, b, lb, ub, cones=(), *, P_diag=None, P_factor=None, norm_weight=None,
-                 cone_arrays=None, cone_consts=None):
+                 cone_arrays=None, cone_consts=None, kernel_arrays=None):
         self._P = P
         self.c, self.r, self.A, self.b, self.lb, self.ub = c, float(r), A, b, lb, ub
         self.cones = list(cones)
@@ -95,8 +98,9 @@ class QPData:
         self.norm_weight = norm_weight
         self._cone_arrays = cone_arrays
         self._cone_consts = cone_consts
-        self._kernel_arrays = None
+        self._kernel_arrays = kernel_arrays
         self._kernel_qp = None  # (the compiled solvers' view of it: solvers.active_set.kernel_qp)
+        self._strict = None  # (strictly_convex, once asked)
         if P is None and (P_diag is None or P_factor is None):
             raise ProblemError("QPData: give P or both P_diag and P_factor")
 
@@ -192,12 +196,12 @@ class QPData:
         """Whether ``P = diag(P_diag) + P_factor^T P_factor`` has every ``P_diag`` entry above zero (a NaN
         not): then ``P`` is positive definite and the optimum unique (case 1, the activations'
         objective). ``False`` proves nothing."""
-        d = self.P_diag
-        # (the first entry first: the interaction objectives' diagonal is zero; then counted:
-        # count_nonzero has no reduction's per-call machinery, as min() has, on every instant)
-        if d is None or d.size == 0 or not d[0] > 0.0:
-            return False
-        return not np.count_nonzero(~(d > 0.0))
+        if self._strict is None:
+            d = self.P_diag
+            # (the first entry first: the interaction objectives' diagonal is zero; then counted:
+            # count_nonzero has no reduction's per-call machinery, as min() has, on every instant)
+            self._strict = not (d is None or d.size == 0 or not d[0] > 0.0 or np.count_nonzero(~(d > 0.0)))
+        return self._strict
 
     def objective(self, x) -> float:
         """``1/2 x^T P x + c^T x + r``."""
