@@ -144,7 +144,6 @@ def time_warm(ident, traj) -> dict:
                 later=later, later_face=later[face], later_plain=later[~face])
 
 
-
 def time_cold(ident, traj, order) -> dict:
     model, solve, wall, bad = cold_instants(ident, traj, order)
     return dict(model=model, solve=solve, wall=wall, total=wall, no_answer=bad)
