@@ -216,16 +216,15 @@ def apply_scaling(qp: QPData, s: Scaling) -> QPData:
 def _scaled_copy(qp: QPData, out, obj: float) -> QPData:
     """The :class:`QPData` of ``qp``'s scaled arrays ``out`` (:class:`~mcdm_pin.model.kernel_structs.ScaledQP`;
     ``obj``: the objective's factor)."""
-    _, _, axis, tan, basis0 = qp.cone_arrays()
     cones = [ConeData(cn.joint, out.G[k], out.g[k], cn.axis, cn.angle_deg, cn.basis) for k, cn in enumerate(qp.cones)]
     structured = qp.P_factor is not None
     # (the kernel's arrays are C-ordered floats of the problem's shapes: the copy's compiled view as it
-    # would make it, and the unscaled axes, tangents and bases as the problem has them)
+    # would make it, and the unscaled axes, tangents and bases as the problem has them; its stacked
+    # cones are that view's last five)
     ka = (out.c, out.A, out.b, out.lb, out.ub, out.G, out.g) + qp.kernel_arrays()[7:]
     return QPData(out.P if out.P.shape[0] else None, out.c, qp.r / obj, out.A, out.b, out.lb, out.ub, cones,
                   P_diag=out.P_diag if qp.P_diag is not None else None, P_factor=out.P_factor if structured else None,
-                  norm_weight=out.norm_weight, cone_arrays=(out.G, out.g, axis, tan, basis0),
-                  cone_consts=qp.cone_consts(), kernel_arrays=ka)
+                  norm_weight=out.norm_weight, cone_arrays=ka[5:], cone_consts=qp.cone_consts(), kernel_arrays=ka)
 
 
 def scale_problem(qp: QPData, f_scale: np.ndarray | None = None, force: bool = False, quick: bool = True):
