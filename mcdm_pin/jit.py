@@ -104,13 +104,27 @@ POLICIES = ("auto", "compile", "wait", "off")
 STAMP = "mcdm_pin_kernels.stamp"  # the stamp's file name, in the kernels' cache folder
 LOCK = "mcdm_pin_kernels.lock"  # the compile lock's file name, beside the stamp
 WORKERS_ENV = "MCDM_PIN_COMPILE_WORKERS"  # how many processes compile (default: the usable cores)
-COMPILE_COST = {"mcdm_pin.solvers._fast.ipm_answer": 109.0, "mcdm_pin.solvers._fast.active_set_answer": 86.0,
-                "mcdm_pin.model.route_kernels.osim_route_pass": 24.6, "mcdm_pin.model.route_kernels.route_pass": 6.8,
-                "mcdm_pin.model.kernels.cable_terms": 4.6, "mcdm_pin.model.kernels.scale_factors": 4.1}
+COMPILE_COST = {"mcdm_pin.solvers._fast.ipm_answer": 115.0, "mcdm_pin.solvers._fast.active_set_answer": 125.0,
+                "mcdm_pin.model.route_kernels.osim_route_pass": 34.5, "mcdm_pin.solvers._unique.face_setup": 19.7,
+                "mcdm_pin.model.route_kernels.route_pass": 9.3, "mcdm_pin.model.kernels.scale_factors": 8.4,
+                "mcdm_pin.solvers._dual_guess.dual_guess": 6.0, "mcdm_pin.model.scale_kernels.scale_instant": 5.8,
+                "mcdm_pin.model.kernels.cable_terms": 4.4, "mcdm_pin.solvers._fast.kkt_measures": 4.1,
+                "mcdm_pin.model.actuated_kernels.actuated_arrays": 3.3}
 """CPU seconds of each entry point's compile in a two-process compile into an empty cache, measured
-(docs/speed.md, "First run"; ``active_set_answer`` includes the active-set solver, which the other
-process's ``ipm_answer`` then loads from the cache): :func:`compile_plan` splits the entry points
-between the processes by them."""
+(docs/speed.md, "A new machine"; ``active_set_answer`` includes the active-set solver, which the
+other process's ``ipm_answer`` then loads from the cache, so ``ipm_answer`` is its compile without
+it): :func:`compile_plan` splits the entry points between the processes by them. Only their ratios
+and :data:`COMPILE_LEAD`, in the same seconds, matter."""
+COMPILE_ANCHOR = "mcdm_pin.solvers._fast.ipm_answer"
+"""The entry point that the calling process compiles after its lead (:func:`compile_plan`): the
+interior-point method, whose machine code, and so whose answers, depend on what its process
+compiled before it."""
+COMPILE_LEAD = 60.0
+"""CPU seconds of the registry's first entry points that the calling process compiles before
+:data:`COMPILE_ANCHOR` (:func:`compile_plan`). ``ipm_answer`` reaches the active-set solver it
+shares with ``active_set_answer`` about 60 s into its compile, and the process that compiles
+``active_set_answer`` first caches that solver about 90 s after it starts: with this lead the
+calling process loads it instead of compiling it a second time (docs/speed.md, "A new machine")."""
 _CHILD_CODE = "import sys; from mcdm_pin import jit; jit._child_main(sys.argv[1:])"  # a worker's program
 LAST_COMPILE: dict = {}
 """The last compile of this process (:func:`compile_now`): ``entries`` (name, wall s, CPU s, worker;
@@ -370,19 +384,26 @@ def compile_workers() -> int:
 def compile_plan(names: list[str], workers: int) -> list[list[int]]:
     """The entry points' indices (``names`` in the registry's order) split into at most ``workers``
     groups, one per process. The first group, the calling process's, starts as a one-process compile
-    does: the first registered module's entry points (the model's kernels, cheap) in the registry's
-    order, then the heaviest entry point (:data:`COMPILE_COST`, 1 s for a name it lacks). numba's code
+    does: the registry's first entry points in its order (the first module's whole, then more up to
+    :data:`COMPILE_LEAD` seconds of :data:`COMPILE_COST`, 1 s for a name it lacks), then
+    :data:`COMPILE_ANCHOR` (or, without it, the heaviest entry point). numba's code
     for a kernel depends on what its process compiled before it (a callee compiled earlier is linked
-    as it was made then), and this order gives the interior-point method the machine code, and so the
-    answers, bit for bit, of a compile in one process. The others go longest first, each to the least
-    loaded group (the heavy layers first, so that a kernel two groups share is more often cached by
-    one before the other reaches it)."""
+    as it was made then), and this order gives the interior-point method the machine code, and so
+    the answers, bit for bit, of a compile in one process; the lead lets another process cache the
+    active-set solver the two share first. The others go longest first, each to the least loaded
+    group."""
     cost = [COMPILE_COST.get(n, 1.0) for n in names]
     if not names:
         return []
-    heaviest = max(range(len(names)), key=cost.__getitem__)
+    anchor = names.index(COMPILE_ANCHOR) if COMPILE_ANCHOR in names else max(range(len(names)), key=cost.__getitem__)
     module = names[0].rsplit(".", 1)[0]
-    first = [i for i, n in enumerate(names) if n.rsplit(".", 1)[0] == module and i != heaviest] + [heaviest]
+    first, lead = [], 0.0
+    for i in range(anchor):
+        if names[i].rsplit(".", 1)[0] != module and lead >= COMPILE_LEAD:
+            break
+        first.append(i)
+        lead += cost[i]
+    first.append(anchor)
     groups: list[list[int]] = [first] + [[] for _ in range(max(1, min(workers, len(names))) - 1)]
     load = [sum(cost[i] for i in first)] + [0.0] * (len(groups) - 1)
     for i in sorted(set(range(len(names))) - set(first), key=lambda i: (-cost[i], i)):

@@ -28,6 +28,28 @@ def test_compile_plan_splits_by_cost():
         assert len(jit.compile_plan(names, 9)) == 4 and jit.compile_plan([], 2) == []
 
 
+def test_compile_plan_leads_the_anchor_by_the_registrys_first_entry_points():
+    """Before its anchor (the interior-point method) the calling process compiles the registry's first
+    entry points in order until their cost reaches the lead, so that another process caches the
+    active-set solver the anchor shares before the anchor reaches it; the plan in one process is the
+    same order."""
+    names = ["m.a", "m.f", "o.x", "o.y", "s.b", "s.c", "s.d"]
+    costs = {"m.a": 1.0, "m.f": 2.0, "o.x": 30.0, "o.y": 20.0, "s.b": 100.0, "s.c": 120.0, "s.d": 10.0}
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(jit, "COMPILE_COST", costs)
+        mp.setattr(jit, "COMPILE_ANCHOR", "s.b")
+        mp.setattr(jit, "COMPILE_LEAD", 25.0)
+        assert jit.compile_plan(names, 2) == [[0, 1, 2, 4, 6], [5, 3]]
+        assert jit.compile_plan(names, 1) == [[0, 1, 2, 4, 5, 3, 6]]
+        mp.setattr(jit, "COMPILE_LEAD", 0.0)  # the first module's entry points only
+        assert jit.compile_plan(names, 2)[0][:3] == [0, 1, 4]
+    names = jit.entry_points()
+    plan = jit.compile_plan(names, 2)
+    lead = plan[0].index(names.index(jit.COMPILE_ANCHOR))  # the library's own plan: a prefix, then the anchor
+    assert plan[0][:lead] == list(range(lead)) and lead > 1
+    assert plan[1][0] == names.index("mcdm_pin.solvers._fast.active_set_answer")
+
+
 def test_stamp_covers_modules_that_decorate_with_imported_decorators():
     """A module whose functions are compiled inline into kernels through a decorator it imports from
     another kernel module (``@register_jitable`` from wrapping_osim.py) is a kernel source too, as is
