@@ -111,20 +111,23 @@ COMPILE_COST = {"mcdm_pin.solvers._fast.ipm_answer": 115.0, "mcdm_pin.solvers._f
                 "mcdm_pin.model.kernels.cable_terms": 4.4, "mcdm_pin.solvers._fast.kkt_measures": 4.1,
                 "mcdm_pin.model.actuated_kernels.actuated_arrays": 3.3}
 """CPU seconds of each entry point's compile in a two-process compile into an empty cache, measured
-(docs/speed.md, "A new machine"; ``active_set_answer`` includes the active-set solver, which the
-other process's ``ipm_answer`` then loads from the cache, so ``ipm_answer`` is its compile without
-it): :func:`compile_plan` splits the entry points between the processes by them. Only their ratios
-and :data:`COMPILE_LEAD`, in the same seconds, matter."""
+on 2026-12-01 (docs/speed.md, "A new machine"; ``active_set_answer`` includes the active-set
+solver, which the other process's ``ipm_answer`` then loads from the cache, so ``ipm_answer``'s is
+its compile without it): :func:`compile_plan` splits the entry points between the processes by
+them. Only their ratios and :data:`COMPILE_LEAD`, in the same seconds, matter."""
 COMPILE_ANCHOR = "mcdm_pin.solvers._fast.ipm_answer"
 """The entry point that the calling process compiles after its lead (:func:`compile_plan`): the
 interior-point method, whose machine code, and so whose answers, depend on what its process
 compiled before it."""
 COMPILE_LEAD = 60.0
-"""CPU seconds of the registry's first entry points that the calling process compiles before
-:data:`COMPILE_ANCHOR` (:func:`compile_plan`). ``ipm_answer`` reaches the active-set solver it
-shares with ``active_set_answer`` about 60 s into its compile, and the process that compiles
-``active_set_answer`` first caches that solver about 90 s after it starts: with this lead the
-calling process loads it instead of compiling it a second time (docs/speed.md, "A new machine")."""
+"""Seconds (of :data:`COMPILE_COST`) of the registry's first entry points that the calling process
+compiles before :data:`COMPILE_ANCHOR` (:func:`compile_plan`). ``ipm_answer`` reaches the active-set
+solver it shares with ``active_set_answer`` about 50 s into its compile, and the process that
+compiles ``active_set_answer`` first caches that solver 75-105 s after it starts: with this lead the
+calling process usually loads it instead of compiling it a second time. It is a race, not a wait:
+where the solver is not cached yet, the calling process compiles it too, which costs time but not
+bits (a compile in one process, in the same order, gives the same answers; docs/speed.md, "A new
+machine")."""
 _CHILD_CODE = "import sys; from mcdm_pin import jit; jit._child_main(sys.argv[1:])"  # a worker's program
 LAST_COMPILE: dict = {}
 """The last compile of this process (:func:`compile_now`): ``entries`` (name, wall s, CPU s, worker;
