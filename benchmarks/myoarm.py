@@ -54,6 +54,7 @@ from mcdm_pin.solvers.least_norm import LeastNorm  # noqa: E402
 DEFAULT_ROBOT = REPO / "robots" / "myosuite" / "myoarm.yaml"
 BACKENDS = (("ours", "default"), ("clarabel", "clarabel"))
 LEAST_NORM = LeastNorm.name  # (the stage that moves an answer along a face of optima: its name in `stage`)
+SAMPLES = ("model", "solve", "wall", "total", "later", "later_face", "later_plain")  # (per run: time_warm's, time_cold's)
 
 
 def load(robot_path: Path, trajectory: str, tmp: Path):
@@ -162,9 +163,8 @@ def time_case(idents, traj, repeat: int, seed: int = 0) -> dict:
             for name, ident in idents.items():
                 ident.reset()
                 one = time_warm(ident, traj) if mode == "warm" else time_cold(ident, traj, order)
-                r = rec.setdefault((name, mode), dict(model=[], solve=[], wall=[], total=[], later=[], later_face=[],
-                                                      later_plain=[], no_answer=0))
-                for key in ("model", "solve", "wall", "total", "later", "later_face", "later_plain"):
+                r = rec.setdefault((name, mode), dict({key: [] for key in SAMPLES}, no_answer=0))
+                for key in SAMPLES:
                     if key in one:
                         r[key].append(one[key])
                 r["no_answer"] += one["no_answer"]

@@ -111,10 +111,12 @@ COMPILE_COST = {"mcdm_pin.solvers._fast.ipm_answer": 115.0, "mcdm_pin.solvers._f
                 "mcdm_pin.model.kernels.cable_terms": 4.4, "mcdm_pin.solvers._fast.kkt_measures": 4.1,
                 "mcdm_pin.model.actuated_kernels.actuated_arrays": 3.3}
 """CPU seconds of each entry point's compile in a two-process compile into an empty cache, measured
-on 2026-12-01 (docs/speed.md, "A new machine"; ``active_set_answer`` includes the active-set
-solver, which the other process's ``ipm_answer`` then loads from the cache, so ``ipm_answer``'s is
-its compile without it): :func:`compile_plan` splits the entry points between the processes by
-them. Only their ratios and :data:`COMPILE_LEAD`, in the same seconds, matter."""
+at 01:53 UTC on 2026-12-01 (docs/speed.md, "A new machine"; ``active_set_answer`` includes the
+active-set solver, which the other process's ``ipm_answer`` then loads from the cache, so
+``ipm_answer``'s is its compile without it: 80-124 s in the later compiles that loaded it, where
+01:53's 151.8 s compiled the solver a second time): :func:`compile_plan` splits the entry points
+between the processes by them. Only their ratios and :data:`COMPILE_LEAD`, in the same seconds,
+matter."""
 COMPILE_ANCHOR = "mcdm_pin.solvers._fast.ipm_answer"
 """The entry point that the calling process compiles after its lead (:func:`compile_plan`): the
 interior-point method, whose machine code, and so whose answers, depend on what its process
