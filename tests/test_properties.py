@@ -20,6 +20,7 @@ disagree by a hair: one returns a point that breaks a bound by ~1e-9 (the runner
 from __future__ import annotations
 
 import os
+import sys
 import tempfile
 
 import numpy as np
@@ -36,8 +37,9 @@ from .robotgen import GenRobot, robots
 
 pytest.importorskip("clarabel")
 
-# a fixed seed (not derandomize, whose examples change whenever a test's source changes);
-# MCDM_HYPOTHESIS_SEED=<n> explores other examples
+# a fixed seed (not derandomize, whose examples change whenever a test's source changes), and
+# hypothesis's pool of literals held empty (tests/conftest.py): the same examples alone and in the
+# suite, whatever a worker loaded before; MCDM_HYPOTHESIS_SEED=<n> explores other examples
 SEED = int(os.environ.get("MCDM_HYPOTHESIS_SEED", "20141121"))
 SETTINGS = dict(deadline=None, database=None, print_blob=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
@@ -306,3 +308,32 @@ def test_a_negligible_weight_does_not_pin_the_least_norm_face():
     for a in answers[1:]:
         assert np.abs(a.f - ref).max() <= 1e-6 * np.abs(ref).max(), (a.stage, a.f, ref)
     assert np.linalg.norm(ref) <= 73.0
+
+
+def test_examples_do_not_depend_on_the_modules_loaded(tmp_path, monkeypatch):
+    """A fixed seed gives the same examples alone and inside the suite: the draws of a seeded test
+    are equal before and after a new local module full of literals is imported (hypothesis mixes
+    the literals of the local modules loaded so far into its draws; tests/conftest.py stops that)."""
+    def draws():
+        seen = []
+
+        @seed(SEED)
+        @settings(max_examples=200, **SETTINGS)
+        @given(st.floats(0.0, 1.0), st.integers(0, 2**32 - 1), st.floats(500.0, 5000.0))
+        def record(x, n, y):
+            seen.append((x, n, y))
+
+        record()
+        return seen
+
+    before = draws()
+    literals = ", ".join(f"{0.5 + k * 1e-3!r}, {k * 7919}, {600.0 + k!r}" for k in range(200))
+    (tmp_path / "literal_probe.py").write_text(f"LITERALS = ({literals})\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    import literal_probe  # noqa: F401  (its literals are what a scan of the loaded modules would find)
+
+    try:
+        after = draws()
+    finally:
+        del sys.modules["literal_probe"]
+    assert after == before
