@@ -71,7 +71,26 @@ def test_weights_and_cones_from_the_command_line(capsys):
     (["info", "missing.yaml"], "missing.yaml: file not found"),
     (["solve", TWO_LINK], "--trajectory"),
 ])
-def test_bad_arguments_exit_2_with_one_line(args, message):
+def test_bad_arguments_exit_2_with_one_line(args, message, capsys, tmp_path, monkeypatch):
+    """In this process (``main``, as ``python -m mcdm_pin.cli`` runs it; argparse's own errors leave
+    by ``SystemExit``): the next test runs the real command for both kinds of error."""
+    monkeypatch.chdir(tmp_path)
+    try:
+        code = main(list(map(str, args)))
+    except SystemExit as exc:
+        code = exc.code
+    err = capsys.readouterr().err
+    assert code == 2
+    assert message in err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert not any(tmp_path.iterdir())  # nothing written on the way out
+
+
+@pytest.mark.parametrize("args, message", [
+    (["solve", TWO_LINK, "-t", "traj1", "--case", "4"], "invalid choice"),  # argparse's
+    (["solve", TWO_LINK, "-t", "traj1", "--case", "3", "--cone", "shoulder=95"], "(0, 90)"),  # ours
+])
+def test_the_command_exits_2_with_one_line(args, message):
     code, out, err = cli(*args)
     assert code == 2
     assert message in err
