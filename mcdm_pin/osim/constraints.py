@@ -183,12 +183,15 @@ class PointLoops:
         (:class:`~mcdm_pin.model.kernel_structs.LoopTerms`): the physical joints' wrenches ``u``
         (Jn, 6) and ``RT`` (Jn, 6, m) with the loop force's share (``child`` (Jn,): each one's Pinocchio
         joint), the actuators' ``RT_act``, and the equation of motion in the basis (``L N K``,
-        ``(N K)^T tau0``, ``(N K)^T S``). ``S``: (nv, n_act) or ``None``."""
+        ``(N K)^T tau0``, ``(N K)^T S``). ``S``: (nv, n_act) or ``None``. The arrays reach the kernel
+        C-contiguous, as the compile typed them (the uncompiled terms' ``RT`` is a strided view: as it
+        was, it compiled a third ``loop_terms`` at its first call, 16 s)."""
         d = self._jacobians(q)
+        c_ = np.ascontiguousarray  # (no copy where the array is one already)
         out = jit.kernels("osim.loop_kernels").loop_terms(
             d.J, self._fp, self._oR, self._op, self._tables_plain, self._coupling_basis(q),
-            np.asarray(tau0, dtype=float),
-            L, self._no_actuators if S is None else np.ascontiguousarray(S, dtype=float), u, RT, child)
+            c_(tau0, dtype=float), c_(L, dtype=float),
+            self._no_actuators if S is None else c_(S, dtype=float), c_(u, dtype=float), c_(RT, dtype=float), child)
         self._check_rank(out.s)
         return out
 
