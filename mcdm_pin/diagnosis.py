@@ -9,7 +9,6 @@ with every cone widened to the smallest common half-angle that makes it feasible
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import linprog
 
 from .model.actuators import actuator_names
 from .qp import QPData
@@ -85,6 +84,8 @@ def _binding_cones(qp: QPData, angle_deg: float, settings: Settings) -> list[str
 
 
 def _feasible_lp(qp: QPData):
+    from scipy.optimize import linprog  # here, not at import: half a second off every command's start
+
     res = linprog(np.zeros(qp.n), A_eq=qp.A if len(qp.b) else None, b_eq=qp.b if len(qp.b) else None,
                   bounds=list(zip(qp.lb, qp.ub)), method="highs")
     return res.x if res.status == 0 else None
@@ -104,6 +105,8 @@ def _elastic_bounds(qp: QPData, rel: float = 1e-9):
     A_ub[k_lo + np.arange(k_hi), hi_i] = 1.0  # x - s_hi <= ub
     A_ub[k_lo + np.arange(k_hi), n + k_lo + np.arange(k_hi)] = -1.0
     A_eq = np.hstack([qp.A, np.zeros((len(qp.b), k_lo + k_hi))])
+    from scipy.optimize import linprog
+
     res = linprog(c, A_ub=A_ub if k_lo + k_hi else None, b_ub=np.concatenate([-lb, ub]) if k_lo + k_hi else None,
                   A_eq=A_eq, b_eq=qp.b, bounds=[(None, None)] * n + [(0, None)] * (k_lo + k_hi), method="highs")
     if res.status != 0:
