@@ -84,7 +84,7 @@ def _binding_cones(qp: QPData, angle_deg: float, settings: Settings) -> list[str
 
 
 def _feasible_lp(qp: QPData):
-    from scipy.optimize import linprog  # here, not at import: half a second off every command's start
+    from scipy.optimize import linprog  # here, not at import: 0.2-0.5 s off every command's start
 
     res = linprog(np.zeros(qp.n), A_eq=qp.A if len(qp.b) else None, b_eq=qp.b if len(qp.b) else None,
                   bounds=list(zip(qp.lb, qp.ub)), method="highs")
