@@ -84,7 +84,8 @@ def _binding_cones(qp: QPData, angle_deg: float, settings: Settings) -> list[str
 
 
 def _feasible_lp(qp: QPData):
-    from scipy.optimize import linprog  # here, not at import: 0.2-0.5 s off every command's start
+    # here, not at import: only an infeasible instant needs it, and every command's start would pay for it
+    from scipy.optimize import linprog
 
     res = linprog(np.zeros(qp.n), A_eq=qp.A if len(qp.b) else None, b_eq=qp.b if len(qp.b) else None,
                   bounds=list(zip(qp.lb, qp.ub)), method="highs")

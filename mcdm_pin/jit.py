@@ -110,13 +110,11 @@ COMPILE_COST = {"mcdm_pin.solvers._fast.ipm_answer": 115.0, "mcdm_pin.solvers._f
                 "mcdm_pin.solvers._dual_guess.dual_guess": 6.0, "mcdm_pin.model.scale_kernels.scale_instant": 5.8,
                 "mcdm_pin.model.kernels.cable_terms": 4.4, "mcdm_pin.solvers._fast.kkt_measures": 4.1,
                 "mcdm_pin.model.actuated_kernels.actuated_arrays": 3.3}
-"""CPU seconds of each entry point's compile in a two-process compile into an empty cache, measured
-at 01:53 UTC on 2026-12-01 (docs/speed.md, "A new machine"; ``active_set_answer`` includes the
-active-set solver, which the other process's ``ipm_answer`` then loads from the cache, so
-``ipm_answer``'s is its compile without it: 80-124 s in the later compiles that loaded it, where
-01:53's 151.8 s compiled the solver a second time): :func:`compile_plan` splits the entry points
-between the processes by them. Only their ratios and :data:`COMPILE_LEAD`, in the same seconds,
-matter."""
+"""CPU seconds of each entry point's compile in a two-process compile into an empty cache
+(docs/speed.md, "A new machine", gives the runs): :func:`compile_plan` splits the entry points
+between the processes by them. ``active_set_answer``'s includes the active-set solver, which the
+other process's ``ipm_answer`` then loads from the cache, so ``ipm_answer``'s is its compile without
+it. Only their ratios and :data:`COMPILE_LEAD`, in the same seconds, matter."""
 COMPILE_ANCHOR = "mcdm_pin.solvers._fast.ipm_answer"
 """The entry point that the calling process compiles after its lead (:func:`compile_plan`): the
 interior-point method, whose machine code, and so whose answers, depend on what its process
@@ -124,9 +122,10 @@ compiled before it."""
 COMPILE_LEAD = 60.0
 """Seconds (of :data:`COMPILE_COST`) of the registry's first entry points that the calling process
 compiles before :data:`COMPILE_ANCHOR` (:func:`compile_plan`). ``ipm_answer`` reaches the active-set
-solver it shares with ``active_set_answer`` about 50 s into its compile, and the process that
-compiles ``active_set_answer`` first caches that solver 75-105 s after it starts: with this lead the
-calling process usually loads it instead of compiling it a second time. It is a race, not a wait:
+solver it shares with ``active_set_answer`` part-way through its compile; with this lead, the
+process that compiles ``active_set_answer`` first has usually cached that solver by then, and the
+calling process loads it instead of compiling it a second time (docs/speed.md, "A new machine",
+gives the timings). It is a race, not a wait:
 where the solver is not cached yet, the calling process compiles it too, which costs time but not
 bits (a compile in one process, in the same order, gives the same answers; docs/speed.md, "A new
 machine")."""

@@ -17,10 +17,10 @@ def _hypothesis_draws_ignore_loaded_modules() -> None:
     """Hypothesis (6.131 on) mixes the literals of the local modules loaded so far into its draws
     (``_get_local_constants``, a scan of ``sys.modules``). Which of our modules, benchmarks and tools a
     pytest-xdist worker has loaded depends on the tests it ran before, so a fixed ``@seed`` gave one
-    set of examples alone and another inside the suite (of the property's 100 instants, 18 had an
-    optimum in a CI run and 53 with the test run alone). The pool is held empty here: the examples
-    are then the seed's alone. The hook is internal; tests/test_properties.py checks the outcome, so
-    a renamed hook fails a test rather than passing unseen."""
+    set of examples alone and another inside the suite (docs/speed.md, "The suite from an empty
+    cache"). The pool is held empty here: the examples are then the seed's alone. The hook is
+    internal; tests/test_properties.py checks the outcome, so a renamed hook fails a test rather
+    than passing unseen."""
     try:
         from hypothesis.internal.conjecture import providers
         from hypothesis.internal.constants_ast import Constants

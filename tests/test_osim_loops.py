@@ -133,8 +133,7 @@ def test_loop_terms_close_the_full_equation_and_equal_rnea_wrenches(actuated):
 
 def test_the_compiled_kernel_path_gives_the_same_loop_terms():
     """The same terms either way; and the uncompiled terms hand the compiled loop kernel the types
-    the compile typed, so no specialisation is added at runtime (their strided ``RT`` once compiled
-    a third ``loop_terms``, 16 s)."""
+    the compile types, so no specialisation is added at runtime (a strided ``RT`` would add one)."""
     pytest.importorskip("numba")
     from mcdm_pin import jit
     from mcdm_pin.osim import loop_kernels

@@ -184,8 +184,8 @@ class PointLoops:
         (Jn, 6) and ``RT`` (Jn, 6, m) with the loop force's share (``child`` (Jn,): each one's Pinocchio
         joint), the actuators' ``RT_act``, and the equation of motion in the basis (``L N K``,
         ``(N K)^T tau0``, ``(N K)^T S``). ``S``: (nv, n_act) or ``None``. The arrays reach the kernel
-        C-contiguous, as the compile typed them (the uncompiled terms' ``RT`` is a strided view: as it
-        was, it compiled a third ``loop_terms`` at its first call, 16 s)."""
+        C-contiguous, as the compile types them: the uncompiled terms' ``RT`` is a strided view, which,
+        handed on as it is, would add a ``loop_terms`` specialisation at runtime."""
         d = self._jacobians(q)
         c_ = np.ascontiguousarray  # (no copy where the array is one already)
         out = jit.kernels("osim.loop_kernels").loop_terms(
