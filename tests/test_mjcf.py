@@ -3,7 +3,7 @@ tensions at given activations, and interaction wrenches with wrapped muscles pre
 
 MyoSuite's models come from ``myo_sim`` (the test extra); the arms, hands, legs and torsos are composed
 in code by MyoSuite and compiled by MuJoCo. Every comparison runs on every MyoSuite model that loads (the
-18 "loaded" rows of docs/musculoskeletal.md's table, ``tools/myosuite_table.py``'s ``LOADED``), at 50
+21 "loaded" rows of docs/musculoskeletal.md's table, ``tools/myosuite_table.py``'s ``LOADED``), at 50
 random states per model.
 """
 
@@ -23,21 +23,26 @@ from mcdm_pin.model.terms import TermsEvaluator  # noqa: E402
 STATES = 50
 # every model that loads: elbows, a finger with pulleys and one with motors on its tendons, the arm
 # (couplings), the hands, the legs (a free root, couplings; the OSL prosthesis's joint motors), the
-# torsos (208-414 muscles), both arms and the full body
+# torsos (208-414 muscles), both arms and the full body; the elbows with an exoskeleton's motor without
+# a control range (an unbounded joint actuator)
 MODELS = ("myoelbow", "myoelbow_2dof", "myofinger", "motorfinger", "myoarm_r", "myohand", "myolegs", "myotorso",
           "myolegs_osl", "myohand_l", "myoarms", "myohands", "myolegs26", "myolegs_abdomen", "myotorso_abdomen",
-          "myotorso_arm_r", "myotorso_arms", "myofullbody")
+          "myotorso_arm_r", "myotorso_arms", "myofullbody", "myoelbow_exo",
+          "legacy/elbow/myoelbow_1dof6muscles_1dofSoftexo_Ideal.xml",
+          "legacy/elbow/myoelbow_1dof6muscles_1dofSoftexo_sim2.xml")
 
 
 def _compile(name):
     if name == "motorfinger":
         return mujoco.MjModel.from_xml_path(str(myo_sim.get_xml_path("myofinger")).replace("myofinger_v0",
                                                                                           "motorfinger_v0"))
+    if name.endswith(".xml"):  # (a whole model of myo_sim's legacy folder)
+        return mujoco.MjModel.from_xml_path(str(myo_sim.get_path(name)))
     if name == "myohand_l":  # (a fragment: no load_spec name)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             return myo_sim.FRAGMENT_SPEC_BUILDERS[name]().compile()
-    if name not in ("myoelbow", "myoelbow_2dof", "myofinger", "myolegs_osl"):  # composed in code by MyoSuite
+    if name not in ("myoelbow", "myoelbow_2dof", "myoelbow_exo", "myofinger", "myolegs_osl"):  # composed in code by MyoSuite
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             return myo_sim.load_spec(name).compile()
@@ -95,13 +100,15 @@ def _states(mj, robot, rng):
 
 def _set_controls(mj, d, act):
     """``act`` (nu,) in [0, 1]: each muscle's activation, each other actuator's control as that share of
-    its control range."""
+    its control range (without a control range: ``2 act - 1``, a control in [-1, 1])."""
     for i in range(mj.nu):
         if mj.actuator_actadr[i] >= 0:
             d.act[mj.actuator_actadr[i]] = act[i]
-        else:
+        elif mj.actuator_ctrllimited[i]:
             lo, hi = mj.actuator_ctrlrange[i]
             d.ctrl[i] = lo + act[i] * (hi - lo)
+        else:
+            d.ctrl[i] = 2.0 * act[i] - 1.0
 
 
 def _cable_tendons(mj, robot):

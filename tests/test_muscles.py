@@ -302,6 +302,69 @@ def test_refuses_muscles_that_are_not_cables(monkeypatch, tmp_path, extra, why):
         mu.from_mujoco(m)
 
 
+# a hinge between two muscles on their own tendons, and an ``{extra}`` actuator
+ELBOW = """
+<mujoco>
+  <worldbody>
+    <site name="up" pos="0 0 0.3"/>
+    <site name="down" pos="0 0 -0.3"/>
+    <body name="arm">
+      <joint name="hinge" type="hinge" axis="0 1 0" range="-60 60" limited="true"/>
+      <geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.02" mass="1.5"/>
+      <site name="top" pos="0.2 0 0.02"/>
+      <site name="bottom" pos="0.2 0 -0.02"/>
+    </body>
+  </worldbody>
+  <tendon>
+    <spatial name="flexor"><site site="up"/><site site="top"/></spatial>
+    <spatial name="extensor"><site site="down"/><site site="bottom"/></spatial>
+  </tendon>
+  <actuator>
+    <muscle name="flexor" tendon="flexor" force="200"/>
+    <muscle name="extensor" tendon="extensor" force="200"/>
+    {extra}
+  </actuator>
+</mujoco>"""
+
+
+@pytest.mark.parametrize("extra, bounds", [
+    ('<motor name="exo" joint="hinge" gear="2"/>', (-math.inf, math.inf)),  # no control range: unbounded
+    ('<motor name="exo" joint="hinge" gear="2" forcelimited="true" forcerange="-3 5"/>', (-6.0, 10.0)),
+    ('<motor name="exo" joint="hinge" gear="2" ctrllimited="true" ctrlrange="-1 0.5"/>', (-2.0, 1.0)),
+])
+def test_joint_motors_with_and_without_a_control_range(monkeypatch, tmp_path, extra, bounds):
+    """A plain motor on a hinge is an actuator of its joint, bounded by ``gear x`` its control range and
+    force range; without either it is unbounded, and its weight in the objective keeps its torque
+    finite (an exoskeleton's motor: MyoSuite's ``myoelbow_exo``). Every back-end gives one answer."""
+    from mcdm_pin import InverseDynamics
+    from mcdm_pin.robot import Robot
+
+    monkeypatch.chdir(tmp_path)
+    robot = Robot.from_mujoco(mujoco.MjModel.from_xml_string(ELBOW.format(extra=extra)), "elbow", "elbow")
+    (act,) = robot.actuators
+    assert (act.label, act.weight) == ("exo", 1.0)
+    assert (float(act.tau_min[0]), float(act.tau_max[0])) == bounds
+    q, qd, qdd = np.array([0.3]), np.array([0.5]), np.array([4.0])
+    ours = InverseDynamics.for_case(robot, 1).solve(q, qd, qdd)
+    ref = InverseDynamics.for_case(robot, 1, solver="clarabel").solve(q, qd, qdd)
+    assert ours.status == ref.status == "optimal" and np.all(np.isfinite(ours.tau_act))
+    assert ours.objective == pytest.approx(ref.objective, rel=1e-9, abs=1e-12)
+    np.testing.assert_allclose(np.concatenate([ours.f, ours.tau_act]), np.concatenate([ref.f, ref.tau_act]),
+                               rtol=1e-7, atol=1e-9)
+
+
+@pytest.mark.parametrize("extra, why", [
+    ('<motor name="push" tendon="flexor"/>', "'push'.*not within \\[0, inf\\)"),  # it could push
+    ('<general name="dead" joint="hinge" gainprm="0"/>', "'dead'.*no gain"),
+])
+def test_refuses_motors_that_are_not_cables_or_actuators(monkeypatch, tmp_path, extra, why):
+    from mcdm_pin.robot import Robot
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ModelError, match=why):
+        Robot.from_mujoco(mujoco.MjModel.from_xml_string(ELBOW.format(extra=extra)), "elbow", "elbow")
+
+
 def test_params_validate():
     with pytest.raises(ModelError, match="gear.*'b'"):
         _params(gear=[1.0, -1.0, 1.0])

@@ -52,7 +52,9 @@ FRAGMENTS = ("myohand_l",)
 # the models that load (the table's "loaded" rows)
 LOADED = ("myoelbow", "myoelbow_2dof", "myofinger", "legacy/finger/motorfinger_v0.xml", "myolegs_osl", "myoarm_r",
           "myohand_r", "myohand_l", "myolegs", "myolegs26", "myolegs_abdomen", "myotorso", "myotorso_abdomen",
-          "myotorso_arm_r", "myoarms", "myohands", "myotorso_arms", "myofullbody")
+          "myotorso_arm_r", "myoarms", "myohands", "myotorso_arms", "myofullbody", "myoelbow_exo",
+          "legacy/elbow/myoelbow_1dof6muscles_1dofSoftexo_Ideal.xml",
+          "legacy/elbow/myoelbow_1dof6muscles_1dofSoftexo_sim2.xml")
 
 
 @contextmanager
@@ -215,8 +217,10 @@ def errors(name: str, count: int = 50) -> dict:
         for i in range(mj.nu):  # muscles: the activation; motors: that share of the control range
             if mj.actuator_actadr[i] >= 0:
                 d.act[mj.actuator_actadr[i]] = act[i]
-            else:
+            elif mj.actuator_ctrllimited[i]:
                 d.ctrl[i] = mj.actuator_ctrlrange[i, 0] + act[i] * np.diff(mj.actuator_ctrlrange[i])[0]
+            else:  # (no control range: a control in [-1, 1])
+                d.ctrl[i] = 2.0 * act[i] - 1.0
         mujoco.mj_forward(mj, d)
         mujoco.mj_rnePostConstraint(mj, d)
         q = maps.to_pin_q(qpos)

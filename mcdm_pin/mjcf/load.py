@@ -93,8 +93,9 @@ def mjcf_parts(mj, source: str, name: str = "robot") -> RobotParts:
 
 
 def _joint_motors(mjm, joints, motors) -> tuple:
-    """Bounded motors on hinge and slide joints as actuators of the physical joint (MuJoCo body) holding
-    the joint, named after the MuJoCo actuator."""
+    """Plain motors on hinge and slide joints as actuators of the physical joint (MuJoCo body) holding
+    the joint, named after the MuJoCo actuator, with weight 1 (an unbounded one, without a control or
+    force range, is kept finite by that weight)."""
     return tuple(Actuator.on_coordinate(joints, int(mjm.jnt_idx_v[jnt]), lo, hi, 1.0, label=name)
                  for name, jnt, lo, hi in motors)
 

@@ -23,6 +23,8 @@ actuators (dynamics, bias, unbounded, on sites or bodies, on ball or free joints
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -159,9 +161,10 @@ def _motors(mj, source: str, skipped) -> dict:
     """The non-muscle actuators this loader reads: ``{actuator id: (kind, lo, hi)}`` with ``kind``
     ``tendon`` (a cable pulling with tension in ``[lo, hi]`` N) or ``joint`` (a hinge or slide motor with
     generalised force in ``[lo, hi]``): a ``motor``/``general`` actuator without dynamics, with a fixed
-    gain ``k``, no bias and a control range ``[c0, c1]`` (and ``forcerange`` when limited). Its force on
-    the transmission is ``g k c`` (gear ``g``), so a tendon's tension is ``-g k c``: read only when it can
-    only pull. Every other actuator is refused, naming it and why."""
+    gain ``k``, no bias, and its control range ``[c0, c1]`` when limited (``forcerange`` too). Its force
+    on the transmission is ``g k c`` (gear ``g``), so a tendon's tension is ``-g k c``: read only when it
+    can only pull. A joint motor without either range is unbounded (``-inf``, ``inf``): its weight in the
+    objective keeps its torque finite. Every other actuator is refused, naming it and why."""
     import mujoco
 
     out = {}
@@ -177,18 +180,21 @@ def _motors(mj, source: str, skipped) -> dict:
         elif int(mj.actuator_gaintype[i]) != mujoco.mjtGain.mjGAIN_FIXED or \
                 int(mj.actuator_biastype[i]) != mujoco.mjtBias.mjBIAS_NONE:
             fail = "is not a plain motor (a fixed gain, no bias)"
-        elif not int(mj.actuator_ctrllimited[i]):
-            fail = "has no control range, so its force is unbounded"
+        elif float(mj.actuator_gear[i, 0]) * float(mj.actuator_gainprm[i, 0]) == 0.0:
+            fail = "has no gain (gear or gain zero), so it exerts no force"
         if fail is None and trn == "joint":
             j = int(mj.actuator_trnid[i, 0])
             if int(mj.jnt_type[j]) not in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
                 fail = "drives a ball or free joint"
         if fail is not None:
             raise _refuse(source, f"actuator {name!r}", f"{why}; it {fail} ({trn} transmission): only muscles, "
-                                                        f"and bounded plain motors on tendons or hinge/slide "
-                                                        f"joints, are read from MJCF")
+                                                        f"plain motors on hinge/slide joints and plain "
+                                                        f"motors on tendons that only pull are read from MJCF")
         g, k = float(mj.actuator_gear[i, 0]), float(mj.actuator_gainprm[i, 0])
-        lo, hi = sorted(g * k * float(c) for c in mj.actuator_ctrlrange[i])
+        # no control range: an unbounded force (a joint motor keeps it finite through its weight in the
+        # objective, as CASPR's joint motors do; a tendon motor that could push is refused below)
+        lo, hi = (sorted(g * k * float(c) for c in mj.actuator_ctrlrange[i]) if int(mj.actuator_ctrllimited[i])
+                  else (-math.inf, math.inf))
         if int(mj.actuator_forcelimited[i]):
             flo, fhi = (g * float(x) for x in sorted(mj.actuator_forcerange[i]))
             lo, hi = max(lo, min(flo, fhi)), min(hi, max(flo, fhi))
