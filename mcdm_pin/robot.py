@@ -314,7 +314,7 @@ def _from_model_file_sidecar(sc: Sidecar) -> Robot:
         if sc.osim_path is not None:
             parts = osim_parts(path, sc.name, sc.actuator_weights)
         else:
-            parts = mjcf_parts(compile_mjcf(path), source, sc.name)
+            parts = mjcf_parts(compile_mjcf(path), source, sc.name, sc.actuator_weights)
     except ModelError as exc:
         raise sc.error(key, str(exc)) from None
     joints = {j.name: j for j in parts.joints}

@@ -122,7 +122,8 @@ class Sidecar:
     reserves: tuple = ()  # ReserveSpec: coordinate actuators of an MJCF robot
     springs: tuple = ()  # SpringSpec: passive springs (known tensions)
     osim_path: Path | None = None  # a sidecar over an OpenSim file (``osim:`` instead of ``urdf:``)
-    actuator_weights: dict = field(default_factory=dict)  # an .osim's CoordinateActuators: name -> w of w c^2
+    # an .osim's CoordinateActuators: name -> w of w c^2; an MJCF's joint motors: name -> w of w |tau|^2
+    actuator_weights: dict = field(default_factory=dict)
 
 
     def error(self, key: str, expected: str) -> SidecarError:
@@ -145,7 +146,7 @@ POINT_KEYS = ("link", "point")
 WRAP_KEYS = ("wrap", "link", "radius", "center", "axis", "side")
 # a sidecar over an MJCF file: the robot (bodies, cables, muscles, couplings) comes from the MJCF; the
 # sidecar adds what MJCF has no words for: joint weights, cones, trajectories
-MJCF_TOP_KEYS = ("version", "name", "description", "mjcf", "joints", "trajectories", "reserves")
+MJCF_TOP_KEYS = ("version", "name", "description", "mjcf", "joints", "trajectories", "reserves", "actuator_weights")
 # a sidecar over an OpenSim file: the same, its CoordinateActuators weighed by name instead of reserves
 OSIM_TOP_KEYS = ("version", "name", "description", "osim", "joints", "trajectories", "actuator_weights")
 RESERVE_KEYS = ("coordinates", "max", "weight")
@@ -284,19 +285,20 @@ def _parse_mjcf_sidecar(r: _Reader, data: dict, path: Path | None, base_dir: Pat
         raise r.fail("trajectories", f"expected a mapping name: trajectory, got {_kind(trajs_raw)}")
     trajectories = {t: _parse_trajectory(r, t, spec, base_dir) for t, spec in trajs_raw.items()}
     source = (base_dir / mjcf).resolve()
+    weights_raw = data.get("actuator_weights", {}) or {}
+    if not isinstance(weights_raw, dict):
+        what = "CoordinateActuator" if osim else "joint motor (MuJoCo actuator)"
+        raise r.fail("actuator_weights", f"expected a mapping {what} name: weight, got {_kind(weights_raw)}")
+    weights = {r.string(k, f"actuator_weights.{k}"): r.number(v, f"actuator_weights.{k}", lo=0.0)
+               for k, v in weights_raw.items()}
     if osim:
-        weights_raw = data.get("actuator_weights", {}) or {}
-        if not isinstance(weights_raw, dict):
-            raise r.fail("actuator_weights", f"expected a mapping CoordinateActuator name: weight, got "
-                                             f"{_kind(weights_raw)}")
-        weights = {r.string(k, f"actuator_weights.{k}"): r.number(v, f"actuator_weights.{k}", lo=0.0)
-                   for k, v in weights_raw.items()}
         return Sidecar(path=path, version=int(version), name=name, urdf="", urdf_path=None,
                        gravity=(0.0, 0.0, 0.0), joints=tuple(joints), cables=(), trajectories=trajectories,
                        description=description, osim_path=source, actuator_weights=weights)
     return Sidecar(path=path, version=int(version), name=name, urdf="", urdf_path=None, gravity=(0.0, 0.0, 0.0),
                    joints=tuple(joints), cables=(), trajectories=trajectories, description=description,
-                   mjcf_path=source, reserves=_parse_reserves(r, data.get("reserves", [])))
+                   mjcf_path=source, reserves=_parse_reserves(r, data.get("reserves", [])),
+                   actuator_weights=weights)
 
 
 def _parse_reserves(r: _Reader, raw) -> tuple[ReserveSpec, ...]:

@@ -353,6 +353,34 @@ def test_joint_motors_with_and_without_a_control_range(monkeypatch, tmp_path, ex
                                rtol=1e-7, atol=1e-9)
 
 
+def test_an_mjcf_sidecar_weighs_the_joint_motors(tmp_path):
+    """``actuator_weights`` in an ``mjcf:`` sidecar sets a joint motor's ``w`` of ``w |tau|^2``: a cheaper
+    exoskeleton's motor takes more of the load and the muscles less. A name that is not a joint motor,
+    a weight below 0 or a list is refused, naming the field."""
+    from mcdm_pin import InverseDynamics, Robot
+    from mcdm_pin.exceptions import SidecarError
+
+    (tmp_path / "elbow.xml").write_text(ELBOW.format(extra='<motor name="exo" joint="hinge" gear="2"/>'))
+    side = tmp_path / "elbow.yaml"
+    state = np.array([0.3]), np.array([0.0]), np.array([20.0])
+    torque, activation = [], []
+    for w in (1.0, 1e-4):
+        side.write_text(f"version: 1\nmjcf: elbow.xml\nactuator_weights: {{exo: {w}}}\n")
+        robot = Robot.load(side)
+        assert robot.actuators[0].weight == w
+        res = InverseDynamics.for_case(robot, 1).solve(*state)
+        assert res.status == "optimal"
+        torque.append(abs(float(res.tau_act[0])))
+        activation.append(float(np.max(res.activation)))
+    assert torque[1] > 100 * torque[0] and activation[1] < activation[0]
+    for raw, why in [("{exoo: 1}", r"actuator_weights names \['exoo'\].*those: 'exo'"),
+                     ("{exo: -1}", r"actuator_weights\.exo: expected a number >= 0"),
+                     ("[1]", "actuator_weights: expected a mapping")]:
+        side.write_text(f"version: 1\nmjcf: elbow.xml\nactuator_weights: {raw}\n")
+        with pytest.raises(SidecarError, match=why):
+            Robot.load(side)
+
+
 @pytest.mark.parametrize("extra, why", [
     ('<motor name="push" tendon="flexor"/>', "'push'.*not within \\[0, inf\\)"),  # it could push
     ('<general name="dead" joint="hinge" gainprm="0"/>', "'dead'.*no gain"),

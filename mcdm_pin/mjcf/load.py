@@ -68,8 +68,9 @@ class RobotParts(NamedTuple):
     notes: tuple
 
 
-def mjcf_parts(mj, source: str, name: str = "robot") -> RobotParts:
-    """The robot of a compiled ``mujoco.MjModel``, in parts (``source``: a path or label for messages)."""
+def mjcf_parts(mj, source: str, name: str = "robot", actuator_weights: dict | None = None) -> RobotParts:
+    """The robot of a compiled ``mujoco.MjModel``, in parts (``source``: a path or label for messages;
+    ``actuator_weights``: ``{joint motor's actuator name: w}`` of ``w |tau|^2``, default 1 each)."""
     try:
         mjm = build_model(mj, source)
         tendons = read_tendons(mj, mjm, source)
@@ -88,16 +89,25 @@ def mjcf_parts(mj, source: str, name: str = "robot") -> RobotParts:
             q_index[mjm.jnt_idx_v[j]] = mjm.jnt_idx_q[j]
     couplings = Couplings(q_index, coupled, names) if coupled else None
     joints = physical_joints(mjm.model)
-    return RobotParts(mjm.model, cables, joints, _joint_motors(mjm, joints, tendons.joint_motors), name,
-                      couplings, names, MjcfSource(mjm, couplings), tendons.notes)
+    motors = _joint_motors(mjm, joints, tendons.joint_motors, source, actuator_weights)
+    return RobotParts(mjm.model, cables, joints, motors, name, couplings, names, MjcfSource(mjm, couplings),
+                      tendons.notes)
 
 
-def _joint_motors(mjm, joints, motors) -> tuple:
+def _joint_motors(mjm, joints, motors, source: str, weights: dict | None) -> tuple:
     """Plain motors on hinge and slide joints as actuators of the physical joint (MuJoCo body) holding
-    the joint, named after the MuJoCo actuator, with weight 1 (an unbounded one, without a control or
-    force range, is kept finite by that weight)."""
-    return tuple(Actuator.on_coordinate(joints, int(mjm.jnt_idx_v[jnt]), lo, hi, 1.0, label=name)
-                 for name, jnt, lo, hi in motors)
+    the joint, named after the MuJoCo actuator, each weighted ``weights[name]`` (default 1) in ``w
+    |tau|^2`` (an unbounded one, without a control or force range, is kept finite by its weight).
+    Weights for other names raise :class:`ModelError`."""
+    weights = dict(weights or {})
+    out = tuple(Actuator.on_coordinate(joints, int(mjm.jnt_idx_v[jnt]), lo, hi, float(weights.pop(name, 1.0)),
+                                       label=name)
+                for name, jnt, lo, hi in motors)
+    if weights:
+        known = ", ".join(repr(m[0]) for m in motors) or "none"
+        raise ModelError(f"{source}: actuator_weights names {sorted(weights)}, which are not motors on hinge or "
+                         f"slide joints of this model (those: {known})")
+    return out
 
 
 def _line_of(source: str, message: str) -> str:
