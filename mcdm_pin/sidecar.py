@@ -145,7 +145,8 @@ CABLE_KEYS = ("name", "f_min", "f_max", "route")
 POINT_KEYS = ("link", "point")
 WRAP_KEYS = ("wrap", "link", "radius", "center", "axis", "side")
 # a sidecar over an MJCF file: the robot (bodies, cables, muscles, couplings) comes from the MJCF; the
-# sidecar adds what MJCF has no words for: joint weights, cones, trajectories
+# sidecar adds what MJCF has no words for: joint weights, cones, trajectories, reserves, the weights of
+# its joint motors
 MJCF_TOP_KEYS = ("version", "name", "description", "mjcf", "joints", "trajectories", "reserves", "actuator_weights")
 # a sidecar over an OpenSim file: the same, its CoordinateActuators weighed by name instead of reserves
 OSIM_TOP_KEYS = ("version", "name", "description", "osim", "joints", "trajectories", "actuator_weights")

@@ -5,8 +5,9 @@ Pinocchio frames of :func:`mcdm_pin.mjcf.model.build_model`:
 
 - a spatial tendon driven by a muscle actuator becomes a muscle cable named after the actuator; one
   driven by a plain ``motor``/``general`` actuator with a control range that only pulls becomes a cable
-  with those bounds (times gain and gear); a bounded plain motor on a hinge or slide joint becomes an
-  actuator of that joint (a hybrid robot's motor); a tendon no actuator drives exerts no force of its
+  with those bounds (times gain and gear); a plain motor on a hinge or slide joint becomes an actuator
+  of that joint (a hybrid robot's motor; unbounded without a control or force range, kept finite by its
+  weight in the objective); a tendon no actuator drives exerts no force of its
   own (MuJoCo's passive tendon stiffness and damping are refused where set) and is left out, with a
   note, as is a muscle whose whole path lies on one body;
 - a route's ``site`` is a :class:`~mcdm_pin.model.cables.RoutePoint` on the site's frame, a ``geom``
@@ -18,7 +19,8 @@ Pinocchio frames of :func:`mcdm_pin.mjcf.model.build_model`:
 
 Everything else that acts on the bodies is refused with the element and the reason: fixed tendons,
 tendons with stiffness or damping, other equality constraints (connect, weld, tendon, flex), and other
-actuators (dynamics, bias, unbounded, on sites or bodies, on ball or free joints).
+actuators (dynamics, bias, no gain, on sites or bodies, on ball or free joints, a tendon motor that
+could push).
 """
 
 from __future__ import annotations
