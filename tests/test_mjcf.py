@@ -42,7 +42,8 @@ def _compile(name):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             return myo_sim.FRAGMENT_SPEC_BUILDERS[name]().compile()
-    if name not in ("myoelbow", "myoelbow_2dof", "myoelbow_exo", "myofinger", "myolegs_osl"):  # composed in code by MyoSuite
+    # composed in code by MyoSuite
+    if name not in ("myoelbow", "myoelbow_2dof", "myoelbow_exo", "myofinger", "myolegs_osl"):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             return myo_sim.load_spec(name).compile()

@@ -174,6 +174,7 @@ def _motors(mj, source: str, skipped) -> dict:
         i = mujoco.mj_name2id(mj, mujoco.mjtObj.mjOBJ_ACTUATOR, name) if not name.startswith("actuator ") \
             else int(name.split()[1])
         trn = mujoco.mjtTrn(int(mj.actuator_trntype[i])).name.removeprefix("mjTRN_").lower()
+        g, k = float(mj.actuator_gear[i, 0]), float(mj.actuator_gainprm[i, 0])
         fail = None
         if trn not in ("tendon", "joint"):
             fail = f"on a {trn}"
@@ -182,7 +183,7 @@ def _motors(mj, source: str, skipped) -> dict:
         elif int(mj.actuator_gaintype[i]) != mujoco.mjtGain.mjGAIN_FIXED or \
                 int(mj.actuator_biastype[i]) != mujoco.mjtBias.mjBIAS_NONE:
             fail = "is not a plain motor (a fixed gain, no bias)"
-        elif float(mj.actuator_gear[i, 0]) * float(mj.actuator_gainprm[i, 0]) == 0.0:
+        elif g * k == 0.0:
             fail = "has no gain (gear or gain zero), so it exerts no force"
         if fail is None and trn == "joint":
             j = int(mj.actuator_trnid[i, 0])
@@ -192,7 +193,6 @@ def _motors(mj, source: str, skipped) -> dict:
             raise _refuse(source, f"actuator {name!r}", f"{why}; it {fail} ({trn} transmission): only muscles, "
                                                         f"plain motors on hinge/slide joints and plain "
                                                         f"motors on tendons that only pull are read from MJCF")
-        g, k = float(mj.actuator_gear[i, 0]), float(mj.actuator_gainprm[i, 0])
         # no control range: an unbounded force (a joint motor keeps it finite through its weight in the
         # objective, as CASPR's joint motors do; a tendon motor that could push is refused below)
         lo, hi = (sorted(g * k * float(c) for c in mj.actuator_ctrlrange[i]) if int(mj.actuator_ctrllimited[i])
