@@ -70,8 +70,8 @@ def test_version_and_python_dash_m():
 
 
 # import names whose distribution importlib.metadata cannot map (cmeel wheels install them under
-# cmeel.prefix)
-_DISTRIBUTION_OF = {"pinocchio": "pin", "proxsuite": "proxsuite", "mujoco": "mujoco"}
+# cmeel.prefix), or cannot map where the extra that brings it is not installed (pink: the ik extra)
+_DISTRIBUTION_OF = {"pinocchio": "pin", "proxsuite": "proxsuite", "mujoco": "mujoco", "pink": "pin-pink"}
 # declared but never imported, on purpose
 _DATA_ONLY = {"example-robot-data": "robot models read through package:// paths"}
 
@@ -160,3 +160,17 @@ def test_links_in_the_readme_and_the_docs_lead_somewhere():
             if not (page.parent / target).exists():
                 broken.append(f"{page.relative_to(REPO)} -> {target}")
     assert not broken, broken
+
+
+def test_ci_runs_the_readmes_test_command_and_both_commands_install_alike():
+    """``.ci/run`` runs exactly the README's second command, and both commands install the same way
+    (uv's ``pip`` interface, the bytecode written at install only where Python will not write it)."""
+    first, second = (block.strip() for block in re.findall(r"```bash\n(.*?)```", README.read_text(), flags=re.S)[:2])
+    ci_lines = [line.strip() for line in (REPO / ".ci" / "run").read_text().splitlines()]
+    assert second in ci_lines
+    install = "python -m pip install -q uv && python -m uv pip install"
+    for command in (first, second):
+        assert command.startswith(install) and "${PYTHONDONTWRITEBYTECODE:+--compile-bytecode}" in command, command
+    # the first command runs the package as a module: an installer that writes the `mcdm-pin` script
+    # where the shell does not look (pyenv's shims before a rehash, a --user install) cannot break it
+    assert " && python -m mcdm_pin solve " in first, first
