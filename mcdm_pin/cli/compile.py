@@ -1,8 +1,12 @@
 """``mcdm-pin compile``: compile the numba kernels once per install (about 160 s of CPU, split between
 the cores: docs/speed.md, "First run") and cache them; until then every run executes the same kernels
-as plain Python (mcdm_pin/jit.py). A CI caches the kernels' cache folder, printed here (``--where``)."""
+as plain Python (mcdm_pin/jit.py). A CI caches the kernels' cache folder, printed here (``--where``). It also writes the bytecode of
+the modules a run imports where it is missing (mcdm_pin/bytecode.py): where ``PYTHONDONTWRITEBYTECODE``
+is set, Python itself never does."""
 
 from __future__ import annotations
+
+import time
 
 
 def add(sub):
@@ -20,7 +24,7 @@ def add(sub):
 
 
 def run(args) -> int:
-    from .. import jit
+    from .. import bytecode, jit
     from ..exceptions import SolverError
 
     folder = jit.cache_dir()
@@ -32,6 +36,11 @@ def run(args) -> int:
         raise SolverError(f"--workers {args.workers}: expected a positive number of processes")
     seconds = jit.compile_now(workers=args.workers)  # (says on stderr when it compiles or waits)
     print(f"kernels ready ({len(jit.entry_points())} entry points) in {seconds:.1f} s; cache: {folder}")
+    t0 = time.perf_counter()
+    done = bytecode.write_bytecode(bytecode.module_sources())
+    print(f"bytecode of the modules a run imports: {done.written} written, {done.current} current"
+          f"{f', {len(done.unwritable)} not writable (they compile at every import)' if done.unwritable else ''}"
+          f" ({time.perf_counter() - t0:.1f} s)")
     info = jit.LAST_COMPILE
     if args.timings and info:
         print(f"compiled in {info['workers']} process(es): wall {info['wall']:.1f} s, CPU {info['cpu']:.1f} s "
