@@ -533,6 +533,13 @@ def compile_now(quiet: bool = False, workers: int | None = None) -> float:
     return time.perf_counter() - t0
 
 
+def _compile_command() -> str:
+    """The compile command as this run was started: ``python -m mcdm_pin compile`` under ``python -m
+    mcdm_pin`` (the script's folder may not be on the shell's path there), else ``mcdm-pin compile``."""
+    spec = getattr(sys.modules.get("__main__"), "__spec__", None)
+    return "python -m mcdm_pin compile" if spec is not None and spec.name.startswith("mcdm_pin") else "mcdm-pin compile"
+
+
 def prepare(policy: str | None = None, quiet: bool = False) -> bool:
     """Load the compiled kernels when they are stamped (policy ``auto``), compile them (``compile``,
     ``wait``) or leave them uncompiled (``off``; see the module docstring); returns :func:`compiled`.
@@ -550,9 +557,10 @@ def prepare(policy: str | None = None, quiet: bool = False) -> bool:
         return True
     if not (quiet or _NOTED):
         _NOTED = True
-        how = ("`mcdm-pin compile` compiles them once (a few minutes of CPU, split between the cores)"
+        command = _compile_command()
+        how = (f"`{command}` compiles them once (a few minutes of CPU, split between the cores)"
                if numba is not None else
-               "installing numba (pip install 'mcdm-pin[numba]') and `mcdm-pin compile` compile them")
+               f"installing numba (pip install 'mcdm-pin[numba]') and `{command}` compile them")
         print(f"mcdm-pin: the numba kernels are not compiled on this install: they run as plain Python "
               f"(the same answers, slower); {how}", file=sys.stderr, flush=True)
     return False

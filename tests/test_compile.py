@@ -62,6 +62,20 @@ def test_stamp_covers_modules_that_decorate_with_imported_decorators():
     assert "ipm.py" not in names
 
 
+def test_the_note_names_the_compile_command_as_the_run_was_started(monkeypatch):
+    """Under ``python -m mcdm_pin`` (the README's first command) the note before an uncompiled run
+    names ``python -m mcdm_pin compile``: the ``mcdm-pin`` script's folder may not be on the shell's
+    path there (pyenv's shims before a rehash); elsewhere ``mcdm-pin compile``."""
+    import sys
+    import types
+
+    monkeypatch.setitem(sys.modules, "__main__", types.SimpleNamespace(__spec__=types.SimpleNamespace(
+        name="mcdm_pin.__main__")))
+    assert jit._compile_command() == "python -m mcdm_pin compile"
+    monkeypatch.setitem(sys.modules, "__main__", types.SimpleNamespace(__spec__=None))  # the script
+    assert jit._compile_command() == "mcdm-pin compile"
+
+
 def test_workers_setting(monkeypatch):
     monkeypatch.setenv(jit.WORKERS_ENV, "3")
     assert jit.compile_workers() == 3
