@@ -32,6 +32,9 @@ The least-norm stage keeps minimising the original ``|f|^2`` (the scaled copy ca
 ``d^2``).
 
 Use: ``ScaledSolver(get_solver("default"))`` is a :class:`~mcdm_pin.solvers.Solver` like any other.
+Along a trajectory it keeps the last optimal instant's factors while the copy they make of the next
+problem is well scaled (``ScaledSolver._scale``): consecutive instants nearly always share their
+factors, and the one-pass test costs a fraction of making them.
 """
 
 from __future__ import annotations
@@ -90,6 +93,10 @@ class Scaling:
     r: np.ndarray
     obj: float
     cone: np.ndarray
+
+    def fits(self, qp: QPData) -> bool:
+        """Whether these factors have the shapes of ``qp``'s variables, equations and cones."""
+        return len(self.d) == qp.n and len(self.r) == len(qp.b) and len(self.cone) == len(qp.cones)
 
     def unscale(self, qp: QPData, sol: Solution) -> Solution:
         """``sol`` (an answer of the scaled copy of ``qp``) mapped back, its objective evaluated on
@@ -227,6 +234,12 @@ def _scaled_copy(qp: QPData, out, obj: float) -> QPData:
                   norm_weight=out.norm_weight, cone_arrays=ka[5:], cone_consts=qp.cone_consts(), kernel_arrays=ka)
 
 
+def _well_scaled(qp: QPData) -> bool:
+    """Whether the structured problem ``qp`` needs no scaling (its every factor would be one)."""
+    A, b, lb, ub, c, _, P_diag, P_factor, _, G, g, _ = _factor_arrays(qp, None)
+    return not jit.kernels("model.kernels").needs_scaling(A, b, lb, ub, P_diag, P_factor, c, G, g, float(SPREAD))
+
+
 def scale_problem(qp: QPData, f_scale: np.ndarray | None = None, force: bool = False, quick: bool = True):
     """``(scaled QPData, Scaling)``, or ``(qp, None)`` when no scaling is needed: the factors and the
     scaled copy in one compiled call (:func:`mcdm_pin.model.scale_kernels.scale_instant`), after the
@@ -266,6 +279,8 @@ class ScaledSolver(Solver):
         # then the one-pass test for a well-scaled instant is left to the compiled call that
         # scales (scale_problem's ``quick``: one call fewer, the same factors)
         self._scaled_last = False
+        # the last optimal instant's factors (:meth:`_scale`)
+        self._kept: Scaling | None = None
 
     def fresh(self) -> "ScaledSolver":
         return ScaledSolver(self.inner.fresh())
@@ -273,17 +288,37 @@ class ScaledSolver(Solver):
     def reset(self) -> None:
         self.inner.reset()
         self._scaled_last = False
+        self._kept = None
 
     def needs_scaling(self, qp: QPData) -> bool:
         return scale_problem(qp)[1] is not None
 
-    def solve(self, qp: QPData) -> Solution:
+    def _scale(self, qp: QPData) -> tuple[QPData, Scaling | None, bool]:
+        """``(scaled copy, its Scaling, kept)`` or ``(qp, None, False)``. Along a trajectory the
+        factors (powers of two) of consecutive instants are nearly always the same: the last optimal
+        instant's are kept where they fit ``qp`` and the copy they make passes the one-pass test of
+        a well-scaled problem (:func:`mcdm_pin.model.kernels.needs_scaling`; structured problems),
+        which makes no factors (about a third of their cost on MyoSuite's arm). Else this instant's
+        own (:func:`scale_problem`). Kept factors equal to the instant's own give the same copy to
+        the bit; others a copy with the same solutions, whose answer differs within rounding."""
+        kept = self._kept
+        if kept is not None and qp.structured and kept.fits(qp):
+            scaled = apply_scaling(qp, kept)
+            if _well_scaled(scaled):
+                return scaled, kept, True
         scaled, scaling = scale_problem(qp, quick=not self._scaled_last)
+        return scaled, scaling, False
+
+    def solve(self, qp: QPData) -> Solution:
+        scaled, scaling, kept = self._scale(qp)
         self._scaled_last = scaling is not None
         sol = self.inner.solve(scaled)
+        self._kept = scaling if sol.status == OPTIMAL else None
         if scaling is None:
             return sol
         sol = scaling.unscale(qp, sol)
+        if sol.status == INACCURATE and kept:  # the instant's own factors next, as without kept ones
+            return self.solve(qp)
         if sol.status == INACCURATE:
             # the scaling can hurt: equilibrating a column 1e7 smaller than the others (a hybrid arm
             # held straight, PlanarSnakeArm at q = 0) spread the scaled Hessian over 14 decades and
