@@ -54,9 +54,9 @@ def _current(source: Path, pyc: str) -> bool:
     return mtime == int(stat.st_mtime) & 0xFFFFFFFF and size == stat.st_size & 0xFFFFFFFF
 
 
-# what a run imports besides the command line and the kernels: the back-ends a chain may reach, and
-# the codec of the sidecar reader
-RUN_IMPORTS = ("mcdm_pin.cli", "clarabel", "proxsuite", "encodings.utf_8_sig")
+# what a run imports besides what the compile command's process has loaded (the command line and
+# every kernel): the back-ends a chain may reach, and the codec of the sidecar reader
+RUN_IMPORTS = ("clarabel", "proxsuite", "encodings.utf_8_sig")
 
 
 def module_sources(modules=None) -> list[Path]:
