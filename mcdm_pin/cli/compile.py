@@ -1,8 +1,8 @@
 """``mcdm-pin compile``: compile the numba kernels once per install (about 160 s of CPU, split between
 the cores: docs/speed.md, "First run") and cache them; until then every run executes the same kernels
-as plain Python (mcdm_pin/jit.py). A CI caches the kernels' cache folder, printed here (``--where``). It also writes the bytecode of
-the modules a run imports where it is missing (mcdm_pin/bytecode.py): where ``PYTHONDONTWRITEBYTECODE``
-is set, Python itself never does."""
+as plain Python (mcdm_pin/jit.py). A CI caches the kernels' cache folder, printed here (``--where``).
+It also writes the bytecode of the modules a run imports where it is missing (mcdm_pin/bytecode.py):
+where ``PYTHONDONTWRITEBYTECODE`` is set, Python itself never does."""
 
 from __future__ import annotations
 
