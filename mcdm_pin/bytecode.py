@@ -4,9 +4,9 @@ Python compiles a module's source to bytecode on every import that finds no curr
 it, and writes that ``.pyc`` only where it may: where ``PYTHONDONTWRITEBYTECODE`` is set (as many
 container images set it) it writes none, so every run compiles numpy's, scipy's, numba's and this
 package's sources again (0.7-0.9 s of an uncompiled 2-link solve's 1.6 s on a quiet 2-core machine:
-docs/speed.md, "The first command without uv's bytecode pass"). Installers write the bytecode of what they install (pip always, uv with
-``--compile-bytecode``), about 6,800 files for the ``all`` extra, most of them never imported by a
-run; and an editable install's own package gets none.
+docs/speed.md, "The first command without uv's bytecode pass"). Installers write the bytecode of
+what they install (pip always, uv with ``--compile-bytecode``), about 6,800 files for the ``all``
+extra, most of them never imported by a run; and an editable install's own package gets none.
 
 :func:`write_bytecode` writes the ``.pyc`` of the given modules where it is missing or stale, as
 Python's import would (timestamp-checked ``.pyc`` in ``__pycache__``, the interpreter's optimisation
