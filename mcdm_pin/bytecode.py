@@ -59,14 +59,12 @@ def _current(source: Path, pyc: str) -> bool:
 RUN_IMPORTS = ("clarabel", "proxsuite", "encodings.utf_8_sig")
 
 
-def module_sources(modules=None) -> list[Path]:
-    """The ``.py`` sources of ``modules`` (default: :data:`RUN_IMPORTS` imported, then every module
-    loaded in this process) and of every module of this package, each once."""
-    if modules is None:
-        for name in RUN_IMPORTS:
-            importlib.import_module(name)
-    files = {Path(getattr(m, "__file__", "") or "") for m in list((modules or sys.modules).values())
-             if m is not None}
+def module_sources() -> list[Path]:
+    """The ``.py`` sources of every module loaded in this process, :data:`RUN_IMPORTS` imported first,
+    and of every module of this package, each once."""
+    for name in RUN_IMPORTS:
+        importlib.import_module(name)
+    files = {Path(getattr(m, "__file__", "") or "") for m in list(sys.modules.values()) if m is not None}
     files |= set(Path(__file__).parent.rglob("*.py"))
     return sorted(f for f in files if f.suffix == ".py" and f.is_file())
 

@@ -234,9 +234,10 @@ def _scaled_copy(qp: QPData, out, obj: float) -> QPData:
                   norm_weight=out.norm_weight, cone_arrays=ka[5:], cone_consts=qp.cone_consts(), kernel_arrays=ka)
 
 
-def _well_scaled(qp: QPData) -> bool:
-    """Whether the structured problem ``qp`` needs no scaling (its every factor would be one)."""
-    A, b, lb, ub, c, _, P_diag, P_factor, _, G, g, _ = _factor_arrays(qp, None)
+def _well_scaled(arrays: tuple) -> bool:
+    """The one-pass test that a structured problem needs no scaling (its every factor would be one),
+    on its :func:`_factor_arrays`."""
+    A, b, lb, ub, c, _, P_diag, P_factor, _, G, g, _ = arrays
     return not jit.kernels("model.kernels").needs_scaling(A, b, lb, ub, P_diag, P_factor, c, G, g, float(SPREAD))
 
 
@@ -249,9 +250,9 @@ def scale_problem(qp: QPData, f_scale: np.ndarray | None = None, force: bool = F
     if not jit.ready():  # (a test's numpy references)
         s = scaling_factors(qp, f_scale, force)
         return (qp, None) if s is None else (apply_scaling(qp, s), s)
-    A, b, lb, ub, c, P, P_diag, P_factor, structured, G, g, fs = _factor_arrays(qp, f_scale)
-    if quick and structured and not force and f_scale is None and not jit.kernels("model.kernels").needs_scaling(
-            A, b, lb, ub, P_diag, P_factor, c, G, g, float(SPREAD)):
+    arrays = _factor_arrays(qp, f_scale)
+    A, b, lb, ub, c, P, P_diag, P_factor, structured, G, g, fs = arrays
+    if quick and structured and not force and f_scale is None and _well_scaled(arrays):
         return qp, None
     c_ = np.ascontiguousarray
     if not structured:  # (the copy scales the problem's own diagonal, if it gives one)
@@ -304,7 +305,7 @@ class ScaledSolver(Solver):
         kept = self._kept
         if kept is not None and qp.structured and kept.fits(qp):
             scaled = apply_scaling(qp, kept)
-            if _well_scaled(scaled):
+            if _well_scaled(_factor_arrays(scaled, None)):
                 return scaled, kept, True
         scaled, scaling = scale_problem(qp, quick=not self._scaled_last)
         return scaled, scaling, False

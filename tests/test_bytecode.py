@@ -65,3 +65,11 @@ def test_the_compile_command_says_what_it_wrote(monkeypatch, capsys, tmp_path):
     out = capsys.readouterr().out.splitlines()
     assert out[-1].startswith("bytecode of the modules a run imports: 1 written, 0 current (")
     assert Path(importlib.util.cache_from_source(str(source))).is_file()
+    blocked = tmp_path / "ro"
+    blocked.mkdir()
+    other = _module(blocked, "Z = 3\n")
+    (blocked / "__pycache__").write_text("a file where the folder would go")
+    monkeypatch.setattr(bytecode, "module_sources", lambda: [source, other])
+    assert main(["compile"]) == 0
+    assert capsys.readouterr().out.splitlines()[-1].startswith(
+        f"bytecode of the modules a run imports: 0 written, 1 current, 1 not writable (e.g. {other}: ")

@@ -38,9 +38,10 @@ def run(args) -> int:
     print(f"kernels ready ({len(jit.entry_points())} entry points) in {seconds:.1f} s; cache: {folder}")
     t0 = time.perf_counter()
     done = bytecode.write_bytecode(bytecode.module_sources())
-    print(f"bytecode of the modules a run imports: {done.written} written, {done.current} current"
-          f"{f', {len(done.unwritable)} not writable (they compile at every import)' if done.unwritable else ''}"
-          f" ({time.perf_counter() - t0:.1f} s)")
+    unwritable = (f", {len(done.unwritable)} not writable (e.g. {done.unwritable[0]}: they compile at every "
+                  f"import)" if done.unwritable else "")
+    print(f"bytecode of the modules a run imports: {done.written} written, {done.current} current{unwritable} "
+          f"({time.perf_counter() - t0:.1f} s)")
     info = jit.LAST_COMPILE
     if args.timings and info:
         print(f"compiled in {info['workers']} process(es): wall {info['wall']:.1f} s, CPU {info['cpu']:.1f} s "
