@@ -1,6 +1,6 @@
 """What answers a cold instant fastest inside our chain: the interior-point method at several crossover
-gaps, or another first stage (DAQP's dual active set, or our active-set solver from an all-free guess),
-on the neck and on the scaling study's chains (6 to 96 DoF).
+gaps, or another first stage (the dual guess, DAQP's dual active set, or our active-set solver from an
+all-free guess), on the neck and on the scaling study's chains (6 to 96 DoF).
 
     python benchmarks/cold_start.py [--sizes 2 4 8 16 32] [--repeat 2] [--no-neck]
 
@@ -9,7 +9,12 @@ median wall time of ``solve`` per instant (ms) and the mean of the answers' ``it
 point iterations plus linear KKT solves), with the 99th percentile of the wall times beside the median.
 Rows:
 
-- ``ipm gap G``: the default chain with ``Settings(ipm_crossover_gap=G)`` (the default is the first);
+- ``ipm gap G``: the default chain with ``Settings(ipm_crossover_gap=G, cold_dual_steps=0)`` (the
+  default gap is the first; without the dual guess, so that the interior-point method answers case 1
+  too);
+- ``dual guess first (default)``: the default chain as it is, for case 1 (strictly convex, diagonal,
+  no cones): :class:`~mcdm_pin.solvers.active_set.DualActiveSet` from zero multipliers, the
+  interior-point method where it fails;
 - ``daqp first``: DAQP (``daqp.solve``, cold, ``eps_prox`` 0) before the default chain's stages, for
   the strictly convex problems without cones (case 1), its multipliers as the answer's duals, then the
   chain's polish, least-norm and check stages as for any answer;
@@ -120,8 +125,10 @@ def rows(robot, traj, kw: dict, case: int, repeat: int):
     from mcdm_pin.settings import DEFAULT
 
     out, ref = [], None
-    variants = [(f"ipm gap {g:g}", "default", DEFAULT.replace(ipm_crossover_gap=g)) for g in GAPS]
+    no_dual = DEFAULT.replace(cold_dual_steps=0)
+    variants = [(f"ipm gap {g:g}", "default", no_dual.replace(ipm_crossover_gap=g)) for g in GAPS]
     if case == 1:
+        variants.append(("dual guess first (default)", "default", DEFAULT))
         variants.append(("daqp first", chain_with(first_stage("daqp", daqp_answer), DEFAULT), DEFAULT))
     all_free = first_stage("all_free_active_set", all_free_answer)
     variants.append(("all-free active set first", chain_with(all_free, DEFAULT), DEFAULT))

@@ -138,6 +138,11 @@ class Settings:
     this many pivots (and ``warm_max_pivots``' halving) before it: of 18,565 warm starts that
     answered the shipped robots' case 1 (their first two trajectories), four needed more than six
     KKT solves (8, 10, 11 and 28), and a guess that fails pivots on to its limit (~1 ms on the neck)."""
+    cold_dual_steps: int = 30
+    """A cold instant (no previous answer) of such a problem starts from the dual guess too, from zero
+    multipliers, with at most this many Newton steps (:class:`mcdm_pin.solvers.active_set.DualActiveSet`);
+    where the active set they reach does not verify within ``warm_min_pivots``, the interior-point
+    method answers. 0: every cold instant goes to the interior-point method."""
     warm_dual_regularisation: float = 1e-6
     """The dual guess's Newton matrix is ``A_F D_F^-1 A_F^T + r A D^-1 A^T`` with this ``r``: positive
     definite where the free variables do not span the equations (:mod:`mcdm_pin.solvers._dual_guess`)."""
@@ -246,14 +251,14 @@ class Settings:
 
 def _check(name: str, default, value) -> None:
     """``value`` of the field ``name`` is of its default's kind: a positive int for the limits (zero
-    allowed for ``ipm_correctors`` and ``warm_dual_steps``), a positive finite float for the
+    allowed for ``ipm_correctors``, ``warm_dual_steps`` and ``cold_dual_steps``), a positive finite float for the
     tolerances (``same_cut_cos`` and ``ipm_step_fraction`` at most 1), a float >= 0 or ``None`` for
     the budget."""
     if name == "budget_s" and (value is None or (isinstance(value, (int, float)) and not isinstance(value, bool)
                                                  and value == 0)):
         return  # (a zero budget: no answering stage after the first starts)
     if isinstance(default, int) and not isinstance(default, bool):
-        least = 0 if name in ("ipm_correctors", "warm_dual_steps") else 1
+        least = 0 if name in ("ipm_correctors", "warm_dual_steps", "cold_dual_steps") else 1
         if isinstance(value, bool) or not isinstance(value, int) or value < least:
             raise SolverError(f"setting {name!r} must be an integer >= {least}, got {value!r}")
         return

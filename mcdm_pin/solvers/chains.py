@@ -10,8 +10,11 @@ stage               kind     what it does
                              least-norm stage's chain (:mod:`.least_norm`)
 ``warm_active_set``  answer  the previous instant's active set, corrected by block pivoting; a
                              verified KKT point or nothing (:mod:`.active_set`)
+``dual_active_set``  answer  a cold instant of a problem with a diagonal objective and no cones (case
+                             1, the muscles' activations): the active set read off the dual's
+                             optimum, verified (:mod:`.active_set`)
 ``ipm``              answer  the compiled interior-point method with crossover to the active set
-                             (:mod:`.ipm`): every cold instant
+                             (:mod:`.ipm`): every other cold instant
 ``clarabel``         answer  Clarabel's exact cone program (:mod:`.clarabel_`), on the scaled problem
 ``proxqp``           answer  ProxQP with the cones by cutting planes (:mod:`.proxqp_`)
 ``sqp_polish``       answer  SQP from the cutting planes' point once the cuts crowd (:mod:`.proxqp_`)
@@ -32,7 +35,7 @@ from __future__ import annotations
 from ..exceptions import SolverError
 from ..settings import DEFAULT, Settings
 from ..vocabulary import BACKENDS
-from .active_set import Polish, WarmActiveSet
+from .active_set import DualActiveSet, Polish, WarmActiveSet
 from .cascade import Cascade
 from .check import Check, Project
 from .clarabel_ import ClarabelStage
@@ -69,9 +72,9 @@ def make_solver(name: str = "default", settings: Settings = DEFAULT, **options) 
         # Clarabel before ProxQP: where the compiled method breaks down (an instant infeasible by a
         # few micro-degrees of cone) Clarabel's exact cone program answers in milliseconds, where
         # the cutting planes' SQP polish may run millions of ProxQP iterations before failing
-        first = [WarmActiveSet, IPMStage, ClarabelStage, proxqp, SQPPolish]
+        first = [WarmActiveSet, DualActiveSet, IPMStage, ClarabelStage, proxqp, SQPPolish]
     elif name == "compiled":
-        first = [WarmActiveSet, IPMStage]
+        first = [WarmActiveSet, DualActiveSet, IPMStage]
     elif name == "proxqp":
         first = [proxqp, SQPPolish]
     elif name == "clarabel":
