@@ -366,8 +366,9 @@ def document(result: dict, plot_path: str | None) -> str:
            "socket axis +z), cables spanning one or two joints at 5 cm from the axis with a +-0.5 rad twist, "
            f"a rest-to-rest quintic sampled at {result['instants']} instants; case 1 = min f^T f, case 3 = "
            f"min interaction forces with {CONE_DEG:g} deg cones on every joint; mcdm-pin's default chain "
-           "(warm instants: the compiled active set from the previous instant's; cold ones: the compiled "
-           "interior-point method with its crossover).",
+           "(warm instants: the compiled active set from the previous instant's; cold ones: in case 1 the "
+           "active set read off the dual's optimum (Newton's method from zero multipliers), verified, "
+           "elsewhere the compiled interior-point method with its crossover).",
            "",
            f"Machine: {m['cpu']}, {m['nproc']} cores (`nproc`), Python {m['python']}, "
            + ", ".join(f"{k} {v}" for k, v in m["versions"].items())
