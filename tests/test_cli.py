@@ -192,3 +192,7 @@ def test_stage_counts_name_the_stage_behind_a_constant_objective():
                             iterations=np.array([2, 2, 7]))
     assert stage_counts(usual) == ("answered by warm_active_set at 2 instants (median 2 KKT solves), ipm at 1 "
                                    "(median 7 interior-point iterations)")
+    cold = SimpleNamespace(stage=np.array(["dual_active_set", "warm_active_set", "warm_active_set"]),
+                           iterations=np.array([6, 1, 1]))
+    assert stage_counts(cold) == ("answered by warm_active_set at 2 instants (median 1 KKT solves), dual_active_set "
+                                  "at 1 (median 6 Newton steps and KKT solves)")

@@ -170,7 +170,8 @@ def summary(result) -> str:
 
 
 # what each answering stage's ``iterations`` count (summed with the least-norm stage's, if it ran)
-ITERATION_UNITS = {"warm_active_set": "KKT solves", "ipm": "interior-point iterations",
+ITERATION_UNITS = {"warm_active_set": "KKT solves", "dual_active_set": "Newton steps and KKT solves",
+                   "ipm": "interior-point iterations",
                    "proxqp": "ProxQP iterations", "sqp_polish": "SQP and ProxQP iterations",
                    "clarabel": "Clarabel iterations"}
 
