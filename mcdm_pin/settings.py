@@ -141,8 +141,9 @@ class Settings:
     cold_dual_steps: int = 30
     """A cold instant (no previous answer) of such a problem starts from the dual guess too, from zero
     multipliers, with at most this many Newton steps (:class:`mcdm_pin.solvers.active_set.DualActiveSet`);
-    where the active set they reach does not verify within ``warm_min_pivots``, the interior-point
-    method answers. 0: every cold instant goes to the interior-point method."""
+    where the active set they reach does not verify within ``warm_max_pivots`` (no pivot was spent on
+    the instant before), the interior-point method answers. 0: every cold instant goes to the
+    interior-point method."""
     warm_dual_regularisation: float = 1e-6
     """The dual guess's Newton matrix is ``A_F D_F^-1 A_F^T + r A D^-1 A^T`` with this ``r``: positive
     definite where the free variables do not span the equations (:mod:`mcdm_pin.solvers._dual_guess`)."""
