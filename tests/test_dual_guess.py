@@ -143,14 +143,32 @@ def _dual(d, c, A, b, lb, ub, y):
     return float(np.sum((0.5 * d * x + s) * x) - b @ y)
 
 
+def _breakpoints_before(d, c, A, lb, ub, y, step, t):
+    """How many of the ray's breakpoints (where a variable meets a bound) lie in ``(0, t)``."""
+    s, q = A.T @ y + c, A.T @ step
+    out = 0
+    for j in np.flatnonzero(q):
+        a = -q[j] / d[j]
+        for bound in (lb[j], ub[j]):
+            tj = (bound + s[j] / d[j]) / a
+            out += bool(0.0 < tj < t)
+    return out
+
+
 def test_the_exact_step_is_the_duals_maximiser_along_the_ray(kernel_modules):
     """``_exact_step`` moves ``y`` to the maximiser of the concave dual along the Newton direction:
-    no point of a fine grid along the ray, nor a point a hair either side, is higher."""
+    no point of a fine grid along the ray, nor a point a hair either side, is higher. The last
+    problems, wide and started far from their optimum, pass more breakpoints before the step than the
+    step finds by a scan (16), so that the rest are sorted."""
     mod = kernel_modules("solvers._dual_guess")
     rng = np.random.default_rng(11)
-    for d, c, A, b, lb, ub in _problems(count=12, seed=13):
+    wide = [(np.ones(n), np.zeros(n), rng.normal(size=(3, n)), np.zeros(3), np.zeros(n), np.full(n, 1.0))
+            for n in (120, 200)]
+    passed = []
+    for i, (d, c, A, b, lb, ub) in enumerate(_problems(count=12, seed=13) + wide):
         m, n = A.shape
-        y = rng.normal(size=m)
+        far = 30.0 if i >= 12 else 1.0
+        y = far * rng.normal(size=m)
         step = rng.normal(size=m)
         x = np.empty(n)
         mod._primal(np.ascontiguousarray(A.T), c, d, lb, ub, y, x)
@@ -167,6 +185,8 @@ def test_the_exact_step_is_the_duals_maximiser_along_the_ray(kernel_modules):
         for u in np.concatenate([np.linspace(0.0, 3.0 * max(t, 1.0), 601), [t * (1 - 1e-6), t * (1 + 1e-6)]]):
             assert _dual(d, c, A, b, lb, ub, y + u * step) <= best + scale
         np.testing.assert_allclose(x1, np.clip(-(A.T @ y1 + c) / d, lb, ub), rtol=0, atol=1e-12 * (1 + np.abs(x1).max()))
+        passed.append(_breakpoints_before(d, c, A, lb, ub, y, step, t))
+    assert max(passed[12:]) > 16, passed
 
 
 def test_the_newton_matrix_kept_up_to_date_equals_the_one_summed_again(kernel_modules):
