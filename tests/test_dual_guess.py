@@ -256,3 +256,32 @@ def test_the_cold_steps_setting_switches_the_cold_guess_off_and_is_checked():
     for bad in (-1, 2.5, True):
         with pytest.raises(SolverError, match="cold_dual_steps"):
             DEFAULT.replace(cold_dual_steps=bad)
+
+
+def test_the_arms_activations_cold_with_a_muscle_fixed_by_its_bounds(tmp_path, monkeypatch):
+    """MyoSuite's arm, case 1 (activations): one muscle's force range is a single value along the
+    abduction (its bounds one value, its weight zero), so the objective is not positive definite;
+    the cold stage takes it all the same (that variable is at its bound whatever the multipliers),
+    with the interior-point method's forces, and the warm stage's test stays the cheap one."""
+    pytest.importorskip("mujoco")
+    from mcdm_pin import InverseDynamics, Robot, load_trajectory
+    from mcdm_pin.problem import Context
+    from mcdm_pin.solvers.active_set import _separable
+
+    from .conftest import REPO
+
+    monkeypatch.chdir(tmp_path)  # (MuJoCo writes its log where it runs)
+    robot = Robot.load(REPO / "robots" / "myosuite" / "myoarm.yaml")
+    traj = load_trajectory(robot, "abduction")
+    on = InverseDynamics.for_case(robot, 1)
+    off = InverseDynamics.for_case(robot, 1, settings=DEFAULT.replace(cold_dual_steps=0))
+    for k in (0, 50, 100):
+        qp = on.problem.assemble(on.evaluate(traj.q[k], traj.qd[k], traj.qdd[k]), Context(robot))
+        assert not _separable(qp) and _separable(qp, fixed_ok=True)
+        on.reset()
+        off.reset()
+        a = on.solve(traj.q[k], traj.qd[k], traj.qdd[k])
+        b = off.solve(traj.q[k], traj.qd[k], traj.qdd[k])
+        assert a.status == b.status == "optimal"
+        assert a.stage.startswith("dual_active_set") and b.stage.startswith("ipm"), (a.stage, b.stage)
+        np.testing.assert_allclose(a.f, b.f, rtol=0, atol=1e-10 * np.abs(b.f).max())

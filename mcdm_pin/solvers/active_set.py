@@ -356,8 +356,9 @@ class WarmActiveSet(Stage):
 
 class DualActiveSet(Stage):
     """Answering stage for a cold instant (no previous answer: a first instant, or after ``reset``)
-    of a problem whose objective is diagonal and positive definite and which has no cones (case 1's
-    ``f^T f``, the muscles' activations): the active set read off the dual's optimum, climbed by
+    of a problem whose objective is diagonal and positive definite (but on variables fixed by their
+    bounds: :func:`_separable`) and which has no cones (case 1's ``f^T f``, the muscles'
+    activations): the active set read off the dual's optimum, climbed by
     Newton's method from zero multipliers (:mod:`._dual_guess`, at most ``settings.cold_dual_steps``
     steps), verified by the active-set solver within ``warm_max_pivots`` (:func:`dual_answer`; no
     pivot was spent on the instant before it, as the warm stage's second guess has spent some).
@@ -378,7 +379,7 @@ class DualActiveSet(Stage):
 
     def run(self, qp, sol, deadline):
         s = self.settings
-        if self.warm or not s.cold_dual_steps or qp.cones or not jit.ready() or not _separable(qp):
+        if self.warm or not s.cold_dual_steps or qp.cones or not jit.ready() or not _separable(qp, fixed_ok=True):
             return None
         return dual_answer(qp, np.zeros(len(qp.b)), s.cold_dual_steps, s.warm_max_pivots, s, self.name)
 
@@ -400,9 +401,11 @@ def dual_answer(qp: QPData, y0: np.ndarray, steps: int, pivots: int, settings: S
     linear systems with the KKT systems."""
     s = settings
     c, A, b, lb, ub = qp.kernel_arrays()[:5]
+    d = np.ascontiguousarray(qp.P_diag, dtype=float)
+    if not qp.strictly_convex():  # (zero only where a variable's bounds are one value: :func:`_separable`)
+        d = np.where(d > 0.0, d, 1.0)
     state, made, _ = jit.kernels("solvers._dual_guess").dual_guess(
-        np.ascontiguousarray(qp.P_diag, dtype=float), c, A, b, lb, ub, np.ascontiguousarray(y0, dtype=float),
-        steps, s.warm_dual_regularisation, s.warm_dual_tol)
+        d, c, A, b, lb, ub, np.ascontiguousarray(y0, dtype=float), steps, s.warm_dual_regularisation, s.warm_dual_tol)
     out = try_active_set(qp, ActiveSet(_EMPTY, _EMPTY, state=state), pivots, stage=stage, settings=s)
     return None if out is None else out.but(iterations=out.iterations + int(made))
 
@@ -418,9 +421,22 @@ def changes(qp: QPData, a: ActiveSet, b: ActiveSet) -> int:
     return out
 
 
-def _separable(qp: QPData) -> bool:
-    """Whether ``qp``'s objective is ``diag(P_diag)`` with every entry positive (no factor rows)."""
-    return qp.P_factor is not None and qp.P_factor.shape[0] == 0 and qp.strictly_convex()
+def _separable(qp: QPData, fixed_ok: bool = False) -> bool:
+    """Whether ``qp``'s objective is ``diag(P_diag)`` (no factor rows) with every entry positive, or
+    (``fixed_ok``) zero only on variables whose two bounds are one value: a muscle whose force range
+    is a single value at this state has no activation to weigh. Such a variable is at its bound
+    whatever the multipliers, so the dual guess takes it with any positive curvature
+    (:func:`dual_answer`). The cold stage asks with ``fixed_ok``; the warm stage does not, at every
+    instant, since that test costs numpy calls (8 us on MyoSuite's arm, against 0.1 for the first)."""
+    if qp.P_factor is None or qp.P_factor.shape[0] != 0:
+        return False
+    if qp.strictly_convex():
+        return True
+    d = qp.P_diag
+    if not fixed_ok or d is None or d.size == 0:
+        return False
+    off = ~(d > 0.0)
+    return bool(np.all(d[off] == 0.0) and np.all(qp.lb[off] == qp.ub[off]) and np.all(np.isfinite(qp.lb[off])))
 
 
 class Polish(Stage):
