@@ -184,7 +184,8 @@ def test_the_exact_step_is_the_duals_maximiser_along_the_ray(kernel_modules):
         scale = 1e-10 * max(1.0, abs(best))
         for u in np.concatenate([np.linspace(0.0, 3.0 * max(t, 1.0), 601), [t * (1 - 1e-6), t * (1 + 1e-6)]]):
             assert _dual(d, c, A, b, lb, ub, y + u * step) <= best + scale
-        np.testing.assert_allclose(x1, np.clip(-(A.T @ y1 + c) / d, lb, ub), rtol=0, atol=1e-12 * (1 + np.abs(x1).max()))
+        want = np.clip(-(A.T @ y1 + c) / d, lb, ub)
+        np.testing.assert_allclose(x1, want, rtol=0, atol=1e-12 * (1 + np.abs(x1).max()))
         passed.append(_breakpoints_before(d, c, A, lb, ub, y, step, t))
     assert max(passed[12:]) > 16, passed
 

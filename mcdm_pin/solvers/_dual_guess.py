@@ -9,8 +9,9 @@ positive (case 1's ``f^T f``, the muscles' activations), the minimiser of the La
 piecewise quadratic and once differentiable, with ``grad g = A x(y) - b``. Newton's method on it
 (Qi and Sun's semismooth Newton method: the generalised Hessian is ``-A_F D_F^{-1} A_F^T`` over the
 variables ``F`` strictly inside their bounds) with an exact line search (the dual along a ray is
-piecewise quadratic: :func:`_exact_step`) climbs to the optimum's multipliers from any start; which bound each variable meets at ``x(y)`` is then the optimum's
-active set, which the active-set solver solves exactly and verifies.
+piecewise quadratic: :func:`_exact_step`) climbs to the optimum's multipliers from any start; which
+bound each variable meets at ``x(y)`` is then the optimum's active set, which the active-set solver
+solves exactly and verifies.
 
 Block principal pivoting from the last instant's active set can wander: on the neck's ``roll``
 (case 1) three warm starts of 101 exchange cables for the pivot limit (50) or reach a singular
@@ -27,8 +28,9 @@ the free part's own mean diagonal instead left more of 200 random problems short
 test within 60 steps, 6 against 3 from zero multipliers.) Where the free set changes at every step
 near a vertex the method may need tens of steps (from zero multipliers on the neck's case 1, 5
 to 22); its guess is then often right all the same. Between steps a few variables enter or leave
-``F``: the Newton matrix is updated by their outer products (:func:`_newton_matrix`). An infeasible problem has an unbounded dual: the method
-stops at its step limit and the guess it returns fails its verification, as any wrong guess does.
+``F``: the Newton matrix is updated by their outer products (:func:`_newton_matrix`). An infeasible
+problem has an unbounded dual: the method stops at its step limit and the guess it returns fails
+its verification, as any wrong guess does.
 No sum here is reassociated (``dot_in_order``; the Cholesky factor and solve are inlined and take
 this module's flags, which have no ``fastmath``), so the compiled and the uncompiled guesses, and
 their step counts, are the same to the bit.
@@ -76,9 +78,9 @@ def dual_guess(d, c, A, b, lb, ub, y0, max_steps, reg, tol):
     (the module docstring; ``d > 0``). Stops when ``|A x(y) - b|`` is within ``tol`` of the problem's
     size: ``x(y)`` minimises the Lagrangian over the box, so it is then the optimum, and the set read
     off it the optimum's active set. (A variable whose bound holds with a zero multiplier may read
-    free at one step and bound at the next; the exact line search often stops on such a kink, and
-    waiting for the set to repeat cycled there.) Returns ``(state, steps,
-    converged)``: ``state`` int8 per variable (0 free, 1 at its lower bound, 2 at its upper bound, as
+    free at one step and bound at the next: the exact line search often stops on such a kink, where
+    a test that waits for the set to repeat cycles.) Returns ``(state, steps, converged)``:
+    ``state`` int8 per variable (0 free, 1 at its lower bound, 2 at its upper bound, as
     the active-set solver takes it), the Newton steps made, and whether the stopping test held."""
     m, n = A.shape
     y = y0.copy()
@@ -167,8 +169,8 @@ def _exact_step(A, c, d, lb, ub, y, x, step, grad, work):
     ``grad . step > 0``), and ``x = x(y)``. Along the ray each ``x_j(t)`` is linear between the two
     values of ``t`` at which it meets its bounds, so the dual's slope ``step . (A x(t) - b)`` is
     piecewise linear and falls with ``t``: walked through those breakpoints in order, it is zero at
-    the step taken (an Armijo search instead halves the Newton step up to 19 times on the neck's
-    first step, and several times at most others). Where the slope stays positive with nothing free
+    the step taken, in one pass (backtracking from the whole Newton step halves it up to 19 times
+    at the neck's first step from zero multipliers). Where the slope stays positive with nothing free
     (an unbounded dual: an infeasible problem), or where rounding leaves ``step`` no ascent, the whole
     Newton step. ``x`` comes from ``A^T y + c`` moved along ``A^T step``, not from a product with the
     new ``y``. ``work``: scratch arrays (n,), (n,), (2n,), (2n,)."""
