@@ -252,9 +252,9 @@ class Settings:
 
 def _check(name: str, default, value) -> None:
     """``value`` of the field ``name`` is of its default's kind: a positive int for the limits (zero
-    allowed for ``ipm_correctors``, ``warm_dual_steps`` and ``cold_dual_steps``), a positive finite float for the
-    tolerances (``same_cut_cos`` and ``ipm_step_fraction`` at most 1), a float >= 0 or ``None`` for
-    the budget."""
+    allowed for ``ipm_correctors``, ``warm_dual_steps`` and ``cold_dual_steps``), a positive finite
+    float for the tolerances (``same_cut_cos`` and ``ipm_step_fraction`` at most 1), a float >= 0 or
+    ``None`` for the budget."""
     if name == "budget_s" and (value is None or (isinstance(value, (int, float)) and not isinstance(value, bool)
                                                  and value == 0)):
         return  # (a zero budget: no answering stage after the first starts)

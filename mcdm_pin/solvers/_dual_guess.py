@@ -26,11 +26,10 @@ floor of ``1e-14`` of its mean diagonal, for equations that are themselves depen
 Newton matrix positive definite, and the line search makes every step an ascent. (A multiple of
 the free part's own mean diagonal instead left more of 200 random problems short of the stopping
 test within 60 steps, 6 against 3 from zero multipliers.) Where the free set changes at every step
-near a vertex the method may need tens of steps (from zero multipliers on the neck's case 1, 5
-to 22); its guess is then often right all the same. Between steps a few variables enter or leave
-``F``: the Newton matrix is updated by their outer products (:func:`_newton_matrix`). An infeasible
-problem has an unbounded dual: the method stops at its step limit and the guess it returns fails
-its verification, as any wrong guess does.
+near a vertex the method may need tens of steps; its guess is then often right all the same.
+Between steps a few variables enter or leave ``F``: the Newton matrix is updated by their outer
+products (:func:`_newton_matrix`). An infeasible problem has an unbounded dual: the method stops at
+its step limit and the guess it returns fails its verification, as any wrong guess does.
 No sum here is reassociated (``dot_in_order``; the Cholesky factor and solve are inlined and take
 this module's flags, which have no ``fastmath``), so the compiled and the uncompiled guesses, and
 their step counts, are the same to the bit.
@@ -47,10 +46,9 @@ from ._kkt_linalg import chol_apply, chol_lower
 
 @njit(cache=True, nogil=True)
 def _primal(AT, c, d, lb, ub, y, x):
-    """``x = clip(-(A^T y + c) / d, lb, ub)`` in place (``AT``: ``A^T``, C-ordered); returns ``g(y)``
-    (the module docstring's dual function, without its ``-b^T y``)."""
+    """``x = clip(-(A^T y + c) / d, lb, ub)`` in place (``AT``: ``A^T``, C-ordered): the minimiser of
+    the Lagrangian over the box at ``y``."""
     n, m = AT.shape
-    val = 0.0
     for j in range(n):
         s = c[j]
         for i in range(m):
@@ -58,8 +56,6 @@ def _primal(AT, c, d, lb, ub, y, x):
         v = -s / d[j]
         v = lb[j] if v < lb[j] else (ub[j] if v > ub[j] else v)
         x[j] = v
-        val += (0.5 * d[j] * v + s) * v
-    return val
 
 
 @njit(cache=True, nogil=True)
@@ -169,8 +165,9 @@ def _exact_step(A, c, d, lb, ub, y, x, step, grad, work):
     ``grad . step > 0``), and ``x = x(y)``. Along the ray each ``x_j(t)`` is linear between the two
     values of ``t`` at which it meets its bounds, so the dual's slope ``step . (A x(t) - b)`` is
     piecewise linear and falls with ``t``: walked through those breakpoints in order, it is zero at
-    the step taken, in one pass (backtracking from the whole Newton step halves it up to 19 times
-    at the neck's first step from zero multipliers). Where the slope stays positive with nothing free
+    the step taken, in one pass, where backtracking from the whole Newton step takes many tries from
+    zero multipliers (docs/speed.md, "The cold instant's dual guess"). Where the slope stays positive
+    with nothing free
     (an unbounded dual: an infeasible problem), or where rounding leaves ``step`` no ascent, the whole
     Newton step. ``x`` comes from ``A^T y + c`` moved along ``A^T step``, not from a product with the
     new ``y``. ``work``: scratch arrays (n,), (n,), (2n,), (2n,)."""
@@ -207,8 +204,7 @@ def _exact_step(A, c, d, lb, ub, y, x, step, grad, work):
     slope = dot_in_order(grad, step)
     t, taken, found = 0.0, 1.0, slope <= 0.0
     # the breakpoints in order of t, up to the slope's zero: the earliest of those left by a scan for
-    # the first 16 of them (the zero usually comes within a few of tens: on the neck after 3 of 53 at
-    # the median), the rest sorted once
+    # the first 16 of them (the zero usually comes within a few of tens), the rest sorted once
     left, at, order = ne, -1, np.empty(0, dtype=np.int64)
     while not found and left > 0:
         if at < 0 and ne - left == 16:

@@ -358,17 +358,16 @@ class DualActiveSet(Stage):
     """Answering stage for a cold instant (no previous answer: a first instant, or after ``reset``)
     of a problem whose objective is diagonal and positive definite (but on variables fixed by their
     bounds: :func:`_separable`) and which has no cones (case 1's ``f^T f``, the muscles'
-    activations): the active set read off the dual's optimum, climbed by
-    Newton's method from zero multipliers (:mod:`._dual_guess`, at most ``settings.cold_dual_steps``
-    steps), verified by the active-set solver within ``warm_max_pivots`` (:func:`dual_answer`; no
-    pivot was spent on the instant before it, as the warm stage's second guess has spent some).
+    activations): the active set read off the dual's optimum, climbed by Newton's method from zero
+    multipliers (:mod:`._dual_guess`, at most ``settings.cold_dual_steps`` steps), verified by the
+    active-set solver within ``warm_max_pivots`` (:func:`dual_answer`; no pivot was spent on the
+    instant before it, as the warm stage's second guess has spent some).
     Where it fails, the interior-point method answers. A warm instant's dual guess starts from the
     last answer's multipliers instead, in :class:`WarmActiveSet`; this stage then has nothing to say.
 
     On the shipped robots and the scaling study's chains it answers every cold instant of case 1
-    with the optimum's exact KKT point (659 of 661 in one KKT solve; the neck's two degenerate
-    instants of ``pitch`` in seven), for a fraction of the interior-point method's time
-    (docs/speed.md, "The cold instant's dual guess").
+    with the optimum's exact KKT point, nearly always in one KKT solve, for a fraction of the
+    interior-point method's time (docs/speed.md, "The cold instant's dual guess").
     """
 
     name = "dual_active_set"
@@ -397,8 +396,8 @@ def dual_answer(qp: QPData, y0: np.ndarray, steps: int, pivots: int, settings: S
                 stage: str) -> Solution | None:
     """The optimum whose active set :func:`._dual_guess.dual_guess` reaches from the multipliers
     ``y0`` within ``steps`` Newton steps, verified by the active-set solver within ``pivots``;
-    ``None`` where it fails. Its ``iterations`` count the Newton steps'
-    linear systems with the KKT systems."""
+    ``None`` where it fails. Its ``iterations`` count the Newton steps' linear systems with the KKT
+    systems."""
     s = settings
     c, A, b, lb, ub = qp.kernel_arrays()[:5]
     d = np.ascontiguousarray(qp.P_diag, dtype=float)
@@ -426,8 +425,9 @@ def _separable(qp: QPData, fixed_ok: bool = False) -> bool:
     (``fixed_ok``) zero only on variables whose two bounds are one value: a muscle whose force range
     is a single value at this state has no activation to weigh. Such a variable is at its bound
     whatever the multipliers, so the dual guess takes it with any positive curvature
-    (:func:`dual_answer`). The cold stage asks with ``fixed_ok``; the warm stage does not, at every
-    instant, since that test costs numpy calls (8 us on MyoSuite's arm, against 0.1 for the first)."""
+    (:func:`dual_answer`). The cold stage asks with ``fixed_ok``; the warm stage, which asks at every
+    instant, does not: that test costs numpy calls where the first costs none (docs/speed.md, "The
+    cold instant's dual guess")."""
     if qp.P_factor is None or qp.P_factor.shape[0] != 0:
         return False
     if qp.strictly_convex():
